@@ -1,0 +1,50 @@
+"""Atomic file output: write to a temporary file beside the target, then rename.
+
+A failed run therefore never leaves a partial file, and an existing file is replaced only
+when the caller says so (``force=True``).
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Iterator
+
+from .errors import ResultsError
+
+__all__ = ["atomic_path", "refuse_existing"]
+
+
+def refuse_existing(path: str | Path, force: bool) -> None:
+    """Raise :class:`ResultsError` if ``path`` exists and ``force`` is false."""
+    if Path(path).exists() and not force:
+        raise ResultsError("output file exists; pass --force (force=True) to replace it", str(path))
+
+
+@contextmanager
+def atomic_path(path: str | Path, *, force: bool = False) -> Iterator[Path]:
+    """Yield a temporary path to write; on success it replaces ``path`` atomically.
+
+    Parameters
+    ----------
+    path
+        Final file name.  Its directory must exist.
+    force
+        Replace an existing file.  Checked before and again just before the rename.
+    """
+    target = Path(path)
+    refuse_existing(target, force)
+    if not target.parent.exists():
+        raise ResultsError("output directory does not exist", str(target.parent))
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent)
+    os.close(fd)
+    tmp_path = Path(tmp)
+    try:
+        yield tmp_path
+        refuse_existing(target, force)
+        os.replace(tmp_path, target)
+    finally:
+        if tmp_path.exists():
+            tmp_path.unlink()

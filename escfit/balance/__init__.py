@@ -1,0 +1,74 @@
+"""The balance wheel under an escapement (Monday 1965; Theory of Horology 3-2).
+
+Per unit inertia::
+
+    theta'' + C theta' + g(theta) + R sgn(theta') + F_esc = 0
+
+with ``g`` the hairspring (``omega0**2 * theta`` unless a piecewise hairspring is named),
+``C`` viscous, ``R`` Coulomb and ``F_esc`` the escapement windows.  Only the effects a scene
+names are simulated.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from .scene import BalanceScene, parse
+from .solvers import SOLVERS, solve_system
+from .trajectory import Trajectory
+
+__all__ = ["BalanceScene", "parse", "simulate", "solve", "json_summary", "Trajectory", "SOLVERS"]
+
+
+def solve(scene: BalanceScene, solver: str = "exact", *, values: dict[str, float] | None = None,
+          swings: int | None = None, **options: Any) -> Trajectory:
+    """Run a balance scene and return the per-swing :class:`Trajectory`.
+
+    Parameters
+    ----------
+    scene
+        A balance scene.
+    solver
+        ``"exact"`` (default), ``"rk4"`` or ``"ivp"``.
+    values
+        Parameter values by name overriding the scene's (used by fits).
+    swings
+        Number of half swings (default: the scene's ``[run] swings``).
+    **options
+        Solver options (see :data:`SOLVERS`).
+    """
+    sys = scene.build(values)
+    return solve_system(sys, swings or scene.swings, scene.switching, solver, **options)
+
+
+def simulate(scene: BalanceScene, solver: str = "exact", *, swings: int | None = None, **options: Any) -> xr.Dataset:
+    """Simulate a balance scene; see :func:`escfit.simulate`."""
+    from .. import __version__
+
+    traj = solve(scene, solver, swings=swings, **options)
+    return traj.to_dataset({
+        "model": "balance",
+        "switching": scene.switching,
+        "scene": scene.text,
+        "scene_file": scene.where,
+        "escfit_version": __version__,
+    })
+
+
+def json_summary(ds: xr.Dataset) -> dict[str, Any]:
+    """The JSON object ``escfit simulate --json`` prints for a balance run."""
+    def arr(name: str) -> list:
+        return [None if not np.isfinite(v) else float(v) for v in ds[name].values]
+
+    return {
+        "amplitude": arr("amplitude"),
+        "half_period": arr("half_period"),
+        "time": arr("time"),
+        "rate": arr("rate"),
+        "status": ds.attrs["status"],
+        "solver": ds.attrs["solver"],
+        "switching": ds.attrs["switching"],
+    }

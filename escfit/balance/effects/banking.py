@@ -1,0 +1,44 @@
+"""Banking: the balance strikes the banking pins when |theta| reaches the banking angle.
+
+The impact reverses the velocity and scales it by the coefficient of restitution ``e``
+(0: the balance stops dead against the pin and restarts from rest; 1: elastic).  The half
+swing ends at the impact, its amplitude is the banking angle and it is flagged ``banked``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Mapping
+
+from ...errors import SceneError
+from ...params import Param, read_param
+from ...scene import check_keys
+from ...units import to_canonical
+from .base import ReadContext, SystemBuilder
+
+__all__ = ["Banking"]
+
+
+@dataclass(frozen=True)
+class Banking:
+    """Banking pins at ``angle`` (rad, > 0); parameter ``banking.e`` in [0, 1]."""
+
+    angle: float
+    key = "banking"
+
+    @classmethod
+    def read(cls, table: Mapping, ctx: ReadContext) -> tuple["Banking", list[Param]]:
+        where = f"{ctx.where} [effects.banking]"
+        check_keys(table, {"angle", "restitution"}, where, {"angle"})
+        if ctx.switching == "phase":
+            raise SceneError("banking needs switching = 'angle' (phase switching has no turning points)", where)
+        angle = to_canonical(table["angle"], "angle", f"{where}.angle")
+        if not angle > 0:
+            raise SceneError(f"banking angle must be positive, got {table['angle']!r}", f"{where}.angle")
+        e = read_param(table.get("restitution", 0.0), name="banking.e", kind="dimensionless", lower=0.0, upper=1.0,
+                       meaning="coefficient of restitution at the banking pins", where=f"{where}.restitution")
+        return cls(angle), [e]
+
+    def apply(self, values: Mapping[str, float], sys: SystemBuilder) -> None:
+        sys.bank = self.angle
+        sys.restitution = values["banking.e"]

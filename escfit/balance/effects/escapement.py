@@ -1,0 +1,125 @@
+"""Escapement windows: constant torques acting over ranges of the swing.
+
+Each window acts while the balance is inside ``[from, to)`` measured in the frame of the
+current swing, ``x = s*theta`` with ``s`` the direction of motion, so every swing runs from
+``x = -A`` to ``x = +A`` and a window at ``from = -0.63, to = -0.28`` is met shortly before
+the balance passes zero, whichever way it swings.  ``kind = "unlock"`` opposes the motion
+(the balance does work releasing the escape wheel), ``kind = "impulse"`` drives it.
+``swings`` restricts a window to ``"positive"`` (theta increasing) or ``"negative"`` swings
+for asymmetric escapements.
+
+With ``switching = "phase"`` the limits are phase offsets (rad) from the zero crossing in
+the middle of each half cycle, as in Monday's programs, and must lie within +-pi/2.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Mapping, Sequence
+
+from ...errors import SceneError
+from ...params import Param, read_param
+from ...scene import check_keys
+from ...units import to_canonical
+from .base import ReadContext, SystemBuilder, read_either
+
+__all__ = ["Window", "Escapement"]
+
+_SWINGS = {"both": 0, "positive": 1, "negative": -1}
+
+
+@dataclass(frozen=True)
+class Window:
+    """One escapement window (structure only; its magnitude is ``escapement[i].X``)."""
+
+    index: int  # 1-based, file order
+    kind: str  # "unlock" | "impulse"
+    lo: float  # rad, swing frame (or phase offset)
+    hi: float
+    swings: str  # "both" | "positive" | "negative"
+
+    @property
+    def name(self) -> str:
+        return f"escapement[{self.index}].X"
+
+    @property
+    def sign(self) -> float:
+        return 1.0 if self.kind == "impulse" else -1.0
+
+
+@dataclass(frozen=True)
+class Escapement:
+    """The set of escapement windows of a scene."""
+
+    windows: tuple[Window, ...]
+    key = "escapement"
+
+    @classmethod
+    def read(cls, tables: Sequence, ctx: ReadContext) -> tuple["Escapement", list[Param]]:
+        if isinstance(tables, Mapping):
+            tables = [tables]
+        windows: list[Window] = []
+        raw_x: list[tuple[Window, Mapping, str]] = []
+        for i, table in enumerate(tables, start=1):
+            where = f"{ctx.where} [effects.escapement {i}]"
+            check_keys(table, {"kind", "from", "to", "X", "torque", "eps", "swings"}, where, {"kind", "from", "to"})
+            kind = table["kind"]
+            if kind not in ("unlock", "impulse"):
+                raise SceneError(f"kind must be 'unlock' or 'impulse', got {kind!r}", f"{where}.kind")
+            lo = to_canonical(table["from"], "angle", f"{where}.from")
+            hi = to_canonical(table["to"], "angle", f"{where}.to")
+            if not lo < hi:
+                raise SceneError(f"'from' ({table['from']!r}) must be below 'to' ({table['to']!r})", where)
+            if ctx.switching == "phase" and (abs(lo) > math.pi / 2 + 1e-12 or abs(hi) > math.pi / 2 + 1e-12):
+                raise SceneError(
+                    f"with phase switching window limits are phase offsets within +-pi/2 of the zero "
+                    f"crossing; got from={table['from']!r}, to={table['to']!r}",
+                    where,
+                )
+            swings = table.get("swings", "both")
+            if swings not in _SWINGS:
+                raise SceneError(f"swings must be one of {sorted(_SWINGS)}, got {swings!r}", f"{where}.swings")
+            w = Window(i, kind, lo, hi, swings)
+            windows.append(w)
+            raw_x.append((w, table, where))
+        _refuse_overlaps(windows, ctx.where)
+        params = [_magnitude(w, table, where, ctx, windows) for w, table, where in raw_x]
+        return cls(tuple(windows)), params
+
+    def apply(self, values: Mapping[str, float], sys: SystemBuilder) -> None:
+        for w in self.windows:
+            sys.w_lo.append(w.lo)
+            sys.w_hi.append(w.hi)
+            sys.w_x.append(w.sign * values[w.name])
+            sys.w_dir.append(_SWINGS[w.swings])
+
+
+def _magnitude(w: Window, table: Mapping, where: str, ctx: ReadContext, windows: list[Window]) -> Param:
+    meaning = f"{w.kind} torque per inertia of window {w.index} (rad/s^2, {'drives' if w.sign > 0 else 'opposes'} the motion)"
+    if "eps" in table:
+        if w.kind != "unlock" or "X" in table or "torque" in table:
+            raise SceneError("'eps' (unlock torque as a fraction of the impulse torque, S = eps*M) "
+                             "goes alone on an unlock window", where)
+        eps = read_param(table["eps"], name=f"escapement[{w.index}].eps", kind="dimensionless", lower=0.0,
+                         meaning="unlock/impulse torque ratio", where=f"{where}.eps")
+        partners = [o for o in windows if o.kind == "impulse" and (o.swings == w.swings or "both" in (o.swings, w.swings))]
+        if len(partners) != 1:
+            raise SceneError(f"'eps' needs exactly one impulse window on the same swings, found {len(partners)}", where)
+        return Param(w.name, math.nan, "1/s**2", meaning, tie=(partners[0].name, eps.value))
+    return read_either(table, ctx, where, name=w.name, meaning=meaning, unit="1/s**2",
+                       direct=("X", "angular_acceleration"), physical=("torque", "torque"))
+
+
+def _refuse_overlaps(windows: list[Window], where: str) -> None:
+    for a in windows:
+        for b in windows:
+            if a.index >= b.index:
+                continue
+            shared = a.swings == b.swings or "both" in (a.swings, b.swings)
+            if shared and max(a.lo, b.lo) < min(a.hi, b.hi):
+                raise SceneError(
+                    f"escapement windows {a.index} [{a.lo:g}, {a.hi:g}) and {b.index} [{b.lo:g}, {b.hi:g}) "
+                    "overlap on the same swings",
+                    where,
+                )

@@ -1,0 +1,53 @@
+"""A hairspring whose stiffness changes at given balance angles.
+
+The restoring torque is continuous and piecewise linear in theta: on piece ``i`` its
+slope per inertia is ``omega0[i]**2``.  ``angles`` (ascending, rad) separate the pieces, so
+``omega0`` has one more entry than ``angles``; the piece containing theta = 0 sets the
+reference frequency used for the rate.  Monday's long program allowed four such values.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Mapping
+
+from ...errors import SceneError
+from ...params import Param, read_param
+from ...scene import check_keys
+from ...units import to_canonical
+from .base import ReadContext, SystemBuilder
+
+__all__ = ["Hairspring"]
+
+
+@dataclass(frozen=True)
+class Hairspring:
+    """Piecewise-linear hairspring; parameters ``hairspring.omega0[i]`` (rad/s, i from 1)."""
+
+    angles: tuple[float, ...]
+    key = "hairspring"
+
+    @classmethod
+    def read(cls, table: Mapping, ctx: ReadContext) -> tuple["Hairspring", list[Param]]:
+        where = f"{ctx.where} [effects.hairspring]"
+        check_keys(table, {"angles", "omega0"}, where, {"angles", "omega0"})
+        if ctx.switching == "phase":
+            raise SceneError("a hairspring with angle-dependent stiffness needs switching = 'angle'", where)
+        angles, omegas = table["angles"], table["omega0"]
+        if not isinstance(angles, list) or not isinstance(omegas, list) or len(omegas) != len(angles) + 1 or not angles:
+            raise SceneError("'angles' must be a non-empty list and 'omega0' a list one entry longer", where)
+        ang = tuple(to_canonical(a, "angle", f"{where}.angles[{i}]") for i, a in enumerate(angles, 1))
+        if any(b <= a for a, b in zip(ang, ang[1:])):
+            raise SceneError(f"'angles' must increase strictly, got {angles!r}", f"{where}.angles")
+        params = [
+            read_param(w, name=f"hairspring.omega0[{i}]", kind="rate_per_s", lower=0.0, lower_open=True,
+                       meaning=f"natural frequency of hairspring piece {i} (rad/s)", where=f"{where}.omega0[{i}]")
+            for i, w in enumerate(omegas, 1)
+        ]
+        return cls(ang), params
+
+    def apply(self, values: Mapping[str, float], sys: SystemBuilder) -> None:
+        sys.spring_breaks = list(self.angles)
+        sys.spring_w2 = [values[f"hairspring.omega0[{i}]"] ** 2 for i in range(1, len(self.angles) + 2)]
+        zero_piece = sum(1 for a in self.angles if a <= 0.0)
+        sys.omega0 = values[f"hairspring.omega0[{zero_piece + 1}]"]

@@ -1,0 +1,31 @@
+"""Viscous damping: a torque ``-c * theta'`` (per inertia ``-C * theta'``)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Mapping
+
+from ...params import Param
+from ...scene import check_keys
+from .base import ReadContext, SystemBuilder, read_either
+
+__all__ = ["Viscous"]
+
+
+@dataclass(frozen=True)
+class Viscous:
+    """Linear viscous damping; parameter ``viscous.C`` = c/I in 1/s (>= 0)."""
+
+    key = "viscous"
+
+    @classmethod
+    def read(cls, table: Mapping, ctx: ReadContext) -> tuple["Viscous", list[Param]]:
+        where = f"{ctx.where} [effects.viscous]"
+        check_keys(table, {"C", "c"}, where)
+        p = read_either(table, ctx, where, name="viscous.C", unit="1/s",
+                        meaning="viscous damping per inertia C = c/I (1/s)",
+                        direct=("C", "rate_per_s"), physical=("c", "damping"))
+        return cls(), [p]
+
+    def apply(self, values: Mapping[str, float], sys: SystemBuilder) -> None:
+        sys.c = values["viscous.C"]

@@ -1,0 +1,339 @@
+"""Exact piecewise solver for the balance wheel (numba-compiled kernel).
+
+The run is split into segments in which every coefficient is constant: the viscous
+coefficient, the stiffness of the current hairspring piece, the Coulomb torque (whose sign
+is fixed within a half swing) and the escapement windows the balance is in.  Each segment
+is solved in closed form (:mod:`escfit.balance.segment`); window edges are located by a
+safeguarded root solve on that closed form and turning points analytically, so the only
+error is floating-point rounding.
+
+Frames and signs
+----------------
+A half swing moving in direction ``s`` (+1 when theta increases) is solved in the swing
+frame ``x = s*theta`` in which the balance always runs from ``x = -A`` towards ``+A``.  In
+that frame Coulomb friction is the constant ``-R``, an unlock window contributes ``-X``
+and an impulse window ``+X``.
+
+Status codes (see :data:`STATUS_NAMES`)
+---------------------------------------
+0 ok, 1 stopped (friction holds the balance at rest, or it creeps to rest without a further
+turning point), 2 banked (the run completed but hit the banking pins), 3 max_segments
+(pathological input: segment budget exhausted), 4 phase_breakdown (phase switching: a half
+cycle ended on the side it started, so Monday's phase convention no longer describes the
+motion).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .segment import cross_time, propagate, turn_time
+
+__all__ = ["run_angle", "run_phase", "STATUS_NAMES"]
+
+STATUS_NAMES = ("ok", "stopped", "banked", "max_segments", "phase_breakdown")
+N_LOG = 9  # fields of a segment-log row: t0, tau, s, x0, v0, xc, w2, h, swing
+
+
+@njit(cache=True)
+def _drift_factor(integral_c, th, rate):
+    """Growth factor of C after a cycle, from the envelope exp(-int C dt / 2)."""
+    env = math.exp(-0.5 * integral_c)
+    for i in range(th.shape[0]):
+        if env > th[i]:
+            return 1.0 + rate[i]
+    return 1.0 + rate[th.shape[0]]
+
+
+@njit(cache=True)
+def _applies(wdir, s):
+    return wdir == 0 or wdir == s
+
+
+@njit(cache=True)
+def _region(x, s, edges, n_edges, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r):
+    """Index of the next edge above ``x`` and the region's (w2, xc)."""
+    j = 0
+    while j < n_edges and edges[j] <= x:
+        j += 1
+    if j == 0:
+        mid = edges[0] - 1.0 if n_edges > 0 else x
+    elif j == n_edges:
+        mid = edges[n_edges - 1] + 1.0
+    else:
+        mid = 0.5 * (edges[j - 1] + edges[j])
+    force = -r
+    for k in range(w_lo.shape[0]):
+        if _applies(w_dir[k], s) and w_lo[k] <= mid < w_hi[k]:
+            force += w_x[k]
+    theta_mid = s * mid
+    i = 0
+    while i < sp_bp.shape[0] and sp_bp[i] <= theta_mid:
+        i += 1
+    w2 = sp_w2[i]
+    xc = (force - s * sp_off[i]) / w2
+    return j, w2, xc
+
+
+@njit(cache=True)
+def _swing_edges(s, bank, sp_bp, w_lo, w_hi, w_dir, edges):
+    """Sorted distinct switch points of a swing in the swing frame, banking last."""
+    n = 0
+    for k in range(w_lo.shape[0]):
+        if _applies(w_dir[k], s):
+            edges[n] = w_lo[k]
+            edges[n + 1] = w_hi[k]
+            n += 2
+    for i in range(sp_bp.shape[0]):
+        edges[n] = s * sp_bp[i]
+        n += 1
+    srt = np.sort(edges[:n])
+    m = 0
+    for i in range(n):
+        v = srt[i]
+        if v < bank and (m == 0 or v > edges[m - 1]):
+            edges[m] = v
+            m += 1
+    if math.isfinite(bank):
+        edges[m] = bank
+        m += 1
+    return m
+
+
+@njit(cache=True)
+def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
+              bank, restitution, dr_th, dr_rate, n_swings, max_seg,
+              amp, theta_turn, half_period, time, banked, log):
+    """Integrate half swings with angle switching (the physical escapement).
+
+    Parameters
+    ----------
+    theta0, v0 : float
+        Initial angle (rad) and angular velocity (rad/s); released at rest when v0 == 0.
+    c0 : float
+        Initial viscous coefficient C = c/I (1/s).
+    r : float
+        Coulomb friction torque per inertia R (rad/s^2), >= 0.
+    sp_bp, sp_w2, sp_off : ndarray
+        Hairspring: breakpoint angles (rad, sorted), stiffness per inertia of each piece
+        (1/s^2) and offsets so the restoring acceleration is ``w2[i]*theta + off[i]``.
+    w_lo, w_hi, w_x, w_dir : ndarray
+        Escapement windows in the swing frame (rad), signed magnitude (rad/s^2, >0
+        drives, <0 opposes) and the swings they act on (0 both, +1 positive, -1 negative).
+    bank, restitution : float
+        Banking angle (rad, inf for none) and coefficient of restitution of the impact.
+    dr_th, dr_rate : ndarray
+        Damping drift: envelope thresholds (descending) and per-cycle growth rates
+        (one more rate than thresholds); all-zero rates disable it.
+    n_swings, max_seg : int
+        Half swings wanted and the segment budget.
+    amp, theta_turn, half_period, time, banked : ndarray
+        Outputs per half swing (filled up to the returned count).
+    log : ndarray, shape (max_seg, 9) or (0, 9)
+        Segment log (t0, tau, s, x0, v0, xc, w2, h, swing) when it has rows.
+
+    Returns
+    -------
+    n_done, status, n_seg, t, theta, omega : int, int, int, float, float, float
+    """
+    s = 1.0 if theta0 < 0.0 else -1.0
+    if v0 != 0.0:
+        s = 1.0 if v0 > 0.0 else -1.0
+    x = s * theta0
+    v = s * v0
+    c = c0
+    t = 0.0
+    t_last = 0.0
+    int_c = 0.0
+    status = 0
+    n_done = 0
+    n_seg = 0
+    any_bank = False
+    drift = False
+    for i in range(dr_rate.shape[0]):
+        if dr_rate[i] != 0.0:
+            drift = True
+    edges = np.empty(2 * w_lo.shape[0] + sp_bp.shape[0] + 1)
+    n_edges = _swing_edges(s, bank, sp_bp, w_lo, w_hi, w_dir, edges)
+    record = log.shape[0] > 0
+    at_start = True
+    while n_done < n_swings:
+        if n_seg >= max_seg:
+            status = 3
+            break
+        j, w2, xc = _region(x, s, edges, n_edges, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r)
+        y0 = x - xc
+        h = 0.5 * c
+        xb = edges[j] if j < n_edges else math.inf
+        grazed = False
+        if v <= 0.0 and y0 >= 0.0:
+            v = 0.0
+            if at_start:
+                status = 1  # at rest and the net torque cannot overcome static friction
+                break
+            grazed = True  # came to rest exactly on an edge: a turning point there
+        if record:
+            log[n_seg, 0] = t
+            log[n_seg, 2] = s
+            log[n_seg, 3] = x
+            log[n_seg, 4] = v
+            log[n_seg, 5] = xc
+            log[n_seg, 6] = w2
+            log[n_seg, 7] = h
+            log[n_seg, 8] = n_done
+        crosses = False
+        if grazed:
+            tau = 0.0
+        else:
+            if v <= 0.0:
+                v = 0.0  # also clears a negative zero, which would flip atan2's branch
+            tau_turn = turn_time(y0, v, h, w2)
+            if math.isfinite(tau_turn):
+                y_turn, _ = propagate(y0, v, tau_turn, h, w2)
+                x_turn = xc + y_turn
+            else:
+                x_turn = xc
+            crosses = x_turn > xb
+            if crosses:
+                tau = cross_time(y0, v, h, w2, xb - xc, tau_turn)
+                _, v_new = propagate(y0, v, tau, h, w2)
+                x = xb
+                v = max(v_new, 0.0)
+            elif math.isfinite(tau_turn):
+                tau = tau_turn
+                x = x_turn
+                v = 0.0
+            else:
+                # creeps towards the centre without turning or reaching another edge
+                if record:
+                    log[n_seg, 1] = math.inf
+                n_seg += 1
+                x = xc
+                v = 0.0
+                t = math.inf
+                status = 1
+                break
+        if record:
+            log[n_seg, 1] = tau
+        n_seg += 1
+        t += tau
+        int_c += c * tau
+        at_start = False
+        is_bank = crosses and j == n_edges - 1 and math.isfinite(bank)
+        if crosses and not is_bank:
+            continue
+        # end of a half swing: a turning point or an impact on the banking pins
+        amp[n_done] = abs(x)
+        theta_turn[n_done] = s * x
+        half_period[n_done] = t - t_last
+        time[n_done] = t
+        banked[n_done] = 1 if is_bank else 0
+        any_bank = any_bank or is_bank
+        t_last = t
+        n_done += 1
+        if drift and n_done % 2 == 0:
+            c *= _drift_factor(int_c, dr_th, dr_rate)
+        s = -s
+        x = -x
+        v = restitution * v if is_bank else 0.0
+        at_start = v == 0.0
+        n_edges = _swing_edges(s, bank, sp_bp, w_lo, w_hi, w_dir, edges)
+    if status == 0 and any_bank:
+        status = 2
+    return n_done, status, n_seg, t, s * x, s * v
+
+
+@njit(cache=True)
+def run_phase(theta0, c0, r, w2, w_lo, w_hi, w_x, w_dir, dr_th, dr_rate, n_swings,
+              amp, theta_turn, half_period, time, banked, log):
+    """Integrate half cycles with Monday's phase switching.
+
+    Each half cycle lasts ``pi/omega1`` (``omega1 = sqrt(w2 - C**2/4)``); window limits
+    ``w_lo, w_hi`` are phase offsets (rad) from the zero crossing in the middle of the
+    half cycle, and the Coulomb sign flips at every half-cycle boundary.  A half swing
+    ends at phase ``k*pi`` and its amplitude is ``|theta|`` there (the velocity there is
+    not exactly zero when forcing acts).  Requires ``C < 2*sqrt(w2)``.
+
+    Returns
+    -------
+    n_done, status, n_seg, t, theta, omega : as :func:`run_angle`
+    """
+    s = 1.0 if theta0 < 0.0 else -1.0
+    x = s * theta0
+    v = 0.0
+    c = c0
+    t = 0.0
+    int_c = 0.0
+    status = 0
+    n_seg = 0
+    n_done = 0
+    drift = False
+    for i in range(dr_rate.shape[0]):
+        if dr_rate[i] != 0.0:
+            drift = True
+    half_pi = 0.5 * math.pi
+    nw = w_lo.shape[0]
+    pts = np.empty(2 * nw + 2)
+    record = log.shape[0] > 0
+    while n_done < n_swings:
+        h = 0.5 * c
+        w1 = math.sqrt(w2 - h * h)
+        n = 0
+        pts[n] = 0.0
+        n += 1
+        for k in range(nw):
+            if _applies(w_dir[k], s):
+                pts[n] = half_pi + w_lo[k]
+                pts[n + 1] = half_pi + w_hi[k]
+                n += 2
+        pts[n] = math.pi
+        n += 1
+        srt = np.sort(pts[:n])
+        for m in range(n - 1):
+            a = srt[m]
+            b = srt[m + 1]
+            if b <= a:
+                continue
+            mid = 0.5 * (a + b) - half_pi
+            force = -r
+            for k in range(nw):
+                if _applies(w_dir[k], s) and w_lo[k] <= mid < w_hi[k]:
+                    force += w_x[k]
+            xc = force / w2
+            tau = (b - a) / w1
+            if record and n_seg < log.shape[0]:
+                log[n_seg, 0] = t
+                log[n_seg, 1] = tau
+                log[n_seg, 2] = s
+                log[n_seg, 3] = x
+                log[n_seg, 4] = v
+                log[n_seg, 5] = xc
+                log[n_seg, 6] = w2
+                log[n_seg, 7] = h
+                log[n_seg, 8] = n_done
+            y, v = propagate(x - xc, v, tau, h, w2)
+            x = xc + y
+            t += tau
+            int_c += c * tau
+            n_seg += 1
+        amp[n_done] = abs(x)
+        theta_turn[n_done] = s * x
+        half_period[n_done] = math.pi / w1
+        time[n_done] = t
+        banked[n_done] = 0
+        n_done += 1
+        if x <= 0.0:
+            status = 4
+            break
+        if drift and n_done % 2 == 0:
+            c *= _drift_factor(int_c, dr_th, dr_rate)
+            if c >= 2.0 * math.sqrt(w2):
+                status = 4
+                break
+        s = -s
+        x = -x
+        v = -v
+    return n_done, status, n_seg, t, s * x, s * v

@@ -1,0 +1,157 @@
+"""Balance-wheel scenes: reading and validating ``model = "balance"`` TOML documents."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Mapping
+
+from ..errors import SceneError
+from ..params import Param, ParamSet, read_param
+from ..scene import check_keys
+from ..units import to_canonical
+from .effects import EFFECTS
+from .effects.base import ReadContext, SystemBuilder
+
+__all__ = ["BalanceScene", "parse", "TOP_KEYS"]
+
+TOP_KEYS = {"model", "switching", "title", "oscillator", "run", "effects", "observation", "fit"}
+
+
+@dataclass(frozen=True)
+class BalanceScene:
+    """A balance wheel under an escapement, with only the effects the file names.
+
+    Attributes
+    ----------
+    switching
+        ``"angle"`` (windows at balance angles, the physics) or ``"phase"`` (Monday's
+        programs: windows at fixed phases of each half cycle).
+    effects
+        The effect objects, in reading order (structure only).
+    params
+        All numeric parameters, named ``oscillator.theta0``, ``viscous.C`` ...
+    swings
+        Number of half swings to simulate.
+    inertia
+        Moment of inertia (kg*m^2) if the file gave one (only needed for conversions).
+    text, where
+        Source TOML text and file name.
+    extra
+        Tables other layers read (``observation``, ``fit``), kept verbatim.
+    """
+
+    switching: str
+    effects: tuple
+    params: ParamSet
+    swings: int
+    inertia: float | None
+    text: str
+    where: str
+    title: str = ""
+    extra: Mapping[str, Any] = field(default_factory=dict)
+    model: str = "balance"
+
+    def effect(self, key: str):
+        """The effect named ``key`` or ``None``."""
+        return next((e for e in self.effects if e.key == key), None)
+
+    def build(self, values: Mapping[str, float] | None = None) -> SystemBuilder:
+        """Assemble the numeric system for a parameter set (defaults: the scene's values).
+
+        Parameters
+        ----------
+        values
+            Values by name overriding the scene's; unnamed parameters keep theirs.
+        """
+        vals = self.params.values() if values is None else self.params.with_values(values).values()
+        sys = SystemBuilder(theta0=vals["oscillator.theta0"], omega0=vals.get("oscillator.omega0", math.nan))
+        for eff in self.effects:
+            eff.apply(vals, sys)
+        return sys
+
+    def with_values(self, values: Mapping[str, float]) -> "BalanceScene":
+        """A copy whose parameters take the given values."""
+        from dataclasses import replace
+
+        return replace(self, params=self.params.with_values(values))
+
+
+def parse(doc: Mapping[str, Any], *, where: str, text: str) -> BalanceScene:
+    """Validate a balance scene document (see the README's scene reference)."""
+    check_keys(doc, TOP_KEYS, where)
+    switching = doc.get("switching", "angle")
+    if switching not in ("angle", "phase"):
+        raise SceneError(f"switching must be 'angle' or 'phase', got {switching!r}", f"{where} [switching]")
+    osc = doc.get("oscillator")
+    if osc is None:
+        raise SceneError("missing table [oscillator]", where)
+    ow = f"{where} [oscillator]"
+    check_keys(osc, {"omega0", "inertia", "stiffness", "theta0"}, ow, {"theta0"})
+    params = ParamSet()
+    inertia = None
+    if "inertia" in osc:
+        inertia = to_canonical(osc["inertia"], "inertia", f"{ow}.inertia")
+        if not inertia > 0:
+            raise SceneError(f"inertia must be positive, got {osc['inertia']!r}", f"{ow}.inertia")
+    effects_doc = doc.get("effects", {})
+    if not isinstance(effects_doc, Mapping):
+        raise SceneError("[effects] must be a table", where)
+    has_spring = "hairspring" in effects_doc
+    if has_spring and ("omega0" in osc or "stiffness" in osc):
+        raise SceneError("with [effects.hairspring] give omega0 per piece there, not in [oscillator]", ow)
+    if not has_spring:
+        params.add(_read_omega0(osc, inertia, ow))
+    params.add(read_param(osc["theta0"], name="oscillator.theta0", kind="angle",
+                          meaning="release angle (rad); released at rest", where=f"{ow}.theta0"))
+    run = doc.get("run", {})
+    check_keys(run, {"swings"}, f"{where} [run]")
+    swings = run.get("swings", 120)
+    if isinstance(swings, bool) or not isinstance(swings, int) or not 1 <= swings <= 10_000_000:
+        raise SceneError(f"swings must be a whole number from 1 to 1e7, got {swings!r}", f"{where} [run].swings")
+    ctx = ReadContext(where=where, inertia=inertia, switching=switching)
+    unknown = sorted(set(effects_doc) - set(EFFECTS))
+    if unknown:
+        raise SceneError(f"unknown effect(s) {unknown}; known effects: {sorted(EFFECTS)}", f"{where} [effects]")
+    if "viscous_drift" in effects_doc and "viscous" not in effects_doc:
+        raise SceneError("viscous_drift changes C and needs [effects.viscous]", f"{where} [effects.viscous_drift]")
+    effects = []
+    for key, cls in EFFECTS.items():
+        if key in effects_doc:
+            eff, ps = cls.read(effects_doc[key], ctx)
+            effects.append(eff)
+            for p in ps:
+                params.add(p)
+    _resolve_ties(params)
+    bank = next((e for e in effects if e.key == "banking"), None)
+    if bank is not None and abs(params["oscillator.theta0"].value) > bank.angle:
+        raise SceneError(f"theta0 = {params['oscillator.theta0'].value:g} rad lies beyond the banking angle "
+                         f"{bank.angle:g} rad", f"{ow}.theta0")
+    title = doc.get("title", "")
+    extra = {k: doc[k] for k in ("observation", "fit") if k in doc}
+    return BalanceScene(switching, tuple(effects), params, swings, inertia, text, where, str(title), extra)
+
+
+def _read_omega0(osc: Mapping, inertia: float | None, where: str) -> Param:
+    meaning = "undamped natural frequency omega0 (rad/s)"
+    if "omega0" in osc:
+        if "stiffness" in osc:
+            raise SceneError("give 'omega0' or 'stiffness' (with inertia), not both", where)
+        return read_param(osc["omega0"], name="oscillator.omega0", kind="rate_per_s", lower=0.0, lower_open=True,
+                          meaning=meaning, where=f"{where}.omega0")
+    if "stiffness" not in osc:
+        raise SceneError("give 'omega0' (rad/s) or 'stiffness' with 'inertia'", where)
+    if inertia is None:
+        raise SceneError("'stiffness' needs 'inertia' to give omega0", where)
+    return read_param(osc["stiffness"], name="oscillator.omega0", kind="stiffness", lower=0.0, lower_open=True,
+                      meaning=meaning, where=f"{where}.stiffness", convert=lambda k: math.sqrt(max(k, 0.0) / inertia),
+                      unit="1/s")
+
+
+def _resolve_ties(params: ParamSet) -> None:
+    from dataclasses import replace
+
+    for p in list(params):
+        if p.tie is not None:
+            other, factor = p.tie
+            params.params[p.name] = replace(p, value=factor * params[other].value)

@@ -1,0 +1,134 @@
+"""Closed-form motion inside one segment of constant coefficients.
+
+Inside a segment the swing-frame coordinate ``x`` obeys::
+
+    x'' + C x' + w2 (x - xc) = 0
+
+so ``y = x - xc`` is a damped oscillation (or an over-/critically damped creep) about the
+shifted centre ``xc``.  With ``h = C/2`` the state after a time ``tau`` is::
+
+    y(tau) = Ec y0 + Es (v0 + h y0)
+    v(tau) = Ec v0 - Es (h v0 + w2 y0)
+
+where ``Ec = exp(-h tau) c(tau)`` and ``Es = exp(-h tau) s(tau)`` with ``c, s`` =
+``cos(wd tau), sin(wd tau)/wd`` (underdamped), ``1, tau`` (critical) or
+``cosh(k tau), sinh(k tau)/k`` (overdamped).  The forms are written so that none of them
+cancels catastrophically near critical damping or overflows for strong overdamping.
+
+All functions are numba-compiled and also run as plain Python with NUMBA_DISABLE_JIT=1.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+__all__ = ["propagate", "turn_time", "cross_time"]
+
+
+@njit(cache=True, inline="always")
+def _ec_es(tau, h, w2):
+    d = w2 - h * h
+    if d > 0.0:
+        wd = math.sqrt(d)
+        e = math.exp(-h * tau)
+        return e * math.cos(wd * tau), e * math.sin(wd * tau) / wd
+    if d == 0.0:
+        e = math.exp(-h * tau)
+        return e, e * tau
+    k = math.sqrt(-d)
+    kt = k * tau
+    if kt < 1.0:
+        e = math.exp(-h * tau)
+        return e * math.cosh(kt), e * math.sinh(kt) / k
+    a = math.exp((k - h) * tau)
+    b = math.exp(-(k + h) * tau)
+    return 0.5 * (a + b), 0.5 * (a - b) / k
+
+
+@njit(cache=True)
+def propagate(y0, v0, tau, h, w2):
+    """State ``(y, v)`` a time ``tau`` >= 0 after ``(y0, v0)``.
+
+    Parameters
+    ----------
+    y0, v0 : float
+        Offset from the segment centre (rad) and velocity (rad/s) at the segment start.
+    tau : float
+        Elapsed time in the segment (s), finite.
+    h : float
+        Half the viscous coefficient, C/2 (1/s), >= 0.
+    w2 : float
+        Stiffness per inertia, omega0**2 (1/s^2), > 0.
+    """
+    ec, es = _ec_es(tau, h, w2)
+    return ec * y0 + es * (v0 + h * y0), ec * v0 - es * (h * v0 + w2 * y0)
+
+
+@njit(cache=True)
+def turn_time(y0, v0, h, w2):
+    """First time ``tau > 0`` at which the velocity returns to zero, or ``inf``.
+
+    Assumes the motion starts forward: ``v0 > 0``, or ``v0 == 0`` with ``y0 < 0``
+    (the centre lies ahead, so the acceleration is positive).
+    """
+    q = h * v0 + w2 * y0
+    d = w2 - h * h
+    if d > 0.0:
+        wd = math.sqrt(d)
+        return math.atan2(v0 * wd, q) / wd
+    if d == 0.0:
+        if q > 0.0 and v0 > 0.0:
+            return v0 / q
+        return math.inf
+    k = math.sqrt(-d)
+    if q > 0.0 and v0 > 0.0:
+        r = k * v0 / q
+        if r < 1.0:
+            return math.atanh(r) / k
+    return math.inf
+
+
+@njit(cache=True)
+def cross_time(y0, v0, h, w2, target, tau_hi):
+    """Time at which ``y`` rises to ``target`` on ``[0, tau_hi]``.
+
+    ``y`` increases monotonically there (the velocity is positive before the turning
+    point), ``y0 < target`` and ``y(tau_hi) >= target``; ``tau_hi`` may be ``inf`` when
+    the motion creeps towards a centre beyond ``target`` (overdamped), in which case a
+    bracket is found by doubling.  Newton steps on the closed form, safeguarded by
+    bisection, converge to a few ulps of the crossing time.
+    """
+    lo = 0.0
+    hi = tau_hi
+    if not math.isfinite(hi):
+        hi = 1.0 / (h + math.sqrt(w2))
+        for _ in range(4000):
+            y, v = propagate(y0, v0, hi, h, w2)
+            if y >= target:
+                break
+            lo = hi
+            hi *= 2.0
+    tau = 0.5 * (lo + hi)
+    if v0 > 0.0:
+        guess = (target - y0) / v0
+        if lo < guess < hi:
+            tau = guess
+    for _ in range(200):
+        y, v = propagate(y0, v0, tau, h, w2)
+        f = y - target
+        if f == 0.0:
+            return tau
+        if f > 0.0:
+            hi = tau
+        else:
+            lo = tau
+        new = tau - f / v if v > 0.0 else 0.5 * (lo + hi)
+        if not (lo < new < hi):
+            new = 0.5 * (lo + hi)
+        if abs(new - tau) <= 2e-16 * abs(new) or hi - lo <= 4e-16 * hi:
+            tau = new
+            break
+        tau = new
+    return min(max(tau, lo), hi)

@@ -1,0 +1,59 @@
+"""One family of exceptions for everything escfit refuses or cannot do.
+
+Every error names where the problem is (file, line, key) and the offending value, so a
+user can fix the input without reading code.  Each class also subclasses the matching
+built-in exception so generic ``except ValueError`` handlers keep working.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "EscfitError",
+    "SceneError",
+    "DataError",
+    "UnitError",
+    "SolverError",
+    "FitError",
+    "ResultsError",
+]
+
+
+class EscfitError(Exception):
+    """Base class of all escfit errors.
+
+    Parameters
+    ----------
+    message
+        What is wrong, in one line.
+    where
+        The file, and optionally ``file:line`` or ``file [key]``, the problem was found in.
+    """
+
+    def __init__(self, message: str, where: str | None = None):
+        self.message = message
+        self.where = where
+        super().__init__(f"{where}: {message}" if where else message)
+
+
+class SceneError(EscfitError, ValueError):
+    """A scene file is malformed, incomplete or physically impossible."""
+
+
+class UnitError(SceneError):
+    """A quantity carries a unit of the wrong dimension or one pint does not know."""
+
+
+class DataError(EscfitError, ValueError):
+    """A data file (recording, table) is malformed or inconsistent with the scene."""
+
+
+class SolverError(EscfitError, RuntimeError):
+    """A solver was asked for something it cannot do (refused before any work)."""
+
+
+class FitError(EscfitError, RuntimeError):
+    """A fit could not be set up or did not produce a usable result."""
+
+
+class ResultsError(EscfitError, OSError):
+    """A results file cannot be written (exists, no --force) or read (wrong schema)."""
