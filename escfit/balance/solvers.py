@@ -16,7 +16,7 @@ from .effects.base import SystemBuilder
 from .exact import STATUS_NAMES, run_angle, run_phase
 from .trajectory import Trajectory
 
-__all__ = ["SOLVERS", "solve_system", "kernel_args"]
+__all__ = ["SOLVERS", "solve_system", "kernel_args", "static_args"]
 
 
 def kernel_args(sys: SystemBuilder) -> tuple:
@@ -28,6 +28,13 @@ def kernel_args(sys: SystemBuilder) -> tuple:
         np.asarray(sys.w_dir, np.int64), float(sys.bank), float(sys.restitution),
         np.asarray(sys.drift_thresholds, float), np.asarray(sys.drift_rates, float),
     )
+
+
+def static_args(sys: SystemBuilder, solver: str) -> tuple:
+    """Kernel arguments without the damping drift, which only the exact solver models."""
+    if any(rate != 0.0 for rate in sys.drift_rates):
+        raise SolverError(f"solver {solver!r} does not model viscous_drift; use the exact solver")
+    return kernel_args(sys)[:13]
 
 
 def _outputs(n: int):

@@ -1,0 +1,129 @@
+"""Numerically hard cases: correct answers or a clear status, never NaN or a hang."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import pytest
+
+from escfit.balance import solve
+
+WINDOWS = """
+[[effects.escapement]]
+kind = "unlock"
+from = -0.6
+to = -0.3
+X = {xu}
+[[effects.escapement]]
+kind = "impulse"
+from = -0.3
+to = 0.3
+X = {xi}
+"""
+
+
+def _finite(traj):
+    for a in (traj.amplitude, traj.half_period, traj.time):
+        assert np.all(np.isfinite(a))
+
+
+@pytest.mark.parametrize("factor", [2.0, 2.0 * (1 + 1e-12), 2.0 * (1 - 1e-12), 3.0, 50.0])
+def test_critical_and_overdamped_creep_to_rest(make_scene, factor):
+    w0 = 10.0
+    traj = solve(make_scene(omega0=w0, theta0=1.0, effects=f"[effects.viscous]\nC = {factor * w0!r}\n"))
+    _finite(traj)
+    if factor < 2.0:  # barely underdamped: turns very late but turns
+        assert len(traj.amplitude) >= 1
+    else:
+        assert traj.status == "stopped" and len(traj.amplitude) == 0
+        assert math.isfinite(traj.final[1]) and abs(traj.final[1]) < 1e-9
+
+
+def test_overdamped_with_impulse_keeps_going(make_scene):
+    # an impulse strong enough to push an overdamped balance through the windows
+    w0 = 10.0
+    traj = solve(make_scene(omega0=w0, theta0=1.0, swings=20,
+                            effects=f"[effects.viscous]\nC = 25.0\n" + WINDOWS.format(xu=10.0, xi=2000.0)))
+    _finite(traj)
+    assert traj.status in ("ok", "stopped")
+
+
+@pytest.mark.parametrize("C, R", [(0.0, 0.0), (0.0, 5.0), (1.0, 0.0)])
+def test_zero_damping_and_zero_friction(make_scene, C, R):
+    traj = solve(make_scene(omega0=10.0, theta0=1.0, swings=50,
+                            effects=f"[effects.viscous]\nC = {C}\n[effects.coulomb]\nR = {R}\n" + WINDOWS.format(xu=10.0, xi=80.0)))
+    _finite(traj)
+    assert traj.status == "ok" and len(traj.amplitude) == 50
+
+
+def test_turning_point_inside_a_window_and_on_its_edge(make_scene):
+    # amplitude that decays into the impulse window: turning points end up inside it
+    traj = solve(make_scene(omega0=10.0, theta0=1.0, swings=200,
+                            effects="[effects.coulomb]\nR = 40.0\n" + WINDOWS.format(xu=0.0, xi=30.0)))
+    _finite(traj)
+    # release exactly on a window edge, and a turning point landing exactly on an edge
+    for th0 in (0.3, 0.6, -0.3):
+        t2 = solve(make_scene(omega0=10.0, theta0=th0, swings=20, effects=WINDOWS.format(xu=5.0, xi=50.0)))
+        _finite(t2)
+        assert t2.status in ("ok", "stopped")
+
+
+def test_grazing_turning_point_at_edge(make_scene):
+    # pure Coulomb: the first turn is at -(theta0 - 2r); place the window edge exactly there
+    w0, R, th0 = 10.0, 10.0, 1.0  # r = 0.1, first turn at -0.8 -> swing frame x = +0.8
+    eff = f"[effects.coulomb]\nR = {R}\n[[effects.escapement]]\nkind = \"impulse\"\nfrom = 0.8\nto = 0.9\nX = 50.0\n"
+    traj = solve(make_scene(omega0=w0, theta0=th0, swings=4, effects=eff))
+    _finite(traj)
+    assert traj.amplitude[0] == pytest.approx(0.8, abs=1e-12)
+
+
+def test_banking_clips_amplitude_and_flags(make_scene):
+    eff = WINDOWS.format(xu=5.0, xi=400.0) + "[effects.banking]\nangle = 1.2\nrestitution = 0.5\n"
+    traj = solve(make_scene(omega0=10.0, theta0=1.0, swings=50, effects=eff))
+    _finite(traj)
+    assert traj.status == "banked"
+    assert traj.banked.any()
+    assert np.all(traj.amplitude <= 1.2 + 1e-12)
+    np.testing.assert_allclose(traj.amplitude[traj.banked], 1.2, atol=1e-12)
+
+
+@pytest.mark.parametrize("e", [0.0, 1.0])
+def test_banking_restitution_limits(make_scene, e):
+    eff = f"[effects.viscous]\nC = 0.1\n[effects.banking]\nangle = 0.5\nrestitution = {e}\n"
+    traj = solve(make_scene(omega0=10.0, theta0=0.5, swings=10, effects=eff))
+    _finite(traj)
+    assert traj.status in ("ok", "banked")
+
+
+@pytest.mark.parametrize("scale", [1e-12, 1e6])
+def test_tiny_and_huge_parameters(make_scene, scale):
+    w0 = 10.0 * scale if scale > 1 else 10.0
+    eff = (f"[effects.viscous]\nC = {0.1 * scale!r}\n[effects.coulomb]\nR = {1e-3 * scale!r}\n"
+           + WINDOWS.format(xu=repr(1e-3 * scale), xi=repr(1e-2 * scale)))
+    traj = solve(make_scene(omega0=w0, theta0=1.0, swings=40, effects=eff))
+    _finite(traj)
+    assert traj.status in ("ok", "stopped")
+
+
+def test_many_stops_and_restarts_bounded_time(make_scene):
+    # an impulse that restarts the balance from rest at every turn inside the window
+    t0 = time.perf_counter()
+    traj = solve(make_scene(omega0=10.0, theta0=0.25, swings=5000,
+                            effects="[effects.coulomb]\nR = 20.0\n" + WINDOWS.format(xu=0.0, xi=25.0)))
+    assert time.perf_counter() - t0 < 20.0
+    _finite(traj)
+
+
+def test_phase_mode_refuses_overdamping(make_scene):
+    from escfit.errors import SolverError
+
+    with pytest.raises(SolverError, match="C < 2\\*omega0"):
+        solve(make_scene(omega0=1.0, theta0=1.0, switching="phase", effects="[effects.viscous]\nC = 2.0\n"))
+
+
+def test_phase_breakdown_status(make_scene):
+    traj = solve(make_scene(omega0=1.0, theta0=1.0, switching="phase", effects="[effects.coulomb]\nR = 2.0\n"))
+    assert traj.status == "phase_breakdown"
+    _finite(traj)
