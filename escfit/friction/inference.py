@@ -17,6 +17,7 @@ Both use the same explicit model (:mod:`escfit.friction.likelihood`):
 from __future__ import annotations
 
 import json
+import logging
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -138,7 +139,6 @@ def fit_least_squares(scene: RigScene, readings: Readings, *, max_iter: int = 50
     params = lmfit.Parameters()
     start = _initial_values(model)
     for name in names:
-        p = scene.params[name]
         lo, hi = scene.priors[name].support
         params.add(safe_name(name), value=float(np.clip(start[name], lo, hi)), min=lo, max=hi)
     result = None
@@ -267,11 +267,22 @@ def sample_posterior(
     lp = sampler.get_log_prob(discard=burn, thin=thin)
     samples = np.transpose(chain, (1, 0, 2))  # (chain, draw, dim)
     flat = samples.reshape(-1, ndim)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        tau = np.asarray(sampler.get_autocorr_time(discard=burn, quiet=True), dtype=float)
+    tau = _autocorr_time(sampler, burn)
     return _to_inference_data(model, samples, flat, lp.T, tau, sampler, dict(
         seed=seed, nwalkers=nwalkers, nsteps=nsteps, burn=burn, thin=thin))
+
+
+def _autocorr_time(sampler, burn: int) -> np.ndarray:
+    """Integrated autocorrelation time per parameter, in steps (recorded, not printed)."""
+    log = logging.getLogger("emcee")
+    level = log.level
+    log.setLevel(logging.ERROR)  # a short-chain caveat is recorded in attrs instead
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return np.asarray(sampler.get_autocorr_time(discard=burn, quiet=True), dtype=float)
+    finally:
+        log.setLevel(level)
 
 
 def _initial_ensemble(model: SessionModel, fit: LeastSquaresFit, nwalkers: int, rng) -> np.ndarray:
@@ -318,6 +329,7 @@ def _to_inference_data(model: SessionModel, samples, flat, lp, tau, sampler, run
         "sampler": "emcee.EnsembleSampler (stretch move, vectorised)",
         "acceptance_fraction": float(np.mean(sampler.acceptance_fraction)),
         "autocorr_time": json.dumps([float(t) for t in tau]),
+        "draws_per_autocorr_time": float(samples.shape[1] * run["thin"] / np.max(tau)),
         "versions": json.dumps(_versions()),
         "schema_version": 1,
         **run,

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import pint
@@ -65,18 +66,31 @@ class Prior:
             lo = max(lo, 0.0)
         return lo, hi
 
-    def _mass(self) -> float:
+    @cached_property
+    def _log_mass(self) -> float:
         lo, hi = self.support
         dist = self._dist()
-        return float(dist.cdf(hi) - dist.cdf(lo))
+        return math.log(float(dist.cdf(hi) - dist.cdf(lo)))
+
+    def _mass(self) -> float:
+        return math.exp(self._log_mass)
 
     def logpdf(self, x):
         """Log density (normalised on the support), ``-inf`` outside it; vectorised."""
         x = np.asarray(x, dtype=float)
         lo, hi = self.support
-        with np.errstate(divide="ignore"):
-            out = self._dist().logpdf(x) - math.log(self._mass())
-        return np.where((x >= lo) & (x <= hi), out, -np.inf)
+        a = self.args
+        if self.family == "normal":
+            out = -0.5 * ((x - a[0]) / a[1]) ** 2 - math.log(a[1] * math.sqrt(2 * math.pi))
+        elif self.family == "halfnormal":
+            out = -0.5 * (x / a[0]) ** 2 + math.log(math.sqrt(2 / math.pi) / a[0])
+        elif self.family == "uniform":
+            out = np.full(x.shape, -math.log(a[1] - a[0]))
+        else:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                out = -np.log(x) - math.log(math.log(a[1] / a[0]))
+        inside = (x >= lo) & (x <= hi)
+        return np.where(inside, out - self._log_mass, -np.inf)
 
     def pdf(self, x):
         """Density, see :meth:`logpdf`."""

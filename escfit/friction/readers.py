@@ -68,7 +68,7 @@ class Readings:
     lines
         Line number (1-based) of each reading in the source, for messages.
     metadata
-        ``# key: value`` comment lines, in file order.
+        ``# key: value`` comment lines, in file order (a repeated key continues the value).
     where
         Source file name.
     """
@@ -148,8 +148,9 @@ def parse_readings(text: str, *, where: str = "<readings>") -> Readings:
             continue
         if line.startswith("#"):
             m = _META.match(line)
-            if m:
-                metadata[m.group(1)] = m.group(2)
+            if m:  # a repeated key continues its value
+                key = m.group(1)
+                metadata[key] = f"{metadata[key]} {m.group(2)}" if key in metadata else m.group(2)
             continue
         fields = next(csv.reader([line]))
         rows.append((lineno, [f.strip() for f in fields]))
@@ -160,7 +161,7 @@ def parse_readings(text: str, *, where: str = "<readings>") -> Readings:
     if len(rows) == 1:
         raise DataError("no readings after the header", f"{where}:{header_line}")
 
-    values: dict[str, list[float]] = {name: [] for name in columns if name != "material"}
+    values: dict[str, list[float]] = {name: [] for name, _ in columns.values() if name != "material"}
     material: list[str] = []
     lines: list[int] = []
     for lineno, fields in rows[1:]:

@@ -1,0 +1,131 @@
+"""Evidence for or against the optional friction laws (Savage-Dickey Bayes factors).
+
+Monday reports two findings from his rig: no appreciable variation of mu with sliding
+speed between 3 and 10 ft/s, and a slight change of mu with normal load.  Each is a point
+hypothesis nested in a larger model: ``mu_v = 0`` inside ``mu = mu0 + mu_v (v - v_ref)`` and
+``mu_w = 0`` inside ``mu = mu0 + mu_w (w - w_ref)``.  For such nested hypotheses, when the
+prior of the coefficient is independent of the other parameters, the Bayes factor of the
+null against the law is the Savage-Dickey ratio
+
+    BF01 = p(coefficient = 0 | data, law) / p(coefficient = 0 | law),
+
+the posterior density at zero over the prior density at zero.  It needs one posterior run
+of the larger model, and unlike information criteria it charges the law for the prior
+range it spreads its coefficient over (a vague prior favours the null), which is exactly
+the question "is there appreciable variation?".  The prior of the coefficient must
+therefore be proper and stated (a normal or a bounded uniform prior in the scene).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+from ..errors import FitError
+from .scene import RigScene
+
+__all__ = ["LawEvidence", "savage_dickey", "compare_laws", "HYPOTHESES"]
+
+#: law parameter -> the null hypothesis it tests
+HYPOTHESES = {
+    "friction.mu_v": "no appreciable variation of mu with sliding speed",
+    "friction.mu_w": "no change of mu with normal load",
+}
+
+
+@dataclass(frozen=True)
+class LawEvidence:
+    """Savage-Dickey Bayes factor of one null hypothesis.
+
+    Attributes
+    ----------
+    parameter
+        The law coefficient set to zero by the null (``friction.mu_v`` or ``friction.mu_w``).
+    hypothesis
+        The null hypothesis in words.
+    bf01
+        Bayes factor of the null against the law (> 1 favours the null).
+    posterior_density, prior_density
+        Densities of the coefficient at zero, in its canonical unit's inverse.
+    method
+        ``"kde"`` (Gaussian kernel density of the draws) or ``"normal"`` (normal
+        approximation of the marginal, used when zero lies more than 4 sd from the mean,
+        where kernel densities are unreliable).
+    mean, sd, ci95
+        Posterior summary of the coefficient (canonical units).
+    verdict
+        Kass-Raftery wording of the strength of the evidence.
+    """
+
+    parameter: str
+    hypothesis: str
+    bf01: float
+    posterior_density: float
+    prior_density: float
+    method: str
+    mean: float
+    sd: float
+    ci95: tuple[float, float]
+    verdict: str
+
+    @property
+    def log10_bf01(self) -> float:
+        return math.log10(self.bf01) if self.bf01 > 0 else -math.inf
+
+
+def savage_dickey(idata, scene: RigScene, parameter: str) -> LawEvidence:
+    """Bayes factor of ``parameter = 0`` from a posterior of the model that contains it.
+
+    Parameters
+    ----------
+    idata
+        Result of :func:`escfit.friction.sample_posterior` for ``scene``.
+    scene
+        The scene sampled (supplies the coefficient's prior).
+    parameter
+        ``"friction.mu_v"`` or ``"friction.mu_w"``.
+
+    Raises
+    ------
+    FitError
+        The coefficient was not sampled, or its prior has no density at zero.
+    """
+    if parameter not in idata.posterior:
+        raise FitError(f"{parameter} was not sampled; declare it with vary = true and a proper prior", scene.where)
+    prior = scene.priors[parameter]
+    prior_density = float(prior.pdf(0.0))
+    if not prior_density > 0:
+        raise FitError(f"the prior of {parameter} ({prior.describe()}) has no density at 0", scene.where)
+    x = np.asarray(idata.posterior[parameter].values, dtype=float).ravel()
+    mean, sd = float(np.mean(x)), float(np.std(x))
+    lo, hi = np.quantile(x, [0.025, 0.975])
+    if sd > 0 and abs(mean) / sd <= 4.0:
+        post_density, method = float(stats.gaussian_kde(x)(0.0)[0]), "kde"
+    else:
+        post_density, method = float(stats.norm.pdf(0.0, mean, sd)), "normal"
+    bf01 = post_density / prior_density
+    return LawEvidence(parameter, HYPOTHESES.get(parameter, f"{parameter} = 0"), bf01, post_density,
+                       prior_density, method, mean, sd, (float(lo), float(hi)), _verdict(bf01))
+
+
+def compare_laws(idata, scene: RigScene) -> dict[str, LawEvidence]:
+    """Savage-Dickey evidence for every law coefficient the posterior sampled."""
+    return {name: savage_dickey(idata, scene, name) for name in HYPOTHESES if name in idata.posterior}
+
+
+def _verdict(bf01: float) -> str:
+    """Kass and Raftery (1995) scale on 2 ln B for whichever hypothesis is favoured."""
+    if not bf01 > 0:
+        return "decisive for the law"
+    two_ln = 2.0 * abs(math.log(bf01))
+    side = "the null" if bf01 >= 1 else "the law"
+    if two_ln < 2:
+        return f"not worth more than a bare mention (leans to {side})"
+    if two_ln < 6:
+        return f"positive for {side}"
+    if two_ln < 10:
+        return f"strong for {side}"
+    return f"very strong for {side}"
