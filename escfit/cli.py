@@ -76,6 +76,24 @@ def simulate(scene, solver, swings, step, as_json, out, force):
         click.echo(_describe(ds, sc))
 
 
+@cli.command()
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), default="charts", show_default=True,
+              help="Directory for the CSV and PNG files.")
+@click.option("--c-over-omega0", "c0", type=click.FloatRange(0.0, 1.99), default=0.05, show_default=True,
+              help="Damping ratio at which the conversion charts are drawn.")
+@click.option("--no-png", is_flag=True, help="CSV only (no matplotlib needed).")
+@click.option("--force", is_flag=True, help="Replace existing files.")
+def charts(out_dir, c0, no_png, force):
+    """Regenerate Monday's charts by computation: unit curves, conversion charts, factors."""
+    from .charts import graph_factor
+    from .charts_files import write_charts
+
+    files = write_charts(out_dir, c_over_w0=c0, force=force, png=not no_png)
+    for f in files:
+        click.echo(str(f))
+    click.echo(f"graph factor K/K_R at C/omega0 = {c0:g}: {graph_factor(c0):.4f}")
+
+
 def _describe(ds, sc) -> str:
     lines = [f"{Path(sc.where).name}: model {sc.model}, status {ds.attrs.get('status')}"]
     if "amplitude" in ds and ds.sizes.get("swing", 0):

@@ -255,7 +255,9 @@ def run_phase(theta0, c0, r, w2, w_lo, w_hi, w_x, w_dir, dr_th, dr_rate, n_swing
     ``w_lo, w_hi`` are phase offsets (rad) from the zero crossing in the middle of the
     half cycle, and the Coulomb sign flips at every half-cycle boundary.  A half swing
     ends at phase ``k*pi`` and its amplitude is ``|theta|`` there (the velocity there is
-    not exactly zero when forcing acts).  Requires ``C < 2*sqrt(w2)``.
+    not exactly zero when forcing acts).  Requires ``C < 2*sqrt(w2)``.  When a half cycle
+    ends on the side it started the run continues, as Monday's programs did, with status
+    4 (phase_breakdown) to say the numbers no longer describe a swinging balance.
 
     Returns
     -------
@@ -326,8 +328,7 @@ def run_phase(theta0, c0, r, w2, w_lo, w_hi, w_x, w_dir, dr_th, dr_rate, n_swing
         banked[n_done] = 0
         n_done += 1
         if x <= 0.0:
-            status = 4
-            break
+            status = 4  # keep going, as Monday's programs did, but say so
         if drift and n_done % 2 == 0:
             c *= _drift_factor(int_c, dr_th, dr_rate)
             if c >= 2.0 * math.sqrt(w2):

@@ -16,8 +16,8 @@ STATUS_MESSAGES = {
     "stopped": "friction holds the balance at rest (or it creeps to rest without another turning point)",
     "banked": "run complete; at least one half swing ended on the banking pins",
     "max_segments": "segment budget exhausted before the requested swings (pathological input)",
-    "phase_breakdown": "phase switching: a half cycle ended on the side it started (or C reached 2*omega0); "
-    "Monday's phase convention no longer describes the motion",
+    "phase_breakdown": "phase switching: some half cycle ended on the side it started (or C reached 2*omega0); "
+    "the numbers are what Monday's programs compute, but they no longer describe a swinging balance",
     "failed": "the solver failed",
 }
 
