@@ -1,0 +1,131 @@
+"""friction_rig scenes: parameters, priors, reading sd, forward predictions and refusals."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from escfit.errors import SceneError, SolverError, UnitError
+from escfit.friction import json_summary, simulate
+from escfit.scene import load_scene
+
+GF = 0.00980665
+IN = 0.0254
+
+BASE = """\
+model = "friction_rig"
+[rig]
+k = { value = "2.0 inch", sd = "0.01 inch" }
+d = { value = "1.0 inch", sd = "0.01 inch" }
+[friction]
+mu = { value = 0.1, vary = true, min = 0.0, max = 1.0 }
+"""
+
+
+def scene(extra: str = "", base: str = BASE):
+    return load_scene("rig.toml", text=base + extra)
+
+
+def test_brief_example_parses_with_shared_geometry_priors():
+    s = scene()
+    assert s.model == "friction_rig"
+    assert s.params["rig.k"].value == pytest.approx(2 * IN)
+    assert s.params["rig.d"].sd == pytest.approx(0.01 * IN)
+    assert s.free_names() == ["rig.k", "rig.d", "friction.mu", "reading.sd"]
+    assert s.priors["rig.k"].family == "normal" and s.priors["rig.k"].args == pytest.approx((2 * IN, 0.01 * IN))
+    assert s.priors["friction.mu"].family == "uniform"
+    assert s.priors["reading.sd"].family == "loguniform"  # no [reading]: estimated
+    assert s.laws == ()
+
+
+def test_reading_resolution_routes_agree():
+    full = scene('[reading]\nresolution = "0.5 inch"\nfull_scale_load = "5 gf"\nscale_length = "11.5 ft"\n')
+    slope = scene('[reading]\nresolution = "0.5 inch"\nslope = "27.6 inch/gf"\n')
+    sd = full.params["reading.sd"].value
+    assert sd / GF == pytest.approx(math.sqrt(1 / 6) * 0.5 * 5 / 138, rel=1e-12)
+    assert slope.params["reading.sd"].value == pytest.approx(sd, rel=1e-12)
+    assert "reading.sd" not in full.free_names()
+    assert "uniform rounding" in full.reading_note
+    direct = scene('[reading]\nsd = "0.0074 gf"\n')
+    assert direct.params["reading.sd"].value == pytest.approx(0.0074 * GF)
+
+
+def test_wire_stiffness_route_uses_the_optical_lever():
+    s = scene('[reading]\nresolution = "0.5 inch"\nwire_stiffness = "1e-5 N*m"\nscale_distance = "15 ft"\n')
+    slope = 2 * 15 * 12 * IN * math.sqrt(3) * IN / 1e-5
+    assert s.params["reading.sd"].value == pytest.approx(math.sqrt(1 / 6) * 0.5 * IN / slope, rel=1e-12)
+
+
+def test_laws_with_units_and_references():
+    s = scene('mu_w = { value = 0.0, vary = true, prior = "normal(0, 0.02 / gf)" }\nload_ref = "2.2 gf"\n'
+              'mu_v = { value = "0.001 s/ft", vary = true, prior = "normal(0, 0.005 s/ft)" }\n'
+              'speed_ref = "6.5 ft/s"\n')
+    assert s.laws == ("load", "speed")
+    assert s.params["friction.mu_w"].unit == "1/N"
+    assert s.priors["friction.mu_w"].args[1] == pytest.approx(0.02 / GF)
+    assert s.params["friction.mu_v"].value == pytest.approx(0.001 / 0.3048)
+    assert s.priors["friction.mu_v"].args[1] == pytest.approx(0.005 / 0.3048)
+    assert s.load_ref == pytest.approx(2.2 * GF) and s.speed_ref == pytest.approx(6.5 * 0.3048)
+
+
+@pytest.mark.parametrize(
+    "text,where,words",
+    [
+        (BASE.replace('"1.0 inch"', '"2.0 inch"'), "rig.toml [rig.d]", ["'2.0 inch'", "must be below k", "'2.0 inch'"]),
+        (BASE.replace('"1.0 inch"', '"2.5 inch"'), "rig.toml [rig.d]", ["d = '2.5 inch'", "cannot reach the disc"]),
+        (BASE.replace('"2.0 inch", sd', '"0 inch", sd'), "rig.toml [rig.k]", ["'0 inch'", "physical range"]),
+        (BASE.replace('"1.0 inch", sd', '"-1 inch", sd'), "rig.toml [rig.d]", ["'-1 inch'"]),
+        (BASE + "colour = 1\n", "rig.toml [friction]", ["unknown key(s) ['colour']"]),
+        (BASE.replace("[rig]", "[rig]\nlength = 1"), "rig.toml [rig]", ["unknown key(s) ['length']"]),
+        (BASE + "[extra]\n", "rig.toml", ["unknown key(s) ['extra']"]),
+        (BASE.replace("[rig]", '[rig]\nload_at = "pan"'), "rig.toml [rig.load_at]", ["'pan'"]),
+        (BASE.replace("min = 0.0, max = 1.0", "min = 0.0"), "rig.toml [friction.mu]", ["open", "add min and max"]),
+        (BASE + 'mu_w = { value = 0, vary = true, prior = "cauchy(0, 1)" }\n', "rig.toml [friction.mu_w].prior",
+         ["'cauchy(0, 1)'"]),
+        (BASE + 'mu_w = { value = 0, vary = true, prior = "normal(0, 0.1 s)" }\n', "rig.toml [friction.mu_w].prior",
+         ["'0.1 s'", "1/N"]),
+        (BASE + 'load_ref = "2 gf"\n', "rig.toml [friction.load_ref]", ["mu_w"]),
+        (BASE + '[reading]\nresolution = "0.5 inch"\n', "rig.toml [reading]", ["exactly one"]),
+        (BASE + '[reading]\nsd = "1 gf"\nslope = "1 inch/gf"\n', "rig.toml [reading]", ["exactly one"]),
+        (BASE + '[reading]\nslope = "1 inch/gf"\n', "rig.toml [reading]", ["add resolution"]),
+        (BASE + '[reading]\nresolution = "0.5 inch"\nfull_scale_load = "5 gf"\n', "rig.toml [reading]",
+         ["scale_length"]),
+        (BASE + '[reading]\nsd = "-1 gf"\n', "rig.toml [reading].sd", ["'-1 gf'"]),
+        (BASE + '[reading]\nresolution = "0.5 inch"\nslope = "0 inch/gf"\n', "rig.toml [reading].slope",
+         ["positive", "'0 inch/gf'"]),
+        (BASE + '[reading]\nresolution = "0.5 inch"\nslope = "1 inch"\n', "rig.toml [reading].slope", ["m/N"]),
+    ],
+)
+def test_refusals_name_key_and_value(text, where, words):
+    with pytest.raises(SceneError) as info:
+        load_scene("rig.toml", text=text)
+    assert info.value.where == where, info.value
+    for w in words:
+        assert w in info.value.message, info.value.message
+
+
+def test_length_given_as_force_is_a_unit_error():
+    with pytest.raises(UnitError, match="'2 gf'"):
+        load_scene("rig.toml", text=BASE.replace('"2.0 inch", sd', '"2 gf", sd'))
+
+
+def test_simulate_predicts_dw_for_a_grid_of_loads():
+    s = scene('[reading]\nsd = "0.0074 gf"\n')
+    ds = simulate(s, loads=np.array([1.0, 2.2]) * GF)
+    assert ds["dw"].dims == ("load", "speed")
+    assert ds["dw"].values[:, 0] / GF == pytest.approx(np.array([1.0, 2.2]) * 0.1 / math.sqrt(3))
+    assert ds["calibration_load"].values[1, 0] == pytest.approx(2.2 * GF - ds["dw"].values[1, 0])
+    assert ds.attrs["lever_ratio"] == pytest.approx(math.sqrt(3))
+    summary = json_summary(ds)
+    assert summary["kind"] == "prediction" and summary["load_gf"] == [1.0, 2.2]
+    with pytest.raises(SolverError, match="'rk4'"):
+        simulate(s, solver="rk4")
+
+
+def test_simulate_with_speed_law_spans_monday_speeds():
+    s = scene('mu_v = { value = "0.01 s/ft" }\nspeed_ref = "6.5 ft/s"\n[reading]\nsd = "0.0074 gf"\n')
+    ds = simulate(s)
+    assert ds.sizes["speed"] == 4
+    assert ds["mu"].values[0] == pytest.approx(0.1 + 0.01 * (np.array([3, 5, 7.5, 10]) - 6.5))
