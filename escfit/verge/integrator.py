@@ -218,7 +218,9 @@ def _fires(regime, e0, e1, e2, armed):
         return -1
     if armed and e0 <= 0.0 and e1 >= 0.0:
         return R_CONTACT
-    if e1 < 0.0 and e0 > 0.0:
+    if e1 < 0.0:
+        # past the face tip: whether or not the tooth is beyond the face line, there is
+        # no face left to hit
         return R_MISS
     return -1
 
@@ -261,16 +263,20 @@ def _track_max(mx, regime, r):
 def _locate_events(k, regime, side, y, off, m, d1, hs, vals0, vals1, armed, tol_h):
     """Smallest step length at which one of the phase events fires (``hs`` if none is found).
 
-    Each event function that went from positive to non-positive over the step is solved
-    for its zero by the Illinois method; the returned length lies just past the zero.
-    The event's side conditions (tooth facing the face at contact, gap open at a miss)
-    are checked at that point, so a crossing that is not an event is skipped.
+    Each event function that went from positive to non-positive over the step (negative,
+    for the free-motion "facing" function) is solved for its zero by the Illinois method;
+    the returned length lies just past the zero.  The event's side condition (the tooth
+    facing the working surface at a contact) is checked there, so a crossing that is not
+    an event is skipped.
     """
     best = hs
     for i in range(3):
         if regime == FREE and i == 0 and not armed:
             continue
-        if not (vals0[i] > 0.0 and vals1[i] <= 0.0) and not (regime == FREE and i == 1 and vals0[i] >= 0.0 > vals1[i]):
+        if regime == FREE and i == 1:
+            if not (vals0[i] >= 0.0 > vals1[i]):
+                continue
+        elif not (vals0[i] > 0.0 and vals1[i] <= 0.0):
             continue
         lo, hi = 0.0, hs
         flo, fhi = vals0[i], vals1[i]
@@ -346,20 +352,22 @@ def integrate_phase(k, regime, side, y, t, off, m, armed, h, t_max, buf, n, reco
         Time at the end of the phase (s).
     n : int
         Next free row of ``buf``.
+    armed : bool
+        The free-motion contact flag at the end (to resume after a full buffer).
     """
     cap = buf.shape[0]
     changes = 0
     tol_h = 1e-10 * h
     if m[M_TSTUCK] > 0.5 and (regime == COUPLED or m[M_VSTUCK] > 0.5):
-        return R_STALL, t, n
+        return R_STALL, t, n, armed
     while True:
         d1 = _deriv(k, regime, side, y[0], y[1], y[2], y[3], off, m)
         if not (math.isfinite(d1[1]) and math.isfinite(d1[3])):
-            return R_BAD, t, n
+            return R_BAD, t, n, armed
         _track_max(mx, regime, d1)
         if record:
             if n >= cap:
-                return R_BUFFER, t, n
+                return R_BUFFER, t, n, armed
             _record(buf, n, t, y, off, regime, side, d1, m)
             n += 1
         e0, e1, e2 = d1[7], d1[8], k.phi_cut - (y[0] + off)
@@ -367,9 +375,9 @@ def integrate_phase(k, regime, side, y, t, off, m, armed, h, t_max, buf, n, reco
             armed = True
         hit = _fires(regime, e0, e1, e2, armed)
         if hit >= 0:
-            return hit, t, n
+            return hit, t, n, armed
         if t >= t_max:
-            return R_TMAX, t, n
+            return R_TMAX, t, n, armed
         hs = min(h, t_max - t)
         y1 = _rk4(k, regime, side, y, off, m, hs, d1)
         if not (math.isfinite(y1[0]) and math.isfinite(y1[1]) and math.isfinite(y1[2])):
@@ -385,7 +393,7 @@ def integrate_phase(k, regime, side, y, t, off, m, armed, h, t_max, buf, n, reco
                     hi = mid
             if lo > 0.0:
                 y[:] = _rk4(k, regime, side, y, off, m, lo, d1)
-            return R_BAD, t + lo, n
+            return R_BAD, t + lo, n, armed
         f0, f1, f2 = _events(k, regime, side, y1, off, m)
         hit = _fires(regime, f0, f1, f2, armed)
         m1 = _mode_at(k, regime, side, y1, off, m)
@@ -418,7 +426,7 @@ def integrate_phase(k, regime, side, y, t, off, m, armed, h, t_max, buf, n, reco
         if mode_change:
             changes += 1
             if changes > max_mode_changes:
-                return R_CHATTER, t, n
+                return R_CHATTER, t, n, armed
             y[:] = _rk4(k, regime, side, y, off, m, h_mode, d1)
             t += h_mode
             new = _mode_at(k, regime, side, y, off, m)
@@ -432,7 +440,7 @@ def integrate_phase(k, regime, side, y, t, off, m, armed, h, t_max, buf, n, reco
                     if regime == COUPLED:
                         m[:] = new
                         m[M_TSTUCK] = 1.0
-                        return R_STALL, t, n
+                        return R_STALL, t, n, armed
                     new[M_TSTUCK] = 1.0
                     new[M_DIR] = m[M_DIR]
                 else:
@@ -450,5 +458,5 @@ def integrate_phase(k, regime, side, y, t, off, m, armed, h, t_max, buf, n, reco
                     new[M_S5] = d
             m[:] = new
             if regime == FREE and m[M_TSTUCK] > 0.5 and m[M_VSTUCK] > 0.5:
-                return R_STALL, t, n
+                return R_STALL, t, n, armed
             continue
