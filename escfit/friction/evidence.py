@@ -25,6 +25,7 @@ import numpy as np
 from scipy import stats
 
 from ..errors import FitError
+from .rig import lever_ratio
 from .scene import RigScene
 
 __all__ = ["LawEvidence", "savage_dickey", "compare_laws", "HYPOTHESES"]
@@ -51,9 +52,12 @@ class LawEvidence:
     posterior_density, prior_density
         Densities of the coefficient at zero, in its canonical unit's inverse.
     method
-        ``"kde"`` (Gaussian kernel density of the draws) or ``"normal"`` (normal
-        approximation of the marginal, used when zero lies more than 4 sd from the mean,
-        where kernel densities are unreliable).
+        How the posterior density at zero was estimated: ``"conditional"`` (average over
+        the draws of the exact conditional density of the coefficient given all other
+        parameters; the default, valid because ``dw`` is linear in the law coefficients
+        when the load column is the normal force), else ``"kde"`` (kernel density of the
+        draws, when zero lies within 2 sd of the mean) or ``"normal"`` (normal
+        approximation of the marginal, further out, where kernel densities are noise).
     mean, sd, ci95
         Posterior summary of the coefficient (canonical units).
     verdict
@@ -102,13 +106,62 @@ def savage_dickey(idata, scene: RigScene, parameter: str) -> LawEvidence:
     x = np.asarray(idata.posterior[parameter].values, dtype=float).ravel()
     mean, sd = float(np.mean(x)), float(np.std(x))
     lo, hi = np.quantile(x, [0.025, 0.975])
-    if sd > 0 and abs(mean) / sd <= 4.0:
+    conditional = _conditional_density_at_zero(idata, scene, parameter)
+    if conditional is not None:
+        post_density, method = conditional, "conditional"
+    elif sd > 0 and abs(mean) / sd <= 2.0:
         post_density, method = float(stats.gaussian_kde(x)(0.0)[0]), "kde"
     else:
         post_density, method = float(stats.norm.pdf(0.0, mean, sd)), "normal"
     bf01 = post_density / prior_density
     return LawEvidence(parameter, HYPOTHESES.get(parameter, f"{parameter} = 0"), bf01, post_density,
                        prior_density, method, mean, sd, (float(lo), float(hi)), _verdict(bf01))
+
+
+def _conditional_density_at_zero(idata, scene: RigScene, parameter: str) -> float | None:
+    """Rao-Blackwellised posterior density of a law coefficient at zero, or ``None``.
+
+    Given every other parameter, ``dw`` is linear in the coefficient ``c``:
+    ``dw_i = base_i + c * x_i``.  With normal reading errors and a normal (or flat) prior
+    the conditional posterior of ``c`` is a normal truncated to the prior's support, whose
+    density at zero is exact; averaging it over the posterior draws of the other
+    parameters estimates the marginal density at zero with far less noise than a kernel
+    density in the tail.  (The constraint ``mu >= 0`` at every reading is ignored here; it
+    only matters when a reading's mu is within a few sd of zero.)
+    """
+    prior = scene.priors[parameter]
+    if scene.load_at != "reading" or prior.family not in ("normal", "uniform", "halfnormal"):
+        return None
+    from .likelihood import build_model
+    from .readers import Readings
+
+    speed = idata.constant_data["speed"].values if "speed" in idata.constant_data else None
+    readings = Readings(load=idata.constant_data["load"].values, dw=idata.observed_data["dw"].values,
+                        speed=speed, where=str(idata.attrs.get("data_where", "<posterior>")))
+    model = build_model(scene, readings)
+    theta = np.column_stack([np.asarray(idata.posterior[n].values, dtype=float).ravel() for n in model.names])
+    values = model.unpack(theta)
+    values[parameter] = np.zeros_like(values[parameter])
+    per_mu = readings.load[None, :] / lever_ratio(values["rig.k"], values["rig.d"])[:, None]
+    base = per_mu * model.mu(values)
+    if parameter == "friction.mu_w":
+        x = per_mu * (readings.load - scene.load_ref)[None, :]
+    else:
+        x = per_mu * (readings.speed - scene.speed_ref)[None, :]
+    sd = values["reading.sd"][:, None]
+    prec = np.sum((x / sd) ** 2, axis=1)
+    num = np.sum(x * (readings.dw[None, :] - base) / sd**2, axis=1)
+    if prior.family in ("normal", "halfnormal"):
+        m0, s0 = (prior.args[0], prior.args[1]) if prior.family == "normal" else (0.0, prior.args[0])
+        prec, num = prec + 1.0 / s0**2, num + m0 / s0**2
+    if not np.all(np.isfinite(num)) or not np.all(prec > 0):
+        return None
+    mean, scale = num / prec, 1.0 / np.sqrt(prec)
+    lo, hi = prior.support
+    mass = stats.norm.cdf((hi - mean) / scale) - stats.norm.cdf((lo - mean) / scale)
+    if not lo <= 0.0 <= hi:
+        return 0.0
+    return float(np.mean(stats.norm.pdf(0.0, mean, scale) / mass))
 
 
 def compare_laws(idata, scene: RigScene) -> dict[str, LawEvidence]:
