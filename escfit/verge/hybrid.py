@@ -33,7 +33,7 @@ from .integrator import (
 )
 from .kinematics import coupled_kinematics
 
-__all__ = ["RunResult", "run_rk4", "side_change", "impact_decision", "DEFAULT_STEP"]
+__all__ = ["RunResult", "run_rk4", "run_hybrid", "side_change", "impact_decision", "DEFAULT_STEP", "IMPACT_FIELDS"]
 
 #: default RK4 step in radians of fuze-body spin (the step in seconds is this / omega,
 #: so runs at any spin rate take the same number of steps)
@@ -72,7 +72,7 @@ class RunResult:
     phases : list of tuple
         ``(t_start, t_end, regime, side, reason)`` for every phase.
     reversals : int
-        Number of phases in which the gear train ran backwards at some point.
+        Number of times the gear train changed direction (at impacts or through zero speed).
     """
 
     status: str
@@ -144,7 +144,7 @@ def run_rk4(
     max_phases: int = 200_000,
     max_mode_changes: int = 100_000,
 ) -> RunResult:
-    """Simulate from rest on the entrance face until armed, stalled or out of time.
+    """Simulate from rest on the entrance face with the compiled fixed-step RK4 integrator.
 
     Parameters
     ----------
@@ -164,16 +164,37 @@ def run_rk4(
         Limit on friction-sign changes within one phase.
     """
     h = step / k.omega
+
+    def phase(regime, side, y, t, off, m, armed, buf, n, mx):
+        while True:
+            code, t, n, armed = integrate_phase(k, regime, side, y, t, off, m, armed, h, t_max, buf, n, record, mx,
+                                                max_mode_changes)
+            if code != R_BUFFER:
+                return code, t, n, armed, buf
+            buf = np.concatenate([buf, np.empty((buf.shape[0], N_COLS))])
+
+    cap = max(4096, int(min(t_max / h, 2e6) * 1.05) + 1024) if record else 1
+    return run_hybrid(k, phase, phi_start=phi_start, t_max=t_max, record=record, max_phases=max_phases,
+                      capacity=cap)
+
+
+def run_hybrid(k: Constants, phase, *, phi_start: float, t_max: float, record: bool, max_phases: int,
+               capacity: int) -> RunResult:
+    """The regime automaton, driving any phase integrator.
+
+    ``phase(regime, side, y, t, off, m, armed, buf, n, mx)`` must advance one phase in
+    place and return ``(reason_code, t, n, armed, buf)`` like
+    :func:`escfit.verge.integrator.integrate_phase`.
+    """
     y = np.array([phi_start, 0.0, 0.0, 0.0])
     off = -phi_start
     side, regime, t = 1.0, COUPLED, 0.0
     if not _kinematic_verge(k, side, y):
         return _finish("failed", "bad_state", "the tooth cannot touch the entrance face at phi_start", k, t, y, off,
-                       None, 0, [], [], np.zeros(5), 0)
-    cap = max(4096, int(min(t_max / h, 2e6) * 1.05) + 1024) if record else 1
-    buf = np.empty((cap, N_COLS))
+                       None, 0, [], [], np.zeros(6), 0)
+    buf = np.empty((capacity, N_COLS))
     n = 0
-    mx = np.zeros(5)
+    mx = np.zeros(6)
     impacts: list[tuple] = []
     phases: list[tuple] = []
     direction = 1.0
@@ -188,15 +209,7 @@ def run_rk4(
         if regime == FREE:
             armed_gap = False
         t0 = t
-        went_back = m[M_DIR] < 0
-        while True:
-            code, t, n, armed_gap = integrate_phase(k, regime, side, y, t, off, m, armed_gap, h, t_max, buf, n,
-                                                    record, mx, max_mode_changes)
-            went_back = went_back or m[M_DIR] < 0
-            if code != R_BUFFER:
-                break
-            buf = np.concatenate([buf, np.empty((buf.shape[0], N_COLS))])
-        reversals += int(went_back)
+        code, t, n, armed_gap, buf = phase(regime, side, y, t, off, m, armed_gap, buf, n, mx)
         direction = m[M_DIR]
         phases.append((t0, t, regime, side, REASONS[code]))
         idle = idle + 1 if t == t0 else 0
@@ -231,6 +244,8 @@ def run_rk4(
             regime, impacted, closing = impact_decision(k, side, y)
             if impacted:
                 impacts.append((t, side, y[0], y[2], before[0], before[1], y[1], y[3], closing))
+                if before[0] * y[1] < 0.0:
+                    reversals += 1
             if regime == COUPLED and not _kinematic_verge(k, side, y):
                 return _finish("failed", "bad_state", "contact found where the coupled kinematics has no solution",
                                k, t, y, off, trace, n, impacts, phases, mx, reversals)
@@ -238,6 +253,7 @@ def run_rk4(
 
 def _finish(status, reason, message, k, t, y, off, trace, n, impacts, phases, mx, reversals) -> RunResult:
     maxima = {"F23": mx[0], "F12": mx[1], "PN": mx[2], "FF23": mx[3], "FF12": mx[4]}
+    reversals += int(mx[5])
     imp = np.array(impacts, dtype=float).reshape(-1, len(IMPACT_FIELDS))
     return RunResult(
         status=status, reason=reason, message=message,

@@ -47,8 +47,9 @@ N_COLS = len(COLUMNS)
 
 M_CODE, M_S1, M_S2, M_S4, M_S5, M_DIR, M_TSTUCK, M_VSTUCK = range(8)
 
-# running maxima: F23, F12, PN (coupled), FF23, FF12 (free)
-MX_F23, MX_F12, MX_PN, MX_FF23, MX_FF12 = range(5)
+# running maxima: F23, F12, PN (coupled), FF23, FF12 (free); then the count of train
+# reversals (speed passing through zero)
+MX_F23, MX_F12, MX_PN, MX_FF23, MX_FF12, MX_REV = range(6)
 
 
 @numba.njit(cache=True)
@@ -339,8 +340,8 @@ def integrate_phase(k, regime, side, y, t, off, m, armed, h, t_max, buf, n, reco
         Next free row of ``buf``.
     record : bool
         Whether to store the trajectory (maxima are tracked either way).
-    mx : float64[5]
-        Running force maxima, updated in place.
+    mx : float64[6]
+        Running force maxima and the count of train reversals, updated in place.
     max_mode_changes : int
         Guard against chattering: at most this many mode changes in one phase.
 
@@ -444,6 +445,8 @@ def integrate_phase(k, regime, side, y, t, off, m, armed, h, t_max, buf, n, reco
                     new[M_TSTUCK] = 1.0
                     new[M_DIR] = m[M_DIR]
                 else:
+                    if d != m[M_DIR]:
+                        mx[MX_REV] += 1.0
                     new[M_DIR] = d
                 if regime == COUPLED:
                     s4, s5 = coupled_signs(k, side, y[0], 0.0, new[M_DIR])
