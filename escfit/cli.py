@@ -94,6 +94,117 @@ def charts(out_dir, c0, no_png, force):
     click.echo(f"graph factor K/K_R at C/omega0 = {c0:g}: {graph_factor(c0):.4f}")
 
 
+RECIPE_KEYS = {"data", "scene", "method", "out", "seed", "walkers", "steps", "burn", "unit", "format", "notch_deg",
+               "report", "title"}
+
+
+def _read_recipe(path: Path) -> dict:
+    import tomllib
+
+    from .errors import SceneError
+    from .scene import check_keys
+
+    try:
+        doc = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise SceneError(f"cannot read fit recipe ({exc})", str(path)) from None
+    check_keys(doc, RECIPE_KEYS, f"{path} (recipe)", {"data", "scene"})
+    for key in ("data", "scene"):
+        doc[key] = str((path.parent / doc[key]).resolve())
+    return doc
+
+
+@cli.command()
+@click.argument("data", type=click.Path(dir_okay=False))
+@click.option("--scene", "scene_path", type=click.Path(dir_okay=False), default=None, help="Scene TOML with free parameters.")
+@click.option("--method", type=click.Choice(["leastsq", "emcee"]), default=None, help="Default leastsq (recipe may set it).")
+@click.option("--out", type=click.Path(dir_okay=False), default=None, help="Results file (HDF5).")
+@click.option("--seed", type=int, default=None)
+@click.option("--walkers", type=click.IntRange(2), default=None)
+@click.option("--steps", type=click.IntRange(10), default=None)
+@click.option("--burn", type=click.IntRange(0), default=None)
+@click.option("--unit", "unit_id", default=None, help="Fit only this unit of a multi-unit file.")
+@click.option("--format", "fmt", type=click.Choice(["unit-curve"]), default=None, help="Data format (detected).")
+@click.option("--notch-deg", type=float, default=None, help="Notch angle for notch counts, deg.")
+@click.option("--resume", is_flag=True, help="Continue an interrupted emcee run from its checkpoint.")
+@click.option("--force", is_flag=True, help="Replace an existing results file.")
+@click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None, help="Also write a report.")
+@click.option("--quiet", is_flag=True, help="No progress bar.")
+def fit(data, scene_path, method, out, seed, walkers, steps, burn, unit_id, fmt, notch_deg, resume, force,
+        report_path, quiet):
+    """Fit DATA (a recording) with --scene SCENE, or run a fit RECIPE.toml."""
+    from .errors import SceneError
+    from .fitting import fit as run_fit
+    from .recordings import read_unit_curve
+
+    recipe: dict = {}
+    if data.endswith(".toml") and scene_path is None:
+        recipe = _read_recipe(Path(data))
+        data, scene_path = recipe["data"], recipe["scene"]
+    if scene_path is None:
+        raise SceneError("give --scene SCENE.toml (or a fit recipe)", data)
+    pick = lambda cli_value, key, default: cli_value if cli_value is not None else recipe.get(key, default)  # noqa: E731
+    method = pick(method, "method", "leastsq")
+    out = pick(out, "out", None) or f"{Path(data).stem}_fit.h5"
+    steps = pick(steps, "steps", 2000)
+    curve = read_unit_curve(data, notch_deg=pick(notch_deg, "notch_deg", None))
+    result = run_fit(scene_path, curve, method=method, out=out, force=force, seed=pick(seed, "seed", 0),
+                     walkers=pick(walkers, "walkers", 32), steps=steps, burn=pick(burn, "burn", None),
+                     resume=resume, progress=not quiet and sys.stderr.isatty(), unit=pick(unit_id, "unit", None))
+    click.echo(f"wrote {out}")
+    _print_summary(result)
+    report_path = report_path or recipe.get("report")
+    if report_path:
+        from .report import make_report
+
+        make_report(out, report_path, fmt="md" if str(report_path).endswith(".md") else "html", force=force)
+        click.echo(f"wrote {report_path}")
+
+
+def _print_summary(result) -> None:
+    import json as _json
+
+    from .report import parameter_table
+
+    head, rows = parameter_table(result)
+    widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(head)]
+    click.echo("  ".join(h.ljust(w) for h, w in zip(head, widths)))
+    for r in rows:
+        click.echo("  ".join(c.ljust(w) for c, w in zip(r, widths)))
+    for w in _json.loads(result.attrs.get("warnings", "[]")):
+        click.echo(f"warning: {w}")
+
+
+@cli.command()
+@click.argument("results", type=click.Path(dir_okay=False))
+@click.option("--json", "as_json", is_flag=True, help="Print the parameter table as JSON.")
+def summary(results, as_json):
+    """Print the parameter table of a saved fit."""
+    from .results import load_fit
+
+    res = load_fit(results)
+    if as_json:
+        a = res.attrs
+        click.echo(json.dumps({"parameters": res.summary(), "warnings": json.loads(a.get("warnings", "[]")),
+                               "method": a.get("method"), "data_file": a.get("data_file"),
+                               "schema_version": a.get("schema_version")}))
+    else:
+        _print_summary(res)
+
+
+@cli.command()
+@click.argument("results", type=click.Path(dir_okay=False))
+@click.option("--out", type=click.Path(dir_okay=False), default=None, help="Report file (default <results>.html).")
+@click.option("--format", "fmt", type=click.Choice(["html", "md"]), default="html", show_default=True)
+@click.option("--force", is_flag=True, help="Replace an existing report.")
+def report(results, out, fmt, force):
+    """Write a report (HTML with embedded figures, or Markdown) of a saved fit."""
+    from .report import make_report
+
+    out = out or str(Path(results).with_suffix(".html" if fmt == "html" else ".md"))
+    click.echo(f"wrote {make_report(results, out, fmt=fmt, force=force)}")
+
+
 def _describe(ds, sc) -> str:
     lines = [f"{Path(sc.where).name}: model {sc.model}, status {ds.attrs.get('status')}"]
     if "amplitude" in ds and ds.sizes.get("swing", 0):

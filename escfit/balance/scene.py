@@ -65,6 +65,10 @@ class BalanceScene:
             Values by name overriding the scene's; unnamed parameters keep theirs.
         """
         vals = self.params.values() if values is None else self.params.with_values(values).values()
+        return self.system(vals)
+
+    def system(self, vals: Mapping[str, float]) -> SystemBuilder:
+        """Assemble the numeric system from a complete name -> value mapping (ties resolved)."""
         sys = SystemBuilder(theta0=vals["oscillator.theta0"], omega0=vals.get("oscillator.omega0", math.nan))
         for eff in self.effects:
             eff.apply(vals, sys)

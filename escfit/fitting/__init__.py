@@ -1,0 +1,184 @@
+"""Fitting: least squares (lmfit) and posterior sampling (emcee) of balance-wheel curves."""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from ..errors import FitError
+from ..recordings import UnitCurve, read_unit_curve
+from ..results import SCHEMA_VERSION, FitResult, clean_attrs, dependency_versions, write_fit
+from ..scene import load_scene
+from .identifiability import correlation_warnings, monday_k, phase_mode_warning, profile, sloppy_directions
+from .lsq import LeastSquaresResult, least_squares
+from .mcmc import McmcResult, run_emcee
+from .problem import FitProblem
+
+__all__ = ["fit", "FitProblem", "least_squares", "run_emcee", "profile", "LeastSquaresResult", "McmcResult"]
+
+PP_DRAWS = 400  # posterior-predictive evaluations stored per fit
+
+
+def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, force: bool = False, seed: int = 0,
+        walkers: int = 32, steps: int = 2000, burn: int | None = None, n_starts: int = 8, resume: bool = False,
+        progress: bool = False, solver: str = "exact", solver_options: dict | None = None,
+        checkpoint: str | Path | None = None, unit: str | None = None) -> FitResult:
+    """Fit a balance scene to a unit-curve recording.
+
+    Parameters
+    ----------
+    scene
+        Scene object or path; its ``vary = true`` parameters are estimated.
+    data
+        :class:`~escfit.recordings.UnitCurve` or path to a unit-curve CSV.
+    method
+        ``"leastsq"`` (lmfit, multistart) or ``"emcee"`` (least squares, then MCMC).
+    out
+        Results file (HDF5); written atomically, never replacing a file without ``force``.
+    seed, walkers, steps, burn, n_starts, progress
+        Sampler and optimiser settings (``burn`` defaults to half the steps).
+    resume
+        Continue an interrupted emcee run from its checkpoint.
+    checkpoint
+        emcee backend file (default ``<out>.emcee`` when ``out`` is given).
+    unit
+        Fit only this unit of a multi-unit recording.
+
+    Returns
+    -------
+    FitResult
+        Also written to ``out`` when given.
+    """
+    from ..atomic import refuse_existing
+
+    if method not in ("leastsq", "emcee"):
+        raise FitError(f"method must be 'leastsq' or 'emcee', got {method!r}")
+    if out is not None:
+        refuse_existing(out, force)
+        if not Path(out).parent.exists():
+            raise FitError("output directory does not exist", str(Path(out).parent))
+    sc = load_scene(scene) if not hasattr(scene, "model") else scene
+    curve = read_unit_curve(data) if not isinstance(data, UnitCurve) else data
+    if unit is not None:
+        rows = np.flatnonzero(curve.unit == unit)
+        if not rows.size:
+            raise FitError(f"no readings of unit {unit!r}; units in the file: {sorted(set(curve.unit))}", curve.source)
+        curve = curve.select(rows)
+    problem = FitProblem(sc, curve, solver, dict(solver_options or {}))
+    started = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+    lsq = least_squares(problem, n_starts=n_starts, seed=seed)
+    mc = None
+    if method == "emcee":
+        if checkpoint is None and out is not None:
+            checkpoint = str(out) + ".emcee"
+        if checkpoint is not None and Path(checkpoint).exists() and not resume and not force:
+            raise FitError("an interrupted run's checkpoint exists; pass --resume to continue it or --force to restart",
+                           str(checkpoint))
+        mc = run_emcee(problem, lsq, walkers=walkers, steps=steps, burn=burn, seed=seed, checkpoint=checkpoint,
+                       resume=resume, progress=progress)
+    result = FitResult(_tree(problem, lsq, mc, method=method, seed=seed, started=started))
+    if out is not None:
+        write_fit(result, out, force=force)
+        if checkpoint is not None and Path(checkpoint).exists():
+            Path(checkpoint).unlink()
+    return result
+
+
+def _tree(problem: FitProblem, lsq: LeastSquaresResult, mc: McmcResult | None, *, method: str, seed: int,
+          started: str) -> xr.DataTree:
+    names = problem.names
+    units = {p.name: p.unit for p in problem.params}
+    meanings = {p.name: p.meaning for p in problem.params}
+    obs_coords = _obs_coords(problem)
+    groups: dict[str, xr.Dataset] = {}
+    groups["observed_data"] = xr.Dataset({"reading": ("obs", problem.observed, {
+        "units": "rad" if problem.data.kind == "amplitude" else "notches"})}, coords=obs_coords)
+    lsq_expected = problem.expected(lsq.values)
+    groups["least_squares"] = xr.Dataset(
+        {"value": ("parameter", lsq.value), "stderr": ("parameter", lsq.stderr),
+         "correlation": (("parameter", "parameter_b"), lsq.correlation),
+         "expected": ("obs", lsq_expected, {"units": "rad", "long_name": "expected reading at the optimum"})},
+        coords={"parameter": lsq.names, "parameter_b": lsq.names, **obs_coords},
+        attrs=clean_attrs({"chisqr": lsq.chisqr, "redchi": lsq.redchi, "sigma_hat": lsq.sigma_hat, "n_data": lsq.n_data,
+                           "aic": lsq.aic(), "bic": lsq.bic(), "success": lsq.success, "message": lsq.message,
+                           "n_starts": lsq.n_starts}))
+    warnings = correlation_warnings(lsq.names, lsq.correlation) + phase_mode_warning(problem)
+    if mc is not None:
+        post = {n: (("chain", "draw"), mc.chain[:, :, i], {"units": units.get(n, ""), "long_name": meanings.get(n, "")})
+                for i, n in enumerate(names)}
+        coords = {"chain": np.arange(mc.walkers), "draw": np.arange(mc.chain.shape[1])}
+        if phase_mode_warning(problem):
+            flat = mc.chain.reshape(-1, len(names))
+            k = np.array([monday_k(problem, problem.values(x)) for x in flat]).reshape(mc.chain.shape[:2])
+            post["K"] = (("chain", "draw"), k, {"units": "", "long_name": "Monday's combined K (derived)"})
+        groups["posterior"] = xr.Dataset(post, coords=coords)
+        groups["sample_stats"] = xr.Dataset({"lp": (("chain", "draw"), mc.log_prob)}, coords=coords)
+        groups["diagnostics"] = _diagnostics(groups["posterior"], names, mc)
+        groups["posterior_predictive"] = _predictive(problem, mc, obs_coords)
+        flat = mc.chain.reshape(-1, len(names))
+        pc = np.corrcoef(flat.T) if len(names) > 1 else np.ones((1, 1))
+        warnings = correlation_warnings(names, pc) + sloppy_directions(names, flat) + phase_mode_warning(problem)
+        bad = [n for n in names if float(groups["diagnostics"]["rhat"].sel(parameter=n)) > 1.05]
+        if bad:
+            warnings.append(f"split R-hat above 1.05 for {bad}: run longer")
+        if not mc.tau_reliable:
+            warnings.append("the run is shorter than 50 autocorrelation times: intervals are approximate")
+    attrs = {
+        "schema_version": SCHEMA_VERSION, "method": method, "seed": seed, "parameters": names, "units": units,
+        "meanings": meanings, "scene": problem.scene.text, "scene_file": problem.scene.where,
+        "switching": problem.scene.switching, "data_file": problem.data.source, "data_sha256": problem.data.sha256,
+        "data_kind": problem.data.kind, "solver": problem.solver, "solver_options": problem.solver_options,
+        "versions": dependency_versions(), "started": started,
+        "finished": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "warnings": warnings, "failures": dict(problem.failures),
+    }
+    if mc is not None:
+        attrs.update(walkers=mc.walkers, steps=mc.steps, burn=mc.burn, resumed=mc.resumed)
+    root = xr.DataTree(dataset=xr.Dataset(attrs=clean_attrs(attrs)))
+    for name, ds in groups.items():
+        root[name] = xr.DataTree(dataset=ds)
+    return root
+
+
+def _obs_coords(problem: FitProblem) -> dict:
+    swing = np.concatenate([c.swing for c in problem.curves])
+    curve = np.concatenate([[c.label] * c.swing.size for c in problem.curves])
+    load = np.concatenate([[c.load] * c.swing.size for c in problem.curves])
+    return {"obs": np.arange(swing.size), "swing": ("obs", swing), "curve": ("obs", curve.astype(str)),
+            "load": ("obs", load)}
+
+
+def _diagnostics(post: xr.Dataset, names: list[str], mc: McmcResult) -> xr.Dataset:
+    import arviz as az
+
+    sub = post[names]
+    rhat = az.rhat(sub)
+    ess_b = az.ess(sub, method="bulk")
+    ess_t = az.ess(sub, method="tail")
+    return xr.Dataset(
+        {"rhat": ("parameter", [float(rhat[n]) for n in names]),
+         "ess_bulk": ("parameter", [float(ess_b[n]) for n in names]),
+         "ess_tail": ("parameter", [float(ess_t[n]) for n in names]),
+         "tau": ("parameter", mc.tau), "acceptance": ("chain", mc.acceptance)},
+        coords={"parameter": names, "chain": np.arange(mc.walkers)},
+        attrs={"tau_reliable": int(mc.tau_reliable)})
+
+
+def _predictive(problem: FitProblem, mc: McmcResult, obs_coords: dict) -> xr.Dataset:
+    per_chain = max(1, PP_DRAWS // mc.walkers)
+    idx = np.unique(np.linspace(0, mc.chain.shape[1] - 1, per_chain).astype(int))
+    exp = np.full((mc.walkers, idx.size, problem.n_data), np.nan)
+    for w in range(mc.walkers):
+        for j, d in enumerate(idx):
+            try:
+                exp[w, j] = problem.expected(problem.values(mc.chain[w, d]))
+            except Exception:  # noqa: BLE001 - a failed draw stays NaN
+                problem.failures["posterior predictive solve failed"] += 1
+    return xr.Dataset({"expected": (("chain", "draw", "obs"), exp, {"units": "rad"})},
+                      coords={"chain": np.arange(mc.walkers), "draw": idx, **obs_coords})

@@ -1,0 +1,140 @@
+"""Least squares through lmfit, with a small Latin-hypercube multistart.
+
+The noise scale ``observation.sigma`` (and ``observation.nu``) are not fitted here: the
+residuals are standardised by the scene's sigma and lmfit rescales the covariance by the
+reduced chi-square, so standard errors reflect the actual scatter; ``sigma_hat`` reports the
+scatter itself.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import lmfit
+import numpy as np
+from scipy.stats import qmc
+
+from ..errors import FitError
+from ..params import safe_name
+from .problem import FitProblem
+
+__all__ = ["LeastSquaresResult", "least_squares", "NOISE_PARAMS"]
+
+NOISE_PARAMS = ("observation.sigma", "observation.nu")
+
+
+@dataclass
+class LeastSquaresResult:
+    """Best fit of the structural parameters.
+
+    Attributes
+    ----------
+    names : list[str]
+        Fitted parameters (free parameters except the noise ones).
+    value, stderr : ndarray
+        Estimates and standard errors (nan when the covariance is singular).
+    correlation : ndarray
+        Correlation matrix (nan when unavailable).
+    chisqr, redchi : float
+        Sum of squared standardised residuals and its reduced value.
+    sigma_hat : float
+        Reading scatter implied by the fit: the scene's sigma times sqrt(redchi) (rad).
+    n_data, n_starts : int
+    success : bool
+    message : str
+    values : dict
+        All parameter values at the optimum (by name, ties resolved).
+    """
+
+    names: list[str]
+    value: np.ndarray
+    stderr: np.ndarray
+    correlation: np.ndarray
+    chisqr: float
+    redchi: float
+    sigma_hat: float
+    n_data: int
+    n_starts: int
+    success: bool
+    message: str
+    values: dict
+
+    def loglike_gaussian(self) -> float:
+        """Gaussian log-likelihood at the optimum with sigma profiled out (for AIC/BIC)."""
+        n = self.n_data
+        return -0.5 * n * (math.log(2 * math.pi * self.chisqr / n) + 1.0)
+
+    def aic(self) -> float:
+        return 2 * (len(self.names) + 1) - 2 * self.loglike_gaussian()
+
+    def bic(self) -> float:
+        return (len(self.names) + 1) * math.log(self.n_data) - 2 * self.loglike_gaussian()
+
+
+def least_squares(problem: FitProblem, *, n_starts: int = 8, seed: int = 0,
+                  fixed: dict[str, float] | None = None) -> LeastSquaresResult:
+    """Minimise the standardised residuals over the structural free parameters.
+
+    Parameters
+    ----------
+    problem
+        The fit problem.
+    n_starts
+        Start points: the scene's values plus ``n_starts - 1`` Latin-hypercube points in the
+        prior bounds (infinite bounds: +-50 % around the scene value).
+    seed
+        Seed of the Latin hypercube.
+    fixed
+        Parameters held at given values (used by profile likelihoods).
+    """
+    fixed = dict(fixed or {})
+    names = [n for n in problem.names if n not in NOISE_PARAMS and n not in fixed]
+    if not names:
+        raise FitError("no structural parameter left to fit by least squares")
+    idx = [problem.names.index(n) for n in names]
+    lo, hi = (b[idx] for b in problem.bounds)
+    x0 = problem.initial[idx]
+    for n, v in fixed.items():
+        if n not in problem.names:
+            raise FitError(f"cannot hold {n!r} fixed: not a free parameter of the fit")
+    span_lo = np.where(np.isfinite(lo), lo, x0 - 0.5 * np.abs(x0) - 1e-12)
+    span_hi = np.where(np.isfinite(hi), hi, x0 + 0.5 * np.abs(x0) + 1e-12)
+    starts = [x0]
+    if n_starts > 1:
+        u = qmc.LatinHypercube(d=len(names), seed=seed).random(n_starts - 1)
+        starts += list(qmc.scale(u, span_lo, span_hi))
+
+    def residual(params: lmfit.Parameters) -> np.ndarray:
+        vals = problem.values({**fixed, **{n: params[safe_name(n)].value for n in names}})
+        return problem.residuals(vals)
+
+    best = None
+    for start in starts:
+        params = lmfit.Parameters()
+        for n, v, a, b in zip(names, start, lo, hi):
+            params.add(safe_name(n), value=float(np.clip(v, a, b)), min=float(a), max=float(b))
+        try:
+            res = lmfit.minimize(residual, params, method="least_squares", scale_covar=True)
+        except (ValueError, FloatingPointError) as exc:  # pragma: no cover - lmfit refusing a start
+            problem.failures[f"least squares start failed: {exc}"[:120]] += 1
+            continue
+        if best is None or res.chisqr < best.chisqr:
+            best = res
+    if best is None:
+        raise FitError("least squares failed from every start point")
+    value = np.array([best.params[safe_name(n)].value for n in names])
+    stderr = np.array([best.params[safe_name(n)].stderr if best.params[safe_name(n)].stderr is not None else np.nan
+                       for n in names], float)
+    if best.covar is not None and best.covar.shape == (len(names), len(names)):
+        d = np.sqrt(np.diag(best.covar))
+        corr = best.covar / np.outer(d, d)
+    else:
+        corr = np.full((len(names), len(names)), np.nan)
+    vals = problem.values({**fixed, **dict(zip(names, value))})
+    ndof = max(best.ndata - best.nvarys, 1)
+    redchi = best.chisqr / ndof
+    sigma = vals.get("observation.sigma", math.nan)
+    return LeastSquaresResult(names, value, stderr, corr, float(best.chisqr), float(redchi),
+                              float(sigma * math.sqrt(redchi)), int(best.ndata), len(starts), bool(best.success),
+                              str(best.message), vals)

@@ -1,0 +1,262 @@
+"""The fit problem: scene + recording + observation model -> likelihood and residuals.
+
+Data flow is one way: parameter vector -> values by name -> balance system per curve (load)
+-> exact solver -> signed turning points at the recorded swings -> observation model ->
+log-likelihood.  A failed solve or a non-finite number becomes ``-inf`` (or large residuals)
+and the reason is counted in :attr:`FitProblem.failures`, never an exception.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from dataclasses import dataclass, field, replace
+from typing import Any, Mapping
+
+import numpy as np
+
+from ..balance import BalanceScene, solve
+from ..errors import EscfitError, FitError, SceneError
+from ..observation import observation_from_table
+from ..params import Param, ParamSet, read_param
+from ..recordings import UnitCurve
+from ..scene import check_keys
+from ..units import to_canonical, ureg
+from .priors import Prior, parse_prior
+
+__all__ = ["FitProblem", "Curve"]
+
+FAIL_RESIDUAL = 1e6
+
+
+@dataclass(frozen=True)
+class Curve:
+    """One decay curve of the recording (a unit at one load)."""
+
+    label: str
+    load: float  # in the data's load unit; nan when none
+    swing: np.ndarray
+    y: np.ndarray
+
+
+@dataclass
+class FitProblem:
+    """Everything a fit needs, prepared once.
+
+    Parameters
+    ----------
+    scene
+        A balance scene; its free parameters (``vary = true``) are estimated.
+    data
+        The recording (one unit; several loads allowed).
+    solver, solver_options
+        Forward solver and its options (default: exact).
+
+    Attributes
+    ----------
+    params
+        Scene, load-rule and observation parameters together.
+    names
+        Names of the free parameters, in vector order.
+    priors
+        Prior of each free parameter.
+    failures
+        Counter of the reasons evaluations returned ``-inf``.
+    """
+
+    scene: BalanceScene
+    data: UnitCurve
+    solver: str = "exact"
+    solver_options: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.scene.model != "balance":
+            raise FitError(f"fitting unit curves needs a balance scene, got model {self.scene.model!r}", self.scene.where)
+        units = sorted(set(map(str, self.data.unit)))
+        if len(units) > 1:
+            raise FitError(f"the recording holds several units {units}; fit one at a time (select with --unit)",
+                           self.data.source)
+        fit_table = self.scene.extra.get("fit", {})
+        check_keys(fit_table, {"loads"}, f"{self.scene.where} [fit]")
+        self.observation = observation_from_table(self.scene.extra.get("observation"), self.scene.where,
+                                                  self.data.kind, self.data.notch)
+        params = ParamSet(dict(self.scene.params.params))
+        for p in self.observation.params:
+            params.add(p)
+        self.curves = [Curve(f"{u or 'unit'} load {ld:g}" if not math.isnan(ld) else (u or "curve"), ld,
+                             self.data.swing[rows], self.data.value[rows]) for (u, ld), rows in self.data.groups()]
+        self.load_rule = _LoadRule.read(fit_table.get("loads"), self.scene, self.data, self.curves, params)
+        self.params = params
+        free = params.free()
+        if not free:
+            raise FitError("no free parameters: mark some with { value = ..., vary = true }", self.scene.where)
+        self.names = [p.name for p in free]
+        self.priors: list[Prior] = [parse_prior(p, f"{self.scene.where} [{p.name}]") for p in free]
+        self._base = params.values()
+        self._ties = [(p.name, p.tie) for p in params if p.tie is not None]
+        self.failures: Counter = Counter()
+
+    # -- parameter vectors -------------------------------------------------------------
+    @property
+    def initial(self) -> np.ndarray:
+        return np.array([self.params[n].value for n in self.names])
+
+    @property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        return np.array([p.lo for p in self.priors]), np.array([p.hi for p in self.priors])
+
+    def values(self, vec: np.ndarray | Mapping[str, float]) -> dict[str, float]:
+        """All parameter values by name for a free-parameter vector (ties resolved)."""
+        vals = dict(self._base)
+        if isinstance(vec, Mapping):
+            vals.update(vec)
+        else:
+            vals.update(zip(self.names, map(float, vec)))
+        for name, (other, factor) in self._ties:
+            vals[name] = factor * vals[other]
+        return vals
+
+    # -- forward model -----------------------------------------------------------------
+    def predict(self, vals: Mapping[str, float]) -> list[np.ndarray]:
+        """Signed turning-point angle at each recorded swing, per curve (rad).
+
+        Raises
+        ------
+        EscfitError
+            When the solver refuses the parameters or runs out of segments.
+        """
+        out = []
+        for curve in self.curves:
+            cv = self.load_rule.apply(vals, curve.load)
+            sys = self.scene.system(cv)
+            n = int(curve.swing.max())
+            theta = np.zeros(curve.swing.size)
+            if n > 0:
+                from ..balance.solvers import solve_system
+
+                tr = solve_system(sys, n, self.scene.switching, self.solver, **self.solver_options)
+                if tr.status == "max_segments":
+                    raise FitError("solver ran out of segments")
+                turns = np.concatenate([[sys.theta0], tr.theta_turn])
+                k = curve.swing
+                inside = k <= tr.theta_turn.size
+                theta[inside] = turns[k[inside]]
+                # after the balance stops it stays at rest where it stopped: no swing, reading 0
+                theta[~inside] = 0.0
+            else:
+                theta[:] = sys.theta0
+            out.append(theta)
+        return out
+
+    # -- likelihood --------------------------------------------------------------------
+    def log_prior(self, vec: np.ndarray) -> float:
+        return float(sum(p.logpdf(float(x)) for p, x in zip(self.priors, vec)))
+
+    def log_likelihood(self, vals: Mapping[str, float]) -> float:
+        try:
+            pred = self.predict(vals)
+        except (EscfitError, ValueError, ArithmeticError) as exc:
+            self.failures[f"solve failed: {exc}"[:120]] += 1
+            return -math.inf
+        ll = sum(self.observation.loglike(p, c.y, vals) for p, c in zip(pred, self.curves))
+        if not math.isfinite(ll):
+            self.failures["non-finite likelihood"] += 1
+            return -math.inf
+        return ll
+
+    def log_prob(self, vec: np.ndarray) -> float:
+        """Log posterior (up to a constant); ``-inf`` outside the prior or on failure."""
+        lp = self.log_prior(vec)
+        if not math.isfinite(lp):
+            return -math.inf
+        return lp + self.log_likelihood(self.values(vec))
+
+    def residuals(self, vals: Mapping[str, float]) -> np.ndarray:
+        """Standardised residuals of all readings (large values on failure)."""
+        n = sum(c.y.size for c in self.curves)
+        try:
+            pred = self.predict(vals)
+        except (EscfitError, ValueError, ArithmeticError) as exc:
+            self.failures[f"solve failed: {exc}"[:120]] += 1
+            return np.full(n, FAIL_RESIDUAL)
+        r = np.concatenate([self.observation.residuals(p, c.y, vals) for p, c in zip(pred, self.curves)])
+        return np.where(np.isfinite(r), r, FAIL_RESIDUAL)
+
+    def expected(self, vals: Mapping[str, float]) -> np.ndarray:
+        """Noise-free expected readings (rad) of all data points, concatenated."""
+        return np.concatenate([self.observation.expected(p, vals) for p in self.predict(vals)])
+
+    @property
+    def observed(self) -> np.ndarray:
+        return np.concatenate([c.y for c in self.curves])
+
+    @property
+    def n_data(self) -> int:
+        return int(sum(c.y.size for c in self.curves))
+
+
+@dataclass
+class _LoadRule:
+    """How parameters change with the fixture load in a multi-load fit.
+
+    Escapement magnitudes are proportional to the load (the scene gives them at ``reference``);
+    Coulomb friction is either free per load (``coulomb.R[load=...]``) or linear,
+    ``R = coulomb.R + kappa * (load - reference)`` with ``fit.kappa`` in rad/s^2 per load unit.
+    """
+
+    reference: float = math.nan
+    friction: str = "none"
+    r_names: dict = field(default_factory=dict)
+    windows: tuple = ()
+
+    @classmethod
+    def read(cls, table, scene: BalanceScene, data: UnitCurve, curves, params: ParamSet) -> "_LoadRule":
+        loads = [c.load for c in curves]
+        if table is None:
+            if len(curves) > 1:
+                raise SceneError(f"the recording has {len(curves)} curves (loads {loads}); say how parameters depend "
+                                 "on the load in a [fit.loads] table", scene.where)
+            return cls()
+        where = f"{scene.where} [fit.loads]"
+        check_keys(table, {"reference", "friction", "kappa"}, where, {"reference"})
+        if data.load is None:
+            raise SceneError("[fit.loads] needs a load column (e.g. load_g) in the data", where)
+        ref_q = to_canonical(table["reference"], "dimensionless", f"{where}.reference") if not isinstance(
+            table["reference"], str) else _load_in(table["reference"], data.load_unit, f"{where}.reference")
+        friction = table.get("friction", "free")
+        if friction not in ("free", "linear", "shared"):
+            raise SceneError(f"friction must be 'free', 'linear' or 'shared', got {friction!r}", f"{where}.friction")
+        rule = cls(ref_q, friction)
+        esc = scene.effect("escapement")
+        rule.windows = tuple(w.name for w in esc.windows) if esc else ()
+        if "coulomb.R" in params and friction == "free":
+            base = params["coulomb.R"]
+            del params.params["coulomb.R"]
+            for ld in loads:
+                name = f"coulomb.R[load={ld:g}]"
+                rule.r_names[ld] = name
+                params.add(replace(base, name=name, meaning=f"{base.meaning} at load {ld:g} {data.load_unit}"))
+        if friction == "linear":
+            params.add(read_param(table.get("kappa", {"value": 0.0, "vary": True}), name="fit.kappa",
+                                  kind="dimensionless", where=f"{where}.kappa",
+                                  meaning=f"change of R per {data.load_unit or 'load unit'} of load (rad/s^2)"))
+        return rule
+
+    def apply(self, vals: Mapping[str, float], load: float) -> Mapping[str, float]:
+        if self.friction == "none" or math.isnan(load):
+            return vals
+        out = dict(vals)
+        for name in self.windows:
+            out[name] = vals[name] * load / self.reference
+        if self.friction == "free" and self.r_names:
+            out["coulomb.R"] = vals[self.r_names[load]]
+        elif self.friction == "linear":
+            out["coulomb.R"] = vals["coulomb.R"] + vals["fit.kappa"] * (load - self.reference)
+        return out
+
+
+def _load_in(text: str, unit: str, where: str) -> float:
+    try:
+        return float(ureg.Quantity(text).to(unit or "g").magnitude)
+    except Exception as exc:
+        raise SceneError(f"cannot read {text!r} as a load in {unit or 'g'} ({exc})", where) from None

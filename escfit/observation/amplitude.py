@@ -1,0 +1,81 @@
+"""Amplitude readings with Gaussian or Student-t noise and an unknown scale zero.
+
+A reading of half swing k is ``|theta_turn[k] - offset| + noise``: with the scale's zero
+displaced by ``offset`` the readings on alternate sides differ by twice the offset.
+Parameters: ``observation.sigma`` (rad, noise scale), ``observation.offset`` (rad, zero
+offset; fixed at 0 unless the scene says otherwise), ``observation.nu`` (Student-t degrees
+of freedom).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Mapping
+
+import numpy as np
+from scipy import special
+
+from ..errors import SceneError
+from ..params import Param, read_param
+
+__all__ = ["AmplitudeObservation", "noise_params"]
+
+
+def noise_params(table: Mapping, where: str, default_sigma: float) -> list[Param]:
+    """The sigma and offset parameters shared by the amplitude-like models."""
+    sigma = read_param(table.get("sigma", {"value": default_sigma, "vary": True, "min": 1e-6, "max": 10.0,
+                                           "prior": "loguniform(1e-6, 10)"}),
+                       name="observation.sigma", kind="angle", lower=0.0, lower_open=True,
+                       meaning="reading noise scale (rad)", where=f"{where}.sigma")
+    offset = read_param(table.get("offset", 0.0), name="observation.offset", kind="angle",
+                        meaning="zero offset of the scale (rad); readings on alternate sides differ by twice it",
+                        where=f"{where}.offset")
+    return [sigma, offset]
+
+
+@dataclass(frozen=True)
+class AmplitudeObservation:
+    """Continuous amplitude readings (rad)."""
+
+    noise: str
+    params: tuple[Param, ...]
+    kind = "amplitude"
+    KEYS = {"noise", "sigma", "offset", "nu"}
+
+    @classmethod
+    def from_table(cls, table: Mapping, where: str, notch: float | None = None) -> "AmplitudeObservation":
+        noise = table.get("noise", "gaussian")
+        if noise not in ("gaussian", "student_t"):
+            raise SceneError(f"noise must be 'gaussian' or 'student_t', got {noise!r}", f"{where}.noise")
+        params = noise_params(table, where, 0.05)
+        if noise == "student_t":
+            params.append(read_param(table.get("nu", 4.0), name="observation.nu", kind="dimensionless", lower=0.0,
+                                     lower_open=True, meaning="Student-t degrees of freedom", where=f"{where}.nu"))
+        return cls(noise, tuple(params))
+
+    @staticmethod
+    def expected(theta_turn: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
+        """Noise-free readings, rad."""
+        return np.abs(theta_turn - values["observation.offset"])
+
+    def loglike(self, theta_turn: np.ndarray, y: np.ndarray, values: Mapping[str, float]) -> float:
+        """Log-likelihood of readings ``y`` (rad)."""
+        sigma = values["observation.sigma"]
+        z = (y - self.expected(theta_turn, values)) / sigma
+        if self.noise == "gaussian":
+            return float(-0.5 * np.dot(z, z) - z.size * (math.log(sigma) + 0.5 * math.log(2 * math.pi)))
+        nu = values["observation.nu"]
+        c = special.gammaln((nu + 1) / 2) - special.gammaln(nu / 2) - 0.5 * math.log(nu * math.pi) - math.log(sigma)
+        return float(z.size * c - (nu + 1) / 2 * np.sum(np.log1p(z * z / nu)))
+
+    def residuals(self, theta_turn: np.ndarray, y: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
+        """Standardised residuals for least squares (Gaussian approximation)."""
+        return (y - self.expected(theta_turn, values)) / values["observation.sigma"]
+
+    def sample(self, theta_turn: np.ndarray, values: Mapping[str, float], rng: np.random.Generator) -> np.ndarray:
+        """Synthetic readings (rad, clipped at 0)."""
+        e = self.expected(theta_turn, values)
+        sigma = values["observation.sigma"]
+        noise = rng.standard_t(values["observation.nu"], e.size) if self.noise == "student_t" else rng.standard_normal(e.size)
+        return np.maximum(e + sigma * noise, 0.0)

@@ -1,0 +1,135 @@
+"""Fit results: one HDF5 file per fit, written by xarray (h5netcdf) in ArviZ's layout.
+
+Groups
+------
+``posterior`` (chain, draw), ``sample_stats`` (lp), ``observed_data`` (the readings),
+``posterior_predictive`` (noise-free expected readings for a thinned set of draws),
+``least_squares`` (values, standard errors, correlation), ``diagnostics`` (autocorrelation
+time, split R-hat and ESS per parameter, acceptance per walker).  Root attributes carry the
+provenance: scene text, data file and its SHA-256, seed, solver and options, versions of
+escfit and its dependencies, timestamps and :data:`SCHEMA_VERSION`.
+
+Read back with :func:`load_fit`; ``arviz.from_netcdf`` and ``xarray.open_datatree`` read the
+same file.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from .atomic import atomic_path
+from .errors import ResultsError
+
+__all__ = ["SCHEMA_VERSION", "FitResult", "load_fit", "write_fit"]
+
+SCHEMA_VERSION = "escfit-fit/1"
+
+
+def dependency_versions() -> dict[str, str]:
+    import importlib.metadata as md
+
+    out = {}
+    for pkg in ("escfit", "numpy", "scipy", "numba", "lmfit", "emcee", "xarray", "h5netcdf", "arviz", "pint"):
+        try:
+            out[pkg] = md.version(pkg)
+        except md.PackageNotFoundError:  # pragma: no cover
+            out[pkg] = "unknown"
+    return out
+
+
+@dataclass
+class FitResult:
+    """A fit read from (or about to be written to) a results file."""
+
+    tree: xr.DataTree
+    path: str = ""
+
+    @property
+    def attrs(self) -> dict[str, Any]:
+        return dict(self.tree.attrs)
+
+    def group(self, name: str) -> xr.Dataset | None:
+        return self.tree[name].to_dataset() if name in self.tree.children else None
+
+    @property
+    def parameter_names(self) -> list[str]:
+        return json.loads(self.tree.attrs["parameters"])
+
+    def summary(self) -> dict[str, dict[str, Any]]:
+        """Per parameter: median, 68 % and 95 % intervals, unit, R-hat, ESS (posterior),
+        or the least-squares value with +-1 and +-1.96 standard errors when there is none."""
+        post = self.group("posterior")
+        lsq = self.group("least_squares")
+        diag = self.group("diagnostics")
+        units = json.loads(self.tree.attrs.get("units", "{}"))
+        out: dict[str, dict[str, Any]] = {}
+        for name in self.parameter_names:
+            row: dict[str, Any] = {"unit": units.get(name, "")}
+            if post is not None and name in post:
+                x = post[name].values.ravel()
+                q = np.quantile(x, [0.025, 0.16, 0.5, 0.84, 0.975])
+                row.update(median=float(q[2]), lo68=float(q[1]), hi68=float(q[3]), lo95=float(q[0]), hi95=float(q[4]),
+                           mean=float(x.mean()), sd=float(x.std(ddof=1)))
+                if diag is not None and "rhat" in diag:
+                    sel = diag.sel(parameter=name)
+                    row.update(rhat=float(sel["rhat"]), ess_bulk=float(sel["ess_bulk"]), ess_tail=float(sel["ess_tail"]),
+                               tau=float(sel["tau"]))
+            elif lsq is not None and name in list(lsq["parameter"].values):
+                sel = lsq.sel(parameter=name)
+                v, se = float(sel["value"]), float(sel["stderr"])
+                row.update(median=v, lo68=v - se, hi68=v + se, lo95=v - 1.96 * se, hi95=v + 1.96 * se, stderr=se)
+            else:
+                continue
+            out[name] = row
+        return out
+
+
+def load_fit(path: str | Path) -> FitResult:
+    """Read a results file written by :func:`escfit.fit`.
+
+    Raises
+    ------
+    ResultsError
+        Missing file, not an escfit results file, or an unknown schema version.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise ResultsError("results file not found", str(path))
+    try:
+        tree = xr.open_datatree(p, engine="h5netcdf").load()
+    except Exception as exc:
+        raise ResultsError(f"cannot read as an HDF5 results file ({type(exc).__name__}: {exc})", str(path)) from None
+    schema = tree.attrs.get("schema_version")
+    if schema != SCHEMA_VERSION:
+        raise ResultsError(f"not an escfit fit file of schema {SCHEMA_VERSION!r} (found {schema!r})", str(path))
+    return FitResult(tree, str(path))
+
+
+def write_fit(result: FitResult, path: str | Path, *, force: bool = False) -> None:
+    """Write atomically; an existing file is replaced only with ``force``."""
+    with atomic_path(path, force=force) as tmp:
+        result.tree.to_netcdf(tmp, engine="h5netcdf")
+    result.path = str(path)
+
+
+def clean_attrs(attrs: dict[str, Any]) -> dict[str, Any]:
+    """netCDF-safe attributes: None -> '', dict/list -> JSON, bool -> int."""
+    out = {}
+    for k, v in attrs.items():
+        if v is None:
+            v = ""
+        elif isinstance(v, bool):
+            v = int(v)
+        elif isinstance(v, (dict, list, tuple)):
+            v = json.dumps(v, default=float)
+        elif isinstance(v, float) and not math.isfinite(v):
+            v = str(v)
+        out[k] = v
+    return out
