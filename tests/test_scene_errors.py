@@ -1,0 +1,68 @@
+"""Every refusal of a bad scene names the file, key and value."""
+
+from __future__ import annotations
+
+import pytest
+
+from escfit import SceneError, UnitError, load_scene
+
+from .conftest import balance_toml
+
+IMPULSE = '[[effects.escapement]]\nkind = "impulse"\nfrom = {lo}\nto = {hi}\nX = 10.0\n'
+
+
+@pytest.mark.parametrize("text, fragments", [
+    (balance_toml() + "[effects.viscous]\nC = 1\nD = 2\n", ["bad.toml", "effects.viscous", "'D'"]),
+    (balance_toml().replace("theta0 = 1.0\n", ""), ["missing required key", "theta0"]),
+    (balance_toml().replace("theta0 = 1.0", 'theta0 = "3 m"'), ["theta0", "'3 m'", "[length]", "angle"]),
+    (balance_toml().replace("omega0 = 10.0", 'inertia = "-1e-9 kg*m^2"\nstiffness = "1e-6 N*m"'), ["inertia", "-1e-9"]),
+    (balance_toml(effects=IMPULSE.format(lo=0.3, hi=0.3)), ["escapement 1", "'from'", "below"]),
+    (balance_toml(effects=IMPULSE.format(lo=0.0, hi=0.5) + IMPULSE.format(lo=0.4, hi=0.9)), ["overlap", "1", "2"]),
+    (balance_toml(effects="[effects.magnet]\nB = 1\n"), ["unknown effect", "magnet"]),
+    (balance_toml(effects="[effects.viscous]\nC = -0.5\n"), ["effects.viscous", "-0.5", "physical range"]),
+    (balance_toml(effects='[effects.coulomb]\nR = "1 N*m"\n'), ["coulomb", "'1 N*m'", "angular acceleration"]),
+    (balance_toml(effects='[effects.coulomb]\ntorque = "1e-9 N*m"\n'), ["torque", "needs [oscillator] inertia"]),
+    (balance_toml(effects="[effects.viscous]\nC = { value = 9, min = 0, max = 5, vary = true }\n"), ["viscous", "outside"]),
+    (balance_toml(effects='[effects.viscous]\nC = { value = 1, vary = "yes" }\n'), ["vary", "'yes'"]),
+    (balance_toml(switching="phase", effects="[effects.hairspring]\nangles = [0.5]\nomega0 = [9.0, 11.0]\n")
+     .replace("omega0 = 10.0\n", "", 1), ["hairspring", "switching = 'angle'"]),
+    (balance_toml(effects="[effects.hairspring]\nangles = [0.5]\nomega0 = [9.0, 11.0]\n"), ["omega0 per piece"]),
+    (balance_toml(switching="phase", effects=IMPULSE.format(lo=-2.0, hi=0.5)), ["phase offsets", "-2.0"]),
+    (balance_toml(theta0=2.0, effects="[effects.banking]\nangle = 1.5\n"), ["theta0", "banking angle"]),
+    (balance_toml(switching="sideways"), ["switching", "'sideways'"]),
+    (balance_toml() + "[run]\n", ["not valid TOML"]),
+    (balance_toml().replace("swings = 20", "swings = 0"), ["swings", "0"]),
+    ('model = "pendulum"\n', ["unknown model", "'pendulum'"]),
+    ("[oscillator]\nomega0 = 1\n", ["missing key 'model'"]),
+    (balance_toml(effects='[[effects.escapement]]\nkind = "unlock"\nfrom = -1\nto = -0.5\neps = 0.3\n'),
+     ["eps", "exactly one impulse window"]),
+    (balance_toml(effects="[effects.viscous_drift]\nthresholds = [0.1]\nrates = [0.01, 0]\n"), ["viscous_drift", "needs"]),
+])
+def test_bad_scene_is_refused_with_a_clear_message(text, fragments):
+    with pytest.raises(SceneError) as info:
+        load_scene("bad.toml", text=text)
+    msg = str(info.value)
+    assert msg.startswith("bad.toml")
+    for frag in fragments:
+        assert frag in msg, (frag, msg)
+
+
+def test_unit_error_is_a_scene_error_and_a_value_error():
+    with pytest.raises(ValueError):
+        load_scene("bad.toml", text=balance_toml().replace("theta0 = 1.0", 'theta0 = "1 furlong"'))
+    assert issubclass(UnitError, SceneError)
+
+
+def test_missing_file_is_named(tmp_path):
+    with pytest.raises(SceneError, match="nope.toml: scene file not found"):
+        load_scene(tmp_path / "nope.toml")
+
+
+def test_units_are_converted():
+    text = balance_toml(effects='[effects.viscous]\nc = "8.41e-11 N*m*s/rad"\n').replace(
+        "omega0 = 10.0", 'inertia = "1.2e-9 kg*m^2"\nstiffness = "1.184352528e-6 N*m/rad"'
+    ).replace("theta0 = 1.0", 'theta0 = "300 deg"')
+    scene = load_scene("ok.toml", text=text)
+    assert scene.params["viscous.C"].value == pytest.approx(8.41e-11 / 1.2e-9, rel=1e-12)
+    assert scene.params["oscillator.omega0"].value == pytest.approx(31.4159265, rel=1e-8)
+    assert scene.params["oscillator.theta0"].value == pytest.approx(5.2359877559, rel=1e-10)
