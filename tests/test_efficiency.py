@@ -117,3 +117,9 @@ def test_contact_work_efficiency_by_virtual_work():
 def test_negative_friction_refused():
     with pytest.raises(ValueError, match="-0.1"):
         eff.transmitted_fraction(deg(45), deg(90), mu=-0.1)
+
+
+@pytest.mark.parametrize("mu", [0.05, 0.1, 0.3])
+def test_contact_efficiency_at_45_degrees(mu):
+    # tan(45 deg - rho) = (1 - mu) / (1 + mu)
+    assert eff.contact_work_efficiency(deg(45), deg(90), mu) == pytest.approx((1 - mu) / (1 + mu), rel=1e-12)

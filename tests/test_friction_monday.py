@@ -1,0 +1,105 @@
+"""Monday (1965) Chapter VI: the printed table, the reconstructed sessions and their fits."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from escfit.friction import compare_laws, fit_least_squares, mu_from_reading, read_readings, sample_posterior
+from escfit.friction import monday
+from escfit.scene import load_scene
+
+DATA = Path(__file__).resolve().parents[1] / "datasets" / "friction"
+TABLE = DATA / "monday1965_mu.csv"
+GF = 0.00980665
+IN = 0.0254
+
+
+@pytest.fixture(scope="module")
+def rows():
+    return monday.read_mu_table(TABLE)
+
+
+@pytest.fixture(scope="module")
+def fitted(rows):
+    """Posterior of every material's session with the committed scene (about 1.5 s each)."""
+    scene = load_scene(DATA / "monday1965_rig.toml")
+    out = {}
+    for row in rows:
+        r = read_readings(DATA / monday.session_file(row))
+        out[row.material] = (r, sample_posterior(scene, r, seed=20 + row.line))
+    return scene, out
+
+
+def test_table_digitised_as_printed(rows):
+    assert [(r.material, r.mu) for r in rows] == [
+        ("1095 steel (hard)", 0.100), ("17-4 PH stainless", 0.125), ("aluminum", 0.160)]
+    assert all(r.load == pytest.approx(2.2 * GF) and r.pallet == "synthetic ruby" for r in rows)
+    assert rows[0].handbook == "0.15-0.4" and rows[1].handbook == ""
+    assert "Chapter VI" in TABLE.read_text()
+
+
+def test_committed_files_regenerate_exactly(tmp_path):
+    written = monday.write_sessions(TABLE, tmp_path)
+    assert len(written) == 4
+    for path in written:
+        assert path.read_text() == (DATA / path.name).read_text(), path.name
+
+
+def test_sessions_reproduce_the_printed_means(rows):
+    a = monday.ASSUMPTIONS
+    for row in rows:
+        r = read_readings(DATA / monday.session_file(row))
+        assert len(r) == 20 and r.materials() == [row.material]
+        mu = mu_from_reading(r.load, r.dw, a["k_inch"] * IN, a["d_inch"] * IN)
+        # written to 0.1 mg, so the printed three decimals are reproduced, not more
+        assert round(float(np.mean(mu)), 3) == row.mu
+        at_ref = np.isclose(r.load, 2.2 * GF)
+        assert abs(np.mean(mu[at_ref]) - row.mu) < 0.05 * row.mu
+
+
+def test_monday_materials_within_their_intervals(rows, fitted):
+    scene, out = fitted
+    for row in rows:
+        _, idata = out[row.material]
+        x = idata.posterior["friction.mu"].values.ravel()
+        lo, hi = np.quantile(x, [0.025, 0.975])
+        assert lo < row.mu < hi, row.material
+        # the interval is set by the stated rig uncertainties: about +-4 % of mu
+        half = (hi - lo) / 2 / row.mu
+        assert 0.03 < half < 0.06, (row.material, half)
+        assert idata.attrs["draws_per_autocorr_time"] > 30
+
+
+def test_monday_speed_and_load_findings(rows, fitted):
+    scene, out = fitted
+    evidence = {row.material: compare_laws(out[row.material][1], scene) for row in rows}
+    for row in rows:
+        speed = evidence[row.material]["friction.mu_v"]
+        assert speed.method == "conditional"
+        assert speed.bf01 > 3, (row.material, speed.bf01)  # "no appreciable variation with velocity"
+        assert speed.ci95[0] < 0 < speed.ci95[1]
+    # the generated -6 %/gf load slope is seen clearly at the larger mu, not at mu = 0.100
+    load = {m: e["friction.mu_w"] for m, e in evidence.items()}
+    assert load["aluminum"].bf01 < 1 / 100 and load["17-4 PH stainless"].bf01 < 1 / 20
+    assert load["1095 steel (hard)"].ci95[0] < -0.06 * 0.100 / GF < load["1095 steel (hard)"].ci95[1]
+
+
+def test_least_squares_agrees_with_posterior(rows, fitted):
+    scene, out = fitted
+    for row in rows:
+        r, idata = out[row.material]
+        fit = fit_least_squares(scene, r)
+        x = idata.posterior["friction.mu"].values.ravel()
+        assert fit.values["friction.mu"] == pytest.approx(np.mean(x), rel=0.005)
+        assert fit.stderr["friction.mu"] == pytest.approx(np.std(x), rel=0.1)
+
+
+def test_scene_file_matches_module_text():
+    assert (DATA / "monday1965_rig.toml").read_text() == monday.SCENE_TEXT
+    s = monday.scene()
+    assert s.load_ref == pytest.approx(2.2 * GF)
+    assert s.params["reading.sd"].value / GF == pytest.approx(math.sqrt(1 / 6) * 0.5 * 5 / 138)
