@@ -137,7 +137,7 @@ def _conditional_density_at_zero(idata, scene: RigScene, parameter: str) -> floa
 
     speed = idata.constant_data["speed"].values if "speed" in idata.constant_data else None
     readings = Readings(load=idata.constant_data["load"].values, dw=idata.observed_data["dw"].values,
-                        speed=speed, where=str(idata.attrs.get("data_where", "<posterior>")))
+                        speed=speed, where=str(idata.attrs.get("data_file", "<posterior>")))
     model = build_model(scene, readings)
     theta = np.column_stack([np.asarray(idata.posterior[n].values, dtype=float).ravel() for n in model.names])
     values = model.unpack(theta)

@@ -317,9 +317,9 @@ def _to_inference_data(model: SessionModel, samples, flat, lp, tau, sampler, run
     attrs = {
         "model": "friction_rig",
         "kind": "posterior",
-        "scene_where": model.scene.where,
-        "scene_text": model.scene.text,
-        "data_where": r.where,
+        "scene_file": model.scene.where,
+        "scene": model.scene.text,
+        "data_file": r.where,
         "load_at": model.scene.load_at,
         "load_ref_N": model.scene.load_ref,
         "speed_ref_m_s": model.scene.speed_ref,

@@ -75,8 +75,8 @@ def simulate(scene: RigScene, solver: str | None = None, *, loads: Sequence[floa
         },
         coords={"load": ("load", w, {"units": "N"}), "speed": ("speed", v, {"units": "m/s"})},
         attrs={
-            "model": "friction_rig", "kind": "prediction", "solver": "closed_form",
-            "scene_where": scene.where, "scene_text": scene.text, "load_at": scene.load_at,
+            "model": "friction_rig", "kind": "prediction", "solver": "closed_form", "status": "ok",
+            "scene_file": scene.where, "scene": scene.text, "load_at": scene.load_at,
             "k_m": k, "d_m": d, "lever_ratio": float(lever_ratio(k, d)),
             "reading_sd_N": values["reading.sd"], "schema_version": 1,
         },
@@ -111,7 +111,8 @@ def json_summary(ds: Any) -> dict:
         kind = attrs.get("kind", "prediction")
     if kind == "prediction":
         return {
-            "model": "friction_rig", "kind": "prediction", "load_at": attrs.get("load_at"),
+            "model": "friction_rig", "kind": "prediction", "status": attrs.get("status"),
+            "solver": attrs.get("solver"), "load_at": attrs.get("load_at"),
             "k_m": attrs.get("k_m"), "d_m": attrs.get("d_m"), "lever_ratio": attrs.get("lever_ratio"),
             "load_gf": [round(x / _GF, 6) for x in ds["load"].values.tolist()],
             "speed_m_s": ds["speed"].values.tolist(),
@@ -134,8 +135,8 @@ def json_summary(ds: Any) -> dict:
         lo, med, hi = np.quantile(x, [0.025, 0.5, 0.975])
         params[name] = {"mean": float(np.mean(x)), "sd": float(np.std(x)), "median": float(med),
                         "ci95": [float(lo), float(hi)], "units": var.attrs.get("units", "")}
-    return {"model": "friction_rig", "kind": "posterior", "scene": attrs.get("scene_where"),
-            "data": attrs.get("data_where"), "seed": attrs.get("seed"),
+    return {"model": "friction_rig", "kind": "posterior", "scene_file": attrs.get("scene_file"),
+            "data_file": attrs.get("data_file"), "seed": attrs.get("seed"),
             "acceptance_fraction": attrs.get("acceptance_fraction"),
             "autocorr_time": json.loads(attrs.get("autocorr_time", "[]")), "params": params}
 

@@ -33,6 +33,7 @@ import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 import pint
@@ -51,7 +52,7 @@ _QUANTITIES = {
 }
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Readings:
     """One rig session: readings that share one stylus set-up (one k, one d).
 
@@ -261,7 +262,7 @@ def _number(text_value: str, factor: float, name: str, where: str) -> float:
     return x * factor
 
 
-def write_readings(readings: Readings, path: str | Path, *, comments: list[str] = (), unit: str = "g",
+def write_readings(readings: Readings, path: str | Path, *, comments: Sequence[str] = (), unit: str = "g",
                    speed_unit: str = "ft_s", digits: int = 4) -> None:
     """Write readings as CSV with loads in ``unit`` (mass read as weight) and speeds in ``speed_unit``.
 
