@@ -25,55 +25,52 @@ import math
 
 import numba
 
-__all__ = ["mesh_state", "mesh_code", "pallet_coefficients", "wheel_coefficients", "train_coefficients"]
+__all__ = ["mesh_phase", "mesh_roll", "pallet_coefficients", "wheel_coefficients", "train_coefficients"]
 
 
 @numba.njit(cache=True)
-def _wrap(u, period):
-    return u - math.floor(u / period) * period
+def _mesh_progress(k, phi_total):
+    """Driver rotation past the first contact of the starting tooth pair, both meshes (rad)."""
+    u1 = (k.al1_start - k.al1_in) + k.n31 * phi_total
+    u2 = (k.al2_start - k.al2_in) + (-k.n32) * phi_total
+    return u1, u2
 
 
 @numba.njit(cache=True)
-def mesh_state(k, phi_total):
-    """Roll angles and approach/recess signs of both meshes at cumulative wheel angle ``phi_total``.
+def mesh_phase(k, phi_total):
+    """Which tooth pair carries each mesh, and whether it is in approach or recess.
 
     The driver's roll angle advances with the driver's rotation: the rotor turns ``n31``
     and gear 2 turns ``|n32|`` radians per radian of the escape wheel.  When a contact
-    reaches the end of its interval the next tooth pair takes over at the start of it
-    (contact ratio 1), so the roll angle is periodic with the interval length.
+    reaches the end of its interval the next tooth pair takes over at its start
+    (contact ratio 1), so each pair covers one interval length of driver rotation.
 
     Returns
     -------
-    al1, al2 : float
-        Roll angles of mesh 1 and mesh 2 (rad).
+    n1, n2 : float
+        Index of the tooth pair in mesh 1 and mesh 2 (0 for the pairs in contact at the
+        start; whole numbers stored as floats).
     s1, s2 : float
-        +1 approach, -1 recess, 0 exactly at the pitch point.
+        +1 while the contact is in approach (roll angle below ``tan(theta)``, the pitch
+        point), -1 in recess.
     """
-    u1 = (k.al1_start - k.al1_in) + k.n31 * phi_total
-    u2 = (k.al2_start - k.al2_in) + (-k.n32) * phi_total
-    al1 = k.al1_in + _wrap(u1, k.al1_range)
-    al2 = k.al2_in + _wrap(u2, k.al2_range)
-    t1 = math.tan(k.theta1)
-    t2 = math.tan(k.theta2)
-    s1 = 1.0 if al1 < t1 else (-1.0 if al1 > t1 else 0.0)
-    s2 = 1.0 if al2 < t2 else (-1.0 if al2 > t2 else 0.0)
-    return al1, al2, s1, s2
+    u1, u2 = _mesh_progress(k, phi_total)
+    n1 = math.floor(u1 / k.al1_range)
+    n2 = math.floor(u2 / k.al2_range)
+    s1 = 1.0 if k.al1_in + (u1 - n1 * k.al1_range) < math.tan(k.theta1) else -1.0
+    s2 = 1.0 if k.al2_in + (u2 - n2 * k.al2_range) < math.tan(k.theta2) else -1.0
+    return n1, n2, s1, s2
 
 
 @numba.njit(cache=True)
-def mesh_code(k, phi_total):
-    """Integer label of the current (tooth pair, approach/recess) segment of both meshes.
+def mesh_roll(k, phi_total, n1, n2):
+    """Roll angles (rad) of the given tooth pairs of mesh 1 and mesh 2.
 
-    It changes exactly where ``s1`` or ``s2`` jumps, which the integrator uses to stop
-    its steps on those discontinuities.
+    For a fixed pair this is a continuous function of ``phi_total``, so an integration
+    step that ends just past a tooth change does not see a jump.
     """
-    u1 = (k.al1_start - k.al1_in) + k.n31 * phi_total
-    u2 = (k.al2_start - k.al2_in) + (-k.n32) * phi_total
-    n1 = math.floor(u1 / k.al1_range)
-    n2 = math.floor(u2 / k.al2_range)
-    r1 = 1 if k.al1_in + (u1 - n1 * k.al1_range) >= math.tan(k.theta1) else 0
-    r2 = 1 if k.al2_in + (u2 - n2 * k.al2_range) >= math.tan(k.theta2) else 0
-    return (2 * int(n1) + r1) * 1000003 + (2 * int(n2) + r2)
+    u1, u2 = _mesh_progress(k, phi_total)
+    return k.al1_in + u1 - n1 * k.al1_range, k.al2_in + u2 - n2 * k.al2_range
 
 
 @numba.njit(cache=True)

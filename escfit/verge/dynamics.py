@@ -27,7 +27,7 @@ import math
 
 import numba
 
-from .coefficients import mesh_state, pallet_coefficients, train_coefficients, wheel_coefficients
+from .coefficients import mesh_roll, pallet_coefficients, train_coefficients, wheel_coefficients
 from .kinematics import coupled_kinematics, sliding_factor
 
 __all__ = ["coupled_eval", "free_eval", "coupled_signs", "side_alpha", "side_psic"]
@@ -87,7 +87,12 @@ def _mesh_force_affine(k, phid, phi_total, s1, s2, mu, al1, al2, inertia_sign):
 
 
 @numba.njit(cache=True)
-def coupled_eval(k, side, phi, phid, phi_total, s1, s2, s4, s5, mus):
+def _consistent(speed, acc):
+    return 1.0 if speed * acc >= 0.0 else -1.0
+
+
+@numba.njit(cache=True)
+def coupled_eval(k, side, phi, phid, phi_total, n1, n2, s1, s2, s4, s5, mus, rot_branch, verge_branch):
     """Escape-wheel acceleration and contact forces in coupled motion.
 
     Parameters
@@ -99,10 +104,16 @@ def coupled_eval(k, side, phi, phid, phi_total, s1, s2, s4, s5, mus):
         Escape-wheel angle (rad, in the active side's reference) and speed (rad/s).
     phi_total : float
         Cumulative escape-wheel angle (rad), which fixes the rotor angle and mesh phases.
+    n1, n2 : float
+        Tooth pairs in contact in mesh 1 and 2 (see :func:`escfit.verge.coefficients.mesh_phase`).
     s1, s2, s4, s5 : float
         Friction signs (see :mod:`escfit.verge.coefficients`).
     mus : float
         Direction of the gear train (+1 forward), the sign given to ``mu``.
+    rot_branch, verge_branch : float
+        Branch of the pivot-friction share of the rotor and verge inertias: +1 while the
+        body speeds up (``speed * acceleration >= 0``), -1 while it slows down, 0 to pick
+        the branch consistent with the resulting acceleration.
 
     Returns
     -------
@@ -118,22 +129,22 @@ def coupled_eval(k, side, phi, phid, phi_total, s1, s2, s4, s5, mus):
         The same force from the verge equation (lbf); equal to ``pn`` (a check).
     g : float
         Contact position along the face (in).
+    rot_ok, verge_ok : float
+        The branches consistent with ``phidd`` (+1/-1).
     """
     alpha = side_alpha(k, side)
     psic = side_psic(k, side)
     psi, g, u, v, aa, ab, ac, ad = coupled_kinematics(k.a, k.b, k.c, alpha, phi)
     mu = k.mu * mus
-    al1, al2, _s1, _s2 = mesh_state(k, phi_total)
+    al1, al2 = mesh_roll(k, phi_total, n1, n2)
     a15, a16, a17 = wheel_coefficients(k, side, psi, alpha, s2, s4, mu, al2, aa, ab)
     a18, a19, a20, a21, a22 = pallet_coefficients(k, side, psi, psic, alpha, s4, s5, ac, ad)
     om = k.omega
     psid = u * phid
     ecc = k.mp * k.rcp * k.r4 * om * om * math.sin(k.gamma_pp - psi - psic)
     p0_rest = (a21 * psid * psid + 2.0 * om * a20 * psid + om * om * a19 - ecc) / a18
-    # The pivot-friction share of the inertias depends on whether each body speeds up
-    # or slows down; start from "speeding up" and switch once if that is inconsistent.
-    rot_sign = 1.0
-    pal_sign = 1.0
+    rot_sign = rot_branch if rot_branch != 0.0 else 1.0
+    pal_sign = verge_branch if verge_branch != 0.0 else 1.0
     phidd = 0.0
     f0 = f1 = a42 = a43 = a44 = ipr = 0.0
     for attempt in range(2):
@@ -142,8 +153,8 @@ def coupled_eval(k, side, phi, phid, phi_total, s1, s2, s4, s5, mus):
         p1 = ipr * u / a18
         p0 = p0_rest + ipr * v * phid * phid / a18
         phidd = (a15 * f0 - a16 * k.t3 - a17 * p0) / (k.i3 - a15 * f1 + a17 * p1)
-        want_rot = 1.0 if phid * phidd >= 0.0 else -1.0
-        want_pal = 1.0 if psid * (u * phidd + v * phid * phid) >= 0.0 else -1.0
+        want_rot = _consistent(phid, phidd) if rot_branch == 0.0 else rot_sign
+        want_pal = _consistent(psid, u * phidd + v * phid * phid) if verge_branch == 0.0 else pal_sign
         if want_rot == rot_sign and want_pal == pal_sign:
             break
         rot_sign = want_rot
@@ -153,57 +164,66 @@ def coupled_eval(k, side, phi, phid, phi_total, s1, s2, s4, s5, mus):
     f12 = (f23 * a44 + k.t2 * a43 - k.i2 * k.n32 * phidd) / a42
     pn = (-k.i3 * phidd + f23 * a15 - k.t3 * a16) / a17
     pn_verge = (ipr * psidd + a21 * psid * psid + 2.0 * om * a20 * psid + om * om * a19 - ecc) / a18
-    return phidd, psi, psid, psidd, f23, f12, pn, pn_verge, g
+    return (phidd, psi, psid, psidd, f23, f12, pn, pn_verge, g,
+            _consistent(phid, phidd), _consistent(psid, psidd))
 
 
 @numba.njit(cache=True)
-def free_train(k, phid, phi_total, s1, s2, mus, hold):
+def free_train(k, phid, phi_total, n1, n2, s1, s2, mus, hold, rot_branch):
     """Escape-wheel acceleration and mesh forces with the verge out of contact.
 
     With ``hold`` the train is held at rest by friction: the acceleration is zero and the
-    forces are those that keep it there.  Returns ``(phidd, f23, f12)`` in rad/s^2 and lbf.
+    forces are those that keep it there.  ``rot_branch`` as in :func:`coupled_eval`.
+
+    Returns ``(phidd, f23, f12, rot_ok)`` in rad/s^2 and lbf.
     """
     mu = k.mu * mus
-    al1, al2, _s1, _s2 = mesh_state(k, phi_total)
+    al1, al2 = mesh_roll(k, phi_total, n1, n2)
     a15, a16, _a17 = wheel_coefficients(k, 1.0, 0.0, 0.0, s2, 1.0, mu, al2, 0.0, 0.0)
     phidd = 0.0
     f0 = f1 = a42 = a43 = a44 = 0.0
-    rot_sign = 1.0
+    rot_sign = rot_branch if rot_branch != 0.0 else 1.0
     for attempt in range(2):
         f0, f1, a42, a43, a44 = _mesh_force_affine(k, phid, phi_total, s1, s2, mu, al1, al2, rot_sign)
         if hold:
             break
         phidd = (a15 * f0 - a16 * k.t3) / (k.i3 - a15 * f1)
-        want = 1.0 if phid * phidd >= 0.0 else -1.0
+        want = _consistent(phid, phidd) if rot_branch == 0.0 else rot_sign
         if want == rot_sign:
             break
         rot_sign = want
     f23 = f0 + f1 * phidd
     f12 = (f23 * a44 + k.t2 * a43 - k.i2 * k.n32 * phidd) / a42
-    return phidd, f23, f12
+    return phidd, f23, f12, _consistent(phid, phidd)
 
 
 @numba.njit(cache=True)
-def free_verge(k, side, psi, psid, s5):
-    """Verge acceleration (rad/s^2) out of contact: pivot friction and eccentric mass only."""
+def free_verge(k, side, psi, psid, s5, verge_branch):
+    """Verge acceleration out of contact: pivot friction and eccentric mass only.
+
+    Returns ``(psidd, verge_ok)``: rad/s^2 and the consistent inertia branch.
+    """
     psic = side_psic(k, side)
     _a18, a19, a20, a21, a22 = pallet_coefficients(k, side, psi, psic, side_alpha(k, side), 1.0, s5, 0.0, 0.0)
     om = k.omega
     ecc = k.mp * k.rcp * k.r4 * om * om * math.sin(k.gamma_pp - psi - psic)
     rhs = -a21 * psid * psid - 2.0 * om * a20 * psid - om * om * a19 + ecc
-    ipr = max(k.ip + a22, 0.0)
+    branch = verge_branch if verge_branch != 0.0 else 1.0
+    ipr = max(k.ip + branch * a22, 0.0)
     psidd = rhs / ipr if ipr > 0.0 else 0.0
-    if psid * psidd < 0.0:
+    if verge_branch == 0.0 and psid * psidd < 0.0:
         ipr = max(k.ip - a22, 0.0)
         psidd = rhs / ipr if ipr > 0.0 else 0.0
-    return psidd
+    return psidd, _consistent(psid, psidd)
 
 
 @numba.njit(cache=True)
-def free_eval(k, side, phid, psi, psid, phi_total, s1, s2, s5, mus, train_stuck, verge_stuck):
+def free_eval(k, side, phid, psi, psid, phi_total, n1, n2, s1, s2, s5, mus, train_stuck, verge_stuck, rot_branch,
+              verge_branch):
     """Accelerations and mesh forces in free motion.
 
     A body flagged as stuck (Coulomb friction holding it at rest) has zero acceleration.
+    Branch arguments as in :func:`coupled_eval`.
 
     Returns
     -------
@@ -211,7 +231,12 @@ def free_eval(k, side, phid, psi, psid, phi_total, s1, s2, s5, mus, train_stuck,
         Accelerations (rad/s^2).
     f23, f12 : float
         Mesh forces FF23, FF12 (lbf).
+    rot_ok, verge_ok : float
+        Consistent inertia branches.
     """
-    phidd, f23, f12 = free_train(k, phid, phi_total, s1, s2, mus, train_stuck)
-    psidd = 0.0 if verge_stuck else free_verge(k, side, psi, psid, s5)
-    return phidd, psidd, f23, f12
+    phidd, f23, f12, rot_ok = free_train(k, phid, phi_total, n1, n2, s1, s2, mus, train_stuck, rot_branch)
+    if verge_stuck:
+        psidd, verge_ok = 0.0, 1.0
+    else:
+        psidd, verge_ok = free_verge(k, side, psi, psid, s5, verge_branch)
+    return phidd, psidd, f23, f12, rot_ok, verge_ok

@@ -37,7 +37,7 @@ __all__ = ["RunResult", "run_rk4", "run_hybrid", "side_change", "impact_decision
 
 #: default RK4 step in radians of fuze-body spin (the step in seconds is this / omega,
 #: so runs at any spin rate take the same number of steps)
-DEFAULT_STEP = 0.005
+DEFAULT_STEP = 0.01
 
 IMPACT_FIELDS = ("time", "side", "phi", "psi", "phidot_before", "psidot_before", "phidot_after",
                  "psidot_after", "closing_speed")

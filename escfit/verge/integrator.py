@@ -13,8 +13,9 @@ from the kinematics and are overwritten after every step.  ``off`` is the cumula
 angle offset: ``phi_total = phi + off`` (it changes only when ``phi`` is re-referenced at
 a side change).
 
-Mode vector ``m`` (float64[8]): ``mesh code, s1, s2, s4, s5, train direction,
-train held by friction (0/1), verge held by friction (0/1)``.
+Mode vector ``m`` (float64[11]): ``tooth pairs n1, n2, s1, s2, s4, s5, train direction,
+train held by friction (0/1), verge held by friction (0/1)``, and the branches (+1/-1)
+of the pivot-friction share of the rotor and verge inertias (speeding up / slowing down).
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ import math
 import numba
 import numpy as np
 
-from .coefficients import mesh_code, mesh_state
+from .coefficients import mesh_phase
 from .dynamics import coupled_eval, coupled_signs, free_eval, free_train, free_verge, side_alpha
 from .kinematics import contact_sensing, coupled_kinematics
 
@@ -45,7 +46,7 @@ COLUMNS = ("time", "phi", "phidot", "psi", "psidot", "phi_total", "regime", "sid
            "F23", "F12", "PN", "train_direction")
 N_COLS = len(COLUMNS)
 
-M_CODE, M_S1, M_S2, M_S4, M_S5, M_DIR, M_TSTUCK, M_VSTUCK = range(8)
+M_N1, M_N2, M_S1, M_S2, M_S4, M_S5, M_DIR, M_TSTUCK, M_VSTUCK, M_IROT, M_IVER = range(11)
 
 # running maxima: F23, F12, PN (coupled), FF23, FF12 (free); then the count of train
 # reversals (speed passing through zero)
@@ -68,11 +69,13 @@ def _deriv(k, regime, side, phi, phid, psi, psid, off, m):
     """
     phi_total = phi + off
     if regime == COUPLED:
-        phidd, psi_k, psid_k, psidd, f23, f12, pn, pnv, g = coupled_eval(
-            k, side, phi, phid, phi_total, m[M_S1], m[M_S2], m[M_S4], m[M_S5], m[M_DIR])
+        phidd, psi_k, psid_k, psidd, f23, f12, pn, pnv, g, ok1, ok2 = coupled_eval(
+            k, side, phi, phid, phi_total, m[M_N1], m[M_N2], m[M_S1], m[M_S2], m[M_S4], m[M_S5], m[M_DIR], m[M_IROT],
+            m[M_IVER])
         return phid, phidd, psid_k, psidd, f23, f12, pn, side * g, pn
-    phidd, psidd, f23, f12 = free_eval(k, side, phid, psi, psid, phi_total, m[M_S1], m[M_S2], m[M_S5],
-                                       m[M_DIR], m[M_TSTUCK] > 0.5, m[M_VSTUCK] > 0.5)
+    phidd, psidd, f23, f12, ok1, ok2 = free_eval(k, side, phid, psi, psid, phi_total, m[M_N1], m[M_N2], m[M_S1], m[M_S2], m[M_S5],
+                                                 m[M_DIR], m[M_TSTUCK] > 0.5, m[M_VSTUCK] > 0.5, m[M_IROT],
+                                                 m[M_IVER])
     f, gp = contact_sensing(k.a, k.b, k.c, side_alpha(k, side), phi, psi)
     return phid, phidd, psid, psidd, f23, f12, 0.0, side * f, side * gp
 
@@ -112,8 +115,9 @@ def _mode_at(k, regime, side, y, off, m):
     """The mode implied by state ``y`` (speeds exactly zero keep the current direction)."""
     out = m.copy()
     phi_total = y[0] + off
-    out[M_CODE] = mesh_code(k, phi_total)
-    al1, al2, s1, s2 = mesh_state(k, phi_total)
+    n1, n2, s1, s2 = mesh_phase(k, phi_total)
+    out[M_N1] = n1
+    out[M_N2] = n2
     out[M_S1] = s1
     out[M_S2] = s2
     if m[M_TSTUCK] < 0.5 and y[1] != 0.0:
@@ -122,16 +126,23 @@ def _mode_at(k, regime, side, y, off, m):
         s4, s5 = coupled_signs(k, side, y[0], y[1], out[M_DIR])
         out[M_S4] = s4
         out[M_S5] = s5
+        r = coupled_eval(k, side, y[0], y[1], phi_total, n1, n2, s1, s2, s4, s5, out[M_DIR], 0.0, 0.0)
+        out[M_IROT] = r[9]
+        out[M_IVER] = r[10]
     else:
         out[M_S4] = 1.0
         if m[M_VSTUCK] < 0.5 and y[3] != 0.0:
             out[M_S5] = _sgn(y[3])
+        r = free_eval(k, side, y[1], y[2], y[3], phi_total, n1, n2, s1, s2, out[M_S5], out[M_DIR], m[M_TSTUCK] > 0.5,
+                      m[M_VSTUCK] > 0.5, 0.0, 0.0)
+        out[M_IROT] = r[4]
+        out[M_IVER] = r[5]
     return out
 
 
 @numba.njit(cache=True)
 def _same_mode(a, b):
-    for i in range(6):
+    for i in (M_N1, M_N2, M_S1, M_S2, M_S4, M_S5, M_DIR, M_IROT, M_IVER):
         if a[i] != b[i]:
             return False
     return True
@@ -144,9 +155,10 @@ def _train_start_direction(k, regime, side, y, off, m):
     for d in (1.0, -1.0):
         if regime == COUPLED:
             s4, s5 = coupled_signs(k, side, y[0], 0.0, d)
-            acc = coupled_eval(k, side, y[0], 0.0, phi_total, m[M_S1], m[M_S2], s4, s5, d)[0]
+            acc = coupled_eval(k, side, y[0], 0.0, phi_total, m[M_N1], m[M_N2], m[M_S1], m[M_S2], s4, s5, d, 0.0,
+                               0.0)[0]
         else:
-            acc = free_train(k, 0.0, phi_total, m[M_S1], m[M_S2], d, False)[0]
+            acc = free_train(k, 0.0, phi_total, m[M_N1], m[M_N2], m[M_S1], m[M_S2], d, False, 0.0)[0]
         if acc * d > 0.0:
             return d
     return 0.0
@@ -156,7 +168,7 @@ def _train_start_direction(k, regime, side, y, off, m):
 def _verge_start_direction(k, side, y):
     """Direction the free verge starts to move from rest, or 0 if pivot friction holds it."""
     for d in (1.0, -1.0):
-        if free_verge(k, side, y[2], 0.0, d) * d > 0.0:
+        if free_verge(k, side, y[2], 0.0, d, 0.0)[0] * d > 0.0:
             return d
     return 0.0
 
@@ -169,7 +181,7 @@ def initial_mode(k, regime, side, y, off, direction):
     ``y[1]`` / ``y[3]`` to zero exactly.  Returns the mode vector; a coupled train that
     friction holds at rest is reported through ``m[M_TSTUCK] = 1``.
     """
-    m = np.zeros(8)
+    m = np.zeros(11)
     m[M_DIR] = direction
     m[M_S4] = 1.0
     m[M_S5] = 1.0

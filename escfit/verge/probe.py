@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from typing import Mapping
 
-from .coefficients import mesh_state
+from .coefficients import mesh_phase
 from .dynamics import coupled_eval, coupled_signs, free_eval
 from .impact import impact_map, normal_speeds
 from .scene import VergeScene
@@ -48,7 +48,7 @@ def coupled_state(scene: VergeScene, phi: float, phidot: float = 0.0, phi_total:
     """
     k = scene.constants()
     s = _side(side)
-    _al1, _al2, s1, s2 = mesh_state(k, phi_total)
+    n1, n2, s1, s2 = mesh_phase(k, phi_total)
     if phidot == 0.0 and at_rest_signs == "listing":
         s4 = s5 = 1.0
     elif at_rest_signs in ("listing", "motion"):
@@ -56,7 +56,8 @@ def coupled_state(scene: VergeScene, phi: float, phidot: float = 0.0, phi_total:
     else:
         raise ValueError(f"at_rest_signs must be 'listing' or 'motion', got {at_rest_signs!r}")
     mus = 1.0 if phidot >= 0 else -1.0
-    phidd, psi, psid, psidd, f23, f12, pn, pnv, g = coupled_eval(k, s, phi, phidot, phi_total, s1, s2, s4, s5, mus)
+    r = coupled_eval(k, s, phi, phidot, phi_total, n1, n2, s1, s2, s4, s5, mus, 0.0, 0.0)
+    phidd, psi, psid, psidd, f23, f12, pn, pnv, g = r[:9]
     return {"phiddot": phidd, "psi": psi, "psidot": psid, "psiddot": psidd, "g": g, "F23": f23, "F12": f12,
             "PN": pn, "PNPSI": pnv}
 
@@ -69,10 +70,11 @@ def free_state(scene: VergeScene, phi: float, phidot: float, psi: float, psidot:
     """
     k = scene.constants()
     s = _side(side)
-    _al1, _al2, s1, s2 = mesh_state(k, phi_total)
+    n1, n2, s1, s2 = mesh_phase(k, phi_total)
     s5 = 1.0 if psidot >= 0 else -1.0
     mus = 1.0 if phidot >= 0 else -1.0
-    phidd, psidd, f23, f12 = free_eval(k, s, phidot, psi, psidot, phi_total, s1, s2, s5, mus, False, False)
+    phidd, psidd, f23, f12, _ok1, _ok2 = free_eval(k, s, phidot, psi, psidot, phi_total, n1, n2, s1, s2, s5, mus, False,
+                                                   False, 0.0, 0.0)
     return {"phiddot": phidd, "psiddot": psidd, "FF23": f23, "FF12": f12}
 
 
