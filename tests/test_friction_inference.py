@@ -255,6 +255,13 @@ def test_refusals():
     one = Readings(load=r.load[:1], dw=r.dw[:1], where="one.csv")
     with pytest.raises(FitError, match="1 reading"):
         fit_least_squares(rig_scene(reading=None), one)
+    fixed = load_scene("fixed.toml", text='model = "friction_rig"\n[rig]\nk = "2 inch"\nd = "1 inch"\n'
+                                          '[friction]\nmu = 0.1\n')
+    with pytest.raises(FitError, match="only the reading sd varies"):
+        fit_least_squares(fixed, r)
+    with pytest.raises(FitError, match="nothing to fit"):
+        fit_least_squares(load_scene("fixed.toml", text='model = "friction_rig"\n[rig]\nk = "2 inch"\n'
+                                     'd = "1 inch"\n[friction]\nmu = 0.1\n[reading]\nsd = "0.01 gf"\n'), r)
     with pytest.raises(FitError, match="was not sampled"):
         from escfit.friction import savage_dickey
 

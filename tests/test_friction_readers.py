@@ -81,6 +81,12 @@ def test_refusals_name_file_line_column_and_value(text, where, words):
         assert w in info.value.message
 
 
+def test_byte_order_mark_tolerated(tmp_path):
+    path = tmp_path / "bom.csv"
+    path.write_bytes("load_g,dw_g\n2.2,0.1\n".encode("utf-8-sig"))
+    assert len(read_readings(path)) == 1
+
+
 def test_missing_file(tmp_path):
     with pytest.raises(DataError, match="not found"):
         read_readings(tmp_path / "nope.csv")

@@ -131,6 +131,8 @@ def fit_least_squares(scene: RigScene, readings: Readings, *, max_iter: int = 50
     estimate_sd = "reading.sd" in model.names
     nlaw = sum(n in names for n in _LAW)
     n = len(readings)
+    if not names:
+        raise FitError("only the reading sd varies; free friction.mu or give k and d an sd", scene.where)
     if estimate_sd and n - nlaw < 1:
         raise FitError(
             f"cannot estimate the reading sd from {n} reading(s) with {nlaw} friction-law parameter(s); "
@@ -156,6 +158,8 @@ def fit_least_squares(scene: RigScene, readings: Readings, *, max_iter: int = 50
         sd = new_sd
         if done:
             break
+    if not result.success:
+        raise FitError(f"least squares did not converge: {result.message}", f"{scene.where} :: {readings.where}")
     values = dict(model.fixed)
     stderr: dict[str, float] = {}
     for name in names:

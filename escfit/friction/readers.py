@@ -133,7 +133,7 @@ def read_readings(path: str | Path) -> Readings:
     if not p.is_file():
         raise DataError("readings file not found", where)
     try:
-        text = p.read_text(encoding="utf-8")
+        text = p.read_text(encoding="utf-8-sig")  # tolerate a spreadsheet's byte-order mark
     except (OSError, UnicodeDecodeError) as exc:
         raise DataError(f"cannot read readings file ({exc})", where) from None
     return parse_readings(text, where=where)
