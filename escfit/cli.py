@@ -162,8 +162,6 @@ def fit(data, scene_path, method, out, seed, walkers, steps, burn, unit_id, fmt,
 
 
 def _print_summary(result) -> None:
-    import json as _json
-
     from .report import parameter_table
 
     head, rows = parameter_table(result)
@@ -171,7 +169,7 @@ def _print_summary(result) -> None:
     click.echo("  ".join(h.ljust(w) for h, w in zip(head, widths)))
     for r in rows:
         click.echo("  ".join(c.ljust(w) for c, w in zip(r, widths)))
-    for w in _json.loads(result.attrs.get("warnings", "[]")):
+    for w in result.warnings:
         click.echo(f"warning: {w}")
 
 
@@ -185,7 +183,7 @@ def summary(results, as_json):
     res = load_fit(results)
     if as_json:
         a = res.attrs
-        click.echo(json.dumps({"parameters": res.summary(), "warnings": json.loads(a.get("warnings", "[]")),
+        click.echo(json.dumps({"parameters": res.summary(), "warnings": res.warnings,
                                "method": a.get("method"), "data_file": a.get("data_file"),
                                "schema_version": a.get("schema_version")}))
     else:

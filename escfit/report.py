@@ -131,7 +131,7 @@ def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: 
     res = load_fit(path)
     a = res.attrs
     head, rows = parameter_table(res)
-    warnings = json.loads(a.get("warnings", "[]"))
+    warnings = res.warnings
     lsq = res.group("least_squares")
     prov = [("results file", str(path)), ("method", a.get("method")), ("scene file", a.get("scene_file")),
             ("switching", a.get("switching")), ("data file", a.get("data_file")), ("data SHA-256", a.get("data_sha256")),

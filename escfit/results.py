@@ -59,6 +59,11 @@ class FitResult:
         return self.tree[name].to_dataset() if name in self.tree.children else None
 
     @property
+    def warnings(self) -> list[str]:
+        """Identifiability and convergence warnings recorded with the fit."""
+        return json.loads(self.tree.attrs.get("warnings", "[]"))
+
+    @property
     def parameter_names(self) -> list[str]:
         return json.loads(self.tree.attrs["parameters"])
 
@@ -123,6 +128,8 @@ def clean_attrs(attrs: dict[str, Any]) -> dict[str, Any]:
     """netCDF-safe attributes: None -> '', dict/list -> JSON, bool -> int."""
     out = {}
     for k, v in attrs.items():
+        if isinstance(v, np.generic):
+            v = v.item()
         if v is None:
             v = ""
         elif isinstance(v, bool):

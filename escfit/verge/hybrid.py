@@ -115,7 +115,10 @@ def impact_decision(k: Constants, side: float, y: np.ndarray) -> tuple[int, bool
     alpha = side_alpha(k, side)
     vs, vp, _aa, _ad = normal_speeds(k, alpha, y[0], y[2], y[1], y[3])
     closing = side * (vs - vp)
-    if closing <= 0.0:
+    if closing < 0.0:
+        # the bodies already separate (the contact was found a rounding error late)
+        return FREE, False, closing
+    if closing == 0.0:
         # grazing contact: the tooth settles on the face without an impulse
         return COUPLED, False, closing
     phid_f, psid_f = impact_map(k, alpha, y[0], y[2], y[1], y[3], k.erest)
