@@ -14,6 +14,7 @@ import pytest
 import escfit
 from escfit.fitting import FitProblem, least_squares
 from escfit.recordings import UnitCurve
+from escfit.recordings.csvtable import read_table
 
 from .conftest import SHARED
 
@@ -39,10 +40,11 @@ COULOMB = "[effects.coulomb]\nR = { value = 1.0, vary = true, min = 0, max = 50 
 def pohl():
     if not POHL.exists():
         pytest.skip("shared real data not present")
-    d = np.loadtxt(POHL, delimiter=",", comments="#", skiprows=1)
-    k = np.arange(d.shape[0], dtype=np.int64)  # row k is the reading after k half periods (0 = release)
-    np.testing.assert_allclose(d[:, 0], 0.715 * k, atol=1e-9)
-    return UnitCurve(k, d[:, 1], "amplitude", unit=np.full(k.size, "", dtype=str), source=str(POHL))
+    table = read_table(POHL)
+    t, a = np.array(table.floats("t_s")), np.array(table.floats("A_Skt"))
+    k = np.arange(t.size, dtype=np.int64)  # row k is the reading after k half periods (0 = release)
+    np.testing.assert_allclose(t, 0.715 * k, atol=1e-9)
+    return UnitCurve(k, a, "amplitude", unit=np.full(k.size, "", dtype=str), source=str(POHL))
 
 
 def _lsq(text, data):
