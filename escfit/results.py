@@ -4,6 +4,7 @@ Groups
 ------
 ``posterior`` (chain, draw), ``sample_stats`` (lp), ``observed_data`` (the readings),
 ``posterior_predictive`` (noise-free expected readings for a thinned set of draws),
+``log_likelihood`` (pointwise, on the same thinned draws, for PSIS-LOO),
 ``least_squares`` (values, standard errors, correlation), ``diagnostics`` (autocorrelation
 time, split R-hat and ESS per parameter, acceptance per walker).  Root attributes carry the
 provenance: scene text, data file and its SHA-256, seed, solver and options, versions of

@@ -120,7 +120,7 @@ def _tree(problem: FitProblem, lsq: LeastSquaresResult, mc: McmcResult | None, *
         groups["posterior"] = xr.Dataset(post, coords=coords)
         groups["sample_stats"] = xr.Dataset({"lp": (("chain", "draw"), mc.log_prob)}, coords=coords)
         groups["diagnostics"] = _diagnostics(groups["posterior"], names, mc)
-        groups["posterior_predictive"] = _predictive(problem, mc, obs_coords)
+        groups["posterior_predictive"], groups["log_likelihood"] = _predictive(problem, mc, obs_coords)
         flat = mc.chain.reshape(-1, len(names))
         pc = np.corrcoef(flat.T) if len(names) > 1 else np.ones((1, 1))
         warnings = correlation_warnings(names, pc) + sloppy_directions(names, flat) + phase_mode_warning(problem)
@@ -170,15 +170,21 @@ def _diagnostics(post: xr.Dataset, names: list[str], mc: McmcResult) -> xr.Datas
         attrs={"tau_reliable": int(mc.tau_reliable)})
 
 
-def _predictive(problem: FitProblem, mc: McmcResult, obs_coords: dict) -> xr.Dataset:
+def _predictive(problem: FitProblem, mc: McmcResult, obs_coords: dict) -> tuple[xr.Dataset, xr.Dataset]:
+    """Expected readings and pointwise log-likelihood for a thinned set of draws."""
     per_chain = max(1, PP_DRAWS // mc.walkers)
     idx = np.unique(np.linspace(0, mc.chain.shape[1] - 1, per_chain).astype(int))
     exp = np.full((mc.walkers, idx.size, problem.n_data), np.nan)
+    ll = np.full_like(exp, -np.inf)
     for w in range(mc.walkers):
         for j, d in enumerate(idx):
+            vals = problem.values(mc.chain[w, d])
             try:
-                exp[w, j] = problem.expected(problem.values(mc.chain[w, d]))
-            except Exception:  # noqa: BLE001 - a failed draw stays NaN
+                exp[w, j] = problem.expected(vals)
+                ll[w, j] = problem.loglike_pointwise(vals)
+            except Exception:  # noqa: BLE001 - a failed draw stays NaN / -inf
                 problem.failures["posterior predictive solve failed"] += 1
-    return xr.Dataset({"expected": (("chain", "draw", "obs"), exp, {"units": "rad"})},
-                      coords={"chain": np.arange(mc.walkers), "draw": idx, **obs_coords})
+    coords = {"chain": np.arange(mc.walkers), "draw": idx, **obs_coords}
+    return (xr.Dataset({"expected": (("chain", "draw", "obs"), exp, {"units": "rad"})}, coords=coords),
+            xr.Dataset({"reading": (("chain", "draw", "obs"), ll)}, coords=coords,
+                       attrs={"note": "pointwise log-likelihood on the thinned draws of posterior_predictive"}))

@@ -182,6 +182,11 @@ class FitProblem:
         r = np.concatenate([self.observation.residuals(p, c.y, vals) for p, c in zip(pred, self.curves)])
         return np.where(np.isfinite(r), r, FAIL_RESIDUAL)
 
+    def loglike_pointwise(self, vals: Mapping[str, float]) -> np.ndarray:
+        """Log-likelihood of each reading (for PSIS-LOO); raises when the solve fails."""
+        return np.concatenate([self.observation.loglike_pointwise(p, c.y, vals)
+                               for p, c in zip(self.predict(vals), self.curves)])
+
     def expected(self, vals: Mapping[str, float]) -> np.ndarray:
         """Noise-free expected readings (rad) of all data points, concatenated."""
         return np.concatenate([self.observation.expected(p, vals) for p in self.predict(vals)])

@@ -33,10 +33,11 @@ from __future__ import annotations
 import math
 
 import numba
+import numpy as np
 
 from .geometry import coefficients
 
-__all__ = ["OK", "AMBIGUOUS", "LOCKED", "acceleration", "friction_argument"]
+__all__ = ["OK", "AMBIGUOUS", "LOCKED", "acceleration", "acceleration_array", "wedge_margin", "friction_argument"]
 
 OK = 0
 AMBIGUOUS = 1
@@ -81,6 +82,22 @@ def acceleration(x: float, w: float, a: float, rho: float, mu: float, e: float) 
         return 0.0, den, LOCKED
     code = AMBIGUOUS if big_a - s * big_d < 0.0 else OK
     return (e - (big_b + s * big_c) * w2) / den, den, code
+
+
+@numba.njit(cache=True)
+def acceleration_array(x: np.ndarray, w: np.ndarray, a: float, rho: float, mu: float, e: float) -> np.ndarray:
+    """:func:`acceleration` over arrays of states (locked states give 0.0), rad/s^2."""
+    out = np.empty(x.shape[0])
+    for i in range(x.shape[0]):
+        out[i] = acceleration(x[i], max(w[i], 0.0), a, rho, mu, e)[0]
+    return out
+
+
+@numba.njit(cache=True)
+def wedge_margin(x: float, a: float, rho: float, mu: float) -> float:
+    """``A - |D|``: negative where friction can wedge the pin (both or neither sign consistent)."""
+    big_a, _, _, big_d = coefficients(x, a, rho, mu)
+    return big_a - math.fabs(big_d)
 
 
 @numba.njit(cache=True)

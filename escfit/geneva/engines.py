@@ -27,7 +27,7 @@ import numba
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from .dynamics import AMBIGUOUS, LOCKED, acceleration
+from .dynamics import AMBIGUOUS, LOCKED, acceleration, acceleration_array, wedge_margin
 
 __all__ = ["EngagementResult", "rk4_engagement", "dop853_engagement", "ENGINES",
            "END_COMPLETE", "END_TIME", "END_LOCKED"]
@@ -265,6 +265,11 @@ def dop853_engagement(x0: float, x_end: float, t0: float, w0: float, t_stop: flo
     def ev_turn(t, y):
         return acceleration(y[0], max(y[1], 0.0), a, rho, mu, 1.0)[0]
 
+    def ev_wedge(t, y):
+        return wedge_margin(y[0], a, rho, mu)
+
+    ev_wedge.direction = -1.0
+
     samp_t = np.asarray(samp_t, dtype=float)
     al0, _, code0 = acceleration(x0, w0, a, rho, mu, 1.0)
     if code0 == LOCKED or t_stop <= t0:
@@ -273,7 +278,7 @@ def dop853_engagement(x0: float, x_end: float, t0: float, w0: float, t_stop: flo
         return EngagementResult(reason, t0, x0, w0, al0, w0, t0, w0, t0, nan, 0, n0,
                                 np.full(n0, x0), np.full(n0, w0), np.full(n0, al0))
     sol = solve_ivp(rhs, (t0, t_stop), [x0, w0], method="DOP853", rtol=rtol, atol=atol, max_step=max_step,
-                    dense_output=True, events=(ev_end, ev_lock, ev_stop, ev_turn))
+                    dense_output=True, events=(ev_end, ev_lock, ev_stop, ev_turn, ev_wedge))
     t_end = float(sol.t[-1])
     x_fin, w_fin = float(sol.y[0, -1]), float(sol.y[1, -1])
     if sol.t_events[0].size:
@@ -294,12 +299,13 @@ def dop853_engagement(x0: float, x_end: float, t0: float, w0: float, t_stop: flo
     ys[:, ~inside] = np.array([[x0], [w0]])
     if inside.any():
         ys[:, inside] = sol.sol(ts[inside])
-    alphas = np.array([acceleration(xx, max(ww, 0.0), a, rho, mu, 1.0)[0] for xx, ww in ys.T])
-    amb = nan
-    for tt, xx, ww in zip(sol.t, sol.y[0], sol.y[1]):
-        if acceleration(xx, max(ww, 0.0), a, rho, mu, 1.0)[2] == AMBIGUOUS:
-            amb = float(tt)
-            break
+    alphas = acceleration_array(ys[0].copy(), ys[1].copy(), a, rho, mu, 1.0)
+    if wedge_margin(x0, a, rho, mu) < 0.0:
+        amb = t0
+    elif sol.t_events[4].size:
+        amb = float(sol.t_events[4][0])
+    else:
+        amb = nan
     return EngagementResult(reason, t_end, x_fin, w_fin, float(al_fin), float(cand_w[i_max]), float(cand_t[i_max]),
                             float(cand_w[i_min]), float(cand_t[i_min]), amb, int(sol.t.size - 1), n,
                             ys[0].copy(), ys[1].copy(), alphas)

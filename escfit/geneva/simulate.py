@@ -65,7 +65,7 @@ def rise_time(peaks: np.ndarray, peak_times: np.ndarray, terminal_peak: float, t
 
 def forward(geometry: Geometry, values: Mapping[str, float], *, duration: float, sample_times: np.ndarray,
             solver: str = "rk4", options: Mapping[str, Any] | None = None, with_terminal: bool = True,
-            max_engagements: int = 1_000_000, periodic_tol: float = 1e-12) -> Prediction:
+            max_engagements: int = 20_000, periodic_tol: float = 1e-12) -> Prediction:
     """Simulate from rest: parameter values in, prediction out (pure).
 
     Parameters
@@ -134,7 +134,7 @@ def simulate(scene, solver: str | None = None, **options: Any) -> xr.Dataset:
         (fixed step ``dt`` in units of ``sqrt(I_f/K)``, default 5e-4, compiled).
     **options
         ``duration`` and ``sample_interval`` (s) override the scene's ``[run]``;
-        ``max_engagements`` (default 1e6), ``periodic_tol`` (default 1e-12; 0 integrates
+        ``max_engagements`` (integrated, default 2e4), ``periodic_tol`` (default 1e-12; 0 integrates
         every engagement), ``max_samples`` (default 2e6: longer runs are sampled more
         coarsely and say so in ``attrs["notes"]``), and the solver's own options.  Unknown
         options are refused before any work.
@@ -157,7 +157,7 @@ def simulate(scene, solver: str | None = None, **options: Any) -> xr.Dataset:
     duration = float(options.pop("duration", scene.duration))
     interval = float(options.pop("sample_interval", scene.sample_interval))
     max_samples = int(options.pop("max_samples", 2_000_000))
-    max_eng = int(options.pop("max_engagements", 1_000_000))
+    max_eng = int(options.pop("max_engagements", 20_000))
     ptol = float(options.pop("periodic_tol", 1e-12))
     if not (duration > 0 and interval > 0 and math.isfinite(duration)):
         raise SolverError(f"duration and sample_interval must be positive, got {duration!r}, {interval!r}",
@@ -257,7 +257,7 @@ def _dataset(scene, values: Mapping[str, float], pred: Prediction, solver: str, 
         ambiguous_time=float("nan") if tr.ambiguous_time is None else float(tr.ambiguous_time),
         periodic_from=-1 if tr.periodic_from is None else int(tr.periodic_from),
         rise_time_definition="first speed peak after which every peak stays within 1% of the terminal peak",
-        notes="; ".join(notes),
+        notes="; ".join(list(notes) + list(tr.notes)),
         scene=scene.text,
         where=scene.where,
         escfit_version=__version__,

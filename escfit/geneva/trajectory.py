@@ -59,6 +59,8 @@ class Trajectory:
         Integration steps (or scipy steps) taken.
     periodic_from
         Index of the first engagement copied from its predecessor, or ``None``.
+    options, notes
+        Engine options used; remarks on the run (records dropped ...).
     """
 
     time: np.ndarray
@@ -80,13 +82,14 @@ class Trajectory:
     n_steps: int
     periodic_from: int | None
     options: dict[str, Any] = field(default_factory=dict)
+    notes: tuple[str, ...] = ()
 
 
 Engine = Callable[..., EngagementResult]
 
 
 def run(geometry: Geometry, rho: float, mu: float, e: float, duration: float, sample_times: np.ndarray,
-        engine: Engine, *, max_engagements: int = 1_000_000, periodic_tol: float = 1e-12,
+        engine: Engine, *, max_engagements: int = 20_000, periodic_tol: float = 1e-12, max_records: int = 1_000_000,
         engine_options: dict[str, Any] | None = None) -> Trajectory:
     """Simulate from rest for ``duration`` seconds.
 
@@ -107,7 +110,10 @@ def run(geometry: Geometry, rho: float, mu: float, e: float, duration: float, sa
     engine
         One of :data:`escfit.geneva.engines.ENGINES`.
     max_engagements
-        Budget of integrated engagements (copies in the periodic regime are free).
+        Budget of integrated engagements (copies in the periodic regime are free); when it
+        runs out the run ends with ``end_reason = "truncated"``.
+    max_records
+        Most per-engagement records kept (periodic copies beyond it are dropped, noted).
     periodic_tol
         Relative agreement of two successive engagements at which the motion is taken as
         periodic; ``0`` integrates every engagement.
@@ -125,6 +131,7 @@ def run(geometry: Geometry, rho: float, mu: float, e: float, duration: float, sa
     recs: list[tuple[float, ...]] = []
     t, x, w, k, j = 0.0, x_start, 0.0, 0, 0
     steps, amb, end_reason, periodic_from = 0, math.nan, "duration", None
+    notes: list[str] = []
     while True:
         if k >= max_engagements:
             end_reason = "truncated"
@@ -148,7 +155,7 @@ def run(geometry: Geometry, rho: float, mu: float, e: float, duration: float, sa
         if periodic_tol > 0 and len(recs) >= 3 and _repeats(recs[-1], recs[-2], periodic_tol):
             periodic_from = k
             j, t = _continue_periodically(recs, k, t, t_stop, ts, j, s_x, s_w, s_a, s_k, engine, opts,
-                                          x_start, x_end, a, rho, mu, span)
+                                          x_start, x_end, a, rho, mu, span, max_records, notes)
             break
     if j < n_s and end_reason == "duration" and periodic_from is None:
         # samples exactly at the final time can be left by round-off
@@ -176,6 +183,7 @@ def run(geometry: Geometry, rho: float, mu: float, e: float, duration: float, sa
         n_steps=steps,
         periodic_from=periodic_from,
         options=opts,
+        notes=tuple(notes),
     )
 
 
@@ -193,15 +201,22 @@ def _repeats(r1: tuple[float, ...], r0: tuple[float, ...], tol: float) -> bool:
 
 
 def _continue_periodically(recs, k, t, t_stop, ts, j, s_x, s_w, s_a, s_k, engine, opts, x_start, x_end, a, rho,
-                           mu, span):
+                           mu, span, max_records, notes):
     """Fill samples and engagement records after ``t`` by repeating the last engagement."""
     last = recs[-1]
     period = last[1] - last[0]
     w_in = last[3]  # the entry speed of the repeated engagement equals the last exit speed
     n_more = int(math.floor((t_stop - t) / period + 1e-12))
-    for i in range(n_more):
-        sh = t - last[0] + i * period
-        recs.append((last[0] + sh, last[1] + sh, w_in, last[3], last[4], last[5] + sh, last[6], last[7] + sh))
+    n_keep = max(0, min(n_more, max_records - len(recs)))
+    if n_keep < n_more:
+        notes.append(f"engagement records stop after {len(recs) + n_keep} engagements (max_records); "
+                     f"the time series covers the whole run")
+    sh = t - last[0] + period * np.arange(n_keep)
+    base = np.array(last)
+    block = np.tile(base, (n_keep, 1))
+    block[:, [0, 1, 5, 7]] += sh[:, None]
+    block[:, 2] = w_in
+    recs.extend(map(tuple, block))
     rest = ts[j:]
     if rest.size:
         m = np.floor((rest - t) / period + 1e-12)

@@ -59,15 +59,19 @@ class AmplitudeObservation:
         """Noise-free readings, rad."""
         return np.abs(theta_turn - values["observation.offset"])
 
-    def loglike(self, theta_turn: np.ndarray, y: np.ndarray, values: Mapping[str, float]) -> float:
-        """Log-likelihood of readings ``y`` (rad)."""
+    def loglike_pointwise(self, theta_turn: np.ndarray, y: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
+        """Log-likelihood of each reading ``y`` (rad)."""
         sigma = values["observation.sigma"]
         z = (y - self.expected(theta_turn, values)) / sigma
         if self.noise == "gaussian":
-            return float(-0.5 * np.dot(z, z) - z.size * (math.log(sigma) + 0.5 * math.log(2 * math.pi)))
+            return -0.5 * z * z - (math.log(sigma) + 0.5 * math.log(2 * math.pi))
         nu = values["observation.nu"]
         c = special.gammaln((nu + 1) / 2) - special.gammaln(nu / 2) - 0.5 * math.log(nu * math.pi) - math.log(sigma)
-        return float(z.size * c - (nu + 1) / 2 * np.sum(np.log1p(z * z / nu)))
+        return c - (nu + 1) / 2 * np.log1p(z * z / nu)
+
+    def loglike(self, theta_turn: np.ndarray, y: np.ndarray, values: Mapping[str, float]) -> float:
+        """Log-likelihood of readings ``y`` (rad)."""
+        return float(np.sum(self.loglike_pointwise(theta_turn, y, values)))
 
     def residuals(self, theta_turn: np.ndarray, y: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
         """Standardised residuals for least squares (Gaussian approximation)."""

@@ -60,11 +60,15 @@ class NotchObservation:
     def expected(theta_turn: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
         return np.abs(theta_turn - values["observation.offset"])
 
-    def loglike(self, theta_turn: np.ndarray, n: np.ndarray, values: Mapping[str, float]) -> float:
-        """Log-probability of the counts ``n``."""
+    def loglike_pointwise(self, theta_turn: np.ndarray, n: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
+        """Log-probability of each count ``n``."""
         mu = self.expected(theta_turn, values)
         sigma = values["observation.sigma"]
-        return float(np.sum(log_interval_mass((n * self.notch - mu) / sigma, ((n + 1) * self.notch - mu) / sigma)))
+        return log_interval_mass((n * self.notch - mu) / sigma, ((n + 1) * self.notch - mu) / sigma)
+
+    def loglike(self, theta_turn: np.ndarray, n: np.ndarray, values: Mapping[str, float]) -> float:
+        """Log-probability of the counts ``n``."""
+        return float(np.sum(self.loglike_pointwise(theta_turn, n, values)))
 
     def residuals(self, theta_turn: np.ndarray, n: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
         """Interval mid-point residuals scaled by the total reading spread (for least squares)."""

@@ -25,19 +25,24 @@ from .impact import normal_speeds
 from .kinematics import coupled_kinematics
 from .integrator import (
     COUPLED, FREE, M_DIR, M_IROT, M_IVER, M_N1, M_N2, M_S1, M_S2, M_S4, M_S5, M_TSTUCK, M_VSTUCK, MX_REV, N_COLS,
-    R_ARMED, R_BAD, R_CONTACT, R_MISS, R_SEPARATION, R_STALL, R_TIP, R_TMAX, _deriv, _record, _sgn,
+    R_ARMED, R_BAD, R_CONTACT, R_MISS, R_SEPARATION, R_STALL, R_TIP, R_TMAX, _deriv, _record,
     _track_max, _train_start_direction, _verge_start_direction,
 )
 
-__all__ = ["run_ivp"]
+__all__ = ["run_ivp", "MAX_STEP_SPIN"]
+
+#: largest step, in radians of fuze spin (a beat of the M739 lasts about 0.9 rad)
+MAX_STEP_SPIN = 0.02
 
 
 @numba.njit(cache=True)
 def _state_eval(k, regime, side, y, off, m):
     """Derivatives and event values with the friction signs taken from the state.
 
-    ``m`` supplies what the state cannot: the train direction and verge sign to use at
-    exactly zero speed, and the stuck flags.
+    The directions of motion (train direction in ``m``, and the verge's in free motion)
+    are kept from ``m``: they change only where a speed passes through zero, which is a
+    terminal event.  Everything else -- mesh phases, sliding direction on the face,
+    inertia branches -- follows the state at every evaluation, as in the report's program.
     """
     mm = m.copy()
     phi_total = y[0] + off
@@ -48,14 +53,10 @@ def _state_eval(k, regime, side, y, off, m):
     mm[M_S2] = s2
     mm[M_IROT] = 0.0
     mm[M_IVER] = 0.0
-    if mm[M_TSTUCK] < 0.5 and y[1] != 0.0:
-        mm[M_DIR] = _sgn(y[1])
     if regime == COUPLED:
-        s4, s5 = coupled_signs(k, side, y[0], y[1], mm[M_DIR])
+        s4, s5 = coupled_signs(k, side, y[0], 0.0, mm[M_DIR])
         mm[M_S4] = s4
         mm[M_S5] = s5
-    elif mm[M_VSTUCK] < 0.5 and y[3] != 0.0:
-        mm[M_S5] = _sgn(y[3])
     return _deriv(k, regime, side, y[0], y[1], y[2], y[3], off, mm), mm
 
 
@@ -66,6 +67,8 @@ def run_ivp(k: Constants, *, phi_start: float, t_max: float, record: bool = True
     Parameters as :func:`escfit.verge.hybrid.run_rk4`; ``rtol`` and ``atol`` are the
     solver tolerances (``atol`` applies to angles in rad and speeds in rad/s alike).
     """
+
+    max_step = MAX_STEP_SPIN / k.omega
 
     def phase(regime, side, y, t, off, m, armed, buf, n, mx):
         state = {"armed": armed}
@@ -90,8 +93,10 @@ def run_ivp(k: Constants, *, phi_start: float, t_max: float, record: bool = True
                 return [d[0], d[1], d[2], d[3]] if m[M_TSTUCK] < 0.5 else [0.0, 0.0, d[2], d[3]]
 
             events = _make_events(k, regime, side, off, m, state["armed"])
+            # scipy looks for events only at step ends: a gap that opens and closes again
+            # within one (smooth, hence long) step would go unseen, so cap the step
             sol = solve_ivp(rhs, (t, t_max), y.copy(), method="DOP853", rtol=rtol, atol=atol, events=events,
-                            dense_output=False)
+                            dense_output=False, max_step=max_step)
             if sol.status < 0:
                 return R_BAD, t, n, state["armed"], buf
             for j in range(sol.t.size - 1):
