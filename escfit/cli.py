@@ -20,8 +20,33 @@ from .errors import EscfitError
 __all__ = ["main", "cli"]
 
 
+# Commands that live beside the features they drive, imported only when used.
+LAZY_COMMANDS = {
+    "bench": "escfit.bench:bench",
+    "fit-many": "escfit.study.cli:fit_many",
+}
+
+
 class _Group(click.Group):
-    """Maps escfit's errors to exit status 2 and anything unexpected to 1."""
+    """Maps escfit's errors to exit status 2 and anything unexpected to 1; loads lazy commands."""
+
+    def list_commands(self, ctx):
+        import importlib.util
+
+        present = {n for n, target in LAZY_COMMANDS.items() if importlib.util.find_spec(target.split(":")[0])}
+        return sorted({*super().list_commands(ctx), *present})
+
+    def get_command(self, ctx, name):
+        cmd = super().get_command(ctx, name)
+        if cmd is None and name in LAZY_COMMANDS:
+            import importlib
+
+            module, attr = LAZY_COMMANDS[name].split(":")
+            try:
+                cmd = getattr(importlib.import_module(module), attr)
+            except (ImportError, AttributeError) as exc:
+                raise click.UsageError(f"command {name!r} is not available ({exc})") from None
+        return cmd
 
     def invoke(self, ctx):
         try:
