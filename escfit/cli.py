@@ -33,7 +33,13 @@ class _Group(click.Group):
     def list_commands(self, ctx):
         import importlib.util
 
-        present = {n for n, target in LAZY_COMMANDS.items() if importlib.util.find_spec(target.split(":")[0])}
+        def exists(module: str) -> bool:
+            try:
+                return importlib.util.find_spec(module) is not None
+            except ModuleNotFoundError:  # a missing parent package
+                return False
+
+        present = {n for n, target in LAZY_COMMANDS.items() if exists(target.split(":")[0])}
         return sorted({*super().list_commands(ctx), *present})
 
     def get_command(self, ctx, name):
