@@ -37,7 +37,7 @@ import numpy as np
 
 from .geometry import coefficients
 
-__all__ = ["OK", "AMBIGUOUS", "LOCKED", "acceleration", "acceleration_array", "wedge_margin", "friction_argument"]
+__all__ = ["OK", "AMBIGUOUS", "LOCKED", "acceleration", "acceleration_array", "switch_function", "wedge_margin", "friction_argument"]
 
 OK = 0
 AMBIGUOUS = 1
@@ -91,6 +91,13 @@ def acceleration_array(x: np.ndarray, w: np.ndarray, a: float, rho: float, mu: f
     for i in range(x.shape[0]):
         out[i] = acceleration(x[i], max(w[i], 0.0), a, rho, mu, e)[0]
     return out
+
+
+@numba.njit(cache=True)
+def switch_function(x: float, w: float, a: float, rho: float, mu: float, e: float) -> float:
+    """``Q = D*E + (A*C - B*D)*w**2``: the friction sign is ``sign(Q)``; ``alpha`` has a kink where ``Q = 0``."""
+    big_a, big_b, big_c, big_d = coefficients(x, a, rho, mu)
+    return big_d * e + (big_a * big_c - big_b * big_d) * w * w
 
 
 @numba.njit(cache=True)

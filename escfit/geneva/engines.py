@@ -27,7 +27,7 @@ import numba
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from .dynamics import AMBIGUOUS, LOCKED, acceleration, acceleration_array, wedge_margin
+from .dynamics import AMBIGUOUS, LOCKED, acceleration, acceleration_array, switch_function, wedge_margin
 
 __all__ = ["EngagementResult", "rk4_engagement", "dop853_engagement", "ENGINES",
            "END_COMPLETE", "END_TIME", "END_LOCKED"]
@@ -149,8 +149,32 @@ def _rk4_kernel(x0, x_end, t0, w0, t_stop, dt, a, rho, mu, samp_t, samp_x, samp_
                     hi = mid
             h = hi * h
             x1, w1, al1, c = _rk4_step(x, w, al, h, a, rho, mu)
+            for _ in range(4):  # Newton on the step length: land on x_end to round-off
+                if c == LOCKED or w1 <= 0.0 or abs(x1 - x_end) <= 1e-15 * (1.0 + abs(x_end)):
+                    break
+                h = h + (x_end - x1) / w1
+                x1, w1, al1, c = _rk4_step(x, w, al, h, a, rho, mu)
             crossed = True
             at_stop = False
+        elif c != LOCKED and mu > 0.0:
+            # split the step where the friction sign flips: alpha has a kink there, and a
+            # kink inside a step would cost RK4 two orders of accuracy
+            q0 = switch_function(x, w, a, rho, mu, 1.0)
+            if (q0 > 0.0) != (switch_function(x1, w1, a, rho, mu, 1.0) > 0.0):
+                lo = 0.0
+                hi = 1.0
+                for _ in range(50):
+                    mid = 0.5 * (lo + hi)
+                    qm = switch_function(_hermite(x, w, x1, w1, h, mid), _hermite(w, al, w1, al1, h, mid),
+                                         a, rho, mu, 1.0)
+                    if (qm > 0.0) == (q0 > 0.0):
+                        lo = mid
+                    else:
+                        hi = mid
+                if hi > 1e-6 and hi < 1.0 - 1e-6:
+                    h = hi * h
+                    x1, w1, al1, c = _rk4_step(x, w, al, h, a, rho, mu)
+                    at_stop = False
         steps += 1
         if c == LOCKED:
             return END_LOCKED, t, x, w, al, peak_w, peak_t, min_w, min_t, amb, steps, j

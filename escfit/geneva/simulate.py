@@ -29,6 +29,8 @@ SOLVERS = ("dop853", "rk4")
 _SOLVER_OPTIONS = {"dop853": {"rtol", "atol", "max_step"}, "rk4": {"dt"}}
 _COMMON_OPTIONS = {"duration", "sample_interval", "max_engagements", "periodic_tol", "max_samples"}
 _DEFAULTS = {"dop853": {"rtol": 1e-11, "atol": 1e-12, "max_step": 0.05}, "rk4": {"dt": 5e-4}}
+# integrated engagements per run before "truncated" (about 20 s of work for either solver)
+_ENGAGEMENT_BUDGET = {"dop853": 2_000, "rk4": 20_000}
 
 
 @dataclass(frozen=True)
@@ -134,7 +136,8 @@ def simulate(scene, solver: str | None = None, **options: Any) -> xr.Dataset:
         (fixed step ``dt`` in units of ``sqrt(I_f/K)``, default 5e-4, compiled).
     **options
         ``duration`` and ``sample_interval`` (s) override the scene's ``[run]``;
-        ``max_engagements`` (integrated, default 2e4), ``periodic_tol`` (default 1e-12; 0 integrates
+        ``max_engagements`` (integrated engagements before the run ends as ``"truncated"``;
+        default 2000 for dop853, 20000 for rk4), ``periodic_tol`` (default 1e-12; 0 integrates
         every engagement), ``max_samples`` (default 2e6: longer runs are sampled more
         coarsely and say so in ``attrs["notes"]``), and the solver's own options.  Unknown
         options are refused before any work.
@@ -157,7 +160,7 @@ def simulate(scene, solver: str | None = None, **options: Any) -> xr.Dataset:
     duration = float(options.pop("duration", scene.duration))
     interval = float(options.pop("sample_interval", scene.sample_interval))
     max_samples = int(options.pop("max_samples", 2_000_000))
-    max_eng = int(options.pop("max_engagements", 20_000))
+    max_eng = int(options.pop("max_engagements", _ENGAGEMENT_BUDGET[solver]))
     ptol = float(options.pop("periodic_tol", 1e-12))
     if not (duration > 0 and interval > 0 and math.isfinite(duration)):
         raise SolverError(f"duration and sample_interval must be positive, got {duration!r}, {interval!r}",
