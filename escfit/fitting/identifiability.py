@@ -33,12 +33,12 @@ def correlation_warnings(names: list[str], corr: np.ndarray, threshold: float = 
 
 
 def sloppy_directions(names: list[str], samples: np.ndarray, ratio: float = 30.0) -> list[str]:
-    """Parameter combinations whose spread is far below the others' (posterior in log scale).
+    """Report a posterior ridge: a combination far better determined than the parameters.
 
-    ``samples`` has shape (n, ndim).  Works on standardised log values (parameters that can
-    be non-positive are standardised directly); a combination whose standard deviation is
-    ``ratio`` times smaller than the largest one is reported as the best-determined
-    combination, and the largest as the direction the data leave open.
+    ``samples`` has shape (n, ndim).  Each parameter is standardised (in log scale when it is
+    positive); if the smallest principal spread is ``ratio`` times below the largest, the
+    parameters move together along the largest direction and the data fix mainly the
+    combination along the smallest one.
     """
     x = np.asarray(samples, float)
     if x.shape[1] < 2:
@@ -47,11 +47,16 @@ def sloppy_directions(names: list[str], samples: np.ndarray, ratio: float = 30.0
     z = (z - z.mean(axis=0)) / (z.std(axis=0) + 1e-300)
     w, v = np.linalg.eigh(np.cov(z.T))
     w = np.maximum(w, 1e-300)
-    if math.sqrt(w[-1] / w[0]) < ratio:
+    spread = math.sqrt(w[-1] / w[0])
+    if spread < ratio:
         return []
-    comb = " ".join(f"{c:+.2f}*{n}" for c, n in zip(v[:, -1], names) if abs(c) > 0.2)
-    return [f"the posterior is a ridge: standardised spread ratio {math.sqrt(w[-1] / w[0]):.0f}; "
-            f"the data leave the direction [{comb}] (log scale for positive parameters) nearly undetermined"]
+
+    def combo(vec):
+        return " ".join(f"{c:+.2f}*{n}" for c, n in zip(vec, names) if abs(c) > 0.2)
+
+    return [f"the posterior is a ridge (principal spreads differ {spread:.0f}-fold): the parameters move together along "
+            f"[{combo(v[:, -1])}] while the data fix mainly [{combo(v[:, 0])}] (standardised, log scale for positive "
+            "parameters)"]
 
 
 def phase_mode_warning(problem: FitProblem) -> list[str]:

@@ -16,7 +16,6 @@ import numpy as np
 from scipy.stats import qmc
 
 from ..errors import FitError
-from ..params import safe_name
 from .problem import FitProblem
 
 __all__ = ["LeastSquaresResult", "least_squares", "NOISE_PARAMS"]
@@ -105,15 +104,17 @@ def least_squares(problem: FitProblem, *, n_starts: int = 8, seed: int = 0,
         u = qmc.LatinHypercube(d=len(names), seed=seed).random(n_starts - 1)
         starts += list(qmc.scale(u, span_lo, span_hi))
 
+    keys = [f"p{i}" for i in range(len(names))]  # lmfit needs identifiers; names carry brackets and dots
+
     def residual(params: lmfit.Parameters) -> np.ndarray:
-        vals = problem.values({**fixed, **{n: params[safe_name(n)].value for n in names}})
+        vals = problem.values({**fixed, **{n: params[k].value for n, k in zip(names, keys)}})
         return problem.residuals(vals)
 
     best = None
     for start in starts:
         params = lmfit.Parameters()
-        for n, v, a, b in zip(names, start, lo, hi):
-            params.add(safe_name(n), value=float(np.clip(v, a, b)), min=float(a), max=float(b))
+        for k, v, a, b in zip(keys, start, lo, hi):
+            params.add(k, value=float(np.clip(v, a, b)), min=float(a), max=float(b))
         try:
             res = lmfit.minimize(residual, params, method="least_squares", scale_covar=True)
         except (ValueError, FloatingPointError) as exc:  # pragma: no cover - lmfit refusing a start
@@ -123,9 +124,8 @@ def least_squares(problem: FitProblem, *, n_starts: int = 8, seed: int = 0,
             best = res
     if best is None:
         raise FitError("least squares failed from every start point")
-    value = np.array([best.params[safe_name(n)].value for n in names])
-    stderr = np.array([best.params[safe_name(n)].stderr if best.params[safe_name(n)].stderr is not None else np.nan
-                       for n in names], float)
+    value = np.array([best.params[k].value for k in keys])
+    stderr = np.array([np.nan if best.params[k].stderr is None else best.params[k].stderr for k in keys], float)
     if best.covar is not None and best.covar.shape == (len(names), len(names)):
         d = np.sqrt(np.diag(best.covar))
         corr = best.covar / np.outer(d, d)

@@ -118,7 +118,12 @@ class FitProblem:
 
     # -- forward model -----------------------------------------------------------------
     def predict(self, vals: Mapping[str, float]) -> list[np.ndarray]:
-        """Signed turning-point angle at each recorded swing, per curve (rad).
+        """Amplitude towards the nominal side at each recorded swing, per curve (rad).
+
+        With angle switching this is the signed turning-point angle theta (the observation
+        model reads ``|theta - offset|``); with phase switching it is theta measured towards
+        the side the half cycle should end on (:meth:`sides`), negative when Monday's
+        convention breaks down, so the likelihood has no fold at zero.
 
         Raises
         ------
@@ -146,7 +151,18 @@ class FitProblem:
             else:
                 theta[:] = sys.theta0
             out.append(theta)
-        return out
+        return [self._nominal(t, c) for t, c in zip(out, self.curves)]
+
+    def _nominal(self, theta: np.ndarray, curve: Curve) -> np.ndarray:
+        side = self.sides(curve)
+        return theta if side is None else side * theta
+
+    def sides(self, curve: Curve) -> np.ndarray | None:
+        """Phase switching: nominal side (+1/-1) of the end of each recorded swing; else None."""
+        if self.scene.switching != "phase":
+            return None
+        sign0 = 1.0 if self.params["oscillator.theta0"].value >= 0 else -1.0
+        return sign0 * np.where(curve.swing % 2 == 0, 1.0, -1.0)
 
     # -- likelihood --------------------------------------------------------------------
     def log_prior(self, vec: np.ndarray) -> float:
@@ -158,7 +174,7 @@ class FitProblem:
         except (EscfitError, ValueError, ArithmeticError) as exc:
             self.failures[f"solve failed: {exc}"[:120]] += 1
             return -math.inf
-        ll = sum(self.observation.loglike(p, c.y, vals) for p, c in zip(pred, self.curves))
+        ll = sum(self.observation.loglike(p, c.y, vals, self.sides(c)) for p, c in zip(pred, self.curves))
         if not math.isfinite(ll):
             self.failures["non-finite likelihood"] += 1
             return -math.inf
@@ -179,17 +195,18 @@ class FitProblem:
         except (EscfitError, ValueError, ArithmeticError) as exc:
             self.failures[f"solve failed: {exc}"[:120]] += 1
             return np.full(n, FAIL_RESIDUAL)
-        r = np.concatenate([self.observation.residuals(p, c.y, vals) for p, c in zip(pred, self.curves)])
+        r = np.concatenate([self.observation.residuals(p, c.y, vals, self.sides(c)) for p, c in zip(pred, self.curves)])
         return np.where(np.isfinite(r), r, FAIL_RESIDUAL)
 
     def loglike_pointwise(self, vals: Mapping[str, float]) -> np.ndarray:
         """Log-likelihood of each reading (for PSIS-LOO); raises when the solve fails."""
-        return np.concatenate([self.observation.loglike_pointwise(p, c.y, vals)
+        return np.concatenate([self.observation.loglike_pointwise(p, c.y, vals, self.sides(c))
                                for p, c in zip(self.predict(vals), self.curves)])
 
     def expected(self, vals: Mapping[str, float]) -> np.ndarray:
         """Noise-free expected readings (rad) of all data points, concatenated."""
-        return np.concatenate([self.observation.expected(p, vals) for p in self.predict(vals)])
+        return np.concatenate([self.observation.expected(p, vals, self.sides(c))
+                               for p, c in zip(self.predict(vals), self.curves)])
 
     @property
     def observed(self) -> np.ndarray:

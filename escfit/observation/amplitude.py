@@ -2,6 +2,11 @@
 
 A reading of half swing k is ``|theta_turn[k] - offset| + noise``: with the scale's zero
 displaced by ``offset`` the readings on alternate sides differ by twice the offset.
+
+Every method takes the model's turning points either as signed angles ``theta`` or, with
+``side`` given, as amplitudes measured towards the nominal side ``side`` (+1/-1) of each
+swing; the latter may be negative (Monday's phase convention can end a half cycle on the
+wrong side) and then keeps the expected reading smooth instead of folding it at zero.
 Parameters: ``observation.sigma`` (rad, noise scale), ``observation.offset`` (rad, zero
 offset; fixed at 0 unless the scene says otherwise), ``observation.nu`` (Student-t degrees
 of freedom).
@@ -19,7 +24,18 @@ from scipy import special
 from ..errors import SceneError
 from ..params import Param, read_param
 
-__all__ = ["AmplitudeObservation", "noise_params"]
+__all__ = ["AmplitudeObservation", "noise_params", "expected_reading"]
+
+
+def expected_reading(theta: np.ndarray, offset: float, side: np.ndarray | None = None) -> np.ndarray:
+    """Noise-free amplitude reading of a scale whose zero is displaced by ``offset``.
+
+    Without ``side``: ``|theta - offset|``.  With ``side``: ``theta`` is the amplitude towards
+    the nominal side ``side`` and the reading is ``theta - side*offset`` (may be negative).
+    """
+    if side is None:
+        return np.abs(theta - offset)
+    return theta - side * offset
 
 
 def noise_params(table: Mapping, where: str, default_sigma: float) -> list[Param]:
@@ -55,27 +71,30 @@ class AmplitudeObservation:
         return cls(noise, tuple(params))
 
     @staticmethod
-    def expected(theta_turn: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
+    def expected(theta_turn: np.ndarray, values: Mapping[str, float], side: np.ndarray | None = None) -> np.ndarray:
         """Noise-free readings, rad."""
-        return np.abs(theta_turn - values["observation.offset"])
+        return expected_reading(theta_turn, values["observation.offset"], side)
 
-    def loglike_pointwise(self, theta_turn: np.ndarray, y: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
+    def loglike_pointwise(self, theta_turn: np.ndarray, y: np.ndarray, values: Mapping[str, float],
+                          side: np.ndarray | None = None) -> np.ndarray:
         """Log-likelihood of each reading ``y`` (rad)."""
         sigma = values["observation.sigma"]
-        z = (y - self.expected(theta_turn, values)) / sigma
+        z = (y - self.expected(theta_turn, values, side)) / sigma
         if self.noise == "gaussian":
             return -0.5 * z * z - (math.log(sigma) + 0.5 * math.log(2 * math.pi))
         nu = values["observation.nu"]
         c = special.gammaln((nu + 1) / 2) - special.gammaln(nu / 2) - 0.5 * math.log(nu * math.pi) - math.log(sigma)
         return c - (nu + 1) / 2 * np.log1p(z * z / nu)
 
-    def loglike(self, theta_turn: np.ndarray, y: np.ndarray, values: Mapping[str, float]) -> float:
+    def loglike(self, theta_turn: np.ndarray, y: np.ndarray, values: Mapping[str, float],
+                side: np.ndarray | None = None) -> float:
         """Log-likelihood of readings ``y`` (rad)."""
-        return float(np.sum(self.loglike_pointwise(theta_turn, y, values)))
+        return float(np.sum(self.loglike_pointwise(theta_turn, y, values, side)))
 
-    def residuals(self, theta_turn: np.ndarray, y: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
+    def residuals(self, theta_turn: np.ndarray, y: np.ndarray, values: Mapping[str, float],
+                  side: np.ndarray | None = None) -> np.ndarray:
         """Standardised residuals for least squares (Gaussian approximation)."""
-        return (y - self.expected(theta_turn, values)) / values["observation.sigma"]
+        return (y - self.expected(theta_turn, values, side)) / values["observation.sigma"]
 
     def sample(self, theta_turn: np.ndarray, values: Mapping[str, float], rng: np.random.Generator) -> np.ndarray:
         """Synthetic readings (rad, clipped at 0)."""

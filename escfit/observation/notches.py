@@ -19,7 +19,7 @@ from scipy import special
 from ..errors import SceneError
 from ..params import Param
 from ..units import to_canonical
-from .amplitude import noise_params
+from .amplitude import expected_reading, noise_params
 
 __all__ = ["NotchObservation", "log_interval_mass"]
 
@@ -57,22 +57,26 @@ class NotchObservation:
         return cls(notch, tuple(noise_params(table, where, 0.25 * notch)))
 
     @staticmethod
-    def expected(theta_turn: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
-        return np.abs(theta_turn - values["observation.offset"])
+    def expected(theta_turn: np.ndarray, values: Mapping[str, float], side: np.ndarray | None = None) -> np.ndarray:
+        """Noise-free amplitude (rad) before counting; see :func:`expected_reading`."""
+        return expected_reading(theta_turn, values["observation.offset"], side)
 
-    def loglike_pointwise(self, theta_turn: np.ndarray, n: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
+    def loglike_pointwise(self, theta_turn: np.ndarray, n: np.ndarray, values: Mapping[str, float],
+                          side: np.ndarray | None = None) -> np.ndarray:
         """Log-probability of each count ``n``."""
-        mu = self.expected(theta_turn, values)
+        mu = self.expected(theta_turn, values, side)
         sigma = values["observation.sigma"]
         return log_interval_mass((n * self.notch - mu) / sigma, ((n + 1) * self.notch - mu) / sigma)
 
-    def loglike(self, theta_turn: np.ndarray, n: np.ndarray, values: Mapping[str, float]) -> float:
+    def loglike(self, theta_turn: np.ndarray, n: np.ndarray, values: Mapping[str, float],
+                side: np.ndarray | None = None) -> float:
         """Log-probability of the counts ``n``."""
-        return float(np.sum(self.loglike_pointwise(theta_turn, n, values)))
+        return float(np.sum(self.loglike_pointwise(theta_turn, n, values, side)))
 
-    def residuals(self, theta_turn: np.ndarray, n: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
+    def residuals(self, theta_turn: np.ndarray, n: np.ndarray, values: Mapping[str, float],
+                  side: np.ndarray | None = None) -> np.ndarray:
         """Interval mid-point residuals scaled by the total reading spread (for least squares)."""
-        mu = self.expected(theta_turn, values)
+        mu = self.expected(theta_turn, values, side)
         spread = math.sqrt(values["observation.sigma"] ** 2 + self.notch**2 / 12.0)
         return ((n + 0.5) * self.notch - mu) / spread
 
