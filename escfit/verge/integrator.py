@@ -418,8 +418,10 @@ def integrate_phase(k, regime, side, y, t, off, m, armed, h, t_max, buf, n, reco
         # Earliest mode change: bisection on the step length.
         h_mode = hs + 1.0
         if mode_change:
+            # Stopping within 1e-7 of a step past the switch leaves an error of that
+            # order times the jump of the right-hand side: far below the RK4 error.
             lo, hi = 0.0, hs
-            while hi - lo > tol_h:
+            while hi - lo > 1e3 * tol_h:
                 mid = 0.5 * (lo + hi)
                 ym = _rk4(k, regime, side, y, off, m, mid, d1)
                 if _same_mode(_mode_at(k, regime, side, ym, off, m), m):
