@@ -102,7 +102,7 @@ def simulate(scene, solver, swings, step, as_json, out, force):
         with atomic_path(out, force=force) as tmp:
             ds.to_netcdf(tmp, engine="h5netcdf")
     if as_json:
-        click.echo(json.dumps(module.json_summary(ds)))
+        click.echo(json.dumps(_json_safe(module.json_summary(ds))))
     else:
         click.echo(_describe(ds, sc))
 
@@ -178,8 +178,22 @@ def fit(data, scene_path, method, out, seed, walkers, steps, burn, unit_id, fmt,
     method = pick(method, "method", "leastsq")
     out = pick(out, "out", None) or f"{Path(data).stem}_fit.h5"
     steps = pick(steps, "steps", 2000)
+    from .scene import load_scene
+
+    scene = load_scene(scene_path)
+    if scene.model == "friction_rig":
+        from .friction.fitfile import fit_rig
+
+        result = fit_rig(scene, data, method=method, out=out, force=force, seed=pick(seed, "seed", 0),
+                         walkers=pick(walkers, "walkers", 32), steps=steps, burn=pick(burn, "burn", None))
+        click.echo(f"wrote {out}")
+        _print_summary(result)
+        return
+    if scene.model != "balance":
+        raise SceneError(f"fitting recordings of model {scene.model!r} is not supported by 'escfit fit' yet; "
+                         "use its Python inference API", scene_path)
     curve = read_unit_curve(data, notch_deg=pick(notch_deg, "notch_deg", None))
-    result = run_fit(scene_path, curve, method=method, out=out, force=force, seed=pick(seed, "seed", 0),
+    result = run_fit(scene, curve, method=method, out=out, force=force, seed=pick(seed, "seed", 0),
                      walkers=pick(walkers, "walkers", 32), steps=steps, burn=pick(burn, "burn", None),
                      resume=resume, progress=not quiet and sys.stderr.isatty(), unit=pick(unit_id, "unit", None))
     click.echo(f"wrote {out}")
@@ -214,11 +228,24 @@ def summary(results, as_json):
     res = load_fit(results)
     if as_json:
         a = res.attrs
-        click.echo(json.dumps({"parameters": res.summary(), "warnings": res.warnings,
+        click.echo(json.dumps(_json_safe({"parameters": res.summary(), "warnings": res.warnings,
                                "method": a.get("method"), "data_file": a.get("data_file"),
-                               "schema_version": a.get("schema_version")}))
+                               "schema_version": a.get("schema_version")})))
     else:
         _print_summary(res)
+
+
+def _json_safe(obj):
+    """Replace non-finite floats by None so the output is valid JSON."""
+    import math as _math
+
+    if isinstance(obj, dict):
+        return {k: _json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_json_safe(v) for v in obj]
+    if isinstance(obj, float) and not _math.isfinite(obj):
+        return None
+    return obj
 
 
 @cli.command()

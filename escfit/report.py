@@ -43,10 +43,18 @@ def _figures(res: FitResult) -> dict[str, bytes]:
     import matplotlib.pyplot as plt
 
     figs: dict[str, bytes] = {}
+    if "expected" in res.group("least_squares"):
+        figs["data and fit"] = _data_figure(res, plt)
+    post = res.group("posterior")
+    if post is not None:
+        figs["corner plot"] = _corner(res, post, plt)
+    return figs
+
+
+def _data_figure(res: FitResult, plt) -> bytes:
     obs = res.group("observed_data")
     lsq = res.group("least_squares")
     pp = res.group("posterior_predictive")
-    post = res.group("posterior")
     kind = res.attrs.get("data_kind", "amplitude")
     y = obs["reading"].values.astype(float)
     swing = obs["swing"].values
@@ -78,30 +86,31 @@ def _figures(res: FitResult) -> dict[str, bytes]:
     axr.axhline(0, color="k", lw=0.5)
     axr.set_xlabel("half swing")
     axr.set_ylabel("residual (rad)")
-    figs["data and fit"] = _png(fig, plt)
-    if post is not None:
-        names = [n for n in res.parameter_names if n in post]
-        k = len(names)
-        fig, axes = plt.subplots(k, k, figsize=(2.2 * k + 1, 2.2 * k + 1), squeeze=False)
-        flat = {n: post[n].values.ravel() for n in names}
-        for i, a in enumerate(names):
-            for j, b in enumerate(names):
-                axx = axes[i, j]
-                if j > i:
-                    axx.axis("off")
-                elif i == j:
-                    axx.hist(flat[a], bins=40, color="C0")
-                else:
-                    axx.plot(flat[b][::max(1, flat[b].size // 3000)], flat[a][::max(1, flat[a].size // 3000)], ".",
-                             ms=1, alpha=0.3)
-                if i == k - 1:
-                    axx.set_xlabel(b, fontsize=7)
-                if j == 0 and i > 0:
-                    axx.set_ylabel(a, fontsize=7)
-                axx.tick_params(labelsize=6)
-        fig.suptitle("posterior (corner plot)")
-        figs["corner plot"] = _png(fig, plt)
-    return figs
+    return _png(fig, plt)
+
+
+def _corner(res: FitResult, post, plt) -> bytes:
+    names = [n for n in res.parameter_names if n in post]
+    k = len(names)
+    fig, axes = plt.subplots(k, k, figsize=(2.2 * k + 1, 2.2 * k + 1), squeeze=False)
+    flat = {n: post[n].values.ravel() for n in names}
+    step = max(1, next(iter(flat.values())).size // 3000)
+    for i, a in enumerate(names):
+        for j, b in enumerate(names):
+            axx = axes[i, j]
+            if j > i:
+                axx.axis("off")
+            elif i == j:
+                axx.hist(flat[a], bins=40, color="C0")
+            else:
+                axx.plot(flat[b][::step], flat[a][::step], ".", ms=1, alpha=0.3)
+            if i == k - 1:
+                axx.set_xlabel(b, fontsize=7)
+            if j == 0 and i > 0:
+                axx.set_ylabel(a, fontsize=7)
+            axx.tick_params(labelsize=6)
+    fig.suptitle("posterior (corner plot)")
+    return _png(fig, plt)
 
 
 def _notch_from_scene(res: FitResult) -> float:
@@ -139,9 +148,11 @@ def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: 
             ("walkers x steps (burn)", f"{a.get('walkers', '-')} x {a.get('steps', '-')} ({a.get('burn', '-')})"),
             ("started / finished", f"{a.get('started')} / {a.get('finished')}"), ("schema", a.get("schema_version")),
             ("versions", a.get("versions")), ("failed evaluations", a.get("failures"))]
-    fit_stats = (f"least squares: chi-square {_fmt(lsq.attrs['chisqr'])}, reduced {_fmt(lsq.attrs['redchi'])}, "
-                 f"reading scatter {_fmt(lsq.attrs['sigma_hat'])} rad, n = {lsq.attrs['n_data']}, "
-                 f"AIC {_fmt(lsq.attrs['aic'])}, BIC {_fmt(lsq.attrs['bic'])}")
+    la = lsq.attrs
+    fit_stats = f"model {a.get('model', 'balance')}; least squares: chi-square {_fmt(la.get('chisqr'))}, n = {la.get('n_data')}"
+    if "redchi" in la:
+        fit_stats += (f", reduced chi-square {_fmt(la['redchi'])}, reading scatter {_fmt(la['sigma_hat'])} rad, "
+                      f"AIC {_fmt(la['aic'])}, BIC {_fmt(la['bic'])}")
     figs = _figures(res)
     out = Path(out)
     if fmt == "md":

@@ -83,7 +83,7 @@ class FitResult:
                 q = np.quantile(x, [0.025, 0.16, 0.5, 0.84, 0.975])
                 row.update(median=float(q[2]), lo68=float(q[1]), hi68=float(q[3]), lo95=float(q[0]), hi95=float(q[4]),
                            mean=float(x.mean()), sd=float(x.std(ddof=1)))
-                if diag is not None and "rhat" in diag:
+                if diag is not None and "rhat" in diag and name in list(diag["parameter"].values):
                     sel = diag.sel(parameter=name)
                     row.update(rhat=float(sel["rhat"]), ess_bulk=float(sel["ess_bulk"]), ess_tail=float(sel["ess_tail"]),
                                tau=float(sel["tau"]))

@@ -1,0 +1,97 @@
+"""The command line: exit codes, JSON output, atomic and non-overwriting outputs."""
+
+from __future__ import annotations
+
+import json
+import shutil
+
+import pytest
+from click.testing import CliRunner
+
+from escfit.cli import cli
+
+from .conftest import DATASETS, ROOT
+
+
+def run(*args):
+    return CliRunner().invoke(cli, [str(a) for a in args])
+
+
+def test_simulate_json_and_out(tmp_path):
+    r = run("simulate", DATASETS / "scenes" / "monday_sample_phase.toml", "--swings", "8", "--json")
+    assert r.exit_code == 0, r.output
+    d = json.loads(r.output)
+    assert set(d) >= {"amplitude", "half_period", "time", "rate", "status"}
+    assert d["amplitude"][1] == pytest.approx(5.548613, abs=1e-6) and d["status"] == "ok"
+    out = tmp_path / "run.nc"
+    assert run("simulate", DATASETS / "scenes" / "horology_rk4_case.toml", "--swings", "3", "--out", out).exit_code == 0
+    before = out.read_bytes()
+    again = run("simulate", DATASETS / "scenes" / "horology_rk4_case.toml", "--swings", "4", "--out", out)
+    assert again.exit_code == 2 and "exists" in again.output and out.read_bytes() == before
+    assert run("simulate", DATASETS / "scenes" / "horology_rk4_case.toml", "--swings", "4", "--out", out,
+               "--force").exit_code == 0
+    assert not list(tmp_path.glob("*.part"))
+
+
+@pytest.mark.parametrize("solver", ["rk4", "ivp"])
+def test_simulate_other_solvers(solver):
+    args = ["--h", "1e-5"] if solver == "rk4" else []
+    r = run("simulate", DATASETS / "scenes" / "horology_rk4_case.toml", "--swings", "2", "--solver", solver, "--json", *args)
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.output)["half_period"][0] == pytest.approx(0.1000035078, abs=2e-9)
+
+
+def test_bad_scene_exits_2_with_one_line(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('model = "balance"\n[oscillator]\nomega0 = 10\ntheta0 = "3 m"\n')
+    r = run("simulate", bad)
+    assert r.exit_code == 2
+    assert "bad.toml" in r.output and "theta0" in r.output and len(r.output.strip().splitlines()) == 1
+
+
+def test_fit_recipe_summary_and_reports(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    shutil.copytree(ROOT / "fits", tmp_path / "fits")
+    shutil.copytree(DATASETS, tmp_path / "datasets")
+    r = run("fit", "fits/monday_unit4.toml", "--steps", "300", "--walkers", "12", "--report", "u4.html")
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "monday_unit4.h5").exists() and (tmp_path / "u4.html").exists()
+    html = (tmp_path / "u4.html").read_text()
+    assert "data:image/png;base64," in html and "coulomb.R[load=165.33]" in html and "R-hat" in html
+    s = json.loads(run("summary", "monday_unit4.h5", "--json").output)
+    assert s["parameters"]["viscous.C"]["unit"] == "1/s"
+    assert set(s["parameters"]["viscous.C"]) >= {"median", "lo95", "hi95", "unit"}
+    md = run("report", "monday_unit4.h5", "--format", "md")
+    assert md.exit_code == 0 and (tmp_path / "monday_unit4.md").exists()
+    again = run("fit", "fits/monday_unit4.toml", "--steps", "300", "--walkers", "12")
+    assert again.exit_code == 2 and "exists" in again.output
+
+
+def test_fit_leastsq_on_data_with_scene(tmp_path):
+    out = tmp_path / "u1.h5"
+    r = run("fit", DATASETS / "monday1965" / "synthetic" / "unit1.csv", "--scene",
+            DATASETS / "monday1965" / "unit1_fit.toml", "--out", out)
+    assert r.exit_code == 0, r.output
+    assert "coulomb.R[load=330.66]" in r.output
+
+
+def test_fit_rig_and_summary(tmp_path):
+    out = tmp_path / "rig.h5"
+    r = run("fit", DATASETS / "friction" / "monday1965_session_1095_steel.csv", "--scene",
+            DATASETS / "friction" / "monday1965_rig.toml", "--method", "emcee", "--steps", "600", "--out", out)
+    assert r.exit_code == 0, r.output
+    s = json.loads(run("summary", out, "--json").output)
+    mu = s["parameters"]["friction.mu"]
+    assert mu["lo95"] < 0.100 < mu["hi95"]
+
+
+@pytest.mark.parametrize("args, fragment", [
+    (["fit", "nope.csv", "--scene", DATASETS / "scenes" / "monday_unit_angle_fit.toml"], "data file not found"),
+    (["fit", DATASETS / "monday1965" / "synthetic" / "unit1.csv"], "--scene"),
+    (["summary", "missing.h5"], "results file not found"),
+    (["report", DATASETS / "scenes" / "horology_rk4_case.toml"], "cannot read"),
+])
+def test_errors_exit_2(args, fragment):
+    r = run(*args)
+    assert r.exit_code == 2, r.output
+    assert fragment in r.output
