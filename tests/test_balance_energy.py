@@ -82,8 +82,9 @@ def test_energy_balance_per_half_swing(case):
     log = traj.log
     w0sq = sys.omega0**2
     theta_prev = sys.theta0
-    # rounding of positions near a window edge costs ~1e-16 of the run's energy: floor the scale there
-    floor = 1e-13 * abs(_potential(sys.theta0, spring, w0sq))
+    # positions are exact to rounding (~1e-16 of the angles involved), so an amplitude decaying to 1e-11 rad
+    # cannot balance its own tiny energy to 1e-9: allow 1e-14 of the run's energy scale in absolute terms
+    e_ref = abs(_potential(sys.theta0, spring, w0sq)) + sum(abs(x) * (hi - lo) for lo, hi, x in zip(sys.w_lo, sys.w_hi, sys.w_x))
     for k, theta_end in enumerate(traj.theta_turn):
         rows = log[log[:, 8] == k]
         s = rows[0, 2]
@@ -101,6 +102,6 @@ def test_energy_balance_per_half_swing(case):
             v = np.array([propagate(x0 - xc, v0, t, h, w2)[1] for t in tq])
             w_visc += 2 * h * 0.5 * tau * np.dot(WEIGHTS, v**2)
         d_e = _potential(theta_end, spring, w0sq) - _potential(theta_prev, spring, w0sq)
-        scale = max(abs(_potential(theta_prev, spring, w0sq)), abs(w_esc), w_coul, w_visc, floor, 1e-300)
-        assert abs(d_e - (w_esc - w_coul - w_visc)) <= 1e-9 * scale, (k, d_e, w_esc, w_coul, w_visc)
+        scale = max(abs(_potential(theta_prev, spring, w0sq)), abs(w_esc), w_coul, w_visc)
+        assert abs(d_e - (w_esc - w_coul - w_visc)) <= 1e-9 * scale + 1e-14 * e_ref, (k, d_e, w_esc, w_coul, w_visc)
         theta_prev = theta_end
