@@ -124,10 +124,19 @@ def cross_time(y0, v0, h, w2, target, tau_hi):
             hi = tau
         else:
             lo = tau
-        new = tau - f / v if v > 0.0 else 0.5 * (lo + hi)
+        if v > 0.0:
+            step = f / v
+            # A correction below rounding means Newton has converged; testing this before
+            # the bracket matters, because ``tau - step`` then rounds back onto the bracket
+            # end just set and would otherwise trigger a long run of bisections.
+            if abs(step) <= 4e-16 * tau:
+                return min(max(tau - step, lo), hi)
+            new = tau - step
+        else:
+            new = 0.5 * (lo + hi)
         if not (lo < new < hi):
             new = 0.5 * (lo + hi)
-        if abs(new - tau) <= 2e-16 * abs(new) or hi - lo <= 4e-16 * hi:
+        if hi - lo <= 4e-16 * hi:
             tau = new
             break
         tau = new
