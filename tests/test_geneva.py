@@ -280,6 +280,12 @@ def test_large_friction_locks_with_clear_status(solver):
     assert json_summary(ds)["terminal_velocity"] is None
 
 
+def test_wedged_but_running_is_flagged_ambiguous():
+    ds = simulate(scene(6, 3e-6, 40e-6, 0.08, 0.9, "meyer1973"), "rk4")
+    assert ds.attrs["status"] == "ambiguous" and ds.attrs["end_time"] == pytest.approx(0.2)
+    assert 0 < ds.attrs["ambiguous_time"] < 0.01 and ds.attrs["terminal_status"] == "ok" and _finite(ds)
+
+
 def test_tiny_torque_is_slow_not_broken():
     ds = simulate(scene(torque=1e-12), "rk4")
     assert ds.attrs["status"] == "not_settled" and ds.sizes["engagement"] == 0 and _finite(ds)
@@ -330,3 +336,14 @@ def test_dataset_outputs_and_json_summary():
 def test_example_scenes_run(path):
     ds = simulate(load_scene(path), "rk4")
     assert ds.attrs["status"] in ("ok", "not_settled") and _finite(ds)
+
+
+def test_docs_reproduction_table_is_current():
+    from escfit.geneva.reproduce import appendix_e_rows, markdown_table, rise_time_scores
+
+    rows = appendix_e_rows()
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "geneva.md").read_text(encoding="utf-8")
+    for line in markdown_table(rows).splitlines()[2:]:
+        assert line in doc, f"docs/geneva.md is stale; regenerate with python -m escfit.geneva.reproduce: {line}"
+    scores = rise_time_scores(rows)
+    assert min(scores, key=lambda d: scores[d]["median_abs"]) == "first_min"
