@@ -131,6 +131,29 @@ def test_first_free_motion_forces(scene):
     assert s["psiddot"] == pytest.approx(-7.629e5, rel=1e-3)
 
 
+def test_exit_coupled_equations_reproduce_printed_line_with_listings_mesh_state(scene):
+    # First exit-coupled line of the sample: PHI 211.78, PHIDOT 113.86, PHITOT 7.33.  The
+    # listing advanced the mesh roll angles about 30 times too fast (see docs/verge.md); with
+    # the roll angles it must have had there (0.4086, 0.5181 rad: mesh 2 just past its pitch
+    # point) the exit-side equations give the printed forces to four digits.
+    from escfit.verge.dynamics import coupled_eval, coupled_signs
+
+    k = scene.constants()
+    phi, phid, phi_total = 211.78 * DEG, 113.86, 7.33 * DEG
+    u1 = (k.al1_start - k.al1_in) + k.n31 * phi_total
+    u2 = (k.al2_start - k.al2_in) - k.n32 * phi_total
+    n1 = (k.al1_in + u1 - 0.4086) / k.al1_range  # tooth "index" that puts the roll angle there
+    n2 = (k.al2_in + u2 - 0.5181) / k.al2_range
+    s4, s5 = coupled_signs(k, -1.0, phi, phid, 1.0)
+    r = coupled_eval(k, -1.0, phi, phid, phi_total, n1, n2, 1.0, -1.0, s4, s5, 1.0, 1.0, 1.0)
+    assert rel(r[0], 0.1124e7) < 2e-3
+    assert rel(r[4], 2.4000) < 1e-3
+    assert rel(r[5], 9.7741) < 1e-3
+    assert rel(r[6], 0.3925) < 1e-3
+    assert r[8] == pytest.approx(-0.0115, abs=5e-5)  # G
+    assert r[1] / DEG == pytest.approx(315.90, abs=0.005)
+
+
 # --- the M739 run ----------------------------------------------------------------------------
 
 def test_m739_time_and_turns_to_arm(m739_run):
