@@ -347,3 +347,20 @@ def test_docs_reproduction_table_is_current():
         assert line in doc, f"docs/geneva.md is stale; regenerate with python -m escfit.geneva.reproduce: {line}"
     scores = rise_time_scores(rows)
     assert min(scores, key=lambda d: scores[d]["median_abs"]) == "first_min"
+
+
+def test_cli_json_and_solver_names():
+    from click.testing import CliRunner
+
+    from escfit.cli import cli
+
+    res = CliRunner().invoke(cli, ["simulate", str(DATA / "four_pin.toml"), "--json"])
+    assert res.exit_code == 0, res.output
+    js = json.loads(res.output)
+    assert js["status"] == "ok" and js["peak_speed"][-1] == pytest.approx(155.396, abs=0.01)
+    assert js["min_speed"][-1] == pytest.approx(18.620, abs=0.01) and js["period"] == pytest.approx(0.0392, abs=1e-4)
+    sc = load_scene(DATA / "four_pin.toml")
+    a = simulate(sc, "ivp")
+    b = simulate(sc, "rk4", h=2e-5)
+    assert a.attrs["solver"] == "dop853"
+    assert float(b.terminal_peak_speed) == pytest.approx(float(a.terminal_peak_speed), rel=1e-6)

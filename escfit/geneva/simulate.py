@@ -26,7 +26,8 @@ __all__ = ["Prediction", "forward", "simulate", "json_summary", "SOLVERS", "RISE
 SCHEMA = "escfit.geneva/1"
 RISE_TOLERANCE = 0.01
 SOLVERS = ("dop853", "rk4")
-_SOLVER_OPTIONS = {"dop853": {"rtol", "atol", "max_step"}, "rk4": {"dt"}}
+_SOLVER_OPTIONS = {"dop853": {"rtol", "atol", "max_step"}, "rk4": {"dt", "h"}}
+_ALIASES = {"ivp": "dop853"}  # the CLI's name for scipy's adaptive solver
 _COMMON_OPTIONS = {"duration", "sample_interval", "max_engagements", "periodic_tol", "max_samples"}
 _DEFAULTS = {"dop853": {"rtol": 1e-11, "atol": 1e-12, "max_step": 0.05}, "rk4": {"dt": 5e-4}}
 # integrated engagements per run before "truncated" (about 20 s of work for either solver)
@@ -132,8 +133,9 @@ def simulate(scene, solver: str | None = None, **options: Any) -> xr.Dataset:
     scene
         A :class:`escfit.geneva.scene.GenevaScene`.
     solver
-        ``"dop853"`` (default: scipy DOP853, rtol 1e-11, events located) or ``"rk4"``
-        (fixed step ``dt`` in units of ``sqrt(I_f/K)``, default 5e-4, compiled).
+        ``"dop853"`` (default; alias ``"ivp"``: scipy DOP853, rtol 1e-11, events located)
+        or ``"rk4"`` (fixed step ``dt`` in units of ``sqrt(I_f/K)``, default 5e-4, or ``h``
+        in seconds; compiled).
     **options
         ``duration`` and ``sample_interval`` (s) override the scene's ``[run]``;
         ``max_engagements`` (integrated engagements before the run ends as ``"truncated"``;
@@ -150,7 +152,7 @@ def simulate(scene, solver: str | None = None, **options: Any) -> xr.Dataset:
         accelerations as scalars; ``status``, ``status_message`` and the scene text in
         ``attrs``.
     """
-    solver = solver or "dop853"
+    solver = _ALIASES.get(solver, solver) if solver else "dop853"
     if solver not in SOLVERS:
         raise SolverError(f"unknown solver {solver!r}; known: {list(SOLVERS)}", f"{scene.where} (solver)")
     unknown = sorted(set(options) - _COMMON_OPTIONS - _SOLVER_OPTIONS[solver])
@@ -173,6 +175,11 @@ def simulate(scene, solver: str | None = None, **options: Any) -> xr.Dataset:
     n = int(math.floor(duration / interval + 1e-9)) + 1
     times = np.arange(n) * interval
     values = scene.params.values()
+    if "h" in options:  # step in seconds -> scaled units
+        h = float(options.pop("h"))
+        if not h > 0:
+            raise SolverError(f"h must be a positive step in seconds, got {h!r}", f"{scene.where} (options)")
+        options["dt"] = h * math.sqrt(values["geneva.torque"] / values["geneva.follower_inertia"])
     pred = forward(scene.geometry, values, duration=duration, sample_times=times, solver=solver, options=options,
                    max_engagements=max_eng, periodic_tol=ptol)
     return _dataset(scene, values, pred, solver, {**_DEFAULTS[solver], **options}, notes)
