@@ -45,6 +45,8 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from ..errors import SceneError
+
 __all__ = ["Geometry", "COMPAT_MODES", "coefficients", "speed_ratio", "speed_ratio_slope", "follower_angle"]
 
 COMPAT_MODES = ("none", "meyer1973")
@@ -70,10 +72,10 @@ class Geometry:
     compat: str = "none"
 
     def __post_init__(self) -> None:
-        if self.slots not in ALLOWED_SLOTS:
-            raise ValueError(f"slots must be one of {ALLOWED_SLOTS}, got {self.slots!r}")
+        if isinstance(self.slots, bool) or self.slots not in ALLOWED_SLOTS:
+            raise SceneError(f"slots must be one of {ALLOWED_SLOTS}, got {self.slots!r}", "geneva geometry")
         if self.compat not in COMPAT_MODES:
-            raise ValueError(f"compat must be one of {COMPAT_MODES}, got {self.compat!r}")
+            raise SceneError(f"compat must be one of {COMPAT_MODES}, got {self.compat!r}", "geneva geometry")
 
     @property
     def pins(self) -> int:
@@ -121,8 +123,9 @@ class Geometry:
 
     def engagement_index(self, theta: np.ndarray | float) -> np.ndarray | int:
         """Zero-based index of the engagement a driver angle ``theta`` lies in."""
-        return np.floor_divide(theta, self.span).astype(int) if isinstance(theta, np.ndarray) \
-            else int(theta // self.span)
+        if isinstance(theta, np.ndarray):
+            return np.floor_divide(theta, self.span).astype(int)
+        return int(theta // self.span)
 
 
 @numba.njit(cache=True)
