@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 import numpy as np
@@ -18,10 +18,10 @@ import numpy as np
 from ..balance import BalanceScene, solve
 from ..errors import EscfitError, FitError, SceneError
 from ..observation import observation_from_table
-from ..params import Param, ParamSet, read_param
+from ..params import ParamSet
 from ..recordings import UnitCurve
 from ..scene import check_keys
-from ..units import to_canonical, ureg
+from .loads import LoadRule
 from .priors import Prior, parse_prior
 
 __all__ = ["FitProblem", "Curve"]
@@ -85,7 +85,7 @@ class FitProblem:
             params.add(p)
         self.curves = [Curve(f"{u or 'unit'} load {ld:g}" if not math.isnan(ld) else (u or "curve"), ld,
                              self.data.swing[rows], self.data.value[rows]) for (u, ld), rows in self.data.groups()]
-        self.load_rule = _LoadRule.read(fit_table.get("loads"), self.scene, self.data, self.curves, params)
+        self.load_rule = LoadRule.read(fit_table.get("loads"), self.scene, self.data, self.curves, params)
         self.params = params
         free = params.free()
         if not free:
@@ -215,70 +215,3 @@ class FitProblem:
     @property
     def n_data(self) -> int:
         return int(sum(c.y.size for c in self.curves))
-
-
-@dataclass
-class _LoadRule:
-    """How parameters change with the fixture load in a multi-load fit.
-
-    Escapement magnitudes are proportional to the load (the scene gives them at ``reference``);
-    Coulomb friction is either free per load (``coulomb.R[load=...]``) or linear,
-    ``R = coulomb.R + kappa * (load - reference)`` with ``fit.kappa`` in rad/s^2 per load unit.
-    """
-
-    reference: float = math.nan
-    friction: str = "none"
-    r_names: dict = field(default_factory=dict)
-    windows: tuple = ()
-
-    @classmethod
-    def read(cls, table, scene: BalanceScene, data: UnitCurve, curves, params: ParamSet) -> "_LoadRule":
-        loads = [c.load for c in curves]
-        if table is None:
-            if len(curves) > 1:
-                raise SceneError(f"the recording has {len(curves)} curves (loads {loads}); say how parameters depend "
-                                 "on the load in a [fit.loads] table", scene.where)
-            return cls()
-        where = f"{scene.where} [fit.loads]"
-        check_keys(table, {"reference", "friction", "kappa"}, where, {"reference"})
-        if data.load is None:
-            raise SceneError("[fit.loads] needs a load column (e.g. load_g) in the data", where)
-        ref_q = to_canonical(table["reference"], "dimensionless", f"{where}.reference") if not isinstance(
-            table["reference"], str) else _load_in(table["reference"], data.load_unit, f"{where}.reference")
-        friction = table.get("friction", "free")
-        if friction not in ("free", "linear", "shared"):
-            raise SceneError(f"friction must be 'free', 'linear' or 'shared', got {friction!r}", f"{where}.friction")
-        rule = cls(ref_q, friction)
-        esc = scene.effect("escapement")
-        rule.windows = tuple(w.name for w in esc.windows) if esc else ()
-        if "coulomb.R" in params and friction == "free":
-            base = params["coulomb.R"]
-            del params.params["coulomb.R"]
-            for ld in loads:
-                name = f"coulomb.R[load={ld:g}]"
-                rule.r_names[ld] = name
-                params.add(replace(base, name=name, meaning=f"{base.meaning} at load {ld:g} {data.load_unit}"))
-        if friction == "linear":
-            params.add(read_param(table.get("kappa", {"value": 0.0, "vary": True}), name="fit.kappa",
-                                  kind="dimensionless", where=f"{where}.kappa",
-                                  meaning=f"change of R per {data.load_unit or 'load unit'} of load (rad/s^2)"))
-        return rule
-
-    def apply(self, vals: Mapping[str, float], load: float) -> Mapping[str, float]:
-        if self.friction == "none" or math.isnan(load):
-            return vals
-        out = dict(vals)
-        for name in self.windows:
-            out[name] = vals[name] * load / self.reference
-        if self.friction == "free" and self.r_names:
-            out["coulomb.R"] = vals[self.r_names[load]]
-        elif self.friction == "linear":
-            out["coulomb.R"] = vals["coulomb.R"] + vals["fit.kappa"] * (load - self.reference)
-        return out
-
-
-def _load_in(text: str, unit: str, where: str) -> float:
-    try:
-        return float(ureg.Quantity(text).to(unit or "g").magnitude)
-    except Exception as exc:
-        raise SceneError(f"cannot read {text!r} as a load in {unit or 'g'} ({exc})", where) from None

@@ -1,0 +1,272 @@
+"""Fit problems on passage times: photo-cell pulse trains (and the shared plumbing).
+
+:class:`RecordingProblem` offers the interface :func:`~escfit.fitting.lsq.least_squares`,
+:func:`~escfit.fitting.mcmc.run_emcee` and the results writer use (``names``, ``priors``,
+``bounds``, ``initial``, ``values``, ``log_prob``, ``residuals``, ``loglike_pointwise``,
+``expected``, ``observed``, ``n_data``, ``curves``, ``failures`` ...) for recordings whose
+readings are not turning-point amplitudes: the data flow is parameter vector -> values ->
+balance system -> exact solver *with its segment log* -> predicted readings -> observation
+model -> log-likelihood.  A failed solve or a non-finite number becomes ``-inf`` (or large
+residuals) with the reason counted in ``failures``.
+
+Least squares sees priors of the observation's nuisance parameters: a free
+``observation.*`` parameter with a ``normal(mu, sd)`` prior adds the residual
+``(x - mu)/sd``, so a nuisance the data alone cannot pin (a timegrapher's true lift angle)
+is held by its prior as it is in the posterior.
+
+:class:`PulseFitProblem` fits a :class:`~escfit.recordings.pulses.PulseTrain`: every pulse is
+a notch at a known angle crossed at a measured time (see
+:mod:`escfit.observation.passage_times`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from typing import Mapping
+
+import numpy as np
+
+from ..balance import BalanceScene
+from ..balance.solvers import solve_system
+from ..balance.trajectory import Trajectory
+from ..errors import DataError, EscfitError, FitError, SolverError
+from ..observation.passage_times import PassageTimeObservation, level_times
+from ..params import ParamSet
+from ..recordings.pulses import PulseTrain, assign_pulses
+from .priors import Prior, parse_prior
+from .problem import FAIL_RESIDUAL, Curve
+
+__all__ = ["RecordingProblem", "PulseFitProblem"]
+
+
+class RecordingProblem:
+    """Parameter handling, solving and failure accounting shared by recording fits.
+
+    Subclasses set ``self.observation`` and ``self.curves`` and implement
+    :meth:`_predict`, :meth:`_pointwise`, :meth:`_residuals` and :meth:`_expected`.
+
+    Parameters
+    ----------
+    scene
+        Balance scene with angle switching; its ``vary = true`` parameters are estimated.
+    data
+        The recording.
+    solver, solver_options
+        Only the exact solver keeps the segment log passage times are read from.
+    """
+
+    reading_units = "s"
+
+    def __init__(self, scene: BalanceScene, data, solver: str = "exact", solver_options: dict | None = None):
+        if getattr(scene, "model", None) != "balance":
+            raise FitError(f"fitting recordings needs a balance scene, got model {getattr(scene, 'model', None)!r}",
+                           getattr(scene, "where", None))
+        if scene.switching != "angle":
+            raise FitError("passage times need angle switching (a physical escapement): with phase switching the "
+                           "balance is not tied to angles", scene.where)
+        if solver != "exact":
+            raise SolverError(f"passage times are read from the exact solver's segment log; solver {solver!r} has none")
+        options = dict(solver_options or {})
+        bad = sorted(set(options) - {"max_segments"})
+        if bad:
+            raise SolverError(f"fits on passage times take solver option max_segments only, not {bad}")
+        self.scene, self.data, self.solver, self.solver_options = scene, data, solver, options
+        self.failures: Counter = Counter()
+
+    def _setup_params(self) -> None:
+        params = ParamSet(dict(self.scene.params.params))
+        for p in self.observation.params:
+            params.add(p)
+        self.params = params
+        free = params.free()
+        if not free:
+            raise FitError("no free parameters: mark some with { value = ..., vary = true }", self.scene.where)
+        self.names = [p.name for p in free]
+        self.priors: list[Prior] = [parse_prior(p, f"{self.scene.where} [{p.name}]") for p in free]
+        self._base = params.values()
+        self._ties = [(p.name, p.tie) for p in params if p.tie is not None]
+        self._prior_residuals = [(i, pr.args) for i, (n, pr) in enumerate(zip(self.names, self.priors))
+                                 if n.startswith("observation.") and pr.kind == "normal"]
+
+    # -- parameter vectors -------------------------------------------------------------------
+    @property
+    def initial(self) -> np.ndarray:
+        return np.array([self.params[n].value for n in self.names])
+
+    @property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        return np.array([p.lo for p in self.priors]), np.array([p.hi for p in self.priors])
+
+    def values(self, vec: np.ndarray | Mapping[str, float]) -> dict[str, float]:
+        """All parameter values by name for a free-parameter vector (ties resolved)."""
+        vals = dict(self._base)
+        if isinstance(vec, Mapping):
+            vals.update(vec)
+        else:
+            vals.update(zip(self.names, map(float, vec)))
+        for name, (other, factor) in self._ties:
+            vals[name] = factor * vals[other]
+        return vals
+
+    # -- forward model -----------------------------------------------------------------------
+    def trajectory(self, vals: Mapping[str, float], n_swings: int) -> Trajectory:
+        """Exact solution with its segment log for ``n_swings`` half swings.
+
+        Raises
+        ------
+        EscfitError
+            When the solver refuses the parameters or runs out of segments.
+        """
+        tr = solve_system(self.scene.system(vals), n_swings, "angle", "exact", log=True, **self.solver_options)
+        if tr.status == "max_segments":
+            raise FitError("solver ran out of segments")
+        return tr
+
+    def predict(self, vals: Mapping[str, float]):
+        """The model's side of every reading (see the subclass)."""
+        return self._predict(vals)
+
+    # -- likelihood --------------------------------------------------------------------------
+    def log_prior(self, vec: np.ndarray) -> float:
+        return float(sum(p.logpdf(float(x)) for p, x in zip(self.priors, vec)))
+
+    def log_likelihood(self, vals: Mapping[str, float]) -> float:
+        try:
+            pred = self._predict(vals)
+        except (EscfitError, ValueError, ArithmeticError) as exc:
+            self.failures[f"solve failed: {exc}"[:120]] += 1
+            return -math.inf
+        ll = float(np.sum(self._pointwise(pred, vals)))
+        if not math.isfinite(ll):
+            self.failures["non-finite likelihood"] += 1
+            return -math.inf
+        return ll
+
+    def log_prob(self, vec: np.ndarray) -> float:
+        """Log posterior (up to a constant); ``-inf`` outside the prior or on failure."""
+        lp = self.log_prior(vec)
+        if not math.isfinite(lp):
+            return -math.inf
+        return lp + self.log_likelihood(self.values(vec))
+
+    def residuals(self, vals: Mapping[str, float]) -> np.ndarray:
+        """Standardised residuals of all readings, then prior residuals of normal-prior
+        nuisances (large values on failure)."""
+        prior = np.array([(vals[self.names[i]] - a[0]) / a[1] for i, a in self._prior_residuals])
+        try:
+            pred = self._predict(vals)
+            r = self._residuals(pred, vals)
+        except (EscfitError, ValueError, ArithmeticError) as exc:
+            self.failures[f"solve failed: {exc}"[:120]] += 1
+            return np.full(self.n_data + prior.size, FAIL_RESIDUAL)
+        r = np.where(np.isfinite(r), r, FAIL_RESIDUAL)
+        return np.concatenate([r, prior])
+
+    def loglike_pointwise(self, vals: Mapping[str, float]) -> np.ndarray:
+        """Log-likelihood of each reading (for PSIS-LOO); raises when the solve fails."""
+        return self._pointwise(self._predict(vals), vals)
+
+    def expected(self, vals: Mapping[str, float]) -> np.ndarray:
+        """Noise-free expected readings of all data points, concatenated."""
+        return self._expected(self._predict(vals), vals)
+
+    @property
+    def observed(self) -> np.ndarray:
+        return np.concatenate([c.y for c in self.curves])
+
+    @property
+    def n_data(self) -> int:
+        return int(sum(c.y.size for c in self.curves))
+
+    # -- subclass hooks ----------------------------------------------------------------------
+    def _predict(self, vals):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _pointwise(self, pred, vals) -> np.ndarray:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _residuals(self, pred, vals) -> np.ndarray:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _expected(self, pred, vals) -> np.ndarray:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+
+class PulseFitProblem(RecordingProblem):
+    """Fit a balance scene to the passage times of a photo-cell pulse train.
+
+    Each pulse used (see :func:`~escfit.recordings.pulses.assign_pulses`) is the crossing of
+    notch ``tooth * notch`` in the swing frame of its half swing, observed at its time with
+    Gaussian timing noise ``observation.sigma`` (s).  The scene's ``[observation]`` table, if
+    any, must say ``model = "passage_times"`` (keys ``sigma``, ``t0``, ``offset``); ``t0``
+    defaults to the file's ``release_s`` (0 when it has none) and is fixed unless freed.
+
+    Parameters
+    ----------
+    scene
+        Balance scene (angle switching).
+    data
+        The pulse train.
+    solver, solver_options
+        ``"exact"`` (the only one with a segment log) and its ``max_segments``.
+
+    Raises
+    ------
+    DataError
+        When the train's release count contradicts the scene's (fixed) release angle.
+    """
+
+    reading_units = "s"
+
+    def __init__(self, scene: BalanceScene, data: PulseTrain, solver: str = "exact",
+                 solver_options: dict | None = None):
+        if not isinstance(data, PulseTrain):
+            raise FitError(f"PulseFitProblem needs a PulseTrain, got {type(data).__name__}",
+                           getattr(data, "source", None))
+        super().__init__(scene, data, solver, solver_options)
+        release = data.release_s if math.isfinite(data.release_s) else 0.0
+        self.observation = PassageTimeObservation.from_table(scene.extra.get("observation"), f"{scene.where} [observation]",
+                                                             release_s=release)
+        self._setup_params()
+        self.assignment = a = assign_pulses(data)
+        self._check_release(a.counts[0])
+        self.notch = data.notch
+        self.curves = [Curve("pulses", math.nan, a.swing, data.time[a.index])]
+        self._x = a.tooth * data.notch
+        self.n_swings = int(a.swing.max())
+
+    def _check_release(self, n0: int) -> None:
+        p = self.params["oscillator.theta0"]
+        if p.vary:
+            return
+        offset = self.params["observation.offset"]
+        if offset.vary:
+            return
+        implied = math.floor(abs(p.value - offset.value) / self.data.notch + 1e-9)
+        if implied != n0:
+            lo, hi = n0 * self.data.notch, (n0 + 1) * self.data.notch
+            raise DataError(f"the train has {n0} notch pulses before the first zero pulse (a release between "
+                            f"{lo:.4g} and {hi:.4g} rad) but the scene releases the balance at theta0 = {p.value:.4g} "
+                            f"rad ({implied} notches): another scene's data, or a chart started after the release",
+                            self.data.source)
+
+    def _predict(self, vals: Mapping[str, float]) -> np.ndarray:
+        """Model passage times since release (s) of the used pulses."""
+        tr = self.trajectory(vals, self.n_swings)
+        if tr.amplitude.size < self.n_swings:
+            raise FitError(f"the model balance stops after {tr.amplitude.size} half swings; the pulses run to half "
+                           f"swing {self.n_swings}")
+        t = level_times(tr.log, self.assignment.swing, self._x, vals["observation.offset"])
+        if not np.all(np.isfinite(t)):
+            raise FitError("a notch the data crossed is only approached asymptotically by the model")
+        return t
+
+    def _pointwise(self, pred, vals):
+        return self.observation.loglike_pointwise(pred, self.curves[0].y, vals)
+
+    def _residuals(self, pred, vals):
+        return self.observation.residuals(pred, self.curves[0].y, vals)
+
+    def _expected(self, pred, vals):
+        return self.observation.expected(pred, vals)
