@@ -299,7 +299,7 @@ def test_long_run_is_periodic_and_cheap():
 
     t0 = time.perf_counter()
     ds = simulate(scene(duration="1000 s"), "rk4")
-    assert time.perf_counter() - t0 < 10
+    assert time.perf_counter() - t0 < 20  # ~1 s alone; generous for a loaded machine
     assert ds.attrs["status"] == "ok" and _finite(ds) and "sample_interval widened" in ds.attrs["notes"]
     assert ds.sizes["engagement"] == pytest.approx(1000 / float(ds.period), abs=1)
     assert float(ds.peak_speed[-1]) == pytest.approx(float(ds.terminal_peak_speed), rel=1e-9)

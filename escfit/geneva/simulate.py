@@ -290,7 +290,7 @@ def json_summary(ds: xr.Dataset) -> dict[str, Any]:
 
     Speeds are rad/s, times s, accelerations rad/s^2; undefined values (no terminal
     velocity, not settled) are ``None``.  ``peak_speed`` and ``min_speed`` are per complete
-    engagement in time order.
+    engagement in time order (the first engagement starts from rest, so its minimum is 0).
     """
     return {
         "model": "geneva",
