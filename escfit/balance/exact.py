@@ -54,13 +54,10 @@ def _applies(wdir, s):
 
 
 @njit(cache=True)
-def _region(x, s, edges, n_edges, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r):
-    """Index of the next edge above ``x`` and the region's (w2, xc)."""
-    j = 0
-    while j < n_edges and edges[j] <= x:
-        j += 1
+def _region_coefficients(j, s, edges, n_edges, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r):
+    """``(w2, xc)`` of region ``j``: between edges ``j-1`` and ``j`` of a swing in direction ``s``."""
     if j == 0:
-        mid = edges[0] - 1.0 if n_edges > 0 else x
+        mid = edges[0] - 1.0 if n_edges > 0 else 0.0
     elif j == n_edges:
         mid = edges[n_edges - 1] + 1.0
     else:
@@ -75,6 +72,16 @@ def _region(x, s, edges, n_edges, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, 
         i += 1
     w2 = sp_w2[i]
     xc = (force - s * sp_off[i]) / w2
+    return w2, xc
+
+
+@njit(cache=True)
+def _region(x, s, edges, n_edges, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r):
+    """Index of the next edge above ``x`` and the region's (w2, xc)."""
+    j = 0
+    while j < n_edges and edges[j] <= x:
+        j += 1
+    w2, xc = _region_coefficients(j, s, edges, n_edges, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r)
     return j, w2, xc
 
 
@@ -90,10 +97,16 @@ def _swing_edges(s, bank, sp_bp, w_lo, w_hi, w_dir, edges):
     for i in range(sp_bp.shape[0]):
         edges[n] = s * sp_bp[i]
         n += 1
-    srt = np.sort(edges[:n])
+    for i in range(1, n):  # insertion sort: a handful of values, no allocation
+        v = edges[i]
+        k = i - 1
+        while k >= 0 and edges[k] > v:
+            edges[k + 1] = edges[k]
+            k -= 1
+        edges[k + 1] = v
     m = 0
     for i in range(n):
-        v = srt[i]
+        v = edges[i]
         if v < bank and (m == 0 or v > edges[m - 1]):
             edges[m] = v
             m += 1
@@ -156,15 +169,33 @@ def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
     for i in range(dr_rate.shape[0]):
         if dr_rate[i] != 0.0:
             drift = True
-    edges = np.empty(2 * w_lo.shape[0] + sp_bp.shape[0] + 1)
-    n_edges = _swing_edges(s, bank, sp_bp, w_lo, w_hi, w_dir, edges)
+    # Switch points and region coefficients of both swing directions (row 0: s = +1,
+    # row 1: s = -1) are fixed for the run, so they are tabulated once.
+    n_max = 2 * w_lo.shape[0] + sp_bp.shape[0] + 1
+    edge_tab = np.empty((2, n_max))
+    n_edge_tab = np.zeros(2, np.int64)
+    w2_tab = np.empty((2, n_max + 1))
+    xc_tab = np.empty((2, n_max + 1))
+    for d in range(2):
+        sd = 1.0 if d == 0 else -1.0
+        n_edge_tab[d] = _swing_edges(sd, bank, sp_bp, w_lo, w_hi, w_dir, edge_tab[d])
+        for j in range(n_edge_tab[d] + 1):
+            w2_tab[d, j], xc_tab[d, j] = _region_coefficients(j, sd, edge_tab[d], n_edge_tab[d], sp_bp, sp_w2,
+                                                              sp_off, w_lo, w_hi, w_x, w_dir, r)
+    d = 0 if s > 0.0 else 1
+    edges = edge_tab[d]
+    n_edges = n_edge_tab[d]
     record = log.shape[0] > 0
     at_start = True
     while n_done < n_swings:
         if n_seg >= max_seg:
             status = 3
             break
-        j, w2, xc = _region(x, s, edges, n_edges, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r)
+        j = 0
+        while j < n_edges and edges[j] <= x:
+            j += 1
+        w2 = w2_tab[d, j]
+        xc = xc_tab[d, j]
         y0 = x - xc
         h = 0.5 * c
         xb = edges[j] if j < n_edges else math.inf
@@ -198,8 +229,7 @@ def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
                 x_turn = xc
             crosses = x_turn > xb
             if crosses:
-                tau = cross_time(y0, v, h, w2, xb - xc, tau_turn)
-                _, v_new = propagate(y0, v, tau, h, w2)
+                tau, v_new = cross_time(y0, v, h, w2, xb - xc, tau_turn)
                 x = xb
                 v = max(v_new, 0.0)
             elif math.isfinite(tau_turn):
@@ -240,7 +270,9 @@ def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
         x = -x
         v = restitution * v if is_bank else 0.0
         at_start = v == 0.0
-        n_edges = _swing_edges(s, bank, sp_bp, w_lo, w_hi, w_dir, edges)
+        d = 1 - d
+        edges = edge_tab[d]
+        n_edges = n_edge_tab[d]
     if status == 0 and any_bank:
         status = 2
     return n_done, status, n_seg, t, s * x, s * v

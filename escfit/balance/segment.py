@@ -92,13 +92,19 @@ def turn_time(y0, v0, h, w2):
 
 @njit(cache=True)
 def cross_time(y0, v0, h, w2, target, tau_hi):
-    """Time at which ``y`` rises to ``target`` on ``[0, tau_hi]``.
+    """Time at which ``y`` rises to ``target`` on ``[0, tau_hi]``, and the velocity then.
 
     ``y`` increases monotonically there (the velocity is positive before the turning
     point), ``y0 < target`` and ``y(tau_hi) >= target``; ``tau_hi`` may be ``inf`` when
     the motion creeps towards a centre beyond ``target`` (overdamped), in which case a
-    bracket is found by doubling.  Newton steps on the closed form, safeguarded by
-    bisection, converge to a few ulps of the crossing time.
+    bracket is found by doubling.  Halley steps on the closed form (the ODE gives the
+    second derivative for free), safeguarded by bisection, converge to a few ulps of the
+    crossing time.
+
+    Returns
+    -------
+    tau, v : float
+        Crossing time (s) and the velocity there (rad/s), evaluated at that same ``tau``.
     """
     lo = 0.0
     hi = tau_hi
@@ -115,29 +121,31 @@ def cross_time(y0, v0, h, w2, target, tau_hi):
         guess = (target - y0) / v0
         if lo < guess < hi:
             tau = guess
+    y, v = propagate(y0, v0, tau, h, w2)
     for _ in range(200):
-        y, v = propagate(y0, v0, tau, h, w2)
         f = y - target
         if f == 0.0:
-            return tau
+            return tau, v
         if f > 0.0:
             hi = tau
         else:
             lo = tau
         if v > 0.0:
             step = f / v
-            # A correction below rounding means Newton has converged; testing this before
-            # the bracket matters, because ``tau - step`` then rounds back onto the bracket
-            # end just set and would otherwise trigger a long run of bisections.
+            # A correction below rounding means the iteration has converged; testing this
+            # before the bracket matters, because ``tau - step`` then rounds back onto the
+            # bracket end just set and would otherwise start a long run of bisections.
             if abs(step) <= 4e-16 * tau:
-                return min(max(tau - step, lo), hi)
-            new = tau - step
+                return tau, v
+            acc = -2.0 * h * v - w2 * y  # y'' from the equation of motion
+            denom = 1.0 - 0.5 * step * acc / v
+            new = tau - (step / denom if denom > 0.5 else step)
         else:
             new = 0.5 * (lo + hi)
         if not (lo < new < hi):
             new = 0.5 * (lo + hi)
-        if hi - lo <= 4e-16 * hi:
-            tau = new
-            break
         tau = new
-    return min(max(tau, lo), hi)
+        y, v = propagate(y0, v0, tau, h, w2)
+        if hi - lo <= 4e-16 * hi:
+            break
+    return tau, v
