@@ -77,7 +77,8 @@ def cli() -> None:
 
 @cli.command()
 @click.argument("scene", type=click.Path(dir_okay=False))
-@click.option("--solver", type=click.Choice(["exact", "rk4", "ivp"]), default=None, help="Balance solver (default exact).")
+@click.option("--solver", default=None,
+              help="Solver: balance exact (default) | rk4 | ivp; geneva dop853 (default) | rk4; see the README.")
 @click.option("--swings", type=click.IntRange(1), default=None, help="Half swings (overrides the scene).")
 @click.option("--h", "step", type=float, default=None, help="RK4 step size, s.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object with the results.")
@@ -263,10 +264,17 @@ def report(results, out, fmt, force):
 
 def _describe(ds, sc) -> str:
     lines = [f"{Path(sc.where).name}: model {sc.model}, status {ds.attrs.get('status')}"]
-    if "amplitude" in ds and ds.sizes.get("swing", 0):
+    if sc.model == "balance" and ds.sizes.get("swing", 0):
         a = ds["amplitude"].values
         lines.append(f"  {a.size} half swings; amplitude {a[0]:.6g} -> {a[-1]:.6g} rad; "
                      f"last half period {ds['half_period'].values[-1]:.10g} s, rate {ds['rate'].values[-1]:.4f} s/day")
+    elif sc.model != "balance":
+        from .scene import model_module
+
+        summary = model_module(sc.model).json_summary(ds)
+        for key, value in summary.items():
+            if key != "status" and not isinstance(value, (list, dict)):
+                lines.append(f"  {key}: {value}")
     return "\n".join(lines)
 
 
