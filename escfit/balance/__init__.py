@@ -16,11 +16,12 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from .dense import dense_output
 from .scene import BalanceScene, parse
 from .solvers import SOLVERS, solve_system
 from .trajectory import Trajectory
 
-__all__ = ["BalanceScene", "parse", "simulate", "solve", "json_summary", "Trajectory", "SOLVERS"]
+__all__ = ["BalanceScene", "parse", "simulate", "solve", "json_summary", "dense_output", "Trajectory", "SOLVERS"]
 
 
 def solve(scene: BalanceScene, solver: str = "exact", *, values: dict[str, float] | None = None,
