@@ -399,7 +399,9 @@ def read_timegrapher_csv(path: str | Path) -> TimegrapherRecording:
     bad = np.flatnonzero(np.diff(time) <= 0)
     if bad.size:
         i = int(bad[0]) + 1
-        raise DataError(f"beat times must increase: {time[i - 1]!r} then {time[i]!r}", f"{where}:{t.lines[i]} [time_s]")
+        col = t.header.index("time_s")
+        raise DataError(f"beat times must increase: {t.rows[i - 1][col]} then {t.rows[i][col]}",
+                        f"{where}:{t.lines[i]} [time_s]")
 
     def optional(col: str, nonneg: bool) -> np.ndarray | None:
         if col not in t.header:

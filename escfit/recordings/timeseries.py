@@ -15,12 +15,14 @@ quantisation:
 1. the period ``P`` from the zero crossings of the smoothed, offset-free series;
 2. candidate extrema of a Savitzky-Golay smoothing (window ``P/10``), merged so that maxima
    and minima alternate at least ``P/4`` apart;
-3. at each candidate, a least-squares quartic in time through the raw samples within
-   ``+-window*P`` (default ``P/8``); the turning point is the quartic's stationary point and
-   its value.  Near a turning point the motion is a smooth damped oscillation (the
-   escapement acts near the rest position), for which the quartic's truncation error is about
-   ``(2 pi window)**6 / 720`` of the amplitude (3e-4 at ``P/8``) while the fit averages the
-   noise of some ``P/4`` of samples.
+3. at each candidate, a least-squares fit to the raw samples within ``+-window*P`` (default
+   ``P/8``) of two quartics in ``s = t - t_c`` without linear term, one each side of the
+   turning time ``t_c``, sharing the vertex value: the velocity vanishes at the turn but the
+   curvature jumps there, because Coulomb friction reverses (a smooth polynomial across
+   the turn misplaces it by about a millisecond).  ``t_c`` comes from a bounded scalar search,
+   the rest from linear least squares.  Near a turning point the escapement does not act, so
+   each side is a smooth damped oscillation; the fit averages the noise of some ``P/4`` of
+   samples.
 
 The zero offset is estimated from consecutive extrema ``e1, e2, e3`` as
 ``((e1 + e3)/2 + e2)/2`` (exact for a linear decay, second order otherwise), medianed over the
@@ -170,7 +172,37 @@ def _period(t: np.ndarray, x: np.ndarray) -> float:
     return float(np.median(np.diff(tc)))
 
 
-def turning_points(series: TimeSeries, *, window: float = 0.125) -> TurningPoints:
+def _kinked_vertex(u: np.ndarray, x: np.ndarray, degree: int = 4) -> tuple[float, float] | None:
+    """Vertex ``(u_c, x_c)`` of a turning point from samples at scaled times ``u`` in [-1, 1].
+
+    Each side is a polynomial of ``degree`` (default: quartic) in ``s = u - u_c`` without a linear term (the velocity is zero at
+    the turn), sharing the vertex value; the curvatures may differ because Coulomb friction
+    reverses there.  Linear least squares for a given ``u_c``, a bounded scalar search over it.
+    """
+    from scipy.optimize import minimize_scalar
+
+    def solve(uc: float):
+        s = u - uc
+        left = s < 0
+        cols = [np.ones_like(s)]
+        for p in range(2, degree + 1):
+            sp = s**p
+            cols += [np.where(left, sp, 0.0), np.where(left, 0.0, sp)]
+        a = np.stack(cols, axis=1)
+        coef, *_ = np.linalg.lstsq(a, x, rcond=None)
+        r = a @ coef - x
+        return float(r @ r), float(coef[0])
+
+    if min(np.sum(u < -0.3), np.sum(u > 0.3)) < 4:
+        return None
+    res = minimize_scalar(lambda uc: solve(uc)[0], bounds=(-0.5, 0.5), method="bounded",
+                          options={"xatol": 1e-7})
+    if not res.success or abs(res.x) > 0.49:
+        return None
+    return float(res.x), solve(float(res.x))[1]
+
+
+def turning_points(series: TimeSeries, *, window: float = 0.125, degree: int = 4) -> TurningPoints:
     """Locate the turning points of a sampled decay (see the module docstring).
 
     Parameters
@@ -178,7 +210,9 @@ def turning_points(series: TimeSeries, *, window: float = 0.125) -> TurningPoint
     series
         The samples.
     window
-        Half width of the local quartic fit, in periods.
+        Half width of the local fits, in periods.
+    degree
+        Degree of the polynomial each side of a turning point (2 to 6).
 
     Raises
     ------
@@ -187,6 +221,8 @@ def turning_points(series: TimeSeries, *, window: float = 0.125) -> TurningPoint
     """
     from scipy.signal import savgol_filter
 
+    if not 2 <= degree <= 6:
+        raise DataError(f"degree must be 2 to 6, got {degree!r}", series.source)
     t, x = series.time, series.theta
     dt = float(np.median(np.diff(t)))
     try:
@@ -223,16 +259,11 @@ def turning_points(series: TimeSeries, *, window: float = 0.125) -> TurningPoint
         lo, hi = np.searchsorted(t, [t[i] - half, t[i] + half])
         if t[i] - half < t[0] or t[i] + half > t[-1] or hi - lo < 8:
             continue  # a one-sided window would bias the vertex
-        u = (t[lo:hi] - t[i]) / half
-        coef = np.polynomial.polynomial.polyfit(u, x[lo:hi], 4)
-        roots = np.polynomial.polynomial.polyroots(np.polynomial.polynomial.polyder(coef))
-        roots = roots[np.isreal(roots)].real
-        roots = roots[np.abs(roots) < 0.8]
-        if not roots.size:
+        fit = _kinked_vertex((t[lo:hi] - t[i]) / half, x[lo:hi], degree)
+        if fit is None:
             continue
-        r = roots[np.argmin(np.abs(roots))]
-        times.append(t[i] + r * half)
-        values.append(float(np.polynomial.polynomial.polyval(r, coef)))
+        times.append(t[i] + fit[0] * half)
+        values.append(fit[1])
     if len(values) < 1:
         raise DataError("no turning point found (is the series long enough?)", series.source)
     times_a, values_a = np.array(times), np.array(values)
@@ -251,7 +282,7 @@ def turning_points(series: TimeSeries, *, window: float = 0.125) -> TurningPoint
     return TurningPoints(swing, times_a, values_a, period, offset)
 
 
-def timeseries_to_unit_curve(series: TimeSeries, *, window: float = 0.125, remove_offset: bool = True,
+def timeseries_to_unit_curve(series: TimeSeries, *, window: float = 0.125, degree: int = 4, remove_offset: bool = True,
                              release_theta: float | None = None, tolerance: float = 0.05) -> UnitCurve:
     """Amplitudes of the turning points of a decay, as a unit curve.
 
@@ -259,8 +290,8 @@ def timeseries_to_unit_curve(series: TimeSeries, *, window: float = 0.125, remov
     ----------
     series
         The samples.
-    window
-        Half width of the local fits, in periods (see :func:`turning_points`).
+    window, degree
+        Half width of the local fits in periods, and their degree (see :func:`turning_points`).
     remove_offset
         Subtract the estimated zero offset before taking ``|theta|``.
     release_theta
@@ -280,7 +311,7 @@ def timeseries_to_unit_curve(series: TimeSeries, *, window: float = 0.125, remov
     DataError
         When the series does not match ``release_theta`` or has no turning points.
     """
-    tp = turning_points(series, window=window)
+    tp = turning_points(series, window=window, degree=degree)
     off = tp.offset if remove_offset else 0.0
     if release_theta is not None:
         start = series.theta[0] - off if not math.isfinite(series.release_s) else \
