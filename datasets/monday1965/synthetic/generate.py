@@ -7,6 +7,11 @@ second cycle (every fourth half swing) for 6.5 s, with a 0.03 rad reading jitter
 quantisation.  The generating scene of every curve is written beside it
 (``unit<N>_load<G>g.toml``) and the seed is 19650 + 10*unit + load index.
 
+Note: taken at face value in the phase convention, Table I's rows imply steady amplitudes from
+2.9 to 15 rad, above the 6.28 rad banking angle for 8 of the 15 rows (his convention has no
+banking).  The curves are generated as his equations say; units 3 and 4 at their lower loads
+stay below the banking angle throughout.
+
 Run from the repository root:  python datasets/monday1965/synthetic/generate.py
 """
 
