@@ -150,9 +150,11 @@ def read_unit_curve(path: str | Path, *, notch_deg: float | None = None) -> Unit
     if loads:
         load_unit = loads[0][len("load_"):]
         try:
-            ureg.Unit(load_unit)
+            dim = ureg.Unit(load_unit).dimensionality
         except Exception:
             raise DataError(f"unknown load unit {load_unit!r} in column {loads[0]!r}", where) from None
+        if dim not in (ureg.Unit("g").dimensionality, ureg.Unit("N").dimensionality):
+            raise DataError(f"load unit {load_unit!r} in column {loads[0]!r} is not a mass or a force", where)
         load = np.array(t.floats(loads[0], nonneg=True))
     unit = np.array(t.column("unit"), dtype=str) if "unit" in t.header else np.full(swing.size, "", dtype=str)
     time = np.array(t.floats("time_s", nonneg=True)) if "time_s" in t.header else None
