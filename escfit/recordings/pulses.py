@@ -186,8 +186,11 @@ def read_pulses(path: str | Path, *, notches: int | None = None) -> PulseTrain:
 
 
 def write_pulses(path: str | Path, train: PulseTrain, *, comments: list[str] | None = None) -> None:
-    """Write ``train`` in the CSV format :func:`read_pulses` reads (times to 1 ns)."""
+    """Write ``train`` in the CSV format :func:`read_pulses` reads (times to 1 ns); its
+    metadata (provenance of synthetic trains) goes into ``# key: value`` lines."""
     lines = [f"# {c}" for c in (comments or [])]
+    lines += [f"# {k}: {v}" for k, v in train.meta.items() if " " not in k and k not in ("notches", "notch_deg",
+                                                                                         "release_s")]
     lines.append(f"# notches: {train.notches}")
     if math.isfinite(train.release_s):
         lines.append(f"# release_s: {train.release_s!r}")

@@ -487,6 +487,7 @@ def write_tg_json(path: str | Path, rec: TimegrapherRecording, *, extra: dict | 
     esc = {"window_s": rec.window}
     if math.isfinite(rec.release_s):
         esc["release_sample"] = int(round(rec.release_s * sr))
+    esc.update({k: v for k, v in rec.meta.items() if k not in ("window_s", "release_sample", "tg-timer-version")})
     esc.update(extra or {})
     doc = {
         "sample_rate": int(sr) if sr == int(sr) else sr,
@@ -500,10 +501,13 @@ def write_tg_json(path: str | Path, rec: TimegrapherRecording, *, extra: dict | 
 
 
 def write_timegrapher_csv(path: str | Path, rec: TimegrapherRecording, *, comments: list[str] | None = None) -> None:
-    """Write ``rec`` as a per-beat CSV (one row per beat, readings at the beats)."""
+    """Write ``rec`` as a per-beat CSV (one row per beat, readings at the beats); its
+    metadata goes into ``# key: value`` lines."""
     if rec.amp_time.size != rec.beat_time.size:
         raise DataError("a per-beat CSV needs one amplitude reading per beat", str(path))
+    reserved = {"lift_angle_deg", "bph", "window_s", "amplitude_resolution_deg", "release_s", "amplitude_range_deg"}
     lines = [f"# {c}" for c in (comments or [])]
+    lines += [f"# {k}: {v}" for k, v in rec.meta.items() if " " not in k and k not in reserved]
     lines += [f"# lift_angle_deg: {math.degrees(rec.lift_angle):.10g}", f"# bph: {rec.bph}", f"# window_s: {rec.window:g}",
               f"# amplitude_resolution_deg: {rec.resolution_deg:g}"]
     if math.isfinite(rec.release_s):

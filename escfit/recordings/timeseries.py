@@ -151,11 +151,14 @@ def write_timeseries(path: str | Path, series: TimeSeries, *, unit: str = "rad",
         ``"rad"`` or ``"deg"`` for the angle column.
     decimals
         Decimals of the angle (times are written to 1 us).
+    comments
+        Comment lines; the series' metadata follows as ``# key: value`` lines.
     """
     if unit not in ("rad", "deg"):
         raise DataError(f"unit must be 'rad' or 'deg', got {unit!r}", str(path))
     values = series.theta if unit == "rad" else np.degrees(series.theta)
     lines = [f"# {c}" for c in (comments or [])]
+    lines += [f"# {k}: {v}" for k, v in series.meta.items() if " " not in k and k != "release_s"]
     if math.isfinite(series.release_s):
         lines.append(f"# release_s: {series.release_s!r}")
     lines.append(f"time_s,theta_{unit}")
