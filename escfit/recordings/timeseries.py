@@ -272,7 +272,11 @@ def turning_points(series: TimeSeries, *, window: float = 0.125, degree: int = 4
     times_a, values_a = np.array(times), np.array(values)
     release = series.release_s if math.isfinite(series.release_s) else t[0]
     swing = np.rint((times_a - release) / (0.5 * period)).astype(np.int64)
-    if np.any(np.diff(swing) <= 0) or swing[0] < 1:
+    after = swing >= 1  # the release itself (balance held, then let go) is not a turning point of the motion
+    times_a, values_a, swing = times_a[after], values_a[after], swing[after]
+    if not swing.size:
+        raise DataError("no turning point after the release", series.source)
+    if np.any(np.diff(swing) <= 0):
         raise DataError("turning points do not fall one per half period after the release; is the series a free "
                         "decay starting at the release (or does release_s say when)?", series.source)
     if values_a.size >= 3:
