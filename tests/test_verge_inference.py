@@ -41,7 +41,7 @@ def test_published_turns_give_the_reported_friction(scene, published, index, mu_
     lsq = fit_least_squares(problem)
     assert lsq.prediction[0] == pytest.approx(published.turns[index], abs=1e-3)  # one number, fitted exactly
     assert abs(lsq.best[0] - mu_reported) < 2 * lsq.stderr[0]
-    idata = sample_posterior(problem, walkers=6, steps=30, burn=10, lsq=lsq, seed=11)
+    idata = sample_posterior(problem, walkers=6, steps=24, burn=8, lsq=lsq, seed=11)
     lo, hi = credible_interval(idata, "verge.mu", 0.95)
     assert lo < mu_reported < hi
     assert hi - lo < 0.05
@@ -54,7 +54,7 @@ def test_synthetic_recovery(scene):
     problem = TurnsProblem(scene, data)
     lsq = fit_least_squares(problem)
     assert abs(lsq.best[0] - truth) < 3 * lsq.stderr[0]
-    idata = sample_posterior(problem, walkers=6, steps=30, burn=10, lsq=lsq, seed=3)
+    idata = sample_posterior(problem, walkers=6, steps=24, burn=8, lsq=lsq, seed=3)
     lo, hi = credible_interval(idata, "verge.mu", 0.95)
     assert lo < truth < hi
     for group in ("posterior", "log_likelihood", "observed_data", "constant_data", "sample_stats"):
@@ -64,6 +64,37 @@ def test_synthetic_recovery(scene):
     # with plastic impacts the spin rate does not matter: one prediction for all three
     pred = idata.posterior["turns_model"].values
     assert np.allclose(pred[..., 0], pred[..., 2])
+
+
+def _grid_posterior(problem, grid):
+    logp = np.array([problem.log_prior([x]) + problem.log_likelihood(problem.predict([x])[0]).sum() for x in grid])
+    w = np.exp(logp - logp.max())
+    w /= w.sum()
+    mean = float((w * grid).sum())
+    return mean, float(np.sqrt((w * (grid - mean) ** 2).sum()))
+
+
+def test_laplace_approximation_matches_exact_one_dimensional_posterior(scene, published):
+    # a one-parameter posterior can be computed on a grid: check the least-squares
+    # covariance (and with it the sampler's starting region) against it
+    problem = TurnsProblem(scene, published.subset([0]))
+    lsq = fit_least_squares(problem)
+    grid = np.linspace(lsq.best[0] - 5 * lsq.stderr[0], lsq.best[0] + 5 * lsq.stderr[0], 41)
+    mean, sd = _grid_posterior(problem, grid)
+    assert mean == pytest.approx(lsq.best[0], abs=0.1 * sd)
+    assert sd == pytest.approx(lsq.stderr[0], rel=0.1)
+
+
+@pytest.mark.slow
+def test_sampler_matches_exact_one_dimensional_posterior(scene, published):
+    problem = TurnsProblem(scene, published.subset([2]))
+    lsq = fit_least_squares(problem)
+    grid = np.linspace(lsq.best[0] - 6 * lsq.stderr[0], lsq.best[0] + 6 * lsq.stderr[0], 61)
+    mean, sd = _grid_posterior(problem, grid)
+    idata = sample_posterior(problem, walkers=8, steps=300, burn=60, lsq=lsq, seed=21)
+    draws = idata.posterior["verge.mu"].values.ravel()
+    assert draws.mean() == pytest.approx(mean, abs=0.15 * sd)
+    assert draws.std() == pytest.approx(sd, rel=0.2)
 
 
 def test_sampler_is_reproducible(scene):

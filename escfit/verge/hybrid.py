@@ -28,7 +28,7 @@ from .dynamics import side_alpha
 from .geometry import Constants
 from .impact import impact_map, normal_speeds
 from .integrator import (
-    COUPLED, FREE, M_DIR, M_TSTUCK, N_COLS, R_ARMED, R_BAD, R_BUFFER, R_CHATTER, R_CONTACT, R_MISS,
+    COUPLED, FREE, M_DIR, N_COLS, R_ARMED, R_BAD, R_BUFFER, R_CHATTER, R_CONTACT, R_MISS,
     R_SEPARATION, R_STALL, R_TIP, R_TMAX, REASONS, initial_mode, integrate_phase,
 )
 from .kinematics import coupled_kinematics

@@ -51,7 +51,7 @@ import emcee
 import lmfit
 import numpy as np
 
-from ..errors import DataError, FitError
+from ..errors import DataError, FitError, SceneError
 from ..fitting.priors import Prior, parse_prior
 from ..params import Param, safe_name
 from .scene import VergeScene
@@ -206,7 +206,7 @@ class TurnsProblem:
     def predict(self, theta: Sequence[float]) -> tuple[np.ndarray, int]:
         """Simulated turns-to-arm per observation and a status code (0 armed, 1 not, 2 failed).
 
-        Not-armed predictions are NaN.
+        Not-armed predictions, and parameter values outside their physical range, are NaN.
         """
         vals = self.values(theta)
         restitution = vals.get("verge.restitution", self.scene.params["verge.restitution"].value)
@@ -214,7 +214,13 @@ class TurnsProblem:
         out: dict[float, float] = {}
         status = 0
         for rpm in spins:
-            p = forward(self.scene, dict(vals, **{"verge.spin": rpm * math.pi / 30}), step=self.step)
+            try:
+                p = forward(self.scene, dict(vals, **{"verge.spin": rpm * math.pi / 30}), step=self.step)
+            except SceneError:
+                # a prior reaching outside the physical range: no prediction, zero likelihood
+                status = _STATUS["failed"]
+                out[float(rpm)] = math.nan
+                continue
             status = max(status, _STATUS[p.status])
             out[float(rpm)] = p.turns_to_arm if p.status == "armed" else math.nan
         if restitution > 0:

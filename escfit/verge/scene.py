@@ -187,6 +187,13 @@ class VergeScene:
         """The compiled model's constants (report units) for these or overridden values."""
         vals = self.params.values()
         if values:
+            for name, x in values.items():
+                key = name.removeprefix("verge.")
+                if name not in self.params:
+                    raise SceneError(f"unknown parameter {name!r}", self.where)
+                _table, _kind, meaning, lower, upper, lower_open = PARAM_SPECS[key]
+                if not (math.isfinite(x) and (x > lower if lower_open else x >= lower) and x <= upper):
+                    raise SceneError(f"{name} = {x!r} is outside the physical range of the {meaning}", self.where)
             vals.update(values)
             for p in self.params:
                 if p.tie is not None and p.name not in values:
