@@ -199,6 +199,10 @@ def write_pulses(path: str | Path, train: PulseTrain, *, comments: list[str] | N
     Path(path).write_text("\n".join(lines) + "\n")
 
 
+def _pulse_name(train: PulseTrain, i: int) -> str:
+    return f"line {int(train.lines[i])}" if train.lines.size > i and train.lines[i] else f"pulse {i}"
+
+
 def assign_pulses(train: PulseTrain) -> PulseAssignment:
     """Reconstruct half swings and notch positions from the pulse sequence.
 
@@ -228,9 +232,9 @@ def assign_pulses(train: PulseTrain) -> PulseAssignment:
         a, b = int(z[k]), int(z[k + 1])
         c = b - a - 1
         if c % 2:
-            raise DataError(f"{c} notch pulses between the zero pulses at {train.where(a)} and line "
-                            f"{train.where(b).rsplit(':', 1)[-1]}: out and back must pair up (a pulse is missing, "
-                            "extra or out of order)", train.where(b))
+            raise DataError(f"{c} notch pulses between the zero pulses of {_pulse_name(train, a)} and "
+                            f"{_pulse_name(train, b)}: out and back must pair up (a pulse is missing, extra or out of "
+                            "order)", train.where(b))
         n = c // 2
         if n >= train.notches:
             raise DataError(f"{n} notches out from the rest position: the balance turned a full turn or more, which "
