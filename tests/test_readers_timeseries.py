@@ -103,3 +103,22 @@ def test_example_file_fits(scene):
     lsq = least_squares(FitProblem(scene, curve), n_starts=1)
     i = lsq.names.index("viscous.C")
     assert abs(lsq.value[i] - 0.6) < 4 * lsq.stderr[i]
+
+
+@pytest.mark.parametrize("recorder, options, kind", [
+    ("unit-curve", {"every": 2, "notch_deg": 6}, "notches"),
+    ("pulses", {"swings": 6}, "pulses"),
+    ("timegrapher", {"fmt": "json", "swings": 30}, "timegrapher"),
+    ("timegrapher", {"fmt": "csv", "swings": 30}, "timegrapher"),
+    ("timeseries", {"swings": 6, "unit": "deg"}, "timeseries"),
+])
+def test_record_writes_every_format_detectably(scene, tmp_path, recorder, options, kind):
+    """The one entry point a command line needs: write, detect, read back, with provenance."""
+    from escfit.recorders_extra import record
+
+    suffix = ".json" if options.get("fmt") == "json" else ".csv"
+    path = record(scene, recorder, tmp_path / f"rec{suffix}", noise=None, seed=5, **options)
+    assert detect_format(path) == recorder
+    assert read_recording(path).kind == kind
+    text = path.read_text()
+    assert "record('timeseries_scene.toml'" in text and "seed=5" in text
