@@ -84,7 +84,7 @@ def _start(problem: FitProblem, lsq: LeastSquaresResult | None, walkers: int, rn
 
 def run_emcee(problem: FitProblem, lsq: LeastSquaresResult | None = None, *, walkers: int = 32, steps: int = 2000,
               burn: int | None = None, seed: int = 0, checkpoint: str | Path | None = None, resume: bool = False,
-              progress: bool = False) -> McmcResult:
+              progress: bool = False, vectorize: bool | None = None) -> McmcResult:
     """Sample the posterior.
 
     Parameters
@@ -101,6 +101,12 @@ def run_emcee(problem: FitProblem, lsq: LeastSquaresResult | None = None, *, wal
         Continue the run stored in ``checkpoint`` up to ``steps`` in total.
     progress
         Show emcee's progress bar.
+    vectorize
+        Evaluate each half-ensemble of proposals in one call of
+        :meth:`FitProblem.log_prob_many` (emcee's ``vectorize=True``), which runs the exact
+        solver on all of them in parallel.  Default: whenever
+        :attr:`FitProblem.can_vectorize` says the result is the same as calling
+        ``log_prob`` walker by walker; the draws are then identical too.
     """
     ndim = len(problem.names)
     if walkers < 2 * ndim:
@@ -123,7 +129,12 @@ def run_emcee(problem: FitProblem, lsq: LeastSquaresResult | None = None, *, wal
                                    f"this fit has {walkers} x {ndim}", str(checkpoint))
         else:
             backend.reset(walkers, ndim)
-    sampler = emcee.EnsembleSampler(walkers, ndim, problem.log_prob, backend=backend)
+    if vectorize is None:
+        vectorize = bool(getattr(problem, "can_vectorize", False))
+    if vectorize:
+        sampler = emcee.EnsembleSampler(walkers, ndim, problem.log_prob_many, vectorize=True, backend=backend)
+    else:
+        sampler = emcee.EnsembleSampler(walkers, ndim, problem.log_prob, backend=backend)
     rng = np.random.default_rng(seed)
     if done == 0:
         sampler.random_state = np.random.RandomState(seed).get_state()
