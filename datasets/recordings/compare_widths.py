@@ -61,7 +61,7 @@ def main() -> None:
     args = ap.parse_args()
     results = {}
     amp_text = (HERE.parent / "scenes" / "monday_unit_angle_fit.toml")
-    for swings, sigma_t in ((24, 1e-4), (64, 1e-4), (64, 1e-3)):
+    for swings, sigma_t in ((24, 1e-4), (64, 1e-4), (64, 3e-4)):
         scene = _scene(HERE / "pulses_scene.toml", swings)
         train = record_pulses(scene, swings=swings, sigma_t=sigma_t, seed=1)
         key = f"pulses {swings} half swings, sigma_t {sigma_t:g} s"

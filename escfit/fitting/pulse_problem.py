@@ -226,8 +226,8 @@ class PulseFitProblem(RecordingProblem):
                            getattr(data, "source", None))
         super().__init__(scene, data, solver, solver_options)
         release = data.release_s if math.isfinite(data.release_s) else 0.0
-        self.observation = PassageTimeObservation.from_table(scene.extra.get("observation"), f"{scene.where} [observation]",
-                                                             release_s=release)
+        self.observation = PassageTimeObservation.from_table(scene.extra.get("observation"),
+                                                             f"{scene.where} [observation]", release_s=release)
         self._setup_params()
         self.assignment = a = assign_pulses(data)
         self._check_release(a.counts[0])

@@ -14,7 +14,9 @@ Columns ``time_s`` (or ``time_<unit>`` in any time unit pint knows) and ``kind``
 ``zero``), one row per pulse in time order.  Metadata lines: ``# notches: 60`` (notches per
 turn; or ``# notch_deg: 6``), optional ``# release_s: 0.0`` (the release instant on the
 chart's clock).  The chart must start before the release; pulses after the last zero pulse
-(an unfinished excursion) are not used.  Amplitudes must stay below one turn.
+(an unfinished excursion) are not used.  Amplitudes must stay below one turn, and the timing
+noise well below the pulse spacing at the rest position (``notch / (omega0 * A)``), or zero
+pulses swap places with their neighbours and the pairs no longer match.
 """
 
 from __future__ import annotations
@@ -179,7 +181,8 @@ def read_pulses(path: str | Path, *, notches: int | None = None) -> PulseTrain:
         try:
             release = float(t.meta["release_s"])
         except ValueError:
-            raise DataError(f"release_s must be a number, got {t.meta['release_s']!r}", f"{where} [release_s]") from None
+            raise DataError(f"release_s must be a number, got {t.meta['release_s']!r}",
+                            f"{where} [release_s]") from None
         if not math.isfinite(release):
             raise DataError(f"release_s must be finite, got {t.meta['release_s']!r}", f"{where} [release_s]")
     return PulseTrain(time, zero, n, release, np.array(t.lines, dtype=np.int64), where, t.sha256, dict(t.meta))

@@ -279,7 +279,8 @@ def read_tg_json(path: str | Path) -> TimegrapherRecording:
                         f"{where}:1")
     bad_const = re.search(r"(?<![\w\"])(NaN|-?Infinity)(?![\w\"])", text)
     if bad_const:
-        raise DataError(f"{bad_const.group(1)} is not a number JSON allows", f"{where}:{_json_error_line(text, bad_const.start())}")
+        raise DataError(f"{bad_const.group(1)} is not a number JSON allows",
+                        f"{where}:{_json_error_line(text, bad_const.start())}")
     try:
         doc = json.loads(text)
     except json.JSONDecodeError as exc:
@@ -508,8 +509,8 @@ def write_timegrapher_csv(path: str | Path, rec: TimegrapherRecording, *, commen
     reserved = {"lift_angle_deg", "bph", "window_s", "amplitude_resolution_deg", "release_s", "amplitude_range_deg"}
     lines = [f"# {c}" for c in (comments or [])]
     lines += [f"# {k}: {v}" for k, v in rec.meta.items() if " " not in k and k not in reserved]
-    lines += [f"# lift_angle_deg: {math.degrees(rec.lift_angle):.10g}", f"# bph: {rec.bph}", f"# window_s: {rec.window:g}",
-              f"# amplitude_resolution_deg: {rec.resolution_deg:g}"]
+    lines += [f"# lift_angle_deg: {math.degrees(rec.lift_angle):.10g}", f"# bph: {rec.bph}",
+              f"# window_s: {rec.window:g}", f"# amplitude_resolution_deg: {rec.resolution_deg:g}"]
     if math.isfinite(rec.release_s):
         lines.append(f"# release_s: {rec.release_s!r}")
     lines.append(",".join(CSV_COLUMNS))

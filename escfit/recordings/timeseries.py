@@ -57,8 +57,8 @@ class TimeSeries:
     time : ndarray
         Sample times, s (strictly increasing).
     theta : ndarray
-        Balance angle, rad (positive in the release direction's opposite convention of the
-        scene: the scene releases at ``+theta0``).
+        Balance angle, rad, in the scene's frame (the scene releases at ``+theta0``; a
+        sensor's zero offset is still in it).
     release_s : float
         Release instant, s (``nan``: the first sample).
     source, sha256, meta
@@ -111,7 +111,8 @@ def read_timeseries(path: str | Path) -> TimeSeries:
     where = t.path
     angle = [c for c in t.header if c.startswith("theta_")]
     if "time_s" not in t.header or len(angle) != 1:
-        raise DataError(f"need columns time_s and one angle column theta_rad or theta_deg, header has {t.header}", where)
+        raise DataError(f"need columns time_s and one angle column theta_rad or theta_deg, header has {t.header}",
+                        where)
     unknown = [c for c in t.header if c not in ("time_s", angle[0])]
     if unknown:
         raise DataError(f"unknown column(s) {unknown}; a time series has time_s and theta_rad|theta_deg", where)
@@ -135,7 +136,8 @@ def read_timeseries(path: str | Path) -> TimeSeries:
         try:
             release = float(t.meta["release_s"])
         except ValueError:
-            raise DataError(f"release_s must be a number, got {t.meta['release_s']!r}", f"{where} [release_s]") from None
+            raise DataError(f"release_s must be a number, got {t.meta['release_s']!r}",
+                            f"{where} [release_s]") from None
     if time.size < 20:
         raise DataError(f"only {time.size} samples; a decay needs many samples per period", where)
     return TimeSeries(time, theta, release, where, t.sha256, dict(t.meta))
@@ -178,9 +180,10 @@ def _period(t: np.ndarray, x: np.ndarray) -> float:
 def _kinked_vertex(u: np.ndarray, x: np.ndarray, degree: int = 4) -> tuple[float, float] | None:
     """Vertex ``(u_c, x_c)`` of a turning point from samples at scaled times ``u`` in [-1, 1].
 
-    Each side is a polynomial of ``degree`` (default: quartic) in ``s = u - u_c`` without a linear term (the velocity is zero at
-    the turn), sharing the vertex value; the curvatures may differ because Coulomb friction
-    reverses there.  Linear least squares for a given ``u_c``, a bounded scalar search over it.
+    Each side is a polynomial of ``degree`` (default: quartic) in ``s = u - u_c`` without a
+    linear term (the velocity is zero at the turn), sharing the vertex value; the curvatures
+    may differ because Coulomb friction reverses there.  Linear least squares for a given
+    ``u_c``, a bounded scalar search over it.
     """
     from scipy.optimize import minimize_scalar
 
