@@ -159,7 +159,7 @@ def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
     v = s * v0
     c = c0
     t = 0.0
-    t_last = 0.0
+    t_swing = 0.0  # duration of the current half swing, summed apart from t to keep its precision
     int_c = 0.0
     status = 0
     n_done = 0
@@ -250,6 +250,7 @@ def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
             log[n_seg, 1] = tau
         n_seg += 1
         t += tau
+        t_swing += tau
         int_c += c * tau
         at_start = False
         is_bank = crosses and j == n_edges - 1 and math.isfinite(bank)
@@ -258,11 +259,11 @@ def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
         # end of a half swing: a turning point or an impact on the banking pins
         amp[n_done] = abs(x)
         theta_turn[n_done] = s * x
-        half_period[n_done] = t - t_last
+        half_period[n_done] = t_swing
         time[n_done] = t
         banked[n_done] = 1 if is_bank else 0
         any_bank = any_bank or is_bank
-        t_last = t
+        t_swing = 0.0
         n_done += 1
         if drift and n_done % 2 == 0:
             c *= _drift_factor(int_c, dr_th, dr_rate)
