@@ -22,11 +22,11 @@ from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
-from numba import config, get_num_threads, njit, prange, set_num_threads
+from numba import config, get_num_threads, set_num_threads
 
 from ..errors import SolverError
 from .effects.base import SystemBuilder
-from .exact import STATUS_NAMES, run_angle, run_phase
+from .exact import STATUS_NAMES, run_angle_many, run_phase_many
 from .trajectory import STATUS_MESSAGES, Trajectory
 
 __all__ = ["SystemStack", "BatchTrajectory", "solve_batch"]
@@ -178,33 +178,6 @@ class BatchTrajectory:
                           message=self.message[i] or ("" if status in STATUS_MESSAGES else status))
 
 
-@njit(parallel=True, cache=True)
-def _angle_many(theta0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, bank, restitution, dr_th, dr_rate,
-                active, n_swings, max_seg, amp, theta_turn, half_period, time, banked, n_done, status, n_seg, final):
-    no_log = np.zeros((0, 9))
-    for i in prange(theta0.shape[0]):
-        if not active[i]:
-            continue
-        res = run_angle(theta0[i], 0.0, c0[i], r[i], sp_bp, sp_w2[i], sp_off[i], w_lo, w_hi, w_x[i], w_dir, bank,
-                        restitution[i], dr_th, dr_rate, n_swings, max_seg, amp[i], theta_turn[i], half_period[i],
-                        time[i], banked[i], no_log)
-        n_done[i], status[i], n_seg[i] = res[0], res[1], res[2]
-        final[i, 0], final[i, 1], final[i, 2] = res[3], res[4], res[5]
-
-
-@njit(parallel=True, cache=True)
-def _phase_many(theta0, c0, r, w2, w_lo, w_hi, w_x, w_dir, dr_th, dr_rate, active, n_swings,
-                amp, theta_turn, half_period, time, banked, n_done, status, n_seg, final):
-    no_log = np.zeros((0, 9))
-    for i in prange(theta0.shape[0]):
-        if not active[i]:
-            continue
-        res = run_phase(theta0[i], c0[i], r[i], w2[i], w_lo, w_hi, w_x[i], w_dir, dr_th, dr_rate, n_swings,
-                        amp[i], theta_turn[i], half_period[i], time[i], banked[i], no_log)
-        n_done[i], status[i], n_seg[i] = res[0], res[1], res[2]
-        final[i, 0], final[i, 1], final[i, 2] = res[3], res[4], res[5]
-
-
 def solve_batch(systems: SystemStack | Sequence[SystemBuilder], n_swings: int, switching: str = "angle", *,
                 max_segments: int | None = None, threads: int | None = None, throw: bool = True) -> BatchTrajectory:
     """Run the exact solver on many parameter sets of one structure.
@@ -252,11 +225,11 @@ def solve_batch(systems: SystemStack | Sequence[SystemBuilder], n_swings: int, s
         set_num_threads(max(1, min(int(threads), config.NUMBA_NUM_THREADS)))
     try:
         if switching == "phase":
-            _phase_many(stack.theta0, stack.c, stack.r, stack.sp_w2[:, 0].copy(), stack.w_lo, stack.w_hi, stack.w_x, stack.w_dir,
-                        stack.drift_thresholds, stack.drift_rates, active, n_swings, amp, turn, half, tm, banked,
+            run_phase_many(stack.theta0, stack.c, stack.r, stack.sp_w2[:, 0].copy(), stack.w_lo, stack.w_hi, stack.w_x,
+                           stack.w_dir, stack.drift_thresholds, stack.drift_rates, active, n_swings, amp, turn, half, tm, banked,
                         n_done, status, n_seg, final)
         else:
-            _angle_many(stack.theta0, stack.c, stack.r, stack.sp_bp, stack.sp_w2, stack.sp_off, stack.w_lo, stack.w_hi,
+            run_angle_many(stack.theta0, stack.c, stack.r, stack.sp_bp, stack.sp_w2, stack.sp_off, stack.w_lo, stack.w_hi,
                         stack.w_x, stack.w_dir, stack.bank, stack.restitution, stack.drift_thresholds,
                         stack.drift_rates, active, n_swings, nseg, amp, turn, half, tm, banked, n_done, status, n_seg,
                         final)

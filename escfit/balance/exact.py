@@ -14,6 +14,10 @@ frame ``x = s*theta`` in which the balance always runs from ``x = -A`` towards `
 that frame Coulomb friction is the constant ``-R``, an unlock window contributes ``-X``
 and an impulse window ``+X``.
 
+:func:`run_angle_many` and :func:`run_phase_many` run the same kernels over many parameter
+sets in parallel (front end: :mod:`escfit.balance.batch`).  They live here so that numba's
+cache, which is keyed on this file, is invalidated together for all of them.
+
 Status codes (see :data:`STATUS_NAMES`)
 ---------------------------------------
 0 ok, 1 stopped (friction holds the balance at rest, or it creeps to rest without a further
@@ -28,11 +32,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from .segment import cross_time, propagate, turn_time
 
-__all__ = ["run_angle", "run_phase", "STATUS_NAMES"]
+__all__ = ["run_angle", "run_phase", "run_angle_many", "run_phase_many", "STATUS_NAMES"]
 
 STATUS_NAMES = ("ok", "stopped", "banked", "max_segments", "phase_breakdown")
 N_LOG = 9  # fields of a segment-log row: t0, tau, s, x0, v0, xc, w2, h, swing
@@ -371,3 +375,38 @@ def run_phase(theta0, c0, r, w2, w_lo, w_hi, w_x, w_dir, dr_th, dr_rate, n_swing
         x = -x
         v = -v
     return n_done, status, n_seg, t, s * x, s * v
+
+
+@njit(parallel=True, cache=True)
+def run_angle_many(theta0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, bank, restitution, dr_th, dr_rate,
+                active, n_swings, max_seg, amp, theta_turn, half_period, time, banked, n_done, status, n_seg, final):
+    """:func:`run_angle` on each parameter set ``i`` with ``active[i]``, in parallel.
+
+    Per-set inputs are rows of ``theta0, c0, r, restitution`` (n,) and ``sp_w2, sp_off,
+    w_x`` (n, .); the structure is shared.  Outputs are rows of ``(n, n_swings)`` arrays
+    and ``n_done, status, n_seg`` (n,), ``final`` (n, 3).  Kept in this module so that its
+    numba cache is invalidated together with the kernel's.
+    """
+    no_log = np.zeros((0, 9))
+    for i in prange(theta0.shape[0]):
+        if not active[i]:
+            continue
+        res = run_angle(theta0[i], 0.0, c0[i], r[i], sp_bp, sp_w2[i], sp_off[i], w_lo, w_hi, w_x[i], w_dir, bank,
+                        restitution[i], dr_th, dr_rate, n_swings, max_seg, amp[i], theta_turn[i], half_period[i],
+                        time[i], banked[i], no_log)
+        n_done[i], status[i], n_seg[i] = res[0], res[1], res[2]
+        final[i, 0], final[i, 1], final[i, 2] = res[3], res[4], res[5]
+
+
+@njit(parallel=True, cache=True)
+def run_phase_many(theta0, c0, r, w2, w_lo, w_hi, w_x, w_dir, dr_th, dr_rate, active, n_swings,
+                amp, theta_turn, half_period, time, banked, n_done, status, n_seg, final):
+    """:func:`run_phase` on each active parameter set, in parallel (as :func:`run_angle_many`)."""
+    no_log = np.zeros((0, 9))
+    for i in prange(theta0.shape[0]):
+        if not active[i]:
+            continue
+        res = run_phase(theta0[i], c0[i], r[i], w2[i], w_lo, w_hi, w_x[i], w_dir, dr_th, dr_rate, n_swings,
+                        amp[i], theta_turn[i], half_period[i], time[i], banked[i], no_log)
+        n_done[i], status[i], n_seg[i] = res[0], res[1], res[2]
+        final[i, 0], final[i, 1], final[i, 2] = res[3], res[4], res[5]
