@@ -1,0 +1,29 @@
+"""Fleet studies: batch fits of many units, population estimates and model comparison.
+
+- :func:`fit_many` fits every unit of one or more recordings independently on
+  dask.distributed (a local cluster by default, or a running one) and writes one results file
+  per unit plus a combined summary with a ``unit`` dimension.
+- :func:`collect_draws` and :func:`fit_population` estimate the log-normal population of
+  C, R and X from the per-unit posteriors by hierarchical reweighting, and set unit-to-unit
+  scatter against measurement noise.
+- :func:`compare_models` compares Monday's phase model, the phase model with his damping
+  drift and the angle model by PSIS-LOO per unit and over the fleet;
+  :func:`decay_residuals` and :func:`chapter5_contrast` test his Chapter V remark.
+- :func:`generate_fleet` draws synthetic fleets with known truth, recorded like his rig.
+
+Plotting lives in :mod:`escfit.study.plots` (matplotlib, imported there only).
+"""
+
+from .batch import BatchResult, discover_units, fit_many, load_summary, unit_seed
+from .compare import ModelComparison, chapter5_contrast, compare_models, decay_residuals
+from .fleet import Fleet, FleetSpec, LogNormal, generate_fleet, load_fleet, preset, record_unit
+from .population import PopulationResult, UnitDraws, collect_draws, fit_population, load_population
+from .scenes import MODELS, POPULATION_PARAMS, Rig, fit_scene, generating_scene
+
+__all__ = [
+    "fit_many", "BatchResult", "discover_units", "load_summary", "unit_seed",
+    "collect_draws", "fit_population", "UnitDraws", "PopulationResult", "load_population",
+    "compare_models", "ModelComparison", "decay_residuals", "chapter5_contrast",
+    "generate_fleet", "load_fleet", "preset", "record_unit", "Fleet", "FleetSpec", "LogNormal",
+    "MODELS", "POPULATION_PARAMS", "Rig", "fit_scene", "generating_scene",
+]
