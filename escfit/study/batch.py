@@ -125,12 +125,19 @@ def discover_units(data: Sequence[str | Path | UnitCurve], out_dir: str | Path, 
 
 
 def _loads(path: Path) -> FitResult | None:
-    if not path.is_file():
+    """The results file read into memory and closed, or None when it is missing or unreadable."""
+    import h5py
+
+    # h5py opens the file afresh; xarray might hand back a cached handle of a replaced file
+    if not path.is_file() or not h5py.is_hdf5(path):
         return None
     try:
-        return load_fit(path)
+        res = load_fit(path)
     except ResultsError:
         return None
+    # an open handle would be reused by xarray's file cache after the file is replaced
+    res.tree.close()
+    return res
 
 
 def _fit_task(scene_text: str, scene_where: str, curve: UnitCurve, options: dict) -> dict[str, Any]:
@@ -308,6 +315,7 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
     options = {"method": method, "walkers": walkers, "steps": steps, "burn": burn, "n_starts": n_starts,
                "solver": solver}
     runner = _Runner(scheduler, workers)
+    where = runner.description
     jobs = []
     for t in todo:
         opts = {**options, "seed": unit_seed(seed, t.unit)}
@@ -333,13 +341,13 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
 
     try:
         if jobs:
-            say(f"fitting {len(jobs)} unit(s) ({method}) on {runner.description}; {len(tasks) - len(jobs)} done before")
+            say(f"fitting {len(jobs)} unit(s) ({method}) on {where}; {len(tasks) - len(jobs)} done before")
             runner.run(_fit_task, jobs, done)
     finally:
         runner.close()
     elapsed = time.perf_counter() - started
     summary = summarize(tasks, status, attrs={
-        "method": method, "seed": seed, "scene": sc.text, "scene_file": str(scene), "runner": runner.description,
+        "method": method, "seed": seed, "scene": sc.text, "scene_file": str(scene), "runner": where,
         "elapsed_s": elapsed, "settings": {k: v for k, v in options.items() if v is not None}})
     with atomic_path(out / SUMMARY_FILE, force=True) as tmp:
         summary.to_netcdf(tmp, engine="h5netcdf")
