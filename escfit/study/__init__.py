@@ -10,20 +10,24 @@
   drift and the angle model by PSIS-LOO per unit and over the fleet;
   :func:`decay_residuals` and :func:`chapter5_contrast` test his Chapter V remark.
 - :func:`generate_fleet` draws synthetic fleets with known truth, recorded like his rig.
+- :class:`StudySettings` and :func:`cross_fit` run the standard study (every shipped fleet
+  fitted by every model) that the notebooks show.
 
 Plotting lives in :mod:`escfit.study.plots` (matplotlib, imported there only).
 """
 
-from .batch import BatchResult, discover_units, fit_many, load_summary, unit_seed
+from .batch import BatchResult, discover_units, fit_fleet, fit_many, load_summary, unit_seed
 from .compare import ModelComparison, chapter5_contrast, compare_models, decay_residuals
 from .fleet import Fleet, FleetSpec, LogNormal, generate_fleet, load_fleet, preset, record_unit
 from .population import PopulationResult, UnitDraws, collect_draws, fit_population, load_population
+from .runs import StudySettings, cross_fit, results_dir
 from .scenes import MODELS, POPULATION_PARAMS, Rig, fit_scene, generating_scene
 
 __all__ = [
-    "fit_many", "BatchResult", "discover_units", "load_summary", "unit_seed",
+    "fit_many", "fit_fleet", "BatchResult", "discover_units", "load_summary", "unit_seed",
     "collect_draws", "fit_population", "UnitDraws", "PopulationResult", "load_population",
     "compare_models", "ModelComparison", "decay_residuals", "chapter5_contrast",
     "generate_fleet", "load_fleet", "preset", "record_unit", "Fleet", "FleetSpec", "LogNormal",
     "MODELS", "POPULATION_PARAMS", "Rig", "fit_scene", "generating_scene",
+    "StudySettings", "cross_fit", "results_dir",
 ]

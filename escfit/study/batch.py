@@ -32,9 +32,10 @@ import xarray as xr
 from ..atomic import atomic_path
 from ..errors import DataError, EscfitError, FitError, ResultsError
 from ..recordings import UnitCurve, read_unit_curve
-from ..results import FitResult, clean_attrs, dependency_versions, load_fit
+from ..results import SCHEMA_VERSION, FitResult, clean_attrs, dependency_versions
 
-__all__ = ["UnitTask", "BatchResult", "discover_units", "fit_many", "summarize", "SUMMARY_SCHEMA", "unit_seed"]
+__all__ = ["UnitTask", "BatchResult", "discover_units", "fit_many", "fit_fleet", "summarize", "load_summary",
+           "SUMMARY_SCHEMA", "unit_seed"]
 
 SUMMARY_SCHEMA = "escfit-fleet-summary/1"
 SUMMARY_FILE = "summary.nc"
@@ -124,20 +125,45 @@ def discover_units(data: Sequence[str | Path | UnitCurve], out_dir: str | Path, 
     return tasks
 
 
-def _loads(path: Path) -> FitResult | None:
-    """The results file read into memory and closed, or None when it is missing or unreadable."""
+SUMMARY_GROUPS = ("posterior", "least_squares", "diagnostics")
+
+
+def _load_for_summary(path: Path) -> FitResult | None:
+    """Root attributes and the groups a summary needs (reading every group costs several times more),
+    or None when the file is missing or unreadable.  h5py checks the file afresh first: xarray
+    might hand back a cached handle of a file that has since been replaced."""
     import h5py
 
-    # h5py opens the file afresh; xarray might hand back a cached handle of a replaced file
     if not path.is_file() or not h5py.is_hdf5(path):
         return None
     try:
-        res = load_fit(path)
-    except ResultsError:
+        with h5py.File(path, "r") as f:
+            present = [g for g in SUMMARY_GROUPS if g in f]
+        parts = {}
+        for g in (None, *present):
+            with xr.open_dataset(path, group=g, engine="h5netcdf") as ds:
+                parts["/" if g is None else g] = ds.load()
+        tree = xr.DataTree.from_dict(parts)
+    except Exception:  # noqa: BLE001 - unreadable: treated as not done
         return None
-    # an open handle would be reused by xarray's file cache after the file is replaced
-    res.tree.close()
-    return res
+    if tree.attrs.get("schema_version") != SCHEMA_VERSION:
+        return None
+    return FitResult(tree, str(path))
+
+
+def _is_done(path: Path) -> bool:
+    """A results file that opens as HDF5 with escfit's schema and its least-squares group."""
+    import h5py
+
+    if not path.is_file() or not h5py.is_hdf5(path):
+        return False
+    try:
+        with h5py.File(path, "r") as f:
+            schema = f.attrs.get("schema_version")
+            schema = schema.decode() if isinstance(schema, bytes) else schema
+            return schema == SCHEMA_VERSION and "least_squares" in f
+    except OSError:
+        return False
 
 
 def _fit_task(scene_text: str, scene_where: str, curve: UnitCurve, options: dict) -> dict[str, Any]:
@@ -307,7 +333,7 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
     status: dict[str, dict] = {}
     todo = []
     for t in tasks:
-        if _loads(t.results_file) is not None:
+        if _is_done(t.results_file):
             status[t.unit] = {"status": "skipped", "seconds": math.nan}
             say(f"{t.unit}: done before ({t.results_file.name}), skipped")
         else:
@@ -346,7 +372,8 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
     finally:
         runner.close()
     elapsed = time.perf_counter() - started
-    summary = summarize(tasks, status, attrs={
+    summary = None if jobs else _previous_summary(out, tasks, sc.text)
+    summary = summary if summary is not None else summarize(tasks, status, attrs={
         "method": method, "seed": seed, "scene": sc.text, "scene_file": str(scene), "runner": where,
         "elapsed_s": elapsed, "settings": {k: v for k, v in options.items() if v is not None}})
     with atomic_path(out / SUMMARY_FILE, force=True) as tmp:
@@ -354,6 +381,22 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
     return BatchResult(summary, out, [u for u, s in status.items() if s["status"] == "ok"],
                        [u for u, s in status.items() if s["status"] == "skipped"],
                        {u: s["error"] for u, s in status.items() if s["status"] == "failed"}, elapsed)
+
+
+def _previous_summary(out: Path, tasks: Sequence[UnitTask], scene_text: str) -> xr.Dataset | None:
+    """The summary written last time, when nothing has been fitted since and it covers exactly
+    these units, all fitted, with the same scene (reading every results file again is slow)."""
+    try:
+        prev = load_summary(out)
+    except ResultsError:
+        return None
+    same = ([str(u) for u in prev["unit"].values] == [t.unit for t in tasks] and prev.attrs.get("scene") == scene_text
+            and all(str(s) in ("ok", "skipped") for s in prev["status"].values))
+    if not same:
+        return None
+    prev["status"] = ("unit", np.array(["skipped"] * len(tasks), dtype=object))
+    prev["seconds"] = ("unit", np.full(len(tasks), np.nan), {"units": "s"})
+    return prev
 
 
 def summarize(tasks: Sequence[UnitTask], status: dict[str, dict] | None = None, *,
@@ -371,7 +414,7 @@ def summarize(tasks: Sequence[UnitTask], status: dict[str, dict] | None = None, 
                                                   "sigma_hat", "warnings")}
     for t in tasks:
         st = status.get(t.unit, {"status": "skipped"})
-        res = _loads(t.results_file) if st["status"] != "failed" else None
+        res = _load_for_summary(t.results_file) if st["status"] != "failed" else None
         s = res.summary() if res is not None else {}
         for name in s:
             if name not in params:
@@ -427,3 +470,26 @@ def load_summary(path: str | Path) -> xr.Dataset:
     if ds.attrs.get("schema_version") != SUMMARY_SCHEMA:
         raise ResultsError(f"not a fleet summary of schema {SUMMARY_SCHEMA!r}", str(p))
     return ds
+
+
+def fit_fleet(fleet, model: str, out_dir: str | Path, *, units: Sequence[str] | None = None, method: str = "emcee",
+              walkers: int = 16, steps: int = 600, seed: int = 0, scheduler: Any = None, workers: int | None = None,
+              progress: bool | Callable[[str], None] = False) -> BatchResult:
+    """Fit one of the study's models to a synthetic fleet (see :mod:`escfit.study.scenes`).
+
+    The model's fit scene for the fleet's rig is written to ``<out_dir>/scene.toml``, then
+    :func:`fit_many` fits the fleet's recordings (all units, or ``units``) into ``out_dir``.
+    """
+    from .fleet import Fleet, load_fleet
+    from .scenes import fit_scene
+
+    fl = fleet if isinstance(fleet, Fleet) else load_fleet(fleet)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    scene = out / "scene.toml"
+    text = fit_scene(fl.spec.rig, model)
+    if not scene.is_file() or scene.read_text() != text:
+        with atomic_path(scene, force=True) as tmp:
+            tmp.write_text(text)
+    return fit_many(fl.recordings, scene, out, method=method, walkers=walkers, steps=steps, seed=seed,
+                    scheduler=scheduler, workers=workers, units=units, progress=progress)

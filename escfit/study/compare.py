@@ -9,9 +9,9 @@ standard error of a difference comes from the pointwise differences over all rea
 Monday's Chapter V remark -- measured curves decay more slowly than the computed ones over
 the first cycles and faster as they approach constant amplitude -- is a statement about the
 residuals of his phase model.  :func:`decay_residuals` collects observed minus fitted
-amplitudes per reading, and :func:`chapter5_contrast` measures the change of that residual
-over the first interval (positive: the recording decays more slowly than the model) and over
-the approach to steady state (negative: faster).
+amplitudes per reading, and :func:`chapter5_contrast` measures that residual after the first
+cycles (positive: the recording decayed more slowly than the model) and its change over the
+approach to steady state (negative: faster).
 """
 
 from __future__ import annotations
@@ -262,30 +262,30 @@ def _notch_of(scene_text: str) -> float:
     return math.radians(deg)
 
 
-def chapter5_contrast(residuals: xr.Dataset, *, early: tuple[int, int] = (0, 1),
-                      approach: tuple[int, int] = (1, 3)) -> dict[str, float]:
+def chapter5_contrast(residuals: xr.Dataset, *, first: int = 1, settled: int = 3) -> dict[str, float]:
     """Monday's Chapter V pattern in numbers.
 
-    The change of the residual over readings ``early`` (default: from the release to the
-    first reading) is positive when the recording decays more slowly than the model; its
-    change over ``approach`` (default: first to third reading, the approach to steady
-    state) is negative when it decays faster.  Each is averaged over curves per unit, then
-    over units, with the standard error between units.
+    Model and unit start from the same release angle (the banking pin), so the residual at
+    reading ``first`` (default: two cycles after release) is what the first cycles did: positive
+    when the recording decayed more slowly than the model.  Its change from reading ``first``
+    to ``settled`` (the approach to steady state) is negative when the recording then decays
+    faster.  Each is averaged over a unit's curves, then over units, with the standard error
+    between units.
 
     Returns
     -------
     dict
-        ``early``, ``early_se``, ``approach``, ``approach_se`` (rad) and ``pattern`` (1 when
-        early > 2 se and approach < -2 se, i.e. Monday's remark holds, else 0).
+        ``early``, ``early_se``, ``approach``, ``approach_se`` (rad), ``units`` and
+        ``pattern`` (1 when early > 2 se and approach < -2 se, i.e. Monday's remark holds).
     """
     r = residuals["residual"]
 
-    def change(a: int, b: int) -> tuple[float, float]:
-        per_unit = (r.isel(reading=b) - r.isel(reading=a)).mean("curve").values
+    def stat(x: xr.DataArray) -> tuple[float, float, int]:
+        per_unit = x.mean("curve").values
         per_unit = per_unit[np.isfinite(per_unit)]
-        return float(per_unit.mean()), float(per_unit.std(ddof=1) / math.sqrt(per_unit.size))
+        return float(per_unit.mean()), float(per_unit.std(ddof=1) / math.sqrt(per_unit.size)), per_unit.size
 
-    e, e_se = change(*early)
-    a, a_se = change(*approach)
-    return {"early": e, "early_se": e_se, "approach": a, "approach_se": a_se,
+    e, e_se, n = stat(r.isel(reading=first))
+    a, a_se, _ = stat(r.isel(reading=settled) - r.isel(reading=first))
+    return {"early": e, "early_se": e_se, "approach": a, "approach_se": a_se, "units": n,
             "pattern": int(e > 2 * e_se and a < -2 * a_se)}

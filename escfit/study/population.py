@@ -113,17 +113,17 @@ def collect_draws(results: str | Path | Iterable[str | Path | FitResult], *,
     from ..scene import load_scene
 
     items = _result_files(results)
-    fits = [r if isinstance(r, FitResult) else load_fit(r) for r in items]
-    labels = [Path(f.path).stem if f.path else f"unit{i}" for i, f in enumerate(fits)]
+    labels = [Path(r.path).stem if isinstance(r, FitResult) else Path(r).stem for r in items]
     if units is not None:
-        by = dict(zip(labels, fits))
+        by = dict(zip(labels, items))
         missing = [u for u in units if u not in by]
         if missing:
             raise ResultsError(f"no results for unit(s) {missing}")
-        labels, fits = list(units), [by[u] for u in units]
+        labels, items = list(units), [by[u] for u in units]
     thetas, lps, sig = [], [], []
     bounds = None
-    for label, f in zip(labels, fits):
+    for label, item in zip(labels, items):
+        f = item if isinstance(item, FitResult) else _PosteriorOnly.read(item)
         post = f.group("posterior")
         if post is None:
             raise ResultsError("no posterior draws (fit with method = 'emcee')", f.path or label)
@@ -148,6 +148,41 @@ def collect_draws(results: str | Path | Iterable[str | Path | FitResult], *,
         lps.append(lp)
         sig.append(float(np.median(post["observation.sigma"].values)) if "observation.sigma" in post else math.nan)
     return UnitDraws(labels, list(names), np.stack(thetas), np.stack(lps), bounds, np.array(sig))
+
+
+@dataclass
+class _PosteriorOnly:
+    """The root attributes and posterior group of a results file (reading every group is slow)."""
+
+    attrs: dict
+    posterior: xr.Dataset | None
+    path: str
+
+    def group(self, name: str) -> xr.Dataset | None:
+        return self.posterior if name == "posterior" else None
+
+    @classmethod
+    def read(cls, path: str | Path) -> "_PosteriorOnly":
+        from ..results import SCHEMA_VERSION
+
+        p = Path(path)
+        if not p.is_file():
+            raise ResultsError("results file not found", str(p))
+        attrs: dict = {}
+        try:
+            with xr.open_dataset(p, engine="h5netcdf") as root:
+                attrs = dict(root.attrs)
+            with xr.open_dataset(p, group="posterior", engine="h5netcdf") as post:
+                posterior = post.load()
+        except OSError as exc:
+            if "posterior" in str(exc) and attrs.get("schema_version") == SCHEMA_VERSION:
+                return cls(attrs, None, str(p))
+            raise ResultsError(f"cannot read as an HDF5 results file ({type(exc).__name__}: {exc})", str(p)) from None
+        except Exception as exc:  # noqa: BLE001 - any unreadable file becomes one message
+            raise ResultsError(f"cannot read as an HDF5 results file ({type(exc).__name__}: {exc})", str(p)) from None
+        if attrs.get("schema_version") != SCHEMA_VERSION:
+            raise ResultsError(f"not an escfit fit file of schema {SCHEMA_VERSION!r}", str(p))
+        return cls(attrs, posterior, str(p))
 
 
 def _half_normal_logpdf(x: np.ndarray, scale: float) -> np.ndarray:
