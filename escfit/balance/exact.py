@@ -16,7 +16,10 @@ and an impulse window ``+X``.
 
 :func:`run_angle_many` and :func:`run_phase_many` run the same kernels over many parameter
 sets in parallel (front end: :mod:`escfit.balance.batch`).  They live here so that numba's
-cache, which is keyed on this file, is invalidated together for all of them.
+cache, which is keyed on this file, is invalidated together for all of them.  The cache does
+not notice edits of :mod:`escfit.balance.segment`, whose functions are compiled into these
+kernels: after changing that file, change this one too or delete its cache files
+(``escfit/balance/__pycache__/exact.*.nb?``); tests/test_stability.py checks the two agree.
 
 Status codes (see :data:`STATUS_NAMES`)
 ---------------------------------------

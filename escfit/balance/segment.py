@@ -122,7 +122,8 @@ def cross_time(y0, v0, h, w2, target, tau_hi):
         if lo < guess < hi:
             tau = guess
     y, v = propagate(y0, v0, tau, h, w2)
-    for _ in range(200):
+    widths = (math.inf, math.inf, math.inf)  # bracket widths of the last three iterations
+    for _ in range(400):
         f = y - target
         if f == 0.0:
             return tau, v
@@ -130,6 +131,7 @@ def cross_time(y0, v0, h, w2, target, tau_hi):
             hi = tau
         else:
             lo = tau
+        new = 0.5 * (lo + hi)
         if v > 0.0:
             step = f / v
             # A correction below rounding means the iteration has converged; testing this
@@ -137,13 +139,17 @@ def cross_time(y0, v0, h, w2, target, tau_hi):
             # bracket end just set and would otherwise start a long run of bisections.
             if abs(step) <= 4e-16 * tau:
                 return tau, v
-            acc = -2.0 * h * v - w2 * y  # y'' from the equation of motion
-            denom = 1.0 - 0.5 * step * acc / v
-            new = tau - (step / denom if denom > 0.5 else step)
-        else:
-            new = 0.5 * (lo + hi)
-        if not (lo < new < hi):
-            new = 0.5 * (lo + hi)
+            if lo < tau - step < hi:
+                # Halley only refines a Newton step that stays in the bracket: where the
+                # velocity has decayed to nothing its damping would crawl instead
+                acc = -2.0 * h * v - w2 * y  # y'' from the equation of motion
+                denom = 1.0 - 0.5 * step * acc / v
+                new = tau - (step / denom if denom > 0.5 else step)
+                if not (lo < new < hi):
+                    new = tau - step
+        if hi - lo > 0.5 * widths[0]:
+            new = 0.5 * (lo + hi)  # no halving in three iterations: bisect to guarantee progress
+        widths = (widths[1], widths[2], hi - lo)
         tau = new
         y, v = propagate(y0, v0, tau, h, w2)
         if hi - lo <= 4e-16 * hi:
