@@ -42,6 +42,15 @@ def _at_recorded_swings(curve: "Curve", theta0: float, theta_turn: np.ndarray) -
     return theta
 
 
+def _at_recorded_swings_many(curve: "Curve", theta0: np.ndarray, theta_turn: np.ndarray,
+                             n_done: np.ndarray) -> np.ndarray:
+    """:func:`_at_recorded_swings` for many sets: rows of ``theta_turn`` hold ``n_done`` turns."""
+    turns = np.concatenate([theta0[:, None], theta_turn], axis=1)
+    k = curve.swing
+    inside = k[None, :] <= n_done[:, None]
+    return np.where(inside, turns[:, np.minimum(k, turns.shape[1] - 1)], 0.0)
+
+
 @dataclass(frozen=True)
 class Curve:
     """One decay curve of the recording (a unit at one load)."""
@@ -231,6 +240,7 @@ class FitProblem:
         n_sets = len(vals)
         preds: list[list[np.ndarray]] = [[] for _ in range(n_sets)]
         scalar = np.zeros(n_sets, bool)  # sets handed to the one-at-a-time path (failures)
+        sides = [self.sides(c) for c in self.curves]
         for curve in self.curves:
             n = int(curve.swing.max())
             systems = []
@@ -243,25 +253,28 @@ class FitProblem:
             live = [i for i in range(n_sets) if not scalar[i]]
             if not live:
                 break
+            theta0 = np.array([systems[i].theta0 for i in live])
             if n > 0:
                 batch = solve_batch(SystemStack.from_systems([systems[i] for i in live]), n, self.scene.switching,
                                     throw=False, max_segments=self.solver_options.get("max_segments"))
+                readings = _at_recorded_swings_many(curve, theta0, batch.theta_turn, batch.n_done)
+                failed = np.isin(batch.status, ("failed", "max_segments"))
+            else:
+                readings = _at_recorded_swings_many(curve, theta0, np.zeros((len(live), 0)), np.zeros(len(live), int))
+                failed = np.zeros(len(live), bool)
             for j, i in enumerate(live):
-                if n == 0:
-                    preds[i].append(_at_recorded_swings(curve, systems[i].theta0, np.zeros(0)))
-                elif batch.status[j] in ("failed", "max_segments"):
+                if failed[j]:
                     scalar[i] = True
                 else:
-                    turns = batch.theta_turn[j, : batch.n_done[j]]
-                    preds[i].append(_at_recorded_swings(curve, systems[i].theta0, turns))
+                    preds[i].append(readings[j])
         ll = np.empty(n_sets)
         for i, v in enumerate(vals):
             if scalar[i]:
                 # the one-at-a-time path records the same failure reason as log_prob would
                 ll[i] = self.log_likelihood(v)
                 continue
-            pred = [self._nominal(t, c) for t, c in zip(preds[i], self.curves)]
-            total = sum(self.observation.loglike(p, c.y, v, self.sides(c)) for p, c in zip(pred, self.curves))
+            pred = [t if side is None else side * t for t, side in zip(preds[i], sides)]  # as _nominal
+            total = sum(self.observation.loglike(p, c.y, v, side) for p, c, side in zip(pred, self.curves, sides))
             if not math.isfinite(total):
                 self.failures["non-finite likelihood"] += 1
                 total = -math.inf
