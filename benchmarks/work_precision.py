@@ -222,6 +222,13 @@ def run_case(case: Case, *, quick: bool = False, batch_sets: int = 1024,
         records.append(Record(case.key, method, setting, e_t, e_a, 1e6 * sec / case.swings, "cpu", tr.status,
                               case.swings, note))
         progress(f"{case.key:10s} {method:11s} {setting:12s} T/2 err {_fmt(e_t)}  {records[-1].us_per_swing:10.2f} us")
+    if case.swings > 1 and not quick:
+        for method in ("rk4", "rk4 naive"):
+            done = next(r for r in records if r.method == method and r.setting == f"h={RK4_H_FLOOR_LONG:g} s")
+            scale = RK4_H_FLOOR_LONG / 1e-8
+            records.append(Record(case.key, method, "h=1e-08 s", None, None, scale * done.us_per_swing, "estimate",
+                                  "not run", case.swings, f"{scale * done.us_per_swing * case.swings / 1e6:.0f} s per run "
+                                  f"(10x h={RK4_H_FLOOR_LONG:g}); RK4 is at round-off already"))
     # the exact solver on many parameter sets per call (here copies of the case's own)
     stack = SystemStack.from_systems([sys] * batch_sets)
     solve_batch(stack, case.swings)
@@ -282,7 +289,7 @@ def table(records: list[Record]) -> str:
         lines += [f"{case.title} ({case.swings} half swing{'s' * (case.swings > 1)})",
                   f"  {'method':12s} {'setting':22s} {'T/2 error (s)':>13s} {'amp. error (rad)':>16s} "
                   f"{'us/swing':>11s} {'clock':>5s}  status"]
-        for r in rows:
+        for r in sorted(rows, key=lambda r: list(dict.fromkeys(x.method for x in rows)).index(r.method)):
             lines.append(f"  {r.method:12s} {r.setting:22s} {_fmt(r.error_half_period_s):>13s} "
                          f"{_fmt(r.error_amplitude_rad):>16s} {r.us_per_swing:11.3f} {r.clock:>5s}  {r.status}"
                          + (f"  ({r.note})" if r.note else ""))

@@ -41,15 +41,18 @@ def _load(name: str):
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON record per method and setting.")
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
               help="Write the work-precision plot (log-log T/2 error vs time per swing) to FILE.png.")
-@click.option("--force", is_flag=True, help="Replace an existing --plot file.")
+@click.option("--json-out", "json_path", type=click.Path(dir_okay=False), default=None,
+              help="Also write the JSON records to FILE (the table is still printed).")
+@click.option("--force", is_flag=True, help="Replace existing --plot and --json-out files.")
 @click.option("--posterior/--no-posterior", default=True, show_default=True,
               help="Also time the 4-parameter posterior (32 walkers x 5000 steps, 120 swings; cold numba cache).")
-def bench(quick, as_json, plot_path, force, posterior):
+def bench(quick, as_json, plot_path, json_path, force, posterior):
     """Work-precision benchmark of the balance solvers and the speed targets."""
     from .atomic import atomic_path, refuse_existing
 
-    if plot_path:
-        refuse_existing(plot_path, force)
+    for path in (plot_path, json_path):
+        if path:
+            refuse_existing(path, force)
     wp = _load("work_precision")
     say = (lambda s: None) if as_json else (lambda s: click.echo(s, err=True))
     started = time.perf_counter()
@@ -72,8 +75,12 @@ def bench(quick, as_json, plot_path, force, posterior):
         with atomic_path(plot_path, force=force) as tmp:
             wp.plot([r for r in records if r.case in ("horology", "monday120") and r.error_half_period_s is not None],
                     tmp, Path(plot_path).suffix.lstrip(".") or "png")
+    text = json.dumps([asdict(r) for r in records], indent=1)
+    if json_path:
+        with atomic_path(json_path, force=force) as tmp:
+            Path(tmp).write_text(text + "\n")
     if as_json:
-        click.echo(json.dumps([asdict(r) for r in records], indent=1))
+        click.echo(text)
         return
     click.echo(wp.table([r for r in records if r.case != "posterior"]))
     click.echo(_targets(wp, records, through, post, time.perf_counter() - started))
