@@ -49,7 +49,7 @@ def test_unit_seeds_depend_on_name_not_order():
     assert unit_seed(1, "u01") != unit_seed(0, "u01")
 
 
-def test_failed_unit_is_reported_and_the_others_are_fitted(split_files, tmp_path, capsys):
+def test_failed_unit_is_reported_and_the_others_are_fitted(split_files, tmp_path, capsys, monkeypatch):
     out = tmp_path / "fits"
     res = fit_many([split_files / "pair.csv", split_files / "u03.csv", split_files / "noload.csv"], SCENE, out,
                    workers=0, n_starts=2)
@@ -78,8 +78,22 @@ def test_failed_unit_is_reported_and_the_others_are_fitted(split_files, tmp_path
                      workers=0, n_starts=2)
     assert sorted(again.skipped) == ["u01", "u03"] and again.fitted == ["u02"] and list(again.failed) == ["noload"]
     assert (out / "u01.h5").stat().st_mtime_ns == before
-    load_fit(out / "u02.h5")
+    load_fit(out / "u02.h5").tree.close()
     assert list(load_summary(out)["status"].values) == ["skipped", "ok", "skipped", "failed"]
+
+    # nothing left to do: the summary of the same finished units is reused, not rebuilt
+    third = fit_many(split_files / "pair.csv", SCENE, out, workers=0)
+    assert third.skipped == ["u01", "u02"] and not third.fitted
+    np.testing.assert_array_equal(third.summary["median"].values, again.summary["median"].values[:2])
+    import escfit.study.batch as batch
+
+    def no_rebuild(*args, **kwargs):
+        raise AssertionError("summary rebuilt")
+
+    monkeypatch.setattr(batch, "summarize", no_rebuild)
+    fourth = fit_many(split_files / "pair.csv", SCENE, out, workers=0)
+    assert list(fourth.summary["status"].values) == ["skipped", "skipped"]
+    np.testing.assert_array_equal(fourth.summary["median"].values, third.summary["median"].values)
 
 
 def test_local_cluster_matches_in_process(split_files, tmp_path):
