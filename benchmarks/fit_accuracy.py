@@ -46,6 +46,8 @@ MODELS = [  # (label, solver, options)
     ("ivp RK45 rtol=1e-3", "ivp", {"method": "RK45", "rtol": 1e-3, "atol": 1e-6}),
     ("ivp RK45 rtol=1e-6", "ivp", {"method": "RK45", "rtol": 1e-6, "atol": 1e-9}),
     ("ivp DOP853 rtol=1e-3", "ivp", {"method": "DOP853", "rtol": 1e-3, "atol": 1e-6}),
+    ("ivp DOP853 rtol=1e-4", "ivp", {"method": "DOP853", "rtol": 1e-4, "atol": 1e-7}),
+    ("ivp DOP853 rtol=1e-5", "ivp", {"method": "DOP853", "rtol": 1e-5, "atol": 1e-8}),
 ]
 QUICK_MODELS = ("exact", "rk4 naive h=1e-3", "rk4 h=1e-2")
 
