@@ -297,6 +297,25 @@ def table(records: list[Record]) -> str:
     return "\n".join(lines)
 
 
+def markdown(records: list[Record]) -> str:
+    """The docs tables: one per case, errors and time per half swing."""
+    out = []
+    for case in CASES:
+        rows = [r for r in records if r.case == case.key]
+        if not rows:
+            continue
+        out += [f"**{case.title}**", "", "| method | setting | T/2 error (s) | amplitude error (rad) | us per half swing |",
+                "|---|---|---:|---:|---:|"]
+        order = list(dict.fromkeys(r.method for r in rows))
+        for r in sorted(rows, key=lambda r: order.index(r.method)):
+            e_t = "-" if r.error_half_period_s is None else f"{r.error_half_period_s:.1e}"
+            e_a = "-" if r.error_amplitude_rad is None else f"{r.error_amplitude_rad:.1e}"
+            us = (f"{r.us_per_swing:,.0f}" if r.us_per_swing >= 100 else f"{r.us_per_swing:.3g}") + {"wall": " (wall)", "estimate": " (estimate, not run)"}.get(r.clock, "")
+            out.append(f"| {r.method} | {r.setting} | {e_t} | {e_a} | {us} |")
+        out.append("")
+    return "\n".join(out)
+
+
 def speed_ratios(records: list[Record]) -> list[dict]:
     """Exact solver against the cheapest solve_ivp setting with T/2 error <= 1e-12 s."""
     out = []
@@ -370,8 +389,16 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--quick", action="store_true", help="fewer settings, short timings (smoke test)")
     ap.add_argument("--json", action="store_true", help="print the records as JSON")
     ap.add_argument("--plot", default=None, help="write the work-precision plot to this PNG file")
+    ap.add_argument("--from-json", default=None, help="render records saved by --json (or escfit bench --json-out)")
+    ap.add_argument("--markdown", action="store_true", help="print the docs tables")
     args = ap.parse_args(argv)
-    records = run(quick=args.quick, progress=lambda s: print(s, file=sys.stderr, flush=True))
+    if args.from_json:
+        records = [Record(**r) for r in json.loads(Path(args.from_json).read_text())]
+    else:
+        records = run(quick=args.quick, progress=lambda s: print(s, file=sys.stderr, flush=True))
+    if args.markdown:
+        print(markdown([r for r in records if r.case in {c.key for c in CASES}]))
+        return 0
     if args.plot:
         plot(records, args.plot)
     if args.json:
