@@ -85,9 +85,17 @@ fig.savefig(FIGURES / "loo.png", dpi=110)
 #
 # Observed minus fitted amplitude per reading, averaged over units and loads.  Fitted by the
 # phase model, the records sit *above* the fit two cycles after release (slower decay over the
-# first cycles) and fall below it over the next cycles (faster decay approaching steady
-# state): Monday's remark.  The drift model, C growing as he proposed, does not remove it; the
-# angle model does.
+# first cycles), then fall below it over the next four cycles (faster decay: they reach
+# constant amplitude sooner) — Monday's remark.  After that the records are flat while the
+# geometric phase curve keeps creeping down past them, so the residual turns positive again.
+# The angle-switching physics explains it: the impulse restores a fixed energy per swing, a
+# small amplitude gain at large amplitude and a large one near steady state, whereas a
+# phase window restores more at large amplitude.  The drift model (C growing as Monday
+# proposed) does not remove the pattern; the angle model does.
+#
+# `early` is the mean residual two cycles after release, `approach` its change from two to six
+# cycles (rad, with standard errors between units); `pattern` = 1 when both are beyond two
+# standard errors with Monday's signs.
 
 # %%
 angle_units = study.load_fleet(settings.fleets / "angle").units
