@@ -17,7 +17,13 @@ FIGURES = ("fleet_recordings.png", "unit_estimates.png", "population.png", "shri
            "loo.png", "chapter5.png")
 
 
+def _needs_study_extra() -> None:
+    for module in ("jupytext", "nbclient", "ipykernel", "distributed"):
+        pytest.importorskip(module, reason="the notebooks need the 'study' extra (pip install -e '.[study]')")
+
+
 def _execute(env: dict[str, str], monkeypatch) -> None:
+    _needs_study_extra()
     import jupytext
     from nbclient import NotebookClient
 
@@ -33,7 +39,7 @@ def _execute(env: dict[str, str], monkeypatch) -> None:
 
 
 def test_notebooks_are_percent_scripts():
-    import jupytext
+    jupytext = pytest.importorskip("jupytext")
 
     for name in ORDER:
         text = (NOTEBOOKS / name).read_text()

@@ -151,21 +151,6 @@ def _load_for_summary(path: Path) -> FitResult | None:
     return FitResult(tree, str(path))
 
 
-def _is_done(path: Path) -> bool:
-    """A results file that opens as HDF5 with escfit's schema and its least-squares group."""
-    import h5py
-
-    if not path.is_file() or not h5py.is_hdf5(path):
-        return False
-    try:
-        with h5py.File(path, "r") as f:
-            schema = f.attrs.get("schema_version")
-            schema = schema.decode() if isinstance(schema, bytes) else schema
-            return schema == SCHEMA_VERSION and "least_squares" in f
-    except OSError:
-        return False
-
-
 def _fit_task(scene_text: str, scene_where: str, curve: UnitCurve, options: dict) -> dict[str, Any]:
     """Worker side: fit one unit; never raises (a failure comes back as a message)."""
     started = time.perf_counter()
@@ -331,9 +316,12 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
     say = progress if callable(progress) else ((lambda s: print(s, file=sys.stderr)) if progress else (lambda s: None))
     started = time.perf_counter()
     status: dict[str, dict] = {}
+    loaded: dict[str, FitResult] = {}
     todo = []
     for t in tasks:
-        if _is_done(t.results_file):
+        done_before = _load_for_summary(t.results_file)
+        if done_before is not None:
+            loaded[t.unit] = done_before
             status[t.unit] = {"status": "skipped", "seconds": math.nan}
             say(f"{t.unit}: done before ({t.results_file.name}), skipped")
         else:
@@ -372,8 +360,7 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
     finally:
         runner.close()
     elapsed = time.perf_counter() - started
-    summary = None if jobs else _previous_summary(out, tasks, sc.text)
-    summary = summary if summary is not None else summarize(tasks, status, attrs={
+    summary = summarize(tasks, status, loaded=loaded, attrs={
         "method": method, "seed": seed, "scene": sc.text, "scene_file": str(scene), "runner": where,
         "elapsed_s": elapsed, "settings": {k: v for k, v in options.items() if v is not None}})
     with atomic_path(out / SUMMARY_FILE, force=True) as tmp:
@@ -383,38 +370,26 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
                        {u: s["error"] for u, s in status.items() if s["status"] == "failed"}, elapsed)
 
 
-def _previous_summary(out: Path, tasks: Sequence[UnitTask], scene_text: str) -> xr.Dataset | None:
-    """The summary written last time, when nothing has been fitted since and it covers exactly
-    these units, all fitted, with the same scene (reading every results file again is slow)."""
-    try:
-        prev = load_summary(out)
-    except ResultsError:
-        return None
-    same = ([str(u) for u in prev["unit"].values] == [t.unit for t in tasks] and prev.attrs.get("scene") == scene_text
-            and all(str(s) in ("ok", "skipped") for s in prev["status"].values))
-    if not same:
-        return None
-    prev["status"] = ("unit", np.array(["skipped"] * len(tasks), dtype=object))
-    prev["seconds"] = ("unit", np.full(len(tasks), np.nan), {"units": "s"})
-    return prev
-
-
 def summarize(tasks: Sequence[UnitTask], status: dict[str, dict] | None = None, *,
-              attrs: dict | None = None) -> xr.Dataset:
+              loaded: dict[str, FitResult] | None = None, attrs: dict | None = None) -> xr.Dataset:
     """The combined summary of a batch from its results files (dimension ``unit``).
 
     Variables: ``<stat>`` (unit, parameter) for the statistics in :data:`STATS`;
     ``status``, ``error``, ``seconds``, ``results_file``, ``data_file``, ``n_data``,
     ``sigma_hat`` (least-squares reading scatter, rad), ``warnings`` (JSON list) per unit.
+    ``loaded`` holds results already read (by unit), which are not read again.
     """
     status = status or {}
+    loaded = loaded or {}
     rows: list[dict[str, dict]] = []
     params: list[str] = []
     per_unit: dict[str, list] = {k: [] for k in ("status", "error", "seconds", "results_file", "data_file", "n_data",
                                                   "sigma_hat", "warnings")}
     for t in tasks:
         st = status.get(t.unit, {"status": "skipped"})
-        res = _load_for_summary(t.results_file) if st["status"] != "failed" else None
+        res = None
+        if st["status"] != "failed":
+            res = loaded.get(t.unit) or _load_for_summary(t.results_file)
         s = res.summary() if res is not None else {}
         for name in s:
             if name not in params:
