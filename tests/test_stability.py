@@ -124,6 +124,16 @@ def hard_scenes(draw, *, gentle: bool = False):
     return text
 
 
+@pytest.fixture(scope="module", autouse=True)
+def compiled():
+    """Compile (or load) the kernels first: compilation must not count against CPU_BOUND."""
+    for switching in ("angle", "phase"):
+        scene = escfit.load_scene("warm.toml", text=balance_toml(switching=switching, effects=(
+            "[effects.viscous]\nC = 0.1\n")))
+        solve(scene, log=True)
+        solve_batch([scene.build()], 2, switching)
+
+
 def _load(text: str):
     try:
         return escfit.load_scene("stability.toml", text=text)
@@ -285,26 +295,35 @@ def test_scale_invariance(text, k, a):
     np.testing.assert_array_equal(other.time * k, base.time)
 
 
+def _agree(other, exact, n: int, a0: float) -> bool:
+    if len(other.amplitude) < n:
+        return False
+    return (np.allclose(other.amplitude[:n], exact.amplitude[:n], rtol=0, atol=1e-7 * a0)
+            and np.allclose(other.half_period[:n], exact.half_period[:n], rtol=1e-7, atol=0)
+            and np.array_equal(other.banked[:n], exact.banked[:n]))
+
+
 @budget(200)
 @given(hard_scenes(gentle=True))
 def test_exact_agrees_with_solve_ivp_on_well_conditioned_scenes(text):
+    """Where solve_ivp disagrees, located RK4 (an independent integration) must side with the
+    exact solver: scipy looks for events only between the ends of its steps, so a swing that
+    passes a window edge or the banking angle and turns back within one step never "crosses"
+    it (found by this test; see docs/performance.md)."""
     scene = _load(text)
     assume(not any(e.key == "viscous_drift" for e in scene.effects))
     exact = _timed_solve(scene, swings=6)
-    ivp = solve(scene, "ivp", swings=6, method="DOP853", rtol=1e-11, atol=1e-13)
     sys = scene.build()
     a0 = abs(sys.theta0)
     assert np.all(exact.amplitude <= sys.bank)
-    # scipy looks for events only between the ends of its steps: a swing that passes the banking
-    # angle and turns back within one step never "hits" the pins there (found by this test)
-    assume(np.all(ivp.amplitude <= sys.bank))
     # compare while the motion is well above solve_ivp's absolute tolerance
     n = int(np.argmin(np.append(exact.amplitude, 0.0) > 1e-4 * a0))
     assume(n > 0)
-    assert len(ivp.amplitude) >= n, (ivp.status, exact.status)
-    np.testing.assert_allclose(ivp.amplitude[:n], exact.amplitude[:n], rtol=0, atol=1e-7 * a0)
-    np.testing.assert_allclose(ivp.half_period[:n], exact.half_period[:n], rtol=1e-7)
-    np.testing.assert_array_equal(ivp.banked[:n], exact.banked[:n])
+    ivp = solve(scene, "ivp", swings=6, method="DOP853", rtol=1e-11, atol=1e-13)
+    if not _agree(ivp, exact, n, a0):
+        rk4 = solve(scene, "rk4", swings=6, h=2e-3 / sys.omega0)
+        assert _agree(rk4, exact, n, a0), (exact.amplitude[:n], ivp.amplitude[:n], rk4.amplitude[:n])
+        event("solve_ivp missed an event; RK4 agrees with the exact solver")
 
 
 @st.composite

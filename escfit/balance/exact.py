@@ -18,8 +18,8 @@ and an impulse window ``+X``.
 sets in parallel (front end: :mod:`escfit.balance.batch`).  They live here so that numba's
 cache, which is keyed on this file, is invalidated together for all of them.  The cache does
 not notice edits of :mod:`escfit.balance.segment`, whose functions are compiled into these
-kernels: after changing that file, change this one too or delete its cache files
-(``escfit/balance/__pycache__/exact.*.nb?``); tests/test_stability.py checks the two agree.
+kernels: after changing that file, bump ``SEGMENT_REVISION`` below (or delete the cache files
+``escfit/balance/__pycache__/exact.*.nb?``); tests/test_stability.py checks the two agree.
 
 Status codes (see :data:`STATUS_NAMES`)
 ---------------------------------------
@@ -43,6 +43,9 @@ __all__ = ["run_angle", "run_phase", "run_angle_many", "run_phase_many", "STATUS
 
 STATUS_NAMES = ("ok", "stopped", "banked", "max_segments", "phase_breakdown")
 N_LOG = 9  # fields of a segment-log row: t0, tau, s, x0, v0, xc, w2, h, swing
+# numba's cache of this file does not notice edits of segment.py, whose functions are compiled
+# into the kernels below: change this line with every edit there (see the module docstring).
+SEGMENT_REVISION = 3  # cross_time: rtsafe safeguard, stops at the rounding floor of y
 
 
 @njit(cache=True)

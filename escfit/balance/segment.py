@@ -122,7 +122,10 @@ def cross_time(y0, v0, h, w2, target, tau_hi):
         if lo < guess < hi:
             tau = guess
     y, v = propagate(y0, v0, tau, h, w2)
-    widths = (math.inf, math.inf, math.inf)  # bracket widths of the last three iterations
+    # y is computed to about an ulp of the offsets involved: below that f is rounding noise
+    noise = 4.5e-16 * (abs(y0) + abs(target))
+    step_before = hi - lo  # safeguard as in Numerical Recipes' rtsafe: bisect when the
+    step_last = hi - lo    # step does not at least halve every second iteration
     for _ in range(400):
         f = y - target
         if f == 0.0:
@@ -136,20 +139,19 @@ def cross_time(y0, v0, h, w2, target, tau_hi):
             step = f / v
             # A correction below rounding means the iteration has converged; testing this
             # before the bracket matters, because ``tau - step`` then rounds back onto the
-            # bracket end just set and would otherwise start a long run of bisections.
-            if abs(step) <= 4e-16 * tau:
+            # bracket end just set and would otherwise start a run of bisections.
+            if abs(step) <= 4e-16 * tau or abs(f) <= noise:
                 return tau, v
-            if lo < tau - step < hi:
-                # Halley only refines a Newton step that stays in the bracket: where the
-                # velocity has decayed to nothing its damping would crawl instead
-                acc = -2.0 * h * v - w2 * y  # y'' from the equation of motion
+            if lo < tau - step < hi and abs(step) <= 0.5 * abs(step_before):
+                # Halley refines a Newton step that stays in the bracket (y'' comes free from
+                # the equation of motion); where the velocity has decayed to nothing its
+                # damping would crawl, which the bracket test excludes
+                acc = -2.0 * h * v - w2 * y
                 denom = 1.0 - 0.5 * step * acc / v
                 new = tau - (step / denom if denom > 0.5 else step)
                 if not (lo < new < hi):
                     new = tau - step
-        if hi - lo > 0.5 * widths[0]:
-            new = 0.5 * (lo + hi)  # no halving in three iterations: bisect to guarantee progress
-        widths = (widths[1], widths[2], hi - lo)
+        step_before, step_last = step_last, abs(new - tau)
         tau = new
         y, v = propagate(y0, v0, tau, h, w2)
         if hi - lo <= 4e-16 * hi:
