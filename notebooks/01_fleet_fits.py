@@ -79,14 +79,8 @@ fig.savefig(FIGURES / "fleet_recordings.png", dpi=110)
 # skips the units already done.
 
 # %%
-import dask
-from distributed import Client, LocalCluster
-
-if settings.scheduler:
-    client = Client(settings.scheduler)
-else:
-    with dask.config.set({"distributed.worker.profile.enabled": False}):
-        client = Client(LocalCluster(n_workers=settings.workers or 2, threads_per_worker=1, dashboard_address=None))
+# a dask client started only if some unit is left to fit: the settings' scheduler, or a local cluster
+client = study.LazyClient(settings.scheduler, settings.workers)
 units = fleet.units[: settings.units] if settings.units else None
 batch = study.fit_fleet(fleet, "angle", study.results_dir(settings, "angle", "angle"), units=units,
                         walkers=settings.walkers, steps=settings.steps, seed=settings.seed, scheduler=client)

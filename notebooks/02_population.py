@@ -43,7 +43,7 @@ results = study.results_dir(settings, "angle", "angle")
 
 # %%
 draws = study.collect_draws(results)
-pop = study.fit_population(draws, steps=1000, seed=1)
+pop = study.fit_population(draws, steps=settings.population_steps, seed=1)
 pop.write(results / "population.nc", force=True)
 print("warnings:", pop.warnings or "none")
 print("effective draws per unit under the population: min", round(float(pop.ess.min())), "median",
@@ -101,7 +101,7 @@ fig.savefig(FIGURES / "shrinkage_C.png", dpi=110)
 
 # %%
 few = study.collect_draws(results, units=draws.units[:5])
-pop5 = study.fit_population(few, steps=1000, seed=1)
+pop5 = study.fit_population(few, steps=settings.population_steps, seed=1)
 fig = plots.plot_scatter_vs_noise({"5 units": pop5, f"{len(draws.units)} units": pop})
 fig.savefig(FIGURES / "scatter_vs_noise.png", dpi=110)
 pd.DataFrame({f"{n} units": {study.scenes.SHORT[k]: f"tau {v['tau']:.2f} [{v['tau_lo']:.2f}, {v['tau_hi']:.2f}], "

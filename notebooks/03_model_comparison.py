@@ -41,16 +41,8 @@ FIGURES.mkdir(parents=True, exist_ok=True)
 pd.DataFrame(settings.plan(), columns=["fleet", "model", "units (None: all)"])
 
 # %%
-import dask
-from distributed import Client, LocalCluster
-
-if settings.scheduler:
-    client = Client(settings.scheduler)
-else:
-    with dask.config.set({"distributed.worker.profile.enabled": False}):
-        client = Client(LocalCluster(n_workers=settings.workers or 2, threads_per_worker=1, dashboard_address=None))
-batches = study.cross_fit(settings, scheduler=client)
-client.close()
+# one dask client for all nine batches, started only if some unit is left to fit
+batches = study.cross_fit(settings)
 pd.DataFrame([{"fleet": f, "model": m, "fitted": len(b.fitted), "done before": len(b.skipped),
                "failed": len(b.failed), "seconds": round(b.elapsed)} for (f, m), b in batches.items()])
 

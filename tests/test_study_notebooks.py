@@ -55,7 +55,8 @@ def test_notebooks_smoke(tmp_path, tmp_path_factory, monkeypatch):
     _execute({"ESCFIT_STUDY_WORK": str(study_dir(tmp_path_factory)), "ESCFIT_STUDY_FIGURES": str(figures),
               "ESCFIT_STUDY_UNITS": "20", "ESCFIT_STUDY_CHAPTER5_UNITS": str(CHAPTER5_UNITS),
               "ESCFIT_STUDY_CROSS_UNITS": str(CROSS_UNITS), "ESCFIT_STUDY_WALKERS": str(WALKERS),
-              "ESCFIT_STUDY_STEPS": str(STEPS), "ESCFIT_STUDY_WORKERS": "2"}, monkeypatch)
+              "ESCFIT_STUDY_STEPS": str(STEPS), "ESCFIT_STUDY_POPULATION_STEPS": "500", "ESCFIT_STUDY_WORKERS": "2"},
+             monkeypatch)
     for f in FIGURES:
         assert (figures / f).stat().st_size > 10_000, f
 

@@ -16,7 +16,7 @@
 Plotting lives in :mod:`escfit.study.plots` (matplotlib, imported there only).
 """
 
-from .batch import BatchResult, discover_units, fit_fleet, fit_many, load_summary, unit_seed
+from .batch import BatchResult, LazyClient, discover_units, fit_fleet, fit_many, load_summary, unit_seed
 from .compare import ModelComparison, chapter5_contrast, compare_models, decay_residuals
 from .fleet import Fleet, FleetSpec, LogNormal, generate_fleet, load_fleet, preset, record_unit
 from .population import PopulationResult, UnitDraws, collect_draws, fit_population, load_population
@@ -24,7 +24,7 @@ from .runs import StudySettings, cross_fit, results_dir
 from .scenes import MODELS, POPULATION_PARAMS, Rig, fit_scene, generating_scene
 
 __all__ = [
-    "fit_many", "fit_fleet", "BatchResult", "discover_units", "load_summary", "unit_seed",
+    "fit_many", "fit_fleet", "BatchResult", "LazyClient", "discover_units", "load_summary", "unit_seed",
     "collect_draws", "fit_population", "UnitDraws", "PopulationResult", "load_population",
     "compare_models", "ModelComparison", "decay_residuals", "chapter5_contrast",
     "generate_fleet", "load_fleet", "preset", "record_unit", "Fleet", "FleetSpec", "LogNormal",

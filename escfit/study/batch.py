@@ -35,7 +35,7 @@ from ..recordings import UnitCurve, read_unit_curve
 from ..results import SCHEMA_VERSION, FitResult, clean_attrs, dependency_versions
 
 __all__ = ["UnitTask", "BatchResult", "discover_units", "fit_many", "fit_fleet", "summarize", "load_summary",
-           "SUMMARY_SCHEMA", "unit_seed"]
+           "SUMMARY_SCHEMA", "unit_seed", "LazyClient", "local_cluster"]
 
 SUMMARY_SCHEMA = "escfit-fleet-summary/1"
 SUMMARY_FILE = "summary.nc"
@@ -201,18 +201,19 @@ class _Runner:
         from distributed import Client, LocalCluster
 
         if scheduler is None:
-            n = workers or _cpu_count()
-            # the statistical profiler samples every task's stack every 10 ms: pure overhead here
-            with dask.config.set({"distributed.worker.profile.enabled": False}):
-                self._cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                             dashboard_address=None, silence_logs=40)
+            self._cluster = local_cluster(workers or _cpu_count())
             self.client = Client(self._cluster)
         elif isinstance(scheduler, str):
             self.client = Client(scheduler)
             self.local_fs = False
-        else:  # an existing distributed.Client
+        elif isinstance(scheduler, Client):
             self.client = scheduler
             self.local_fs = False
+        elif callable(scheduler):  # a factory, e.g. LazyClient: called only when there is work
+            self.client = scheduler()
+            self.local_fs = isinstance(scheduler, LazyClient) and not scheduler.address
+        else:
+            raise FitError(f"scheduler must be an address, a distributed.Client or a factory, got {scheduler!r}")
 
     @property
     def description(self) -> str:
@@ -247,6 +248,53 @@ class _Runner:
             self._cluster.close()
 
 
+def local_cluster(n_workers: int):
+    """A LocalCluster of ``n_workers`` single-threaded processes, as batches use it."""
+    import dask
+    from distributed import LocalCluster
+
+    # the statistical profiler samples every task's stack every 10 ms: pure overhead here
+    with dask.config.set({"distributed.worker.profile.enabled": False}):
+        return LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                            silence_logs=40)
+
+
+class LazyClient:
+    """A dask Client started on first use and shared by the batches it is passed to.
+
+    Pass it as ``scheduler`` to :func:`fit_many` (or :func:`fit_fleet`): a batch with nothing
+    left to fit never starts a cluster.  ``address`` selects a running scheduler; otherwise a
+    LocalCluster of ``workers`` processes is started.  Call :meth:`close` at the end.
+    """
+
+    def __init__(self, address: str | None = None, workers: int | None = None):
+        self.address, self.workers = address, workers
+        self._client = None
+        self._cluster = None
+
+    def __call__(self):
+        if self._client is None:
+            from distributed import Client
+
+            if self.address:
+                self._client = Client(self.address)
+            else:
+                self._cluster = local_cluster(self.workers or _cpu_count())
+                self._client = Client(self._cluster)
+        return self._client
+
+    @property
+    def started(self) -> bool:
+        return self._client is not None
+
+    def close(self) -> None:
+        if self._client is not None:
+            self._client.close()
+        if self._cluster is not None:
+            self._cluster.close()
+        self._client = self._cluster = None
+
+
 def _cpu_count() -> int:
     try:
         return len(os.sched_getaffinity(0))
@@ -274,7 +322,8 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
         ``"leastsq"`` or ``"emcee"`` (see :func:`escfit.fitting.fit`).
     scheduler
         ``None``: a LocalCluster on this machine (processes, one thread each); an address
-        such as ``"tcp://10.0.0.5:8786"``: that running cluster; or a ``distributed.Client``.
+        such as ``"tcp://10.0.0.5:8786"``: that running cluster; a ``distributed.Client``; or
+        a :class:`LazyClient` (a client started only when some unit is left to fit).
     workers
         Worker processes of the local cluster (default: the CPUs available); ``0`` fits in
         this process without dask (for debugging and profiling).
@@ -328,8 +377,8 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
             todo.append(t)
     options = {"method": method, "walkers": walkers, "steps": steps, "burn": burn, "n_starts": n_starts,
                "solver": solver}
-    runner = _Runner(scheduler, workers)
-    where = runner.description
+    runner = _Runner(scheduler, workers) if todo else _Runner(None, 0)  # no cluster when nothing is left
+    where = runner.description if todo else "nothing to fit"
     jobs = []
     for t in todo:
         opts = {**options, "seed": unit_seed(seed, t.unit)}

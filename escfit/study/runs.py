@@ -13,7 +13,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Callable
 
-from .batch import BatchResult, fit_fleet
+from .batch import BatchResult, LazyClient, fit_fleet
 from .fleet import load_fleet
 from .scenes import MODELS
 
@@ -38,6 +38,8 @@ class StudySettings:
         Units of the phase and phase_drift fleets fitted by every model; None: all.
     walkers, steps, seed
         emcee settings of every unit fit and the batch seed.
+    population_steps
+        emcee steps of the population (hyperparameter) sampler.
     scheduler, workers
         Where to run (see :func:`escfit.study.fit_many`).
     """
@@ -50,17 +52,18 @@ class StudySettings:
     walkers: int = 16
     steps: int = 600
     seed: int = 0
+    population_steps: int = 1000
     scheduler: Any = None
     workers: int | None = None
 
     @classmethod
     def from_env(cls, fleets: str | Path, work: str | Path, **defaults: Any) -> "StudySettings":
-        """Settings from ``ESCFIT_STUDY_{WORK,UNITS,CHAPTER5_UNITS,CROSS_UNITS,WALKERS,STEPS,SEED,SCHEDULER,
-        WORKERS}``, falling back to ``defaults`` and the class defaults."""
+        """Settings from ``ESCFIT_STUDY_{WORK,UNITS,CHAPTER5_UNITS,CROSS_UNITS,WALKERS,STEPS,SEED,
+        POPULATION_STEPS,SCHEDULER,WORKERS}``, falling back to ``defaults`` and the class defaults."""
         env = os.environ.get
         base = replace(cls(Path(fleets), Path(env("ESCFIT_STUDY_WORK", str(work)))), **defaults)
         ints = {k: env(f"ESCFIT_STUDY_{k.upper()}") for k in ("units", "chapter5_units", "cross_units", "walkers",
-                                                               "steps", "seed", "workers")}
+                                                               "steps", "seed", "population_steps", "workers")}
         out = replace(base, **{k: int(v) for k, v in ints.items() if v not in (None, "")})
         if env("ESCFIT_STUDY_SCHEDULER"):
             out = replace(out, scheduler=env("ESCFIT_STUDY_SCHEDULER"))
@@ -90,15 +93,22 @@ def cross_fit(settings: StudySettings, *, scheduler: Any = None,
     Parameters
     ----------
     scheduler
-        A ``distributed.Client`` to reuse for all batches (default: the settings' scheduler,
-        else one local cluster per batch).
+        A ``distributed.Client`` (or :class:`~escfit.study.batch.LazyClient`) for all batches;
+        default: one client, started only if some unit is left to fit, on the settings'
+        scheduler or a local cluster of ``settings.workers`` processes.
     """
+    own = scheduler is None and settings.workers != 0
+    client = (LazyClient(settings.scheduler, settings.workers) if own else scheduler)
     out = {}
-    for fleet, model, n in settings.plan():
-        fl = load_fleet(settings.fleets / fleet)
-        units = fl.units[:n] if n else None
-        out[(fleet, model)] = fit_fleet(fl, model, results_dir(settings, fleet, model), units=units,
-                                        walkers=settings.walkers, steps=settings.steps, seed=settings.seed,
-                                        scheduler=scheduler or settings.scheduler, workers=settings.workers,
-                                        progress=progress)
+    try:
+        for fleet, model, n in settings.plan():
+            fl = load_fleet(settings.fleets / fleet)
+            units = fl.units[:n] if n else None
+            out[(fleet, model)] = fit_fleet(fl, model, results_dir(settings, fleet, model), units=units,
+                                            walkers=settings.walkers, steps=settings.steps, seed=settings.seed,
+                                            scheduler=client, workers=0 if client is None else None,
+                                            progress=progress)
+    finally:
+        if own:
+            client.close()
     return out
