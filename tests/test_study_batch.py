@@ -12,7 +12,7 @@ from escfit.cli import cli
 from escfit.errors import DataError, FitError, ResultsError
 from escfit.recordings import read_unit_curve, write_unit_curve
 from escfit.results import load_fit
-from escfit.study import discover_units, fit_many, load_fleet, load_summary, unit_seed
+from escfit.study import LazyClient, discover_units, fit_many, load_fleet, load_summary, unit_seed
 
 from .conftest import DATASETS
 
@@ -81,9 +81,10 @@ def test_failed_unit_is_reported_and_the_others_are_fitted(split_files, tmp_path
     load_fit(out / "u02.h5").tree.close()
     assert list(load_summary(out)["status"].values) == ["skipped", "ok", "skipped", "failed"]
 
-    # nothing left to do: every unit is skipped and the summary is rebuilt from the files
-    third = fit_many(split_files / "pair.csv", SCENE, out, workers=0)
-    assert third.skipped == ["u01", "u02"] and not third.fitted
+    # nothing left to do: every unit is skipped, no cluster is started, the summary is rebuilt
+    lazy = LazyClient(workers=2)
+    third = fit_many(split_files / "pair.csv", SCENE, out, scheduler=lazy)
+    assert third.skipped == ["u01", "u02"] and not third.fitted and not lazy.started
     assert list(third.summary["status"].values) == ["skipped", "skipped"]
     np.testing.assert_array_equal(third.summary["median"].values, again.summary["median"].values[:2])
 

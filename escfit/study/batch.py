@@ -194,6 +194,7 @@ class _Runner:
     def __init__(self, scheduler, workers: int | None):
         self.client = None
         self._cluster = None
+        self._lazy = scheduler if isinstance(scheduler, LazyClient) else None
         self.local_fs = True
         if workers == 0 and scheduler is None:
             return
@@ -219,8 +220,9 @@ class _Runner:
     def description(self) -> str:
         if self.client is None:
             return "in-process"
-        if self._cluster is not None:
-            return f"LocalCluster({len(self._cluster.workers)} processes x 1 thread)"
+        cluster = self._cluster if self._cluster is not None else getattr(self._lazy, "_cluster", None)
+        if cluster is not None:
+            return f"LocalCluster({len(cluster.workers)} processes x 1 thread)"
         return f"scheduler {self.client.scheduler.address}"
 
     def run(self, fn: Callable, jobs: list[tuple], on_done: Callable[[int, dict], None]) -> None:
