@@ -89,6 +89,14 @@ def test_failed_unit_is_reported_and_the_others_are_fitted(split_files, tmp_path
     np.testing.assert_array_equal(third.summary["median"].values, again.summary["median"].values[:2])
 
 
+def test_results_of_another_scene_or_method_are_not_taken_as_done(split_files, tmp_path):
+    fit_many(split_files / "u03.csv", SCENE, tmp_path, workers=0, n_starts=2)
+    with pytest.raises(ResultsError, match=r"\['u03'\] were fitted here with another scene or method"):
+        fit_many(split_files / "u03.csv", SCENE, tmp_path, workers=0, method="emcee", walkers=10, steps=20)
+    with pytest.raises(ResultsError, match="another scene"):
+        fit_many(split_files / "u03.csv", DATASETS / "fleet" / "scenes" / "phase.toml", tmp_path, workers=0)
+
+
 def test_local_cluster_matches_in_process(split_files, tmp_path):
     """The default path: a LocalCluster of worker processes; results equal the in-process ones."""
     pytest.importorskip("distributed")

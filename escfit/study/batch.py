@@ -369,14 +369,21 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
     status: dict[str, dict] = {}
     loaded: dict[str, FitResult] = {}
     todo = []
+    other: list[str] = []
     for t in tasks:
         done_before = _load_for_summary(t.results_file)
-        if done_before is not None:
+        if done_before is not None and (done_before.attrs.get("scene") != sc.text
+                                        or done_before.attrs.get("method") != method):
+            other.append(t.unit)
+        elif done_before is not None:
             loaded[t.unit] = done_before
             status[t.unit] = {"status": "skipped", "seconds": math.nan}
             say(f"{t.unit}: done before ({t.results_file.name}), skipped")
         else:
             todo.append(t)
+    if other:
+        raise ResultsError(f"units {other} were fitted here with another scene or method; use another output "
+                           "directory or remove their results files", str(out))
     options = {"method": method, "walkers": walkers, "steps": steps, "burn": burn, "n_starts": n_starts,
                "solver": solver}
     runner = _Runner(scheduler, workers) if todo else _Runner(None, 0)  # no cluster when nothing is left
