@@ -100,8 +100,13 @@ def hard_scenes(draw, *, gentle: bool = False):
             edges.append(amp0 * draw(st.floats(-1.5, 1.5)))
     # (an edge of 1e-323 rad is a float artefact, not a case: such edges are put at zero)
     edges = sorted(set(e if abs(e) > 1e-200 else 0.0 for e in edges if math.isfinite(e) and not -drive < e < drive))
+    if not gentle and draw(st.integers(0, 3)) == 0:
+        # a window around the first turning point of pure Coulomb motion: the balance turns
+        # inside it (exactly so when C = 0)
+        half = amp0 * draw(st.sampled_from([1e-9, 1e-6, 1e-3, 0.05]))
+        edges = [first_turn - half, first_turn + half]
     for lo, hi in zip(edges[::2], edges[1::2]):
-        if drive and lo < 0.0 < hi:
+        if drive and lo < drive and hi > -drive:
             continue  # would overlap the drive
         mag = (draw(st.floats(0.0, 3.0)) * unit if gentle else
                draw(st.one_of(st.floats(0.0, 3.0).map(lambda f: f * unit), st.just(1e-12 * unit), st.just(50.0 * unit))))
@@ -262,6 +267,14 @@ def _features(sys, traj) -> set[str]:
         prev = th
     if traj.log is not None and np.any(traj.log[:, 7] ** 2 >= traj.log[:, 6]):
         out.add("overdamped or critical segment")
+    if sys.omega0 > 1e4:
+        out.add("omega0 above 1e4 rad/s")
+    if abs(sys.theta0) < 1e-9:
+        out.add("angles near 1e-12 rad")
+    if sys.spring_w2:
+        out.add("piecewise hairspring")
+    if any(sys.drift_rates):
+        out.add("damping drift")
     return out
 
 
