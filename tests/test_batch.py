@@ -216,9 +216,19 @@ def test_a_replaced_log_prob_keeps_per_walker_calls(problem, monkeypatch):
     run_emcee(problem, None, walkers=8, steps=10, seed=1)
     assert len(calls) >= 8 * 10
 
+
+def test_subclasses_replacing_what_the_batch_path_reproduces_are_not_vectorised(problem):
+    original = FitProblem.log_prob
+
     class WithPenalty(FitProblem):
         def log_prob(self, vec):
             return original(self, vec) - 1.0
 
     assert not WithPenalty(problem.scene, problem.data).can_vectorize
+
+    class OtherForward(FitProblem):
+        def predict(self, vals):
+            return [2.0 * p for p in super().predict(vals)]
+
+    assert not OtherForward(problem.scene, problem.data).can_vectorize
     assert not FitProblem(problem.scene, problem.data, solver="rk4", solver_options={"h": 1e-4}).can_vectorize

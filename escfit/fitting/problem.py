@@ -207,11 +207,13 @@ class FitProblem:
     def can_vectorize(self) -> bool:
         """Whether :meth:`log_prob_many` computes what :meth:`log_prob` does, row by row.
 
-        True for the exact solver when ``log_prob`` is this class's own: a subclass (or a
-        wrapper installed on the class) that replaces ``log_prob`` would be bypassed by the
-        batch path, so samplers keep calling it one vector at a time.
+        True for the exact solver when the methods the batch path stands in for (``log_prob``,
+        ``log_prior``, ``log_likelihood``, ``predict``, ``values``, ``sides``) are this class's
+        own: a subclass, or a wrapper installed on the class, that replaces one of them would
+        be bypassed, so samplers keep calling ``log_prob`` one vector at a time.
         """
-        return self.solver == "exact" and type(self).log_prob is _SCALAR_LOG_PROB
+        cls = type(self)
+        return self.solver == "exact" and all(getattr(cls, name) is fn for name, fn in _BATCH_STANDS_IN_FOR.items())
 
     def log_prob_many(self, vecs: np.ndarray) -> np.ndarray:
         """Log posterior of each row of ``vecs``, shape ``(sets, ndim)`` -> ``(sets,)``.
@@ -311,4 +313,6 @@ class FitProblem:
         return int(sum(c.y.size for c in self.curves))
 
 
-_SCALAR_LOG_PROB = FitProblem.log_prob  # see FitProblem.can_vectorize
+# what log_prob_many reproduces, as defined here (see FitProblem.can_vectorize)
+_BATCH_STANDS_IN_FOR = {name: FitProblem.__dict__[name]
+                        for name in ("log_prob", "log_prior", "log_likelihood", "predict", "values", "sides")}
