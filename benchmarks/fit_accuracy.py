@@ -158,7 +158,8 @@ def markdown(result: dict) -> str:
     lines.append("")
     for k, d in result["datasets"].items():
         lines.append(f"- {k}: {d['readings']} readings; posterior sd " + ", ".join(
-            f"{SHORT[n]} {d['posterior_sd'][n]:.3g}" for n in NAMES) + f" ({d['walkers']} walkers x {d['steps']} steps)")
+            f"{SHORT[n]} {d['posterior_sd'][n]:.3g}" for n in NAMES)
+            + f" ({d['walkers']} walkers x {d['steps']} steps)")
     return "\n".join(lines)
 
 

@@ -192,7 +192,8 @@ def settings(case: Case, quick: bool) -> list[tuple[str, str, dict]]:
         out.append(("rk4 naive", f"h={h:g} s", {"solver": "rk4", "h": h, "locate_events": False}))
     for method, rt in rtols.items():
         for r in rt:
-            out.append((f"ivp {method}", f"rtol={r:g}", {"solver": "ivp", "method": method, "rtol": r, "atol": 1e-3 * r}))
+            opts = {"solver": "ivp", "method": method, "rtol": r, "atol": 1e-3 * r}
+            out.append((f"ivp {method}", f"rtol={r:g}", opts))
     return out
 
 
@@ -226,9 +227,10 @@ def run_case(case: Case, *, quick: bool = False, batch_sets: int = 1024,
         for method in ("rk4", "rk4 naive"):
             done = next(r for r in records if r.method == method and r.setting == f"h={RK4_H_FLOOR_LONG:g} s")
             scale = RK4_H_FLOOR_LONG / 1e-8
-            records.append(Record(case.key, method, "h=1e-08 s", None, None, scale * done.us_per_swing, "estimate",
-                                  "not run", case.swings, f"{scale * done.us_per_swing * case.swings / 1e6:.0f} s per run "
-                                  f"(10x h={RK4_H_FLOOR_LONG:g}); RK4 is at round-off already"))
+            us = scale * done.us_per_swing
+            records.append(Record(case.key, method, "h=1e-08 s", None, None, us, "estimate", "not run", case.swings,
+                                  f"{us * case.swings / 1e6:.0f} s per run (10x h={RK4_H_FLOOR_LONG:g}); "
+                                  "RK4 is at round-off already"))
     # the exact solver on many parameter sets per call (here copies of the case's own)
     stack = SystemStack.from_systems([sys] * batch_sets)
     solve_batch(stack, case.swings)
@@ -304,13 +306,15 @@ def markdown(records: list[Record]) -> str:
         rows = [r for r in records if r.case == case.key]
         if not rows:
             continue
-        out += [f"**{case.title}**", "", "| method | setting | T/2 error (s) | amplitude error (rad) | us per half swing |",
+        out += [f"**{case.title}**", "",
+                "| method | setting | T/2 error (s) | amplitude error (rad) | us per half swing |",
                 "|---|---|---:|---:|---:|"]
         order = list(dict.fromkeys(r.method for r in rows))
         for r in sorted(rows, key=lambda r: order.index(r.method)):
             e_t = "-" if r.error_half_period_s is None else f"{r.error_half_period_s:.1e}"
             e_a = "-" if r.error_amplitude_rad is None else f"{r.error_amplitude_rad:.1e}"
-            us = (f"{r.us_per_swing:,.0f}" if r.us_per_swing >= 100 else f"{r.us_per_swing:.3g}") + {"wall": " (wall)", "estimate": " (estimate, not run)"}.get(r.clock, "")
+            us = f"{r.us_per_swing:,.0f}" if r.us_per_swing >= 100 else f"{r.us_per_swing:.3g}"
+            us += {"wall": " (wall)", "estimate": " (estimate, not run)"}.get(r.clock, "")
             out.append(f"| {r.method} | {r.setting} | {e_t} | {e_a} | {us} |")
         out.append("")
     return "\n".join(out)
@@ -351,7 +355,8 @@ def plot(records: list[Record], path: str | Path, fmt: str | None = None) -> Non
     floor = 1e-18
     for ax, case in zip(axes[0], cases):
         for method, (color, marker) in styles.items():
-            rows = [r for r in records if r.case == case.key and r.method == method and r.error_half_period_s is not None]
+            rows = [r for r in records
+                    if r.case == case.key and r.method == method and r.error_half_period_s is not None]
             if not rows:
                 continue
             x = [r.us_per_swing for r in rows]

@@ -58,9 +58,9 @@ def bench(quick, as_json, plot_path, json_path, force, posterior):
     started = time.perf_counter()
     records = wp.run(quick=quick, progress=say)
     through = wp.batch_throughput(n_sets=256 if quick else 2048, min_time=0.1 if quick else 0.5)
-    records.append(wp.Record("monday120", "exact batch", f"{through['sets']} perturbed sets, {through['threads']} threads",
-                             None, None, through["us_per_swing_per_set_wall"], "wall", "ok", through["swings"],
-                             f"cpu {through['us_per_swing_per_set_cpu']:.3f} us, one thread "
+    setting = f"{through['sets']} perturbed sets, {through['threads']} threads"
+    records.append(wp.Record("monday120", "exact batch", setting, None, None, through["us_per_swing_per_set_wall"],
+                             "wall", "ok", through["swings"], f"cpu {through['us_per_swing_per_set_cpu']:.3f} us, one thread "
                              f"{through['us_per_swing_per_set_one_thread']:.3f} us"))
     post = None
     if posterior:
@@ -101,7 +101,8 @@ def _targets(wp, records, through: dict, post: dict | None, elapsed: float) -> s
                  f"one thread {through['us_per_swing_per_set_one_thread']:.3f} us)")
     if post is not None and post.get("cold_cache"):
         lines.append(f"  posterior: {post['walkers']} walkers x {post['steps']} steps x {post['swings']} swings, "
-                     f"{len(post['parameters'])} parameters: {post['seconds_process_wall']:.1f} s for the whole process, "
+                     f"{len(post['parameters'])} parameters: {post['seconds_process_wall']:.1f} s for the whole "
+                     "process, "
                      f"imports and compilation into an empty numba cache included ({post['seconds_compile']:.1f} s "
                      f"compiling the batch kernel, {post['seconds_sampling']:.1f} s sampling)")
     elif post is not None:

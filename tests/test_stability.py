@@ -109,7 +109,8 @@ def hard_scenes(draw, *, gentle: bool = False):
         if drive and lo < drive and hi > -drive:
             continue  # would overlap the drive
         mag = (draw(st.floats(0.0, 3.0)) * unit if gentle else
-               draw(st.one_of(st.floats(0.0, 3.0).map(lambda f: f * unit), st.just(1e-12 * unit), st.just(50.0 * unit))))
+               draw(st.one_of(st.floats(0.0, 3.0).map(lambda f: f * unit), st.just(1e-12 * unit),
+                              st.just(50.0 * unit))))
         eff += window(lo, hi, draw(st.sampled_from(["unlock", "impulse"])), mag,
                       draw(st.sampled_from(["both", "positive", "negative"])))
     spring = not gentle and draw(st.integers(0, 3)) == 0
@@ -183,7 +184,8 @@ def _viscous_loss(x0, v0, xc, w2, h, tau) -> float:
         return 0.0
     decays = h * tau > 1.0
     cuts = [0.0] + [tau * 2.0**-j for j in range(80, -1, -1)] if decays else [0.0, tau]
-    return 2.0 * h * sum(_v2_integral(x0 - xc, v0, h, w2, a, b, NODES, WEIGHTS) for a, b in zip(cuts, cuts[1:]) if b > a)
+    return 2.0 * h * sum(_v2_integral(x0 - xc, v0, h, w2, a, b, NODES, WEIGHTS)
+                         for a, b in zip(cuts, cuts[1:]) if b > a)
 
 
 def check_energy(scene, traj) -> None:

@@ -225,16 +225,17 @@ def solve_batch(systems: SystemStack | Sequence[SystemBuilder], n_swings: int, s
         set_num_threads(max(1, min(int(threads), config.NUMBA_NUM_THREADS)))
     try:
         if switching == "phase":
-            run_phase_many(stack.theta0, stack.c, stack.r, stack.sp_w2[:, 0].copy(), stack.w_lo, stack.w_hi, stack.w_x,
-                           stack.w_dir, stack.drift_thresholds, stack.drift_rates, active, n_swings, amp, turn, half, tm, banked,
-                        n_done, status, n_seg, final)
+            run_phase_many(stack.theta0, stack.c, stack.r, stack.sp_w2[:, 0].copy(), stack.w_lo, stack.w_hi,
+                           stack.w_x, stack.w_dir, stack.drift_thresholds, stack.drift_rates, active, n_swings,
+                           amp, turn, half, tm, banked, n_done, status, n_seg, final)
         else:
-            run_angle_many(stack.theta0, stack.c, stack.r, stack.sp_bp, stack.sp_w2, stack.sp_off, stack.w_lo, stack.w_hi,
-                        stack.w_x, stack.w_dir, stack.bank, stack.restitution, stack.drift_thresholds,
-                        stack.drift_rates, active, n_swings, nseg, amp, turn, half, tm, banked, n_done, status, n_seg,
-                        final)
+            run_angle_many(stack.theta0, stack.c, stack.r, stack.sp_bp, stack.sp_w2, stack.sp_off, stack.w_lo,
+                           stack.w_hi, stack.w_x, stack.w_dir, stack.bank, stack.restitution, stack.drift_thresholds,
+                           stack.drift_rates, active, n_swings, nseg, amp, turn, half, tm, banked, n_done, status,
+                           n_seg, final)
     finally:
         set_num_threads(previous)
     # rows were written only up to n_done; the rest keep their NaN fill (np.full above)
-    return BatchTrajectory(amp, turn, half, tm, banked.astype(bool), n_done, np.array([_STATUS[k] for k in status]), n_seg,
-                           final, stack.omega0.copy(), reasons, {"max_segments": nseg, "switching": switching})
+    names = np.array([_STATUS[k] for k in status])
+    return BatchTrajectory(amp, turn, half, tm, banked.astype(bool), n_done, names, n_seg, final, stack.omega0.copy(),
+                           reasons, {"max_segments": nseg, "switching": switching})
