@@ -53,6 +53,11 @@ def bench(quick, as_json, plot_path, json_path, force, posterior):
     for path in (plot_path, json_path):
         if path:
             refuse_existing(path, force)
+    try:
+        import mpmath  # noqa: F401  (the 40-digit reference of the work-precision study)
+    except ModuleNotFoundError:
+        raise click.ClickException("escfit bench needs mpmath for its reference solution: "
+                                   "pip install 'escfit[bench]'") from None
     wp = _load("work_precision")
     say = (lambda s: None) if as_json else (lambda s: click.echo(s, err=True))
     started = time.perf_counter()

@@ -84,14 +84,26 @@ def cli() -> None:
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object with the results.")
 @click.option("--out", type=click.Path(dir_okay=False), default=None, help="Write the dataset to FILE.nc (HDF5).")
 @click.option("--force", is_flag=True, help="Replace an existing --out file.")
-def simulate(scene, solver, swings, step, as_json, out, force):
-    """Simulate SCENE (a TOML scene file)."""
+@click.option("--recorder", type=click.Choice(["unit-curve", "pulses", "timegrapher", "timeseries"]), default=None,
+              help="Write a synthetic recording of a balance scene to --out instead of the dataset "
+                   "(timegrapher: tg JSON, or the per-beat CSV when --out ends in .csv).")
+@click.option("--noise", type=click.FloatRange(0.0), default=None,
+              help="The recorder's noise sd: reading (rad), pulse timing (s), timegrapher amplitude (deg) "
+                   "or sample (rad); each recorder's default if omitted.")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the recorder's noise.")
+@click.option("--notch-deg", type=click.FloatRange(0.0, min_open=True), default=None,
+              help="unit-curve recorder: count notches of this angle (deg) instead of amplitudes.")
+def simulate(scene, solver, swings, step, as_json, out, force, recorder, noise, seed, notch_deg):
+    """Simulate SCENE (a TOML scene file), or record it with a synthetic recorder."""
     from .atomic import atomic_path, refuse_existing
     from .scene import load_scene, model_module
 
     if out:
         refuse_existing(out, force)
     sc = load_scene(scene)
+    if recorder is not None:
+        _record(sc, recorder, out, force=force, noise=noise, seed=seed, swings=swings, notch_deg=notch_deg)
+        return
     module = model_module(sc.model)
     options = {}
     if swings is not None:
@@ -106,6 +118,28 @@ def simulate(scene, solver, swings, step, as_json, out, force):
         click.echo(json.dumps(_json_safe(module.json_summary(ds))))
     else:
         click.echo(_describe(ds, sc))
+
+
+def _record(sc, recorder: str, out: str | None, *, force: bool, noise, seed: int, swings, notch_deg) -> None:
+    """``simulate --recorder``: one synthetic recording, written atomically."""
+    from .atomic import atomic_path
+    from .errors import SceneError
+    from .recorders_extra import record
+
+    if sc.model != "balance":
+        raise SceneError(f"--recorder records balance scenes; this scene's model is {sc.model!r}", sc.where)
+    if not out:
+        raise SceneError("--recorder needs --out FILE for the recording", sc.where)
+    options = {} if swings is None else {"swings": swings}
+    if notch_deg is not None:
+        if recorder != "unit-curve":
+            raise SceneError("--notch-deg applies to the unit-curve recorder only", sc.where)
+        options["notch_deg"] = notch_deg
+    if recorder == "timegrapher":
+        options["fmt"] = "csv" if str(out).lower().endswith(".csv") else "json"
+    with atomic_path(out, force=force) as tmp:
+        record(sc, recorder, tmp, noise=noise, seed=seed, **options)
+    click.echo(f"wrote {out} ({recorder}, seed {seed})")
 
 
 @cli.command()
@@ -156,7 +190,8 @@ def _read_recipe(path: Path) -> dict:
 @click.option("--steps", type=click.IntRange(10), default=None)
 @click.option("--burn", type=click.IntRange(0), default=None)
 @click.option("--unit", "unit_id", default=None, help="Fit only this unit of a multi-unit file.")
-@click.option("--format", "fmt", type=click.Choice(["unit-curve"]), default=None, help="Data format (detected).")
+@click.option("--format", "fmt", type=click.Choice(["unit-curve", "pulses", "timegrapher", "timeseries"]), default=None,
+              help="Recording format (detected from the file's content).")
 @click.option("--notch-deg", type=float, default=None, help="Notch angle for notch counts, deg.")
 @click.option("--resume", is_flag=True, help="Continue an interrupted emcee run from its checkpoint.")
 @click.option("--force", is_flag=True, help="Replace an existing results file.")
@@ -167,7 +202,6 @@ def fit(data, scene_path, method, out, seed, walkers, steps, burn, unit_id, fmt,
     """Fit DATA (a recording) with --scene SCENE, or run a fit RECIPE.toml."""
     from .errors import SceneError
     from .fitting import fit as run_fit
-    from .recordings import read_unit_curve
 
     recipe: dict = {}
     if data.endswith(".toml") and scene_path is None:
@@ -193,8 +227,8 @@ def fit(data, scene_path, method, out, seed, walkers, steps, burn, unit_id, fmt,
     if scene.model != "balance":
         raise SceneError(f"fitting recordings of model {scene.model!r} is not supported by 'escfit fit' yet; "
                          "use its Python inference API", scene_path)
-    curve = read_unit_curve(data, notch_deg=pick(notch_deg, "notch_deg", None))
-    result = run_fit(scene, curve, method=method, out=out, force=force, seed=pick(seed, "seed", 0),
+    result = run_fit(scene, data, fmt=pick(fmt, "format", None), notch_deg=pick(notch_deg, "notch_deg", None),
+                     method=method, out=out, force=force, seed=pick(seed, "seed", 0),
                      walkers=pick(walkers, "walkers", 32), steps=steps, burn=pick(burn, "burn", None),
                      resume=resume, progress=not quiet and sys.stderr.isatty(), unit=pick(unit_id, "unit", None))
     click.echo(f"wrote {out}")

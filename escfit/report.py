@@ -44,7 +44,8 @@ def _figures(res: FitResult) -> dict[str, bytes]:
 
     figs: dict[str, bytes] = {}
     if "expected" in res.group("least_squares"):
-        figs["data and fit"] = _data_figure(res, plt)
+        kind = res.attrs.get("data_kind", "amplitude")
+        figs["data and fit"] = (_data_figure if kind in ("amplitude", "notches") else _residual_figure)(res, plt)
     post = res.group("posterior")
     if post is not None:
         figs["corner plot"] = _corner(res, post, plt)
@@ -86,6 +87,37 @@ def _data_figure(res: FitResult, plt) -> bytes:
     axr.axhline(0, color="k", lw=0.5)
     axr.set_xlabel("half swing")
     axr.set_ylabel("residual (rad)")
+    return _png(fig, plt)
+
+
+def _residual_figure(res: FitResult, plt) -> bytes:
+    """Recordings whose readings are times or instrument values: residuals per reading series.
+
+    Passage times and beat times grow through the run, so the informative picture is the data
+    minus the least-squares prediction, with the posterior band of the prediction around it.
+    """
+    obs = res.group("observed_data")
+    lsq_exp = res.group("least_squares")["expected"].values
+    pp = res.group("posterior_predictive")
+    y = obs["reading"].values.astype(float)
+    swing, curves = obs["swing"].values, obs["curve"].values
+    units = obs["reading"].attrs.get("units", "")
+    labels = list(dict.fromkeys(curves))
+    fig, axes = plt.subplots(len(labels), 1, figsize=(8, 2.8 * len(labels) + 0.8), squeeze=False)
+    for ax, label in zip(axes[:, 0], labels):
+        m = curves == label
+        if pp is not None:
+            e = pp["expected"].values.reshape(-1, y.size)[:, m]
+            e = e[np.all(np.isfinite(e), axis=1)]
+            if e.size:
+                lo, hi = np.quantile(e - lsq_exp[m], [0.025, 0.975], axis=0)
+                ax.fill_between(swing[m], lo, hi, alpha=0.3, step="mid", label="95% posterior band of the prediction")
+        ax.plot(swing[m], y[m] - lsq_exp[m], ".", ms=3, label="data")
+        ax.axhline(0, color="k", lw=0.5)
+        ax.set_ylabel(f"{label}: data - fit")
+        ax.legend(fontsize=7)
+    axes[-1, 0].set_xlabel("half swing")
+    fig.suptitle(f"residuals against the least-squares prediction (readings in {units})", fontsize=9)
     return _png(fig, plt)
 
 
@@ -151,7 +183,9 @@ def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: 
     la = lsq.attrs
     fit_stats = f"model {a.get('model', 'balance')}; least squares: chi-square {_fmt(la.get('chisqr'))}, n = {la.get('n_data')}"
     if "redchi" in la:
-        fit_stats += (f", reduced chi-square {_fmt(la['redchi'])}, reading scatter {_fmt(la['sigma_hat'])} rad, "
+        units = res.group("observed_data")["reading"].attrs.get("units", "rad") if res.group("observed_data") else "rad"
+        scatter = "" if " and " in units else f", reading scatter {_fmt(la['sigma_hat'])} {units}"  # one unit only
+        fit_stats += (f", reduced chi-square {_fmt(la['redchi'])}{scatter}, "
                       f"AIC {_fmt(la['aic'])}, BIC {_fmt(la['bic'])}")
     figs = _figures(res)
     out = Path(out)

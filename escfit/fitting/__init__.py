@@ -12,7 +12,7 @@ import numpy as np
 import xarray as xr
 
 from ..errors import FitError
-from ..recordings import UnitCurve, read_unit_curve
+from ..recordings import UnitCurve
 from ..results import SCHEMA_VERSION, FitResult, clean_attrs, dependency_versions, write_fit
 from ..scene import load_scene
 from .identifiability import correlation_warnings, monday_k, phase_mode_warning, profile, sloppy_directions
@@ -20,7 +20,8 @@ from .lsq import LeastSquaresResult, least_squares
 from .mcmc import McmcResult, run_emcee
 from .problem import FitProblem
 
-__all__ = ["fit", "FitProblem", "least_squares", "run_emcee", "profile", "LeastSquaresResult", "McmcResult"]
+__all__ = ["fit", "make_problem", "FitProblem", "least_squares", "run_emcee", "profile", "LeastSquaresResult",
+           "McmcResult"]
 
 PP_DRAWS = 400  # posterior-predictive evaluations stored per fit
 
@@ -28,15 +29,16 @@ PP_DRAWS = 400  # posterior-predictive evaluations stored per fit
 def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, force: bool = False, seed: int = 0,
         walkers: int = 32, steps: int = 2000, burn: int | None = None, n_starts: int = 8, resume: bool = False,
         progress: bool = False, solver: str = "exact", solver_options: dict | None = None,
-        checkpoint: str | Path | None = None, unit: str | None = None) -> FitResult:
-    """Fit a balance scene to a unit-curve recording.
+        checkpoint: str | Path | None = None, unit: str | None = None, fmt: str | None = None,
+        notch_deg: float | None = None) -> FitResult:
+    """Fit a balance scene to a recording.
 
     Parameters
     ----------
     scene
         Scene object or path; its ``vary = true`` parameters are estimated.
     data
-        :class:`~escfit.recordings.UnitCurve` or path to a unit-curve CSV.
+        A recording (see :func:`make_problem`) or the path of a recording file.
     method
         ``"leastsq"`` (lmfit, multistart) or ``"emcee"`` (least squares, then MCMC).
     out
@@ -49,6 +51,8 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
         emcee backend file (default ``<out>.emcee`` when ``out`` is given).
     unit
         Fit only this unit of a multi-unit recording.
+    fmt, notch_deg
+        Recording format (detected when ``None``) and the notch angle of notch counts, deg.
 
     Returns
     -------
@@ -64,13 +68,8 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
         if not Path(out).parent.exists():
             raise FitError("output directory does not exist", str(Path(out).parent))
     sc = load_scene(scene) if not hasattr(scene, "model") else scene
-    curve = read_unit_curve(data) if not isinstance(data, UnitCurve) else data
-    if unit is not None:
-        rows = np.flatnonzero(curve.unit == unit)
-        if not rows.size:
-            raise FitError(f"no readings of unit {unit!r}; units in the file: {sorted(set(curve.unit))}", curve.source)
-        curve = curve.select(rows)
-    problem = FitProblem(sc, curve, solver, dict(solver_options or {}))
+    problem = make_problem(sc, data, solver=solver, solver_options=solver_options, unit=unit, fmt=fmt,
+                           notch_deg=notch_deg)
     started = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
     lsq = least_squares(problem, n_starts=n_starts, seed=seed)
     mc = None
@@ -90,6 +89,73 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
     return result
 
 
+def make_problem(scene, data, *, solver: str = "exact", solver_options: dict | None = None, unit: str | None = None,
+                 fmt: str | None = None, notch_deg: float | None = None):
+    """The fit problem of a balance scene and a recording of any supported format.
+
+    Parameters
+    ----------
+    scene
+        Balance scene (object or path).
+    data
+        A :class:`~escfit.recordings.UnitCurve` (amplitudes or notch counts per swing), a
+        :class:`~escfit.recordings.pulses.PulseTrain` (photo-cell passage times), a
+        :class:`~escfit.recordings.timegrapher.TimegrapherRecording`, a
+        :class:`~escfit.recordings.timeseries.TimeSeries` (turning points extracted, then
+        fitted as a unit curve), or the path of a file holding one of them.
+    solver, solver_options
+        Forward solver; passage-time and timegrapher fits need the exact solver's log.
+    unit
+        Keep only this unit of a multi-unit unit-curve file.
+    fmt
+        ``"unit-curve"``, ``"pulses"``, ``"timegrapher"`` or ``"timeseries"``; detected
+        from the file's content when ``None``.
+    notch_deg
+        Notch angle of notch counts (deg) when the file does not say.
+
+    Returns
+    -------
+    FitProblem or RecordingProblem
+    """
+    from ..recordings.pulses import PulseTrain
+    from ..recordings.timegrapher import TimegrapherRecording, read_recording
+    from ..recordings.timeseries import TimeSeries, timeseries_to_unit_curve
+
+    sc = load_scene(scene) if not hasattr(scene, "model") else scene
+    if isinstance(data, (str, Path)):
+        options = {"notch_deg": notch_deg} if notch_deg is not None else {}
+        detected = fmt
+        if detected is None:
+            from ..recordings.timegrapher import detect_format
+
+            detected = detect_format(data)
+        data = read_recording(data, detected, **(options if detected == "unit-curve" else {}))
+    options = dict(solver_options or {})
+    if unit is not None and not isinstance(data, UnitCurve):
+        raise FitError("--unit selects a unit of a unit-curve file; this recording holds one unit",
+                       getattr(data, "source", None))
+    if isinstance(data, TimeSeries):
+        theta0 = sc.params["oscillator.theta0"]  # a fixed release angle must match the series' start
+        data = timeseries_to_unit_curve(data, release_theta=None if theta0.vary else abs(theta0.value))
+    if isinstance(data, UnitCurve):
+        if unit is not None:
+            rows = np.flatnonzero(data.unit == unit)
+            if not rows.size:
+                raise FitError(f"no readings of unit {unit!r}; units in the file: {sorted(set(data.unit))}",
+                               data.source)
+            data = data.select(rows)
+        return FitProblem(sc, data, solver, options)
+    if isinstance(data, PulseTrain):
+        from .pulse_problem import PulseFitProblem
+
+        return PulseFitProblem(sc, data, solver, options)
+    if isinstance(data, TimegrapherRecording):
+        from .timegrapher_problem import TimegrapherFitProblem
+
+        return TimegrapherFitProblem(sc, data, solver, options)
+    raise FitError(f"cannot fit data of type {type(data).__name__}; give a recording or a file path")
+
+
 def _tree(problem: FitProblem, lsq: LeastSquaresResult, mc: McmcResult | None, *, method: str, seed: int,
           started: str) -> xr.DataTree:
     names = problem.names
@@ -97,18 +163,24 @@ def _tree(problem: FitProblem, lsq: LeastSquaresResult, mc: McmcResult | None, *
     meanings = {p.name: p.meaning for p in problem.params}
     obs_coords = _obs_coords(problem)
     groups: dict[str, xr.Dataset] = {}
-    groups["observed_data"] = xr.Dataset({"reading": ("obs", problem.observed, {
-        "units": "rad" if problem.data.kind == "amplitude" else "notches"})}, coords=obs_coords)
+    reading_units = getattr(problem, "reading_units", None) or (
+        "rad" if problem.data.kind == "amplitude" else "notches")
+    groups["observed_data"] = xr.Dataset({"reading": ("obs", problem.observed, {"units": reading_units})},
+                                         coords=obs_coords)
     lsq_expected = problem.expected(lsq.values)
     groups["least_squares"] = xr.Dataset(
         {"value": ("parameter", lsq.value), "stderr": ("parameter", lsq.stderr),
          "correlation": (("parameter", "parameter_b"), lsq.correlation),
-         "expected": ("obs", lsq_expected, {"units": "rad", "long_name": "expected reading at the optimum"})},
+         "expected": ("obs", lsq_expected, {"units": reading_units, "long_name": "expected reading at the optimum"})},
         coords={"parameter": lsq.names, "parameter_b": lsq.names, **obs_coords},
         attrs=clean_attrs({"chisqr": lsq.chisqr, "redchi": lsq.redchi, "sigma_hat": lsq.sigma_hat, "n_data": lsq.n_data,
                            "aic": lsq.aic(), "bic": lsq.bic(), "success": lsq.success, "message": lsq.message,
                            "n_starts": lsq.n_starts}))
     warnings = correlation_warnings(lsq.names, lsq.correlation) + phase_mode_warning(problem)
+    undefined = [n for n, e in zip(lsq.names, lsq.stderr) if not np.isfinite(e)]
+    if undefined:
+        warnings.append(f"least-squares standard errors undefined for {undefined} (singular or indefinite "
+                        "covariance): the data do not fix them locally; use --method emcee")
     if mc is not None:
         post = {n: (("chain", "draw"), mc.chain[:, :, i], {"units": units.get(n, ""), "long_name": meanings.get(n, "")})
                 for i, n in enumerate(names)}
@@ -120,7 +192,7 @@ def _tree(problem: FitProblem, lsq: LeastSquaresResult, mc: McmcResult | None, *
         groups["posterior"] = xr.Dataset(post, coords=coords)
         groups["sample_stats"] = xr.Dataset({"lp": (("chain", "draw"), mc.log_prob)}, coords=coords)
         groups["diagnostics"] = _diagnostics(groups["posterior"], names, mc)
-        groups["posterior_predictive"], groups["log_likelihood"] = _predictive(problem, mc, obs_coords)
+        groups["posterior_predictive"], groups["log_likelihood"] = _predictive(problem, mc, obs_coords, reading_units)
         flat = mc.chain.reshape(-1, len(names))
         pc = np.corrcoef(flat.T) if len(names) > 1 else np.ones((1, 1))
         warnings = correlation_warnings(names, pc) + sloppy_directions(names, flat) + phase_mode_warning(problem)
@@ -170,7 +242,8 @@ def _diagnostics(post: xr.Dataset, names: list[str], mc: McmcResult) -> xr.Datas
         attrs={"tau_reliable": int(mc.tau_reliable)})
 
 
-def _predictive(problem: FitProblem, mc: McmcResult, obs_coords: dict) -> tuple[xr.Dataset, xr.Dataset]:
+def _predictive(problem: FitProblem, mc: McmcResult, obs_coords: dict,
+                reading_units: str) -> tuple[xr.Dataset, xr.Dataset]:
     """Expected readings and pointwise log-likelihood for a thinned set of draws."""
     per_chain = max(1, PP_DRAWS // mc.walkers)
     idx = np.unique(np.linspace(0, mc.chain.shape[1] - 1, per_chain).astype(int))
@@ -185,6 +258,6 @@ def _predictive(problem: FitProblem, mc: McmcResult, obs_coords: dict) -> tuple[
             except Exception:  # noqa: BLE001 - a failed draw stays NaN / -inf
                 problem.failures["posterior predictive solve failed"] += 1
     coords = {"chain": np.arange(mc.walkers), "draw": idx, **obs_coords}
-    return (xr.Dataset({"expected": (("chain", "draw", "obs"), exp, {"units": "rad"})}, coords=coords),
+    return (xr.Dataset({"expected": (("chain", "draw", "obs"), exp, {"units": reading_units})}, coords=coords),
             xr.Dataset({"reading": (("chain", "draw", "obs"), ll)}, coords=coords,
                        attrs={"note": "pointwise log-likelihood on the thinned draws of posterior_predictive"}))

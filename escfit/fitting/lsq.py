@@ -20,7 +20,7 @@ from .problem import FitProblem
 
 __all__ = ["LeastSquaresResult", "least_squares", "NOISE_PARAMS"]
 
-NOISE_PARAMS = ("observation.sigma", "observation.nu")
+NOISE_PARAMS = ("observation.sigma", "observation.nu", "observation.sigma_t")
 
 
 @dataclass
@@ -126,11 +126,14 @@ def least_squares(problem: FitProblem, *, n_starts: int = 8, seed: int = 0,
         raise FitError("least squares failed from every start point")
     value = np.array([best.params[k].value for k in keys])
     stderr = np.array([np.nan if best.params[k].stderr is None else best.params[k].stderr for k in keys], float)
+    corr = np.full((len(names), len(names)), np.nan)
     if best.covar is not None and best.covar.shape == (len(names), len(names)):
-        d = np.sqrt(np.diag(best.covar))
-        corr = best.covar / np.outer(d, d)
-    else:
-        corr = np.full((len(names), len(names)), np.nan)
+        diag = np.diag(best.covar)
+        good = diag > 0  # an indefinite covariance (a flat or curved-away direction) has no standard error
+        stderr[~good] = np.nan
+        d = np.sqrt(np.where(good, diag, np.nan))
+        with np.errstate(invalid="ignore"):
+            corr = best.covar / np.outer(d, d)
     vals = problem.values({**fixed, **dict(zip(names, value))})
     ndof = max(best.ndata - best.nvarys, 1)
     redchi = best.chisqr / ndof
