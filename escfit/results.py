@@ -109,7 +109,8 @@ def load_fit(path: str | Path) -> FitResult:
     if not p.is_file():
         raise ResultsError("results file not found", str(path))
     try:
-        tree = xr.open_datatree(p, engine="h5netcdf").load()
+        with xr.open_datatree(p, engine="h5netcdf") as opened:  # read into memory, then let go of the file
+            tree = opened.load()
     except Exception as exc:
         raise ResultsError(f"cannot read as an HDF5 results file ({type(exc).__name__}: {exc})", str(path)) from None
     schema = tree.attrs.get("schema_version")

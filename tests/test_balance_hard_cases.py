@@ -127,3 +127,31 @@ def test_phase_breakdown_status(make_scene):
     traj = solve(make_scene(omega0=1.0, theta0=1.0, switching="phase", effects="[effects.coulomb]\nR = 2.0\n"))
     assert traj.status == "phase_breakdown"
     _finite(traj)
+
+
+def test_ivp_locates_an_edge_passed_and_turned_back_within_one_step(make_scene):
+    # found by the stability suite: swing 5 leaves the unlock window at x = -0.28726 so slowly
+    # that DOP853 passes the edge and turns within one step; without locating that crossing
+    # the turning point came out at x = -0.28477, in the unlock window's dynamics, and the run
+    # stopped there instead of going on to an amplitude of 1.1107 rad
+    effects = """
+[effects.coulomb]
+R = 1.0141620678513064
+[[effects.escapement]]
+kind = "impulse"
+from = -0.1393904175977709
+to = 0.1393904175977709
+X = 68.18952762075706
+[[effects.escapement]]
+kind = "unlock"
+from = -0.6256583410030291
+to = -0.2872560809465752
+X = 74.80456357959548
+"""
+    scene = make_scene(omega0=5.554423127538406, theta0=2.0853158787438373, effects=effects)
+    exact = solve(scene, swings=8)
+    ivp = solve(scene, "ivp", swings=8, method="DOP853", rtol=1e-11, atol=1e-13)
+    assert exact.amplitude[4] == pytest.approx(1.11073636, abs=1e-8)
+    assert ivp.status == exact.status and len(ivp.amplitude) == len(exact.amplitude)
+    np.testing.assert_allclose(ivp.amplitude, exact.amplitude, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(ivp.half_period, exact.half_period, rtol=1e-9)

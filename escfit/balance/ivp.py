@@ -20,6 +20,11 @@ from .trajectory import Trajectory
 
 __all__ = ["solve_ivp_events"]
 
+# A turning point found beyond the next edge by less than GRAZE times the step tolerance is a
+# grazing turn at the edge (the integration's own drift, e.g. an undamped balance released at
+# the banking angle), not a missed crossing.
+GRAZE = 100.0
+
 
 def solve_ivp_events(sys: SystemBuilder, n_swings: int, switching: str, *, method: str = "DOP853",
                      rtol: float = 1e-10, atol: float = 1e-12, max_segments: int | None = None) -> Trajectory:
@@ -69,7 +74,8 @@ def solve_ivp_events(sys: SystemBuilder, n_swings: int, switching: str, *, metho
         y0 = [x, v if v > 0 else 0.0]
         if y0[1] == 0.0:  # start from rest: nudge past the trivial root of the turning event
             y0[1] = 1e-300
-        sol = solve_ivp(rhs, (0.0, horizon), y0, method=method, rtol=rtol, atol=atol, events=events)
+        sol = solve_ivp(rhs, (0.0, horizon), y0, method=method, rtol=rtol, atol=atol, events=events,
+                        dense_output=math.isfinite(xb))
         nsteps += int(sol.t.size)
         n_seg += 1
         hit = [k for k, te in enumerate(sol.t_events) if te.size]
@@ -79,9 +85,12 @@ def solve_ivp_events(sys: SystemBuilder, n_swings: int, switching: str, *, metho
         k = min(hit, key=lambda k: sol.t_events[k][0])
         te = float(sol.t_events[k][0])
         ye = sol.y_events[k][0]
+        is_edge = events[k] is edge
+        if not is_edge and float(ye[0]) - xb > GRAZE * (atol + rtol * abs(xb)):
+            te, ye = _missed_edge(sol, xb, te)
+            is_edge = True
         t += te
         at_start = False
-        is_edge = events[k] is edge
         if is_edge:
             x, v = xb, max(float(ye[1]), 0.0)
             is_bank = j == n_edges - 1 and math.isfinite(bank)
@@ -105,3 +114,27 @@ def solve_ivp_events(sys: SystemBuilder, n_swings: int, switching: str, *, metho
                       sys.omega0, "ivp", {"method": method, "rtol": rtol, "atol": atol}, n_seg, nsteps,
                       (t, s * x, s * v))
 
+
+
+def _missed_edge(sol, xb: float, t_turn: float) -> tuple[float, np.ndarray]:
+    """The edge crossing inside the last step when the turning point lies beyond the edge.
+
+    scipy tests event functions for a sign change between the ends of each step only, so a
+    swing that passes the edge and turns back within one step shows no crossing of the edge
+    and a turning point beyond it, computed with the wrong region's torques.  The crossing
+    lies in the last step before the turning point (where ``x`` rises); it is located on the
+    step's dense output.
+
+    Returns
+    -------
+    (t, y)
+        Time of the crossing within the segment (s) and the state there.
+    """
+    from scipy.optimize import brentq
+
+    t_lo = float(sol.t[-2]) if sol.t.size >= 2 else 0.0
+    f = lambda tt: float(sol.sol(tt)[0]) - xb  # noqa: E731
+    if not f(t_lo) < 0.0:  # the edge lies at the start of the step: a crossing at its start
+        return t_lo, sol.sol(t_lo)
+    tx = brentq(f, t_lo, t_turn, xtol=1e-16, rtol=4.0 * np.finfo(float).eps, maxiter=200)
+    return float(tx), sol.sol(tx)
