@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import importlib
 import tomllib
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping, Protocol
 

@@ -3,10 +3,7 @@
 from __future__ import annotations
 
 import datetime as _dt
-import json
-import math
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import xarray as xr

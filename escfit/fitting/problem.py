@@ -11,18 +11,18 @@ from __future__ import annotations
 import math
 from collections import Counter
 from dataclasses import dataclass, field
-from typing import Any, Mapping
+from typing import Mapping
 
 import numpy as np
 
-from ..balance import BalanceScene, solve
-from ..errors import EscfitError, FitError, SceneError
+from ..balance import BalanceScene
+from ..errors import EscfitError, FitError
 from ..observation import observation_from_table
 from ..params import ParamSet
 from ..recordings import UnitCurve
 from ..scene import check_keys
+from .freeparams import FreeParameters
 from .loads import LoadRule
-from .priors import Prior, parse_prior
 
 __all__ = ["FitProblem", "Curve"]
 
@@ -62,7 +62,7 @@ class Curve:
 
 
 @dataclass
-class FitProblem:
+class FitProblem(FreeParameters):
     """Everything a fit needs, prepared once.
 
     Parameters
@@ -108,35 +108,8 @@ class FitProblem:
         self.curves = [Curve(f"{u or 'unit'} load {ld:g}" if not math.isnan(ld) else (u or "curve"), ld,
                              self.data.swing[rows], self.data.value[rows]) for (u, ld), rows in self.data.groups()]
         self.load_rule = LoadRule.read(fit_table.get("loads"), self.scene, self.data, self.curves, params)
-        self.params = params
-        free = params.free()
-        if not free:
-            raise FitError("no free parameters: mark some with { value = ..., vary = true }", self.scene.where)
-        self.names = [p.name for p in free]
-        self.priors: list[Prior] = [parse_prior(p, f"{self.scene.where} [{p.name}]") for p in free]
-        self._base = params.values()
-        self._ties = [(p.name, p.tie) for p in params if p.tie is not None]
+        self._set_free(params, self.scene.where)
         self.failures: Counter = Counter()
-
-    # -- parameter vectors -------------------------------------------------------------
-    @property
-    def initial(self) -> np.ndarray:
-        return np.array([self.params[n].value for n in self.names])
-
-    @property
-    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        return np.array([p.lo for p in self.priors]), np.array([p.hi for p in self.priors])
-
-    def values(self, vec: np.ndarray | Mapping[str, float]) -> dict[str, float]:
-        """All parameter values by name for a free-parameter vector (ties resolved)."""
-        vals = dict(self._base)
-        if isinstance(vec, Mapping):
-            vals.update(vec)
-        else:
-            vals.update(zip(self.names, map(float, vec)))
-        for name, (other, factor) in self._ties:
-            vals[name] = factor * vals[other]
-        return vals
 
     # -- forward model -----------------------------------------------------------------
     def predict(self, vals: Mapping[str, float]) -> list[np.ndarray]:
@@ -180,9 +153,6 @@ class FitProblem:
         return sign0 * np.where(curve.swing % 2 == 0, 1.0, -1.0)
 
     # -- likelihood --------------------------------------------------------------------
-    def log_prior(self, vec: np.ndarray) -> float:
-        return float(sum(p.logpdf(float(x)) for p, x in zip(self.priors, vec)))
-
     def log_likelihood(self, vals: Mapping[str, float]) -> float:
         try:
             pred = self.predict(vals)
@@ -314,5 +284,5 @@ class FitProblem:
 
 
 # what log_prob_many reproduces, as defined here (see FitProblem.can_vectorize)
-_BATCH_STANDS_IN_FOR = {name: FitProblem.__dict__[name]
+_BATCH_STANDS_IN_FOR = {name: getattr(FitProblem, name)
                         for name in ("log_prob", "log_prior", "log_likelihood", "predict", "values", "sides")}

@@ -22,6 +22,7 @@ a notch at a known angle crossed at a measured time (see
 from __future__ import annotations
 
 import math
+from abc import ABC, abstractmethod
 from collections import Counter
 from typing import Mapping
 
@@ -34,13 +35,13 @@ from ..errors import DataError, EscfitError, FitError, SolverError
 from ..observation.passage_times import PassageTimeObservation, level_times
 from ..params import ParamSet
 from ..recordings.pulses import PulseTrain, assign_pulses
-from .priors import Prior, parse_prior
+from .freeparams import FreeParameters
 from .problem import FAIL_RESIDUAL, Curve
 
 __all__ = ["RecordingProblem", "PulseFitProblem"]
 
 
-class RecordingProblem:
+class RecordingProblem(FreeParameters, ABC):
     """Parameter handling, solving and failure accounting shared by recording fits.
 
     Subclasses set ``self.observation`` and ``self.curves`` and implement
@@ -78,36 +79,9 @@ class RecordingProblem:
         params = ParamSet(dict(self.scene.params.params))
         for p in self.observation.params:
             params.add(p)
-        self.params = params
-        free = params.free()
-        if not free:
-            raise FitError("no free parameters: mark some with { value = ..., vary = true }", self.scene.where)
-        self.names = [p.name for p in free]
-        self.priors: list[Prior] = [parse_prior(p, f"{self.scene.where} [{p.name}]") for p in free]
-        self._base = params.values()
-        self._ties = [(p.name, p.tie) for p in params if p.tie is not None]
+        self._set_free(params, self.scene.where)
         self._prior_residuals = [(i, pr.args) for i, (n, pr) in enumerate(zip(self.names, self.priors))
                                  if n.startswith("observation.") and pr.kind == "normal"]
-
-    # -- parameter vectors -------------------------------------------------------------------
-    @property
-    def initial(self) -> np.ndarray:
-        return np.array([self.params[n].value for n in self.names])
-
-    @property
-    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        return np.array([p.lo for p in self.priors]), np.array([p.hi for p in self.priors])
-
-    def values(self, vec: np.ndarray | Mapping[str, float]) -> dict[str, float]:
-        """All parameter values by name for a free-parameter vector (ties resolved)."""
-        vals = dict(self._base)
-        if isinstance(vec, Mapping):
-            vals.update(vec)
-        else:
-            vals.update(zip(self.names, map(float, vec)))
-        for name, (other, factor) in self._ties:
-            vals[name] = factor * vals[other]
-        return vals
 
     # -- forward model -----------------------------------------------------------------------
     def trajectory(self, vals: Mapping[str, float], n_swings: int) -> Trajectory:
@@ -128,9 +102,6 @@ class RecordingProblem:
         return self._predict(vals)
 
     # -- likelihood --------------------------------------------------------------------------
-    def log_prior(self, vec: np.ndarray) -> float:
-        return float(sum(p.logpdf(float(x)) for p, x in zip(self.priors, vec)))
-
     def log_likelihood(self, vals: Mapping[str, float]) -> float:
         try:
             pred = self._predict(vals)
@@ -179,18 +150,22 @@ class RecordingProblem:
     def n_data(self) -> int:
         return int(sum(c.y.size for c in self.curves))
 
-    # -- subclass hooks ----------------------------------------------------------------------
-    def _predict(self, vals):  # pragma: no cover - abstract
-        raise NotImplementedError
+    # -- what each recording defines ------------------------------------------------------------
+    @abstractmethod
+    def _predict(self, vals):
+        """The model's side of the readings for parameter values ``vals``."""
 
-    def _pointwise(self, pred, vals) -> np.ndarray:  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abstractmethod
+    def _pointwise(self, pred, vals) -> np.ndarray:
+        """Log-likelihood of each reading."""
 
-    def _residuals(self, pred, vals) -> np.ndarray:  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abstractmethod
+    def _residuals(self, pred, vals) -> np.ndarray:
+        """Standardised residual of each reading."""
 
-    def _expected(self, pred, vals) -> np.ndarray:  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abstractmethod
+    def _expected(self, pred, vals) -> np.ndarray:
+        """Noise-free expected value of each reading."""
 
 
 class PulseFitProblem(RecordingProblem):

@@ -198,8 +198,7 @@ class _Runner:
         self.local_fs = True
         if workers == 0 and scheduler is None:
             return
-        import dask
-        from distributed import Client, LocalCluster
+        from distributed import Client
 
         if scheduler is None:
             self._cluster = local_cluster(workers or _cpu_count())

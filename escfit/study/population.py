@@ -31,7 +31,7 @@ import xarray as xr
 from scipy.special import logsumexp
 
 from ..errors import FitError, ResultsError
-from ..results import FitResult, clean_attrs, load_fit
+from ..results import FitResult, clean_attrs
 from .scenes import POPULATION_PARAMS
 
 __all__ = ["UnitDraws", "collect_draws", "PopulationResult", "fit_population", "POPULATION_SCHEMA",

@@ -1,0 +1,68 @@
+"""The free-parameter vector of a fit: names, priors, bounds, and values with ties resolved.
+
+Shared by every fit problem (unit curves, passage times, timegrapher readings): the sampler
+and the optimiser see a plain vector in :attr:`FreeParameters.names` order; the forward model
+sees all parameters by name (:meth:`FreeParameters.values`).
+"""
+
+from __future__ import annotations
+
+from typing import Mapping
+
+import numpy as np
+
+from ..errors import FitError
+from ..params import ParamSet
+from .priors import Prior, parse_prior
+
+__all__ = ["FreeParameters"]
+
+
+class FreeParameters:
+    """Mixin holding the parameters of a fit problem.
+
+    Attributes
+    ----------
+    params
+        All parameters (scene, load rule, observation).
+    names
+        Names of the free parameters, in vector order.
+    priors
+        Prior of each free parameter (its bounds are the parameter's).
+    """
+
+    def _set_free(self, params: ParamSet, where: str) -> None:
+        """Take ``params``; refuse a fit with nothing free (``where`` names the scene)."""
+        free = params.free()
+        if not free:
+            raise FitError("no free parameters: mark some with { value = ..., vary = true }", where)
+        self.params = params
+        self.names = [p.name for p in free]
+        self.priors: list[Prior] = [parse_prior(p, f"{where} [{p.name}]") for p in free]
+        self._base = params.values()
+        self._ties = [(p.name, p.tie) for p in params if p.tie is not None]
+
+    @property
+    def initial(self) -> np.ndarray:
+        """The scene's values of the free parameters."""
+        return np.array([self.params[n].value for n in self.names])
+
+    @property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper bounds of the free parameters."""
+        return np.array([p.lo for p in self.priors]), np.array([p.hi for p in self.priors])
+
+    def values(self, vec: np.ndarray | Mapping[str, float]) -> dict[str, float]:
+        """All parameter values by name for a free-parameter vector (ties resolved)."""
+        vals = dict(self._base)
+        if isinstance(vec, Mapping):
+            vals.update(vec)
+        else:
+            vals.update(zip(self.names, map(float, vec)))
+        for name, (other, factor) in self._ties:
+            vals[name] = factor * vals[other]
+        return vals
+
+    def log_prior(self, vec: np.ndarray) -> float:
+        """Sum of the free parameters' log prior densities (``-inf`` outside the bounds)."""
+        return float(sum(p.logpdf(float(x)) for p, x in zip(self.priors, vec)))
