@@ -27,7 +27,7 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
         walkers: int = 32, steps: int = 2000, burn: int | None = None, n_starts: int = 8, resume: bool = False,
         progress: bool = False, solver: str = "exact", solver_options: dict | None = None,
         checkpoint: str | Path | None = None, unit: str | None = None, fmt: str | None = None,
-        notch_deg: float | None = None) -> FitResult:
+        notch_deg: float | None = None, predictive_draws: int = PP_DRAWS) -> FitResult:
     """Fit a balance scene to a recording.
 
     Parameters
@@ -50,6 +50,9 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
         Fit only this unit of a multi-unit recording.
     fmt, notch_deg
         Recording format (detected when ``None``) and the notch angle of notch counts, deg.
+    predictive_draws
+        Posterior draws (spread evenly over walkers and steps) at which the expected readings
+        and the pointwise log-likelihood (for PSIS-LOO) are stored.
 
     Returns
     -------
@@ -60,6 +63,8 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
 
     if method not in ("leastsq", "emcee"):
         raise FitError(f"method must be 'leastsq' or 'emcee', got {method!r}")
+    if predictive_draws < 1:
+        raise FitError(f"predictive_draws must be at least 1, got {predictive_draws}")
     if out is not None:
         refuse_existing(out, force)
         if not Path(out).parent.exists():
@@ -78,7 +83,8 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
                            str(checkpoint))
         mc = run_emcee(problem, lsq, walkers=walkers, steps=steps, burn=burn, seed=seed, checkpoint=checkpoint,
                        resume=resume, progress=progress)
-    result = FitResult(_tree(problem, lsq, mc, method=method, seed=seed, started=started))
+    result = FitResult(_tree(problem, lsq, mc, method=method, seed=seed, started=started,
+                             predictive_draws=predictive_draws))
     if out is not None:
         write_fit(result, out, force=force)
         if checkpoint is not None and Path(checkpoint).exists():
@@ -154,7 +160,7 @@ def make_problem(scene, data, *, solver: str = "exact", solver_options: dict | N
 
 
 def _tree(problem: FitProblem, lsq: LeastSquaresResult, mc: McmcResult | None, *, method: str, seed: int,
-          started: str) -> xr.DataTree:
+          started: str, predictive_draws: int = PP_DRAWS) -> xr.DataTree:
     names = problem.names
     units = {p.name: p.unit for p in problem.params}
     meanings = {p.name: p.meaning for p in problem.params}
@@ -189,7 +195,8 @@ def _tree(problem: FitProblem, lsq: LeastSquaresResult, mc: McmcResult | None, *
         groups["posterior"] = xr.Dataset(post, coords=coords)
         groups["sample_stats"] = xr.Dataset({"lp": (("chain", "draw"), mc.log_prob)}, coords=coords)
         groups["diagnostics"] = _diagnostics(groups["posterior"], names, mc)
-        groups["posterior_predictive"], groups["log_likelihood"] = _predictive(problem, mc, obs_coords, reading_units)
+        groups["posterior_predictive"], groups["log_likelihood"] = _predictive(problem, mc, obs_coords, reading_units,
+                                                                             predictive_draws)
         flat = mc.chain.reshape(-1, len(names))
         pc = np.corrcoef(flat.T) if len(names) > 1 else np.ones((1, 1))
         warnings = correlation_warnings(names, pc) + sloppy_directions(names, flat) + phase_mode_warning(problem)
@@ -239,10 +246,10 @@ def _diagnostics(post: xr.Dataset, names: list[str], mc: McmcResult) -> xr.Datas
         attrs={"tau_reliable": int(mc.tau_reliable)})
 
 
-def _predictive(problem: FitProblem, mc: McmcResult, obs_coords: dict,
-                reading_units: str) -> tuple[xr.Dataset, xr.Dataset]:
+def _predictive(problem: FitProblem, mc: McmcResult, obs_coords: dict, reading_units: str,
+                draws: int) -> tuple[xr.Dataset, xr.Dataset]:
     """Expected readings and pointwise log-likelihood for a thinned set of draws."""
-    per_chain = max(1, PP_DRAWS // mc.walkers)
+    per_chain = max(1, draws // mc.walkers)
     idx = np.unique(np.linspace(0, mc.chain.shape[1] - 1, per_chain).astype(int))
     exp = np.full((mc.walkers, idx.size, problem.n_data), np.nan)
     ll = np.full_like(exp, -np.inf)

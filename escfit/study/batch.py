@@ -307,7 +307,7 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
              *, method: str = "leastsq", scheduler: Any = None, workers: int | None = None, seed: int = 0,
              walkers: int = 32, steps: int = 2000, burn: int | None = None, n_starts: int = 8,
              solver: str = "exact", units: Sequence[str] | None = None, notch_deg: float | None = None,
-             progress: bool | Callable[[str], None] = False) -> BatchResult:
+             progress: bool | Callable[[str], None] = False, predictive_draws: int = 400) -> BatchResult:
     """Fit every unit of the recordings independently and summarise the fleet.
 
     Parameters
@@ -338,6 +338,9 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
         Notch angle for files without a ``# notch_deg:`` line.
     progress
         ``True`` prints one line per unit to stderr; a callable receives those lines.
+    predictive_draws
+        Thinned posterior draws whose pointwise log-likelihood each results file keeps (more
+        lowers the Pareto k of PSIS-LOO; see :func:`escfit.fitting.fit`).
 
     Returns
     -------
@@ -384,7 +387,7 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
         raise ResultsError(f"units {other} were fitted here with another scene or method; use another output "
                            "directory or remove their results files", str(out))
     options = {"method": method, "walkers": walkers, "steps": steps, "burn": burn, "n_starts": n_starts,
-               "solver": solver}
+               "solver": solver, "predictive_draws": predictive_draws}
     runner = _Runner(scheduler, workers) if todo else _Runner(None, 0)  # no cluster when nothing is left
     where = runner.description if todo else "nothing to fit"
     jobs = []
@@ -506,7 +509,7 @@ def load_summary(path: str | Path) -> xr.Dataset:
 
 def fit_fleet(fleet, model: str, out_dir: str | Path, *, units: Sequence[str] | None = None, method: str = "emcee",
               walkers: int = 16, steps: int = 600, seed: int = 0, scheduler: Any = None, workers: int | None = None,
-              progress: bool | Callable[[str], None] = False) -> BatchResult:
+              progress: bool | Callable[[str], None] = False, predictive_draws: int = 400) -> BatchResult:
     """Fit one of the study's models to a synthetic fleet (see :mod:`escfit.study.scenes`).
 
     The model's fit scene for the fleet's rig is written to ``<out_dir>/scene.toml``, then
