@@ -20,7 +20,7 @@ __all__ = ["atomic_path", "refuse_existing"]
 def refuse_existing(path: str | Path, force: bool) -> None:
     """Raise :class:`ResultsError` if ``path`` exists and ``force`` is false."""
     if Path(path).exists() and not force:
-        raise ResultsError("output file exists; pass --force (force=True) to replace it", str(path))
+        raise ResultsError("output file exists; pass --force (force=True in Python) to replace it", str(path))
 
 
 @contextmanager

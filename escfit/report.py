@@ -183,7 +183,8 @@ def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: 
     fit_stats = f"model {a.get('model', 'balance')}; least squares: chi-square {_fmt(la.get('chisqr'))}, n = {la.get('n_data')}"
     if "redchi" in la:
         units = res.group("observed_data")["reading"].attrs.get("units", "rad") if res.group("observed_data") else "rad"
-        scatter = "" if " and " in units else f", reading scatter {_fmt(la['sigma_hat'])} {units}"  # one unit only
+        sigma_unit = "rad" if units == "notches" else units  # notch counts: the jitter is an angle
+        scatter = "" if " and " in units else f", reading scatter {_fmt(la['sigma_hat'])} {sigma_unit}"
         fit_stats += (f", reduced chi-square {_fmt(la['redchi'])}{scatter}, "
                       f"AIC {_fmt(la['aic'])}, BIC {_fmt(la['bic'])}")
     figs = _figures(res)
