@@ -7,6 +7,7 @@ sees all parameters by name (:meth:`FreeParameters.values`).
 
 from __future__ import annotations
 
+import math
 from typing import Mapping
 
 import numpy as np
@@ -66,3 +67,14 @@ class FreeParameters:
     def log_prior(self, vec: np.ndarray) -> float:
         """Sum of the free parameters' log prior densities (``-inf`` outside the bounds)."""
         return float(sum(p.logpdf(float(x)) for p, x in zip(self.priors, vec)))
+
+    def log_prob(self, vec: np.ndarray) -> float:
+        """Log posterior (up to a constant); ``-inf`` outside the prior or on failure.
+
+        The problem supplies ``log_likelihood(values)``, which returns ``-inf`` (with the
+        reason counted) when the forward model fails.
+        """
+        lp = self.log_prior(vec)
+        if not math.isfinite(lp):
+            return -math.inf
+        return lp + self.log_likelihood(self.values(vec))

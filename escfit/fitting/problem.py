@@ -165,13 +165,6 @@ class FitProblem(FreeParameters):
             return -math.inf
         return ll
 
-    def log_prob(self, vec: np.ndarray) -> float:
-        """Log posterior (up to a constant); ``-inf`` outside the prior or on failure."""
-        lp = self.log_prior(vec)
-        if not math.isfinite(lp):
-            return -math.inf
-        return lp + self.log_likelihood(self.values(vec))
-
     # -- many parameter vectors at once ------------------------------------------------
     @property
     def can_vectorize(self) -> bool:

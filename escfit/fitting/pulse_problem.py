@@ -114,13 +114,6 @@ class RecordingProblem(FreeParameters, ABC):
             return -math.inf
         return ll
 
-    def log_prob(self, vec: np.ndarray) -> float:
-        """Log posterior (up to a constant); ``-inf`` outside the prior or on failure."""
-        lp = self.log_prior(vec)
-        if not math.isfinite(lp):
-            return -math.inf
-        return lp + self.log_likelihood(self.values(vec))
-
     def residuals(self, vals: Mapping[str, float]) -> np.ndarray:
         """Standardised residuals of all readings, then prior residuals of normal-prior
         nuisances (large values on failure)."""

@@ -39,7 +39,11 @@ from typing import Mapping
 import numpy as np
 from numba import njit
 
-from ..balance.segment import propagate
+from ..balance.segment import cross_time, propagate
+
+# numba caches compiled code per file and does not see edits of balance/segment.py: after
+# changing that file bump this marker as well as SEGMENT_REVISION in balance/exact.py.
+SEGMENT_REVISION = 3
 from ..errors import SceneError
 from ..params import Param, read_param
 
@@ -57,46 +61,6 @@ def swing_starts(log: np.ndarray, n_swings: int) -> np.ndarray:
         Number of half swings wanted; half swings the run did not reach get empty ranges.
     """
     return np.searchsorted(log[:, 8], np.arange(n_swings + 1, dtype=float), side="left").astype(np.int64)
-
-
-@njit(cache=True)
-def _rise_time(y0, v0, h, w2, target, tau_hi):
-    """Time at which ``y`` rises to ``target`` on ``[0, tau_hi]`` (``y`` increasing there,
-    ``y0 < target <= y(tau_hi)``; ``tau_hi = inf`` brackets by doubling).  Newton on the
-    closed form, safeguarded by bisection; converges to a few ulps."""
-    lo = 0.0
-    hi = tau_hi
-    if not math.isfinite(hi):
-        hi = 1.0 / (h + math.sqrt(w2))
-        for _ in range(4000):
-            y, v = propagate(y0, v0, hi, h, w2)
-            if y >= target:
-                break
-            lo = hi
-            hi *= 2.0
-    tau = 0.5 * (lo + hi)
-    if v0 > 0.0:
-        guess = (target - y0) / v0
-        if lo < guess < hi:
-            tau = guess
-    for _ in range(200):
-        y, v = propagate(y0, v0, tau, h, w2)
-        f = y - target
-        if f == 0.0:
-            return tau
-        if f > 0.0:
-            hi = tau
-        else:
-            lo = tau
-        new = tau - f / v if v > 0.0 else 0.5 * (lo + hi)
-        if abs(new - tau) <= 4e-16 * tau:
-            return min(max(new, lo), hi)
-        if not (lo < new < hi):
-            new = 0.5 * (lo + hi)
-        tau = new
-        if hi - lo <= 4e-16 * hi:
-            break
-    return min(max(tau, lo), hi)
 
 
 @njit(cache=True)
@@ -126,7 +90,7 @@ def _level_times(log, starts, swing, x_base, offset, out):
             if not math.isfinite(tau):
                 # creeps towards the centre xc without turning: crosses only levels below it
                 if x < xc:
-                    out[q] = t0 + _rise_time(x0 - xc, v0, h, w2, x - xc, math.inf)
+                    out[q] = t0 + cross_time(x0 - xc, v0, h, w2, x - xc, math.inf)[0]
                 else:
                     out[q] = math.inf
                 found = True
@@ -136,7 +100,7 @@ def _level_times(log, starts, swing, x_base, offset, out):
                 if tau == 0.0 or x <= x0:
                     out[q] = t0
                 else:
-                    out[q] = t0 + _rise_time(x0 - xc, v0, h, w2, x - xc, tau)
+                    out[q] = t0 + cross_time(x0 - xc, v0, h, w2, x - xc, tau)[0]
                 found = True
                 break
         if not found:
