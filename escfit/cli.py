@@ -78,7 +78,8 @@ def cli() -> None:
 @cli.command()
 @click.argument("scene", type=click.Path(dir_okay=False))
 @click.option("--solver", default=None,
-              help="Solver: balance exact (default) | rk4 | ivp; geneva dop853 (default) | rk4; see the README.")
+              help="Solver: balance exact (default; dop853 for a pendulum) | dop853 | rk4 | ivp; "
+                   "geneva dop853 (default) | rk4; see the README.")
 @click.option("--swings", type=click.IntRange(1), default=None, help="Half swings (overrides the scene).")
 @click.option("--h", "step", type=float, default=None, help="RK4 step size, s.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object with the results.")
@@ -249,6 +250,8 @@ def _print_summary(result) -> None:
     click.echo("  ".join(h.ljust(w) for h, w in zip(head, widths)))
     for r in rows:
         click.echo("  ".join(c.ljust(w) for c, w in zip(r, widths)))
+    for n in result.notes:
+        click.echo(f"note: {n}")
     for w in result.warnings:
         click.echo(f"warning: {w}")
 
@@ -263,7 +266,8 @@ def summary(results, as_json):
     res = load_fit(results)
     if as_json:
         a = res.attrs
-        click.echo(json.dumps(_json_safe({"parameters": res.summary(), "warnings": res.warnings,
+        click.echo(json.dumps(_json_safe({"parameters": res.summary(), "warnings": res.warnings, "notes": res.notes,
+                               "misfit": res.misfit,
                                "method": a.get("method"), "data_file": a.get("data_file"),
                                "schema_version": a.get("schema_version")})))
     else:

@@ -172,6 +172,7 @@ def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: 
     a = res.attrs
     head, rows = parameter_table(res)
     warnings = res.warnings
+    notes = res.notes
     lsq = res.group("least_squares")
     prov = [("results file", str(path)), ("method", a.get("method")), ("scene file", a.get("scene_file")),
             ("switching", a.get("switching")), ("data file", a.get("data_file")), ("data SHA-256", a.get("data_sha256")),
@@ -193,7 +194,10 @@ def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: 
         lines = [f"# escfit fit report: {Path(a.get('data_file', '')).name}", "", fit_stats, "", "## Parameters", "",
                  "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
         lines += ["| " + " | ".join(r) + " |" for r in rows]
-        lines += ["", "## Identifiability", ""] + ([f"- {w}" for w in warnings] or ["- no warnings"])
+        lines += ["", "## Warnings: identifiability, convergence and misfit", ""]
+        lines += [f"- {w}" for w in warnings] or ["- no warnings"]
+        if notes:
+            lines += ["", "## What was done to the recording", ""] + [f"- {n}" for n in notes]
         for title, png in figs.items():
             img = out.with_name(f"{out.stem}_{title.replace(' ', '_')}.png")
             with atomic_path(img, force=force) as tmp:
@@ -211,9 +215,12 @@ def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: 
                  f"<h1>escfit fit report: {esc(Path(a.get('data_file', '')).name)}</h1>", f"<p>{esc(fit_stats)}</p>",
                  "<h2>Parameters</h2><table><tr>" + "".join(f"<th>{esc(h)}</th>" for h in head) + "</tr>"]
         parts += ["<tr>" + "".join(f"<td>{esc(c)}</td>" for c in r) + "</tr>" for r in rows]
-        parts += ["</table><h2>Identifiability</h2><ul>"]
+        parts += ["</table><h2>Warnings: identifiability, convergence and misfit</h2><ul>"]
         parts += [f"<li class='warn'>{esc(w)}</li>" for w in warnings] or ["<li>no warnings</li>"]
         parts += ["</ul>"]
+        if notes:
+            parts += ["<h2>What was done to the recording</h2><ul>"] + [f"<li>{esc(n)}</li>" for n in notes]
+            parts += ["</ul>"]
         for title, png in figs.items():
             b64 = base64.b64encode(png).decode()
             parts += [f"<h2>{esc(title.capitalize())}</h2><img alt='{esc(title)}' src='data:image/png;base64,{b64}'>"]

@@ -65,6 +65,16 @@ class FitResult:
         return json.loads(self.tree.attrs.get("warnings", "[]"))
 
     @property
+    def notes(self) -> list[str]:
+        """What was done to the recording before fitting (re-timing, windows, release, stops)."""
+        return json.loads(self.tree.attrs.get("notes", "[]") or "[]")
+
+    @property
+    def misfit(self) -> dict[str, float]:
+        """Residual-structure figures at the best fit (see :mod:`escfit.fitting.misfit`)."""
+        return json.loads(self.tree.attrs.get("misfit", "{}") or "{}")
+
+    @property
     def parameter_names(self) -> list[str]:
         return json.loads(self.tree.attrs["parameters"])
 

@@ -12,7 +12,9 @@ from ..errors import FitError
 from ..recordings import UnitCurve
 from ..results import SCHEMA_VERSION, FitResult, clean_attrs, dependency_versions, write_fit
 from ..scene import load_scene
-from .identifiability import correlation_warnings, monday_k, phase_mode_warning, profile, sloppy_directions
+from .identifiability import (correlation_warnings, monday_k, phase_mode_warning, profile, ridge_warnings,
+                              sloppy_directions)
+from .misfit import misfit_report
 from .lsq import LeastSquaresResult, least_squares
 from .mcmc import McmcResult, run_emcee
 from .problem import FitProblem
@@ -179,7 +181,9 @@ def _tree(problem: FitProblem, lsq: LeastSquaresResult, mc: McmcResult | None, *
         attrs=clean_attrs({"chisqr": lsq.chisqr, "redchi": lsq.redchi, "sigma_hat": lsq.sigma_hat, "n_data": lsq.n_data,
                            "aic": lsq.aic(), "bic": lsq.bic(), "success": lsq.success, "message": lsq.message,
                            "n_starts": lsq.n_starts}))
-    warnings = correlation_warnings(lsq.names, lsq.correlation) + phase_mode_warning(problem)
+    warnings = (correlation_warnings(lsq.names, lsq.correlation) + ridge_warnings(lsq.names, lsq.correlation)
+                + phase_mode_warning(problem))
+    misfit, misfit_warnings = _misfit(problem, lsq)
     undefined = [n for n, e in zip(lsq.names, lsq.stderr) if not np.isfinite(e)]
     if undefined:
         warnings.append(f"least-squares standard errors undefined for {undefined} (singular or indefinite "
@@ -205,6 +209,7 @@ def _tree(problem: FitProblem, lsq: LeastSquaresResult, mc: McmcResult | None, *
             warnings.append(f"split R-hat above 1.05 for {bad}: run longer")
         if not mc.tau_reliable:
             warnings.append("the run is shorter than 50 autocorrelation times: intervals are approximate")
+    warnings += misfit_warnings
     attrs = {
         "schema_version": SCHEMA_VERSION, "method": method, "seed": seed, "parameters": names, "units": units,
         "meanings": meanings, "scene": problem.scene.text, "scene_file": problem.scene.where,
@@ -212,7 +217,8 @@ def _tree(problem: FitProblem, lsq: LeastSquaresResult, mc: McmcResult | None, *
         "data_kind": problem.data.kind, "solver": problem.solver, "solver_options": problem.solver_options,
         "versions": dependency_versions(), "started": started,
         "finished": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-        "warnings": warnings, "failures": dict(problem.failures),
+        "warnings": warnings, "failures": dict(problem.failures), "misfit": misfit,
+        "notes": list(getattr(problem, "notes", [])),
     }
     if mc is not None:
         attrs.update(walkers=mc.walkers, steps=mc.steps, burn=mc.burn, resumed=mc.resumed)
@@ -222,12 +228,33 @@ def _tree(problem: FitProblem, lsq: LeastSquaresResult, mc: McmcResult | None, *
     return root
 
 
+def _misfit(problem, lsq: LeastSquaresResult) -> tuple[dict, list[str]]:
+    """Residual structure at the least-squares optimum (see :mod:`escfit.fitting.misfit`).
+
+    Readings and expectations in one unit (angles, times) give residuals in that unit; notch
+    counts are compared through the standardised residuals.
+    """
+    coords = _obs_coords(problem)
+    n = problem.n_data
+    if getattr(problem.data, "kind", "") == "notches":
+        resid, unit = problem.residuals(lsq.values)[:n], "noise scales"
+    else:
+        resid, unit = problem.observed - problem.expected(lsq.values), getattr(problem, "reading_units", "rad")
+    is_turns = isinstance(problem, FitProblem)
+    return misfit_report(resid, coords["swing"][1] if is_turns else None, coords["curve"][1], unit=unit,
+                         branches=is_turns)
+
+
 def _obs_coords(problem: FitProblem) -> dict:
     swing = np.concatenate([c.swing for c in problem.curves])
     curve = np.concatenate([[c.label] * c.swing.size for c in problem.curves])
     load = np.concatenate([[c.load] * c.swing.size for c in problem.curves])
-    return {"obs": np.arange(swing.size), "swing": ("obs", swing), "curve": ("obs", curve.astype(str)),
-            "load": ("obs", load)}
+    coords = {"obs": np.arange(swing.size), "swing": ("obs", swing), "curve": ("obs", curve.astype(str)),
+              "load": ("obs", load)}
+    times = [getattr(c, "time", None) for c in problem.curves]
+    if all(t is not None for t in times):
+        coords["time"] = ("obs", np.concatenate(times), {"units": "s"})
+    return coords
 
 
 def _diagnostics(post: xr.Dataset, names: list[str], mc: McmcResult) -> xr.Dataset:

@@ -17,7 +17,7 @@ from ..charts import Pulse, k_value
 from .lsq import least_squares
 from .problem import FitProblem
 
-__all__ = ["correlation_warnings", "sloppy_directions", "phase_mode_warning", "monday_k", "profile"]
+__all__ = ["correlation_warnings", "sloppy_directions", "ridge_warnings", "phase_mode_warning", "monday_k", "profile"]
 
 
 def correlation_warnings(names: list[str], corr: np.ndarray, threshold: float = 0.95) -> list[str]:
@@ -45,7 +45,19 @@ def sloppy_directions(names: list[str], samples: np.ndarray, ratio: float = 30.0
         return []
     z = np.where(np.all(x > 0, axis=0), np.log(np.abs(x) + 1e-300), x)
     z = (z - z.mean(axis=0)) / (z.std(axis=0) + 1e-300)
-    w, v = np.linalg.eigh(np.cov(z.T))
+    return ridge_warnings(names, np.cov(z.T), ratio, "posterior")
+
+
+def ridge_warnings(names: list[str], corr: np.ndarray, ratio: float = 30.0, what: str = "least-squares fit") -> list[str]:
+    """The ridge test of :func:`sloppy_directions` on a correlation matrix of the parameters.
+
+    Standardising (and taking logs, to first order) leaves correlations unchanged, so the
+    least-squares correlation matrix gives the same principal spreads as posterior samples.
+    """
+    c = np.asarray(corr, float)
+    if c.shape[0] < 2 or not np.all(np.isfinite(c)):
+        return []
+    w, v = np.linalg.eigh(0.5 * (c + c.T))
     w = np.maximum(w, 1e-300)
     spread = math.sqrt(w[-1] / w[0])
     if spread < ratio:
@@ -54,7 +66,7 @@ def sloppy_directions(names: list[str], samples: np.ndarray, ratio: float = 30.0
     def combo(vec):
         return " ".join(f"{c:+.2f}*{n}" for c, n in zip(vec, names) if abs(c) > 0.2)
 
-    return [f"the posterior is a ridge (principal spreads differ {spread:.0f}-fold): the parameters move together along "
+    return [f"the {what} is a ridge (principal spreads differ {spread:.0f}-fold): the parameters move together along "
             f"[{combo(v[:, -1])}] while the data fix mainly [{combo(v[:, 0])}] (standardised, log scale for positive "
             "parameters)"]
 

@@ -59,6 +59,7 @@ class Curve:
     load: float  # in the data's load unit; nan when none
     swing: np.ndarray
     y: np.ndarray
+    time: np.ndarray | None = None  # reading times since release, s (for a drifting offset)
 
 
 @dataclass
@@ -105,8 +106,14 @@ class FitProblem(FreeParameters):
         params = ParamSet(dict(self.scene.params.params))
         for p in self.observation.params:
             params.add(p)
+        times = self.data.time
         self.curves = [Curve(f"{u or 'unit'} load {ld:g}" if not math.isnan(ld) else (u or "curve"), ld,
-                             self.data.swing[rows], self.data.value[rows]) for (u, ld), rows in self.data.groups()]
+                             self.data.swing[rows], self.data.value[rows], None if times is None else times[rows])
+                       for (u, ld), rows in self.data.groups()]
+        drift = params["observation.offset_rate"]
+        if (drift.vary or drift.value != 0.0) and times is None:
+            raise FitError("observation.offset_rate (a drifting centre) needs the time of every reading; the "
+                           "recording has no time column", self.data.source)
         self.load_rule = LoadRule.read(fit_table.get("loads"), self.scene, self.data, self.curves, params)
         self._set_free(params, self.scene.where)
         self.failures: Counter = Counter()
@@ -159,7 +166,7 @@ class FitProblem(FreeParameters):
         except (EscfitError, ValueError, ArithmeticError) as exc:
             self.failures[f"solve failed: {exc}"[:120]] += 1
             return -math.inf
-        ll = sum(self.observation.loglike(p, c.y, vals, self.sides(c)) for p, c in zip(pred, self.curves))
+        ll = sum(self.observation.loglike(p, c.y, vals, self.sides(c), c.time) for p, c in zip(pred, self.curves))
         if not math.isfinite(ll):
             self.failures["non-finite likelihood"] += 1
             return -math.inf
@@ -239,7 +246,8 @@ class FitProblem(FreeParameters):
                 ll[i] = self.log_likelihood(v)
                 continue
             pred = [t if side is None else side * t for t, side in zip(preds[i], sides)]  # as _nominal
-            total = sum(self.observation.loglike(p, c.y, v, side) for p, c, side in zip(pred, self.curves, sides))
+            total = sum(self.observation.loglike(p, c.y, v, side, c.time)
+                        for p, c, side in zip(pred, self.curves, sides))
             if not math.isfinite(total):
                 self.failures["non-finite likelihood"] += 1
                 total = -math.inf
@@ -254,17 +262,18 @@ class FitProblem(FreeParameters):
         except (EscfitError, ValueError, ArithmeticError) as exc:
             self.failures[f"solve failed: {exc}"[:120]] += 1
             return np.full(n, FAIL_RESIDUAL)
-        r = np.concatenate([self.observation.residuals(p, c.y, vals, self.sides(c)) for p, c in zip(pred, self.curves)])
+        r = np.concatenate([self.observation.residuals(p, c.y, vals, self.sides(c), c.time)
+                            for p, c in zip(pred, self.curves)])
         return np.where(np.isfinite(r), r, FAIL_RESIDUAL)
 
     def loglike_pointwise(self, vals: Mapping[str, float]) -> np.ndarray:
         """Log-likelihood of each reading (for PSIS-LOO); raises when the solve fails."""
-        return np.concatenate([self.observation.loglike_pointwise(p, c.y, vals, self.sides(c))
+        return np.concatenate([self.observation.loglike_pointwise(p, c.y, vals, self.sides(c), c.time)
                                for p, c in zip(self.predict(vals), self.curves)])
 
     def expected(self, vals: Mapping[str, float]) -> np.ndarray:
         """Noise-free expected readings (rad) of all data points, concatenated."""
-        return np.concatenate([self.observation.expected(p, vals, self.sides(c))
+        return np.concatenate([self.observation.expected(p, vals, self.sides(c), c.time)
                                for p, c in zip(self.predict(vals), self.curves)])
 
     @property

@@ -58,6 +58,7 @@ class RecordingProblem(FreeParameters, ABC):
     """
 
     reading_units = "s"
+    needs_segment_log = True  # readings come from the exact solver's segment log
 
     def __init__(self, scene: BalanceScene, data, solver: str = "exact", solver_options: dict | None = None):
         if getattr(scene, "model", None) != "balance":
@@ -66,12 +67,14 @@ class RecordingProblem(FreeParameters, ABC):
         if scene.switching != "angle":
             raise FitError("passage times need angle switching (a physical escapement): with phase switching the "
                            "balance is not tied to angles", scene.where)
-        if solver != "exact":
-            raise SolverError(f"passage times are read from the exact solver's segment log; solver {solver!r} has none")
         options = dict(solver_options or {})
-        bad = sorted(set(options) - {"max_segments"})
-        if bad:
-            raise SolverError(f"fits on passage times take solver option max_segments only, not {bad}")
+        if self.needs_segment_log:
+            if solver != "exact":
+                raise SolverError(f"passage times are read from the exact solver's segment log; solver {solver!r} "
+                                  "has none")
+            bad = sorted(set(options) - {"max_segments"})
+            if bad:
+                raise SolverError(f"fits on passage times take solver option max_segments only, not {bad}")
         self.scene, self.data, self.solver, self.solver_options = scene, data, solver, options
         self.failures: Counter = Counter()
 

@@ -4,7 +4,8 @@ Monday's balance had 60 notches (6 deg each); counting notches from the rest pos
 turning point gives ``n = floor(A/notch)``.  With a small timing/reading jitter ``sigma`` the
 probability of reading ``n`` is the mass of the interval ``[n, n+1) * notch`` under a normal
 distribution centred on the true amplitude, not a Gaussian density at its centre.
-Parameters: ``observation.sigma`` (rad, jitter), ``observation.offset`` (rad).
+Parameters: ``observation.sigma`` (rad, jitter), ``observation.offset`` (rad) and its drift
+``observation.offset_rate`` (rad/s, see :mod:`escfit.observation.amplitude`).
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from scipy import special
 from ..errors import SceneError
 from ..params import Param
 from ..units import to_canonical
-from .amplitude import expected_reading, noise_params
+from .amplitude import drift_param, expected_reading, noise_params, offset_at
 
 __all__ = ["NotchObservation", "log_interval_mass"]
 
@@ -42,7 +43,7 @@ class NotchObservation:
     notch: float
     params: tuple[Param, ...]
     kind = "notches"
-    KEYS = {"sigma", "offset", "notch_deg"}
+    KEYS = {"sigma", "offset", "offset_rate", "notch_deg"}
 
     @classmethod
     def from_table(cls, table: Mapping, where: str, notch: float | None = None) -> "NotchObservation":
@@ -54,29 +55,30 @@ class NotchObservation:
             notch = n
         if notch is None or not notch > 0:
             raise SceneError("notch readings need a notch angle (notch_deg)", where)
-        return cls(notch, tuple(noise_params(table, where, 0.25 * notch)))
+        return cls(notch, tuple(noise_params(table, where, 0.25 * notch) + [drift_param(table, where)]))
 
     @staticmethod
-    def expected(theta_turn: np.ndarray, values: Mapping[str, float], side: np.ndarray | None = None) -> np.ndarray:
+    def expected(theta_turn: np.ndarray, values: Mapping[str, float], side: np.ndarray | None = None,
+                 time: np.ndarray | None = None) -> np.ndarray:
         """Noise-free amplitude (rad) before counting; see :func:`expected_reading`."""
-        return expected_reading(theta_turn, values["observation.offset"], side)
+        return expected_reading(theta_turn, offset_at(values, time), side)
 
     def loglike_pointwise(self, theta_turn: np.ndarray, n: np.ndarray, values: Mapping[str, float],
-                          side: np.ndarray | None = None) -> np.ndarray:
+                          side: np.ndarray | None = None, time: np.ndarray | None = None) -> np.ndarray:
         """Log-probability of each count ``n``."""
-        mu = self.expected(theta_turn, values, side)
+        mu = self.expected(theta_turn, values, side, time)
         sigma = values["observation.sigma"]
         return log_interval_mass((n * self.notch - mu) / sigma, ((n + 1) * self.notch - mu) / sigma)
 
     def loglike(self, theta_turn: np.ndarray, n: np.ndarray, values: Mapping[str, float],
-                side: np.ndarray | None = None) -> float:
+                side: np.ndarray | None = None, time: np.ndarray | None = None) -> float:
         """Log-probability of the counts ``n``."""
-        return float(np.sum(self.loglike_pointwise(theta_turn, n, values, side)))
+        return float(np.sum(self.loglike_pointwise(theta_turn, n, values, side, time)))
 
     def residuals(self, theta_turn: np.ndarray, n: np.ndarray, values: Mapping[str, float],
-                  side: np.ndarray | None = None) -> np.ndarray:
+                  side: np.ndarray | None = None, time: np.ndarray | None = None) -> np.ndarray:
         """Interval mid-point residuals scaled by the total reading spread (for least squares)."""
-        mu = self.expected(theta_turn, values, side)
+        mu = self.expected(theta_turn, values, side, time)
         spread = math.sqrt(values["observation.sigma"] ** 2 + self.notch**2 / 12.0)
         return ((n + 0.5) * self.notch - mu) / spread
 
