@@ -162,7 +162,7 @@ def charts(out_dir, c0, no_png, force):
 
 
 RECIPE_KEYS = {"data", "scene", "method", "out", "seed", "walkers", "steps", "burn", "unit", "format", "notch_deg",
-               "report", "title"}
+               "report", "title", "solver"}
 
 
 def _read_recipe(path: Path) -> dict:
@@ -191,14 +191,25 @@ def _read_recipe(path: Path) -> dict:
 @click.option("--steps", type=click.IntRange(10), default=None)
 @click.option("--burn", type=click.IntRange(0), default=None)
 @click.option("--unit", "unit_id", default=None, help="Fit only this unit of a multi-unit file.")
-@click.option("--format", "fmt", type=click.Choice(["unit-curve", "pulses", "timegrapher", "timeseries"]), default=None,
-              help="Recording format (detected from the file's content).")
+@click.option("--format", "fmt", type=click.Choice(["unit-curve", "pulses", "timegrapher", "timeseries", "raw"]),
+              default=None, help="Recording format (detected from the file's content; raw: a table or .mat file read "
+              "with the [recording] options).")
+@click.option("--time-column", default=None, help="[recording] time_column: name or 1-based position.")
+@click.option("--sample-rate", default=None, help="[recording] sample_rate, e.g. '500 Hz' (instead of a time column).")
+@click.option("--angle-column", default=None, help="[recording] angle_column: name or 1-based position.")
+@click.option("--angle-unit", default=None, help="[recording] angle_unit: deg, rad, ... or counts.")
+@click.option("--counts-per-turn", type=float, default=None, help="[recording] counts_per_turn (with counts).")
+@click.option("--scale", type=float, default=None, help="[recording] scale: multiplies the raw readings.")
+@click.option("--start", "start_time", default=None, help="[recording] start of the window, e.g. '13 s'.")
+@click.option("--stop", "stop_time", default=None, help="[recording] end of the window, e.g. '60 s'.")
+@click.option("--solver", default=None, help="Forward solver (default: exact, or dop853 for a pendulum).")
 @click.option("--notch-deg", type=float, default=None, help="Notch angle for notch counts, deg.")
 @click.option("--resume", is_flag=True, help="Continue an interrupted emcee run from its checkpoint.")
 @click.option("--force", is_flag=True, help="Replace an existing results file.")
 @click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None, help="Also write a report.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def fit(data, scene_path, method, out, seed, walkers, steps, burn, unit_id, fmt, notch_deg, resume, force,
+def fit(data, scene_path, method, out, seed, walkers, steps, burn, unit_id, fmt, time_column, sample_rate,
+        angle_column, angle_unit, counts_per_turn, scale, start_time, stop_time, solver, notch_deg, resume, force,
         report_path, quiet):
     """Fit DATA (a recording) with --scene SCENE, or run a fit RECIPE.toml."""
     from .errors import SceneError
@@ -231,7 +242,12 @@ def fit(data, scene_path, method, out, seed, walkers, steps, burn, unit_id, fmt,
     result = run_fit(scene, data, fmt=pick(fmt, "format", None), notch_deg=pick(notch_deg, "notch_deg", None),
                      method=method, out=out, force=force, seed=pick(seed, "seed", 0),
                      walkers=pick(walkers, "walkers", 32), steps=steps, burn=pick(burn, "burn", None),
-                     resume=resume, progress=not quiet and sys.stderr.isatty(), unit=pick(unit_id, "unit", None))
+                     resume=resume, progress=not quiet and sys.stderr.isatty(), unit=pick(unit_id, "unit", None),
+                     solver=pick(solver, "solver", None),
+                     recording={"time_column": _column(time_column), "sample_rate": sample_rate,
+                                "angle_column": _column(angle_column), "angle_unit": angle_unit,
+                                "counts_per_turn": counts_per_turn, "scale": scale, "start": start_time,
+                                "stop": stop_time})
     click.echo(f"wrote {out}")
     _print_summary(result)
     report_path = report_path or recipe.get("report")
@@ -240,6 +256,11 @@ def fit(data, scene_path, method, out, seed, walkers, steps, burn, unit_id, fmt,
 
         make_report(out, report_path, fmt="md" if str(report_path).endswith(".md") else "html", force=force)
         click.echo(f"wrote {report_path}")
+
+
+def _column(text: str | None):
+    """A column option: a 1-based position when it is a whole number, else a name."""
+    return int(text) if text is not None and text.strip().isdigit() else text
 
 
 def _print_summary(result) -> None:

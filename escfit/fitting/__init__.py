@@ -27,9 +27,9 @@ PP_DRAWS = 400  # posterior-predictive evaluations stored per fit
 
 def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, force: bool = False, seed: int = 0,
         walkers: int = 32, steps: int = 2000, burn: int | None = None, n_starts: int = 8, resume: bool = False,
-        progress: bool = False, solver: str = "exact", solver_options: dict | None = None,
+        progress: bool = False, solver: str | None = None, solver_options: dict | None = None,
         checkpoint: str | Path | None = None, unit: str | None = None, fmt: str | None = None,
-        notch_deg: float | None = None, predictive_draws: int = PP_DRAWS) -> FitResult:
+        notch_deg: float | None = None, predictive_draws: int = PP_DRAWS, recording: dict | None = None) -> FitResult:
     """Fit a balance scene to a recording.
 
     Parameters
@@ -52,6 +52,10 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
         Fit only this unit of a multi-unit recording.
     fmt, notch_deg
         Recording format (detected when ``None``) and the notch angle of notch counts, deg.
+    solver
+        Forward solver (default: the scene's).
+    recording
+        ``[recording]`` options overriding the scene's (see :func:`make_problem`).
     predictive_draws
         Posterior draws (spread evenly over walkers and steps) at which the expected readings
         and the pointwise log-likelihood (for PSIS-LOO) are stored.
@@ -73,7 +77,7 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
             raise FitError("output directory does not exist", str(Path(out).parent))
     sc = load_scene(scene) if not hasattr(scene, "model") else scene
     problem = make_problem(sc, data, solver=solver, solver_options=solver_options, unit=unit, fmt=fmt,
-                           notch_deg=notch_deg)
+                           notch_deg=notch_deg, recording=recording)
     started = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
     lsq = least_squares(problem, n_starts=n_starts, seed=seed)
     mc = None
@@ -94,8 +98,9 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
     return result
 
 
-def make_problem(scene, data, *, solver: str = "exact", solver_options: dict | None = None, unit: str | None = None,
-                 fmt: str | None = None, notch_deg: float | None = None):
+def make_problem(scene, data, *, solver: str | None = None, solver_options: dict | None = None,
+                 unit: str | None = None, fmt: str | None = None, notch_deg: float | None = None,
+                 recording: dict | None = None):
     """The fit problem of a balance scene and a recording of any supported format.
 
     Parameters
@@ -106,42 +111,45 @@ def make_problem(scene, data, *, solver: str = "exact", solver_options: dict | N
         A :class:`~escfit.recordings.UnitCurve` (amplitudes or notch counts per swing), a
         :class:`~escfit.recordings.pulses.PulseTrain` (photo-cell passage times), a
         :class:`~escfit.recordings.timegrapher.TimegrapherRecording`, a
-        :class:`~escfit.recordings.timeseries.TimeSeries` (turning points extracted, then
-        fitted as a unit curve), or the path of a file holding one of them.
+        :class:`~escfit.recordings.timeseries.TimeSeries` (a sampled angle: turning points or
+        the whole waveform are fitted, see :mod:`escfit.fitting.recorded`), or the path of a
+        file holding one of them, including raw tables and MATLAB files.
     solver, solver_options
-        Forward solver; passage-time and timegrapher fits need the exact solver's log.
+        Forward solver (default: the scene's, see :func:`escfit.balance.default_solver`);
+        passage-time and timegrapher fits need the exact solver's log.
     unit
         Keep only this unit of a multi-unit unit-curve file.
     fmt
-        ``"unit-curve"``, ``"pulses"``, ``"timegrapher"`` or ``"timeseries"``; detected
+        ``"unit-curve"``, ``"pulses"``, ``"timegrapher"``, ``"timeseries"`` or ``"raw"``
+        (a raw table or ``.mat`` file read with the scene's ``[recording]`` options); detected
         from the file's content when ``None``.
     notch_deg
         Notch angle of notch counts (deg) when the file does not say.
+    recording
+        ``[recording]`` options overriding the scene's key by key (the command line's).
 
     Returns
     -------
-    FitProblem or RecordingProblem
+    FitProblem, WaveformProblem or RecordingProblem
     """
+    from ..balance import default_solver
     from ..recordings.pulses import PulseTrain
-    from ..recordings.timegrapher import TimegrapherRecording, read_recording
-    from ..recordings.timeseries import TimeSeries, timeseries_to_unit_curve
+    from ..recordings.timegrapher import TimegrapherRecording
+    from ..recordings.timeseries import TimeSeries
+    from .recorded import problem_from_series
 
     sc = load_scene(scene) if not hasattr(scene, "model") else scene
+    solver = solver or default_solver(sc)
+    spec = _recording_spec(sc, recording)
     if isinstance(data, (str, Path)):
-        options = {"notch_deg": notch_deg} if notch_deg is not None else {}
-        detected = fmt
-        if detected is None:
-            from ..recordings.timegrapher import detect_format
-
-            detected = detect_format(data)
-        data = read_recording(data, detected, **(options if detected == "unit-curve" else {}))
+        data = _read_data(data, spec, fmt, notch_deg)
     options = dict(solver_options or {})
     if unit is not None and not isinstance(data, UnitCurve):
         raise FitError("--unit selects a unit of a unit-curve file; this recording holds one unit",
                        getattr(data, "source", None))
     if isinstance(data, TimeSeries):
-        theta0 = sc.params["oscillator.theta0"]  # a fixed release angle must match the series' start
-        data = timeseries_to_unit_curve(data, release_theta=None if theta0.vary else abs(theta0.value))
+        readings = spec.readings if spec is not None else "samples"
+        return problem_from_series(sc, data, solver=solver, solver_options=options, readings=readings)
     if isinstance(data, UnitCurve):
         if unit is not None:
             rows = np.flatnonzero(data.unit == unit)
@@ -159,6 +167,41 @@ def make_problem(scene, data, *, solver: str = "exact", solver_options: dict | N
 
         return TimegrapherFitProblem(sc, data, solver, options)
     raise FitError(f"cannot fit data of type {type(data).__name__}; give a recording or a file path")
+
+
+def _recording_spec(scene, overrides: dict | None):
+    """The scene's ``[recording]`` options with command-line overrides, or ``None`` if neither."""
+    from ..recordings.recording_spec import merge_spec, recording_spec_from_table
+
+    table = scene.extra.get("recording")
+    given = {k: v for k, v in (overrides or {}).items() if v is not None}
+    if table is None and not given:
+        return None
+    spec = recording_spec_from_table(table or {}, f"{scene.where}")
+    return merge_spec(spec, **given) if given else spec
+
+
+def _read_data(path, spec, fmt: str | None, notch_deg: float | None):
+    """Read a recording file: a known escfit format, else a raw table or MATLAB file."""
+    from ..errors import DataError
+    from ..recordings.rawseries import read_raw_series
+    from ..recordings.timegrapher import detect_format, read_recording
+
+    if spec is not None or fmt == "raw":
+        return read_raw_series(path, spec)
+    detected = fmt
+    if detected is None:
+        try:
+            detected = detect_format(path)
+        except DataError as exc:
+            try:
+                return read_raw_series(path, None)
+            except DataError as raw_exc:
+                if "binary" in exc.message or "empty" in exc.message:
+                    raise exc from None
+                raise raw_exc from None
+    options = {"notch_deg": notch_deg} if notch_deg is not None and detected == "unit-curve" else {}
+    return read_recording(path, detected, **options)
 
 
 def _tree(problem: FitProblem, lsq: LeastSquaresResult, mc: McmcResult | None, *, method: str, seed: int,

@@ -1,0 +1,139 @@
+"""Fit problems for sampled recordings: turning points or the whole waveform.
+
+A sampled record (:class:`~escfit.recordings.timeseries.TimeSeries`) is first analysed once
+(:func:`~escfit.recordings.turning_points.reduce_series`): turning points counted as
+alternating extrema, the reference instant where the model is released at rest, the centre and
+its drift, the end of motion.  Then, by the scene's ``[observation] model``:
+
+- ``"amplitude"`` (default) or ``"notches"``: the turning points as a unit curve (reading 0 is
+  the reference turning point itself, a reading of the release angle), fitted by
+  :class:`~escfit.fitting.problem.FitProblem`;
+- ``"waveform"``: every sample, fitted by :class:`~escfit.fitting.waveform_problem.WaveformProblem`.
+
+Either way the release angle comes from the record (:func:`~escfit.fitting.release.release_from_record`)
+and what was done is kept as plain-sentence ``notes``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from ..balance import BalanceScene
+from ..params import ParamSet
+from ..recordings import UnitCurve
+from .problem import FitProblem
+from .release import release_from_record
+
+__all__ = ["problem_from_series", "turning_point_curve", "amplitude_readings_curve"]
+
+
+def _notes_of(meta: dict) -> list[str]:
+    text = str(meta.get("notes", "") or "")
+    return [n.strip() for n in text.split(";") if n.strip()]
+
+
+def turning_point_curve(series, tp) -> UnitCurve:
+    """The turning points of ``series`` as amplitude readings about the estimated centre.
+
+    Reading 0 is the reference turning point (the model's release); times are since then.
+    """
+    off = float(tp.offset)
+    swing = np.concatenate([[0], np.asarray(tp.swing, np.int64)])
+    theta = np.concatenate([[tp.release_theta], np.asarray(tp.theta, float)])
+    time = np.concatenate([[tp.release_time], np.asarray(tp.time, float)]) - tp.release_time
+    amp = np.abs(theta - off)
+    meta = dict(series.meta)
+    meta.update(derived_from="time series: turning points counted as alternating extrema", period_s=repr(tp.period),
+                offset_rad=repr(off), offset_rate_rad_per_s=repr(float(getattr(tp, "offset_rate", 0.0))),
+                release_time_s=repr(float(tp.release_time)), release_theta_rad=repr(float(tp.release_theta)))
+    return UnitCurve(swing, amp, "amplitude", unit=np.full(amp.size, "", dtype=str), time=time,
+                     source=series.source, sha256=series.sha256, meta=meta)
+
+
+def amplitude_readings_curve(series) -> UnitCurve:
+    """Rows that are already amplitude readings, one per half swing (reading 0: the release).
+
+    For records such as a pointer read at every turning point: the angle column holds
+    amplitudes, the time column the reading times.  Swings are numbered by row order; the
+    spacing of the times is checked to be even within 40 % of its median.
+    """
+    from ..errors import DataError
+
+    t = np.asarray(series.time, float)
+    if t.size >= 3:
+        gaps = np.diff(t)
+        med = float(np.median(gaps))
+        bad = np.flatnonzero(np.abs(gaps - med) > 0.4 * med)
+        if bad.size:
+            raise DataError(f"readings {bad[0] + 1} and {bad[0] + 2} are {gaps[bad[0]]:.4g} s apart where the others are "
+                            f"~{med:.4g} s: a half swing missed or repeated; amplitude rows must follow one per half swing",
+                            series.source)
+    value = np.abs(np.asarray(series.theta, float))
+    meta = dict(series.meta)
+    meta.update(derived_from="amplitude readings, one per half swing in row order")
+    return UnitCurve(np.arange(value.size, dtype=np.int64), value, "amplitude", unit=np.full(value.size, "", dtype=str),
+                     time=t - t[0], source=series.source, sha256=series.sha256, meta=meta)
+
+
+def _free_centre(scene: BalanceScene, curve: UnitCurve, tp) -> BalanceScene:
+    """Free the centre and its drift unless the scene's ``[observation]`` fixes them."""
+    obs = dict(scene.extra.get("observation", {}))
+    amp = float(np.max(curve.value))
+    span_t = float(max(curve.time[-1], 1e-9))
+    rate0 = float(getattr(tp, "offset_rate", 0.0))
+    obs.setdefault("offset", {"value": 0.0, "vary": True, "min": -0.25 * amp, "max": 0.25 * amp})
+    obs.setdefault("offset_rate", {"value": 0.0, "vary": True, "min": -(abs(rate0) + amp / span_t),
+                                   "max": abs(rate0) + amp / span_t})
+    return replace(scene, extra={**scene.extra, "observation": obs})
+
+
+def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_options: dict | None = None,
+                        readings: str = "samples"):
+    """The fit problem of a sampled record (see the module docstring).
+
+    Parameters
+    ----------
+    scene
+        Balance scene.
+    series
+        The samples, rad, in the recording's clock.
+    solver, solver_options
+        Forward solver.
+    readings
+        ``"samples"``: theta sampled in time; ``"amplitudes"``: each row is already the
+        amplitude of one half swing.
+
+    Returns
+    -------
+    FitProblem or WaveformProblem
+        With ``notes`` saying what was done to the record.
+    """
+    scene = replace(scene, params=ParamSet(dict(scene.params.params)))  # the release is set on a copy
+    notes = _notes_of(series.meta)
+    model = dict(scene.extra.get("observation", {})).get("model", "amplitude")
+    if readings == "amplitudes":
+        curve = amplitude_readings_curve(series)
+        notes += release_from_record(scene.params, float(curve.value[0]), series.source)
+        problem = FitProblem(scene, curve, solver, dict(solver_options or {}))
+        problem.notes = notes
+        return problem
+    from ..recordings.turning_points import reduce_series
+
+    tp = reduce_series(series)
+    notes += list(getattr(tp, "notes", []))
+    if model == "waveform":
+        from .waveform_problem import WaveformProblem
+
+        problem = WaveformProblem(scene, series, tp, solver, solver_options)
+        problem.notes = notes + problem.notes
+        return problem
+    curve = turning_point_curve(series, tp)
+    notes.append(f"{curve.value.size - 1} turning points after the reference one at t = {tp.release_time:.4g} s "
+                 f"({math.degrees(tp.release_theta - tp.offset):+.2f} deg from the centre); period {tp.period:.4g} s")
+    notes += release_from_record(scene.params, float(tp.release_theta - tp.offset), series.source)
+    problem = FitProblem(_free_centre(scene, curve, tp), curve, solver, dict(solver_options or {}))
+    problem.notes = notes
+    return problem
