@@ -191,7 +191,7 @@ def _read_recipe(path: Path) -> dict:
 @click.option("--steps", type=click.IntRange(10), default=None)
 @click.option("--burn", type=click.IntRange(0), default=None)
 @click.option("--unit", "unit_id", default=None, help="Fit only this unit of a multi-unit file.")
-@click.option("--format", "fmt", type=click.Choice(["unit-curve", "pulses", "timegrapher", "timeseries", "raw"]),
+@click.option("--format", "fmt", type=click.Choice(["unit-curve", "pulses", "timegrapher", "tg-applog", "timeseries", "raw"]),
               default=None, help="Recording format (detected from the file's content; raw: a table or .mat file read "
               "with the [recording] options).")
 @click.option("--time-column", default=None, help="[recording] time_column: name or 1-based position.")

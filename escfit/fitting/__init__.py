@@ -252,7 +252,7 @@ def _tree(problem: FitProblem, lsq: LeastSquaresResult, mc: McmcResult | None, *
             warnings.append(f"split R-hat above 1.05 for {bad}: run longer")
         if not mc.tau_reliable:
             warnings.append("the run is shorter than 50 autocorrelation times: intervals are approximate")
-    warnings += misfit_warnings
+    warnings += misfit_warnings + list(getattr(problem, "data_warnings", []))
     attrs = {
         "schema_version": SCHEMA_VERSION, "method": method, "seed": seed, "parameters": names, "units": units,
         "meanings": meanings, "scene": problem.scene.text, "scene_file": problem.scene.where,

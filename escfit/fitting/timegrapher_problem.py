@@ -17,6 +17,7 @@ and says so in ``used_readings``.  tg's dump, written back to back, loses nothin
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Mapping
 
 import numpy as np
@@ -67,6 +68,13 @@ class TimegrapherFitProblem(RecordingProblem):
         self.observation = TimegrapherObservation.from_table(scene.extra.get("observation"),
                                                              f"{scene.where} [observation]",
                                                              lift_set=data.lift_angle, release_s=data.release_s)
+        self.notes = [n.strip() for n in str(data.meta.get("notes", "") or "").split(";") if n.strip()]
+        steady = data.meta.get("steady_state_warning")
+        self.data_warnings = [str(steady)] if steady else []
+        if getattr(data, "format", "") == "tg-applog" and self.observation.use_beats:
+            # an app log's row times are display updates, not heard beats: fit the amplitudes alone
+            self.observation = replace(self.observation, use_beats=False)
+            self.notes.append("app log: row times are display updates, not beats; amplitudes fitted alone")
         self._setup_params()
         self._check_rate()
         start, end = data.amp_window

@@ -139,6 +139,8 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
         if bad.size:
             raise DataError(f"{name} value {float(values[bad[0]])!r} is not a finite number", where_of_row(int(bad[0])))
     time = regular_times(np.asarray(time, dtype=float), where_of_row, notes)
+    if spec.readings == "samples":
+        theta = unwrap_angles(np.asarray(theta, dtype=float), notes)
     if spec.start is not None or spec.stop is not None:
         lo = -math.inf if spec.start is None else spec.start
         hi = math.inf if spec.stop is None else spec.stop
@@ -156,6 +158,21 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
         meta["notes"] = "; ".join(n.replace(";", ",") for n in notes)
     return TimeSeries(time=time, theta=np.asarray(theta, dtype=float), release_s=release_s, source=source,
                       sha256=sha256, meta=meta)
+
+
+def unwrap_angles(theta: np.ndarray, notes: list[str]) -> np.ndarray:
+    """Undo the wrap of angles written modulo one turn (an ``atan2`` of tracker coordinates).
+
+    A step of more than 1.5*pi rad between neighbouring samples is a wrap, not motion (the
+    motion itself moves far less between samples of any usable record); the wraps are undone
+    with a note counting them.
+    """
+    steps = np.diff(theta)
+    jumps = int(np.count_nonzero(np.abs(steps) > 1.5 * math.pi))
+    if not jumps:
+        return theta
+    notes.append(f"angles written modulo one turn: {jumps} wraps at +-180 deg undone")
+    return np.unwrap(theta)
 
 
 def merge_file_meta(file_meta: Mapping[str, str], reader_meta: Mapping[str, str]) -> dict[str, str]:

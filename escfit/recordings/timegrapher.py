@@ -55,7 +55,7 @@ __all__ = ["TimegrapherRecording", "read_timegrapher", "read_tg_json", "read_tim
 
 TG_RANGE_DEG = (135.0, 360.0)  # tg shows no amplitude outside this range (src/computer.c)
 TG_WINDOW_S = 2.0  # tg's shortest processing buffer, 2**FIRST_STEP s (src/tg.h)
-FORMATS = ("unit-curve", "pulses", "timegrapher", "timeseries")
+FORMATS = ("unit-curve", "pulses", "timegrapher", "timeseries", "tg-applog")
 CSV_COLUMNS = ("time_s", "rate_s_per_day", "amplitude_deg", "beat_error_ms")
 _BLANK = ("", "---", "-")
 
@@ -96,7 +96,7 @@ class TimegrapherRecording:
     sample_rate : float
         Audio sample rate, Hz (``nan`` for CSV).
     format : str
-        ``"tg-json"`` or ``"csv"``.
+        ``"tg-json"``, ``"csv"`` or ``"tg-applog"`` (see :mod:`escfit.recordings.tg_applog`).
     """
 
     beat_time: np.ndarray
@@ -205,6 +205,10 @@ def detect_format(path: str | Path) -> str:
         return "timegrapher"
     if any(c.startswith("theta_") for c in cols):
         return "timeseries"
+    from .tg_applog import sniff_tg_applog
+
+    if sniff_tg_applog(path):  # a timegrapher app's log: settings lines first, one row per display update
+        return "tg-applog"
     raise DataError(f"cannot tell the recording format from the header {header}; give the format explicitly "
                     f"(one of {', '.join(FORMATS)})", where)
 
@@ -224,6 +228,7 @@ def read_recording(path: str | Path, fmt: str | None = None, **options):
     Returns
     -------
     UnitCurve, PulseTrain, TimegrapherRecording or TimeSeries
+        (a ``"tg-applog"`` file, see :mod:`escfit.recordings.tg_applog`, is a TimegrapherRecording)
     """
     fmt = fmt or detect_format(path)
     if fmt == "unit-curve":
@@ -241,13 +246,21 @@ def read_recording(path: str | Path, fmt: str | None = None, **options):
         from .timeseries import read_timeseries
 
         return read_timeseries(path, **options)
+    if fmt == "tg-applog":
+        from .tg_applog import read_tg_applog
+
+        return read_tg_applog(path, **options)
     raise DataError(f"unknown format {fmt!r}; choose one of {', '.join(FORMATS)}", str(path))
 
 
 # -- readers -------------------------------------------------------------------------------
 def read_timegrapher(path: str | Path) -> TimegrapherRecording:
-    """Read a tg JSON dump or a per-beat CSV (told apart by content)."""
-    return read_tg_json(path) if file_kind(path) == "json" else read_timegrapher_csv(path)
+    """Read a tg JSON dump, a per-beat CSV or an app's log (told apart by content)."""
+    if file_kind(path) == "json":
+        return read_tg_json(path)
+    from .tg_applog import read_tg_applog, sniff_tg_applog
+
+    return read_tg_applog(path) if sniff_tg_applog(path) else read_timegrapher_csv(path)
 
 
 def _json_error_line(text: str, pos: int) -> int:
