@@ -24,7 +24,8 @@ FREE_SPAN = 0.2  # a free release angle may move this fraction of the reference 
 def release_from_record(params: ParamSet, measured: float, source: str) -> list[str]:
     """Set ``oscillator.theta0`` from the record's signed reference angle (rad), in place.
 
-    - theta0 free in the scene: kept, but its bounds must contain ``measured``;
+    - theta0 free in the scene: kept, but its bounds (or their mirror image: the sign is a
+      convention) must contain ``measured``;
     - theta0 fixed within :data:`REL_TOL` of ``|measured|``: kept fixed, signed as the record;
     - theta0 fixed elsewhere: refused (another scene's data);
     - theta0 not given by the scene (``nan``): free around ``measured``, +-:data:`FREE_SPAN`.
@@ -48,12 +49,18 @@ def release_from_record(params: ParamSet, measured: float, source: str) -> list[
                                         prior=None)
         return [f"release angle free around the record's reference turning point {math.degrees(measured):+.3f} deg"]
     if p.vary:
+        notes = []
+        if not p.min <= measured <= p.max and p.min <= -measured <= p.max:
+            # the scene's sign is a convention; the record decides on which side the decay starts
+            p = replace(p, value=-p.value, min=-p.max, max=-p.min)
+            params.params[p.name] = p
+            notes.append(f"theta0's range mirrored to the record's side ([{p.min:.4g}, {p.max:.4g}] rad)")
         if not p.min <= measured <= p.max:
             raise DataError(f"the record's reference turning point is at {measured:+.4g} rad, outside theta0's bounds "
                             f"[{p.min:.4g}, {p.max:.4g}] in the scene", source)
         if not p.min <= p.value <= p.max or math.copysign(1.0, p.value) != math.copysign(1.0, measured):
             params.params[p.name] = replace(p, value=measured)
-        return []
+        return notes
     if abs(abs(p.value) - abs(measured)) > REL_TOL * abs(measured):
         raise DataError(f"the record's reference turning point is at {measured:+.4g} rad but the scene releases the "
                         f"balance at theta0 = {p.value:.4g} rad: another scene's data (leave theta0 out to take it from "
