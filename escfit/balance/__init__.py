@@ -4,9 +4,11 @@ Per unit inertia::
 
     theta'' + C theta' + g(theta) + R sgn(theta') + F_esc = 0
 
-with ``g`` the hairspring (``omega0**2 * theta`` unless a piecewise hairspring is named),
-``C`` viscous, ``R`` Coulomb and ``F_esc`` the escapement windows.  Only the effects a scene
-names are simulated.
+with ``g`` the hairspring (``omega0**2 * theta`` unless a piecewise hairspring is named) or,
+with ``[oscillator] restoring = "pendulum"``, gravity (``omega0**2 * sin(theta)``), ``C``
+viscous, ``R`` Coulomb and ``F_esc`` the escapement windows.  Only the effects a scene names
+are simulated.  A spring is solved in closed form by default, a pendulum by the compiled
+adaptive solver ``"dop853"`` (:func:`default_solver`).
 """
 
 from __future__ import annotations
@@ -18,13 +20,15 @@ import xarray as xr
 
 from .dense import dense_output
 from .scene import BalanceScene, parse
-from .solvers import SOLVERS, solve_system
+from .solvers import SOLVERS, default_solver, solve_system
 from .trajectory import Trajectory
+from .waveform import sample_scene, sample_theta
 
-__all__ = ["BalanceScene", "parse", "simulate", "solve", "json_summary", "dense_output", "Trajectory", "SOLVERS"]
+__all__ = ["BalanceScene", "parse", "simulate", "solve", "json_summary", "dense_output", "Trajectory", "SOLVERS",
+           "default_solver", "sample_theta", "sample_scene"]
 
 
-def solve(scene: BalanceScene, solver: str = "exact", *, values: dict[str, float] | None = None,
+def solve(scene: BalanceScene, solver: str | None = None, *, values: dict[str, float] | None = None,
           swings: int | None = None, **options: Any) -> Trajectory:
     """Run a balance scene and return the per-swing :class:`Trajectory`.
 
@@ -33,7 +37,8 @@ def solve(scene: BalanceScene, solver: str = "exact", *, values: dict[str, float
     scene
         A balance scene.
     solver
-        ``"exact"`` (default), ``"rk4"`` or ``"ivp"``.
+        ``"exact"``, ``"dop853"``, ``"rk4"`` or ``"ivp"``; default :func:`default_solver`
+        (``"exact"``, or ``"dop853"`` for a pendulum).
     values
         Parameter values by name overriding the scene's (used by fits).
     swings
@@ -42,17 +47,19 @@ def solve(scene: BalanceScene, solver: str = "exact", *, values: dict[str, float
         Solver options (see :data:`SOLVERS`).
     """
     sys = scene.build(values)
-    return solve_system(sys, swings or scene.swings, scene.switching, solver, **options)
+    return solve_system(sys, swings or scene.swings, scene.switching, solver or default_solver(scene), **options)
 
 
-def simulate(scene: BalanceScene, solver: str = "exact", *, swings: int | None = None, **options: Any) -> xr.Dataset:
-    """Simulate a balance scene; see :func:`escfit.simulate`."""
+def simulate(scene: BalanceScene, solver: str | None = None, *, swings: int | None = None,
+             **options: Any) -> xr.Dataset:
+    """Simulate a balance scene; see :func:`escfit.simulate` (solver default: :func:`default_solver`)."""
     from .. import __version__
 
     traj = solve(scene, solver, swings=swings, **options)
     return traj.to_dataset({
         "model": "balance",
         "switching": scene.switching,
+        "restoring": scene.restoring,
         "scene": scene.text,
         "scene_file": scene.where,
         "escfit_version": __version__,

@@ -27,6 +27,7 @@ from numba import config, get_num_threads, set_num_threads
 from ..errors import SolverError
 from .effects.base import SystemBuilder
 from .exact import STATUS_NAMES, run_angle_many, run_phase_many
+from .solvers import check_capability
 from .trajectory import STATUS_MESSAGES, Trajectory
 
 __all__ = ["SystemStack", "BatchTrajectory", "solve_batch"]
@@ -85,11 +86,14 @@ class SystemStack:
         Raises
         ------
         SolverError
-            When the list is empty or two systems differ in structure.
+            When the list is empty, two systems differ in structure or one is a pendulum (the
+            exact kernels handle a spring only).
         """
         if not systems:
             raise SolverError("a batch needs at least one parameter set")
         first = systems[0]
+        for restoring in {sys.restoring for sys in systems}:  # the batch runs the exact kernels
+            check_capability("exact", "angle", restoring)
         key = _structure(first)
         for i, sys in enumerate(systems):
             if sys is not first and _structure(sys) != key:

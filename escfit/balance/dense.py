@@ -1,7 +1,9 @@
-"""Dense output of the exact solver: theta(t) and omega(t) on a time grid, for plots.
+"""Dense output of the exact solver: theta(t) and omega(t) between the turning points.
 
 Inside each logged segment the motion is the closed form of :mod:`escfit.balance.segment`, so
-dense values are exact, not interpolated.
+dense values are exact, not interpolated.  :func:`log_states` is the one evaluation of a
+segment-log row; :func:`dense_output` (plots) and :func:`log_theta_at` (waveform fits, see
+:mod:`escfit.balance.waveform`) both use it.
 """
 
 from __future__ import annotations
@@ -10,11 +12,70 @@ import math
 
 import numpy as np
 import xarray as xr
+from numba import njit
 
 from .segment import propagate
 from .trajectory import Trajectory
 
-__all__ = ["dense_output"]
+__all__ = ["dense_output", "log_states", "log_theta_at"]
+
+# numba caches compiled code per file and does not see edits of segment.py, whose propagate is
+# compiled into the kernels below: bump this marker with SEGMENT_REVISION in exact.py.
+SEGMENT_REVISION = 3
+
+
+@njit(cache=True, inline="always")
+def _row_state(log, i, u):
+    """theta (rad) and omega (rad/s) a time ``u`` (s, clipped to the row) into log row ``i``."""
+    tau = log[i, 1]
+    if u > tau:
+        u = tau
+    if u < 0.0:
+        u = 0.0
+    s = log[i, 2]
+    xc = log[i, 5]
+    y, v = propagate(log[i, 3] - xc, log[i, 4], u, log[i, 7], log[i, 6])
+    return s * (xc + y), s * v
+
+
+@njit(cache=True)
+def log_states(log, seg, u, theta, omega):
+    """Fill ``theta[k], omega[k]`` with the state ``u[k]`` seconds into log row ``seg[k]``.
+
+    Parameters
+    ----------
+    log : ndarray, shape (rows, 9)
+        Segment log of the exact solver (t0, tau, s, x0, v0, xc, w2, h, swing).
+    seg : ndarray of int
+        Row of each sample.
+    u : ndarray
+        Time into that row (s), clipped to ``[0, tau]``.
+    theta, omega : ndarray
+        Outputs: angle (rad) and angular velocity (rad/s), signed in the balance frame.
+    """
+    for k in range(seg.shape[0]):
+        theta[k], omega[k] = _row_state(log, seg[k], u[k])
+
+
+@njit(cache=True)
+def log_theta_at(log, times, beyond, theta):
+    """theta (rad) at ascending ``times`` (s) from a segment log.
+
+    Each time falls in the last row starting at or before it (a merge of the sorted times with
+    the rows' start times); times after the end of the last row, or all times when the log is
+    empty, get ``beyond`` (the rest angle after a stop, or NaN).
+    """
+    n = log.shape[0]
+    i = 0
+    end = log[n - 1, 0] + log[n - 1, 1] if n > 0 else -math.inf
+    for k in range(times.shape[0]):
+        t = times[k]
+        if not t <= end:
+            theta[k] = beyond
+            continue
+        while i + 1 < n and log[i + 1, 0] <= t:
+            i += 1
+        theta[k], _ = _row_state(log, i, t - log[i, 0])
 
 
 def dense_output(traj: Trajectory, *, points_per_segment: int = 24) -> xr.Dataset:
@@ -35,17 +96,18 @@ def dense_output(traj: Trajectory, *, points_per_segment: int = 24) -> xr.Datase
     """
     if traj.log is None:
         raise ValueError("dense output needs the segment log: solve(..., solver='exact', log=True)")
-    t_all, th_all, om_all, sw_all = [], [], [], []
-    for t0, tau, s, x0, v0, xc, w2, h, swing in traj.log:
-        if not math.isfinite(tau):
-            tau = 5.0 / max(h, math.sqrt(w2) * 1e-3)  # creeping to rest: show a few time constants
-        for u in np.linspace(0.0, tau, points_per_segment):
-            y, v = propagate(x0 - xc, v0, u, h, w2)
-            t_all.append(t0 + u)
-            th_all.append(s * (xc + y))
-            om_all.append(s * v)
-            sw_all.append(int(swing) + 1)
+    log = np.ascontiguousarray(traj.log, float)
+    tau = log[:, 1].copy()
+    creep = ~np.isfinite(tau)
+    # creeping to rest: show a few time constants
+    tau[creep] = 5.0 / np.maximum(log[creep, 7], np.sqrt(log[creep, 6]) * 1e-3)
+    u = (tau[:, None] * np.linspace(0.0, 1.0, points_per_segment)[None, :]).ravel()
+    seg = np.repeat(np.arange(log.shape[0]), points_per_segment)
+    theta, omega = np.empty(u.size), np.empty(u.size)
+    log_states(log, seg, u, theta, omega)
+    t = log[seg, 0] + u
+    swing = log[seg, 8].astype(int) + 1
     return xr.Dataset(
-        {"theta": ("t", np.array(th_all), {"units": "rad"}), "omega": ("t", np.array(om_all), {"units": "rad/s"}),
-         "swing": ("t", np.array(sw_all), {"long_name": "half swing the sample belongs to"})},
-        coords={"t": ("t", np.array(t_all), {"units": "s"})})
+        {"theta": ("t", theta, {"units": "rad"}), "omega": ("t", omega, {"units": "rad/s"}),
+         "swing": ("t", swing, {"long_name": "half swing the sample belongs to"})},
+        coords={"t": ("t", t, {"units": "s"})})

@@ -18,8 +18,10 @@ and an impulse window ``+X``.
 sets in parallel (front end: :mod:`escfit.balance.batch`).  They live here so that numba's
 cache, which is keyed on this file, is invalidated together for all of them.  The cache does
 not notice edits of :mod:`escfit.balance.segment`, whose functions are compiled into these
-kernels: after changing that file, bump ``SEGMENT_REVISION`` below (or delete the cache files
-``escfit/balance/__pycache__/exact.*.nb?``); tests/test_stability.py checks the two agree.
+kernels: after changing that file, bump ``SEGMENT_REVISION`` below and its copies in the other
+modules that compile it (:mod:`escfit.balance.dense`, :mod:`escfit.observation.passage_times`),
+or delete their cache files (``__pycache__/<module>.*.nb?``); tests/test_stability.py checks
+this kernel agrees.
 
 Status codes (see :data:`STATUS_NAMES`)
 ---------------------------------------

@@ -3,6 +3,11 @@
 Each segment of frozen regime is one ``solve_ivp`` call whose terminal events are the next
 window edge (rising) and the turning point (velocity falling through zero); scipy's event
 conventions stay inside this module.
+
+In the swing frame ``x = s*theta`` a region of the swing has constants ``(w2, xc)`` (see
+:func:`escfit.balance.exact._region`): ``w2*xc`` gathers Coulomb friction, the windows acting
+there and the hairspring offset, so the right-hand side is ``-C v - w2 (x - xc)`` for a
+spring and ``-C v - w2 (sin x - xc)`` for a pendulum (``w2 = omega0**2``, no offset).
 """
 
 from __future__ import annotations
@@ -11,11 +16,12 @@ import math
 
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.special import ellipk
 
 from ..errors import SolverError
 from .effects.base import SystemBuilder
 from .exact import _region, _swing_edges
-from .solvers import _check_system, static_args
+from .solvers import OVER_THE_TOP, _check_system, static_args, status_of
 from .trajectory import Trajectory
 
 __all__ = ["solve_ivp_events"]
@@ -48,19 +54,24 @@ def solve_ivp_events(sys: SystemBuilder, n_swings: int, switching: str, *, metho
     edges = np.empty(2 * len(w_lo) + len(bp) + 1)
     n_edges = _swing_edges(s, bank, bp, w_lo, w_hi, w_dir, edges)
     status, nsteps, n_seg, at_start = "ok", 0, 0, True
+    message = ""
+    pend = sys.restoring == "pendulum"
+    spring = math.sin if pend else (lambda x: x)
     horizon = 4.0 * math.pi / sys.omega0 + 8.0 / max(c, 1e-300)
+    if pend:  # a pendulum's half swing lasts 2 K(sin^2(A/2)) / omega0, long near A = pi
+        horizon += 4.0 * float(ellipk(math.sin(0.5 * theta0) ** 2)) / sys.omega0
     while len(amp) < n_swings:
         if n_seg >= nseg:
             status = "max_segments"
             break
         j, w2, xc = _region(x, s, edges, n_edges, bp, w2s, off, w_lo, w_hi, w_x, w_dir, r)
-        if at_start and v <= 0.0 and x - xc >= 0.0:
-            status = "stopped"
+        if at_start and v <= 0.0 and spring(x) - xc >= 0.0:
+            status = "stopped"  # the net acceleration at rest, -w2 (spring(x) - xc), cannot start it
             break
         xb = edges[j] if j < n_edges else math.inf
 
         def rhs(_t, y, w2=w2, xc=xc):
-            return (y[1], -c * y[1] - w2 * (y[0] - xc))
+            return (y[1], -c * y[1] - w2 * (spring(y[0]) - xc))
 
         def edge(_t, y, xb=xb):
             return y[0] - xb
@@ -68,9 +79,15 @@ def solve_ivp_events(sys: SystemBuilder, n_swings: int, switching: str, *, metho
         def turn(_t, y):
             return y[1]
 
+        def over_top(_t, y):
+            return y[0] - math.pi
+
         edge.terminal, edge.direction = True, 1.0
         turn.terminal, turn.direction = True, -1.0
+        over_top.terminal, over_top.direction = True, 1.0
         events = [turn] if not math.isfinite(xb) else [edge, turn]
+        if pend:
+            events.append(over_top)
         y0 = [x, v if v > 0 else 0.0]
         if y0[1] == 0.0:  # start from rest: nudge past the trivial root of the turning event
             y0[1] = 1e-300
@@ -83,6 +100,11 @@ def solve_ivp_events(sys: SystemBuilder, n_swings: int, switching: str, *, metho
             status = "stopped"  # creeps to rest within the horizon without an event
             break
         k = min(hit, key=lambda k: sol.t_events[k][0])
+        if events[k] is over_top:
+            status, message = status_of(OVER_THE_TOP)
+            t += float(sol.t_events[k][0])
+            x = math.pi
+            break
         te = float(sol.t_events[k][0])
         ye = sol.y_events[k][0]
         is_edge = events[k] is edge
@@ -112,7 +134,7 @@ def solve_ivp_events(sys: SystemBuilder, n_swings: int, switching: str, *, metho
         status = "banked"
     return Trajectory(np.array(amp), np.array(tturn), np.array(hp), np.array(tm), np.array(bk, bool), status,
                       sys.omega0, "ivp", {"method": method, "rtol": rtol, "atol": atol}, n_seg, nsteps,
-                      (t, s * x, s * v))
+                      (t, s * x, s * v), message=message)
 
 
 

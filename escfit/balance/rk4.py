@@ -9,6 +9,9 @@ Two modes show what event handling is worth:
 - ``locate_events=False``: the naive integrator evaluates the discontinuous right-hand side
   at every stage and steps straight over switches; turning points are only interpolated for
   the output.  Its error is first order in ``h`` whenever a switch falls inside a step.
+
+Both modes handle a spring and a pendulum (``pend``: restoring acceleration
+``w2*sin(theta)`` instead of ``w2*theta + off``).
 """
 
 from __future__ import annotations
@@ -20,35 +23,43 @@ from numba import njit
 
 from ..errors import SolverError
 from .effects.base import SystemBuilder
-from .exact import STATUS_NAMES, _region, _swing_edges, _applies
-from .solvers import static_args
+from .exact import _applies, _region, _swing_edges
+from .solvers import OVER_THE_TOP, static_args, status_of
 from .trajectory import Trajectory
 
 __all__ = ["solve_rk4"]
 
 
 @njit(cache=True, inline="always")
-def _step(x, v, dt, c, w2, xc):
+def _acc(x, v, c, w2, xc, pend):
+    """Swing-frame acceleration: ``-c v - w2 (x - xc)``, or ``-c v - w2 (sin x - xc)`` (pendulum)."""
+    if pend:
+        return -c * v - w2 * (math.sin(x) - xc)
+    return -c * v - w2 * (x - xc)
+
+
+@njit(cache=True, inline="always")
+def _step(x, v, dt, c, w2, xc, pend):
     k1x = v
-    k1v = -c * v - w2 * (x - xc)
+    k1v = _acc(x, v, c, w2, xc, pend)
     x2 = x + 0.5 * dt * k1x
     v2 = v + 0.5 * dt * k1v
     k2x = v2
-    k2v = -c * v2 - w2 * (x2 - xc)
+    k2v = _acc(x2, v2, c, w2, xc, pend)
     x3 = x + 0.5 * dt * k2x
     v3 = v + 0.5 * dt * k2v
     k3x = v3
-    k3v = -c * v3 - w2 * (x3 - xc)
+    k3v = _acc(x3, v3, c, w2, xc, pend)
     x4 = x + dt * k3x
     v4 = v + dt * k3v
     k4x = v4
-    k4v = -c * v4 - w2 * (x4 - xc)
+    k4v = _acc(x4, v4, c, w2, xc, pend)
     return (x + dt / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
             v + dt / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v))
 
 
 @njit(cache=True)
-def _locate(x, v, dt, c, w2, xc, which, target):
+def _locate(x, v, dt, c, w2, xc, pend, which, target):
     """Partial step in (0, dt] at which x reaches target (which=0) or v reaches 0 (which=1)."""
     lo = 0.0
     hi = dt
@@ -56,11 +67,11 @@ def _locate(x, v, dt, c, w2, xc, which, target):
         lo = dt
         for _ in range(80):
             lo *= 0.5
-            _, vl = _step(x, v, lo, c, w2, xc)
+            _, vl = _step(x, v, lo, c, w2, xc, pend)
             if vl > 0.0:
                 break
-    xl, vl = _step(x, v, lo, c, w2, xc) if lo > 0.0 else (x, v)
-    xh, vh = _step(x, v, hi, c, w2, xc)
+    xl, vl = _step(x, v, lo, c, w2, xc, pend) if lo > 0.0 else (x, v)
+    xh, vh = _step(x, v, hi, c, w2, xc, pend)
     gl = xl - target if which == 0 else -vl
     gh = xh - target if which == 0 else -vh
     side = 0
@@ -69,7 +80,7 @@ def _locate(x, v, dt, c, w2, xc, which, target):
         tau = (lo * gh - hi * gl) / (gh - gl) if gh != gl else 0.5 * (lo + hi)
         if not (lo < tau < hi):
             tau = 0.5 * (lo + hi)
-        xm, vm = _step(x, v, tau, c, w2, xc)
+        xm, vm = _step(x, v, tau, c, w2, xc, pend)
         gm = xm - target if which == 0 else -vm
         if gm == 0.0 or hi - lo <= 1e-15 * dt:
             break
@@ -87,7 +98,7 @@ def _locate(x, v, dt, c, w2, xc, which, target):
 
 
 @njit(cache=True)
-def _run_located(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, bank, restitution,
+def _run_located(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, bank, restitution, pend,
                  n_swings, h, max_steps, amp, theta_turn, half_period, time, banked):
     s = 1.0 if theta0 < 0.0 else -1.0
     x = s * theta0
@@ -103,7 +114,7 @@ def _run_located(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
     at_start = True
     while n_done < n_swings:
         j, w2, xc = _region(x, s, edges, n_edges, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r)
-        if at_start and v <= 0.0 and x - xc >= 0.0:
+        if at_start and v <= 0.0 and _acc(x, 0.0, c, w2, xc, pend) <= 0.0:
             status = 1
             break
         xb = edges[j] if j < n_edges else math.inf
@@ -114,20 +125,23 @@ def _run_located(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
             if steps >= max_steps:
                 status = 3
                 break
-            xn, vn = _step(x, v, h, c, w2, xc)
+            xn, vn = _step(x, v, h, c, w2, xc, pend)
             steps += 1
+            if pend and xn >= math.pi:
+                status = OVER_THE_TOP
+                break
             hit_edge = xn >= xb
             hit_turn = vn <= 0.0
             if hit_edge or hit_turn:
-                te = _locate(x, v, h, c, w2, xc, 0, xb) if hit_edge else math.inf
-                tt = _locate(x, v, h, c, w2, xc, 1, 0.0) if hit_turn else math.inf
+                te = _locate(x, v, h, c, w2, xc, pend, 0, xb) if hit_edge else math.inf
+                tt = _locate(x, v, h, c, w2, xc, pend, 1, 0.0) if hit_turn else math.inf
                 if te <= tt:
-                    x, v = _step(x, v, te, c, w2, xc)
+                    x, v = _step(x, v, te, c, w2, xc, pend)
                     x = xb
                     t = t0 + k * h + te
                     event = 0
                 else:
-                    x, v = _step(x, v, tt, c, w2, xc)
+                    x, v = _step(x, v, tt, c, w2, xc, pend)
                     v = 0.0
                     t = t0 + k * h + tt
                     event = 1
@@ -160,11 +174,12 @@ def _run_located(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
 
 
 @njit(cache=True, inline="always")
-def _accel(th, om, s, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir):
+def _accel(th, om, s, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, pend):
     i = 0
     while i < sp_bp.shape[0] and sp_bp[i] <= th:
         i += 1
-    a = -c * om - (sp_w2[i] * th + sp_off[i]) - s * r
+    spring = sp_w2[i] * math.sin(th) if pend else sp_w2[i] * th + sp_off[i]
+    a = -c * om - spring - s * r
     x = s * th
     for k in range(w_lo.shape[0]):
         if _applies(w_dir[k], s) and w_lo[k] <= x < w_hi[k]:
@@ -173,7 +188,7 @@ def _accel(th, om, s, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir):
 
 
 @njit(cache=True)
-def _run_naive(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, bank, restitution,
+def _run_naive(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, bank, restitution, pend,
                n_swings, h, max_steps, amp, theta_turn, half_period, time, banked):
     """Steps over every switch; friction and window sign follow the sign of the stage velocity."""
     th = theta0
@@ -188,13 +203,17 @@ def _run_naive(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, b
             status = 3
             break
         sv = s_prev
-        a1 = _accel(th, om, sv if om == 0.0 else math.copysign(1.0, om), c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir)
+        a1 = _accel(th, om, sv if om == 0.0 else math.copysign(1.0, om),
+                    c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, pend)
         o2 = om + 0.5 * h * a1
-        a2 = _accel(th + 0.5 * h * om, o2, sv if o2 == 0.0 else math.copysign(1.0, o2), c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir)
+        a2 = _accel(th + 0.5 * h * om, o2, sv if o2 == 0.0 else math.copysign(1.0, o2),
+                    c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, pend)
         o3 = om + 0.5 * h * a2
-        a3 = _accel(th + 0.5 * h * o2, o3, sv if o3 == 0.0 else math.copysign(1.0, o3), c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir)
+        a3 = _accel(th + 0.5 * h * o2, o3, sv if o3 == 0.0 else math.copysign(1.0, o3),
+                    c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, pend)
         o4 = om + h * a3
-        a4 = _accel(th + h * o3, o4, sv if o4 == 0.0 else math.copysign(1.0, o4), c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir)
+        a4 = _accel(th + h * o3, o4, sv if o4 == 0.0 else math.copysign(1.0, o4),
+                    c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, pend)
         thn = th + h / 6.0 * (om + 2.0 * o2 + 2.0 * o3 + o4)
         omn = om + h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
         k += 1
@@ -229,7 +248,7 @@ def _run_naive(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, b
             t_last = t_turn
             n_done += 1
             s_new = -s_prev
-            a_rest = _accel(th_turn, 0.0, s_new, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir)
+            a_rest = _accel(th_turn, 0.0, s_new, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, pend)
             if a_rest * s_new <= 0.0:
                 status = 1
                 th = th_turn
@@ -264,8 +283,11 @@ def solve_rk4(sys: SystemBuilder, n_swings: int, switching: str, *, h: float = 1
         max_steps = int(min(50.0 * n_swings * math.pi / (sys.omega0 * h) + 10_000, 2**62))
     out = (np.empty(n_swings), np.empty(n_swings), np.empty(n_swings), np.empty(n_swings), np.zeros(n_swings, np.int8))
     run = _run_located if locate_events else _run_naive
-    n_done, status, steps, t, th, om = run(*static_args(sys, "rk4"), n_swings, float(h), int(max_steps), *out)
+    pend = sys.restoring == "pendulum"
+    n_done, status, steps, t, th, om = run(*static_args(sys, "rk4"), pend, n_swings, float(h), int(max_steps), *out)
+    name, message = status_of(status)
     return Trajectory(
-        *(a[:n_done].copy() for a in out[:4]), out[4][:n_done].astype(bool), STATUS_NAMES[status], sys.omega0,
+        *(a[:n_done].copy() for a in out[:4]), out[4][:n_done].astype(bool), name, sys.omega0,
         "rk4", {"h": h, "locate_events": locate_events, "max_steps": max_steps}, 0, steps, (t, th, om),
+        message=message,
     )

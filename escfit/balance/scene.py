@@ -15,7 +15,7 @@ from .effects.base import ReadContext, SystemBuilder
 
 __all__ = ["BalanceScene", "parse", "TOP_KEYS"]
 
-TOP_KEYS = {"model", "switching", "title", "oscillator", "run", "effects", "observation", "fit"}
+TOP_KEYS = {"model", "switching", "title", "oscillator", "run", "effects", "observation", "fit", "recording"}
 
 
 @dataclass(frozen=True)
@@ -27,6 +27,10 @@ class BalanceScene:
     switching
         ``"angle"`` (windows at balance angles, the physics) or ``"phase"`` (Monday's
         programs: windows at fixed phases of each half cycle).
+    restoring
+        ``"spring"`` (hairspring: restoring acceleration ``omega0**2 * theta``) or
+        ``"pendulum"`` (gravity: ``omega0**2 * sin(theta)``, ``omega0 = sqrt(g/L)``),
+        from ``[oscillator] restoring``.
     effects
         The effect objects, in reading order (structure only).
     params
@@ -51,6 +55,7 @@ class BalanceScene:
     title: str = ""
     extra: Mapping[str, Any] = field(default_factory=dict)
     model: str = "balance"
+    restoring: str = "spring"
 
     def effect(self, key: str):
         """The effect named ``key`` or ``None``."""
@@ -69,7 +74,8 @@ class BalanceScene:
 
     def system(self, vals: Mapping[str, float]) -> SystemBuilder:
         """Assemble the numeric system from a complete name -> value mapping (ties resolved)."""
-        sys = SystemBuilder(theta0=vals["oscillator.theta0"], omega0=vals.get("oscillator.omega0", math.nan))
+        sys = SystemBuilder(theta0=vals["oscillator.theta0"], omega0=vals.get("oscillator.omega0", math.nan),
+                            restoring=self.restoring)
         for eff in self.effects:
             eff.apply(vals, sys)
         return sys
@@ -91,7 +97,8 @@ def parse(doc: Mapping[str, Any], *, where: str, text: str) -> BalanceScene:
     if osc is None:
         raise SceneError("missing table [oscillator]", where)
     ow = f"{where} [oscillator]"
-    check_keys(osc, {"omega0", "inertia", "stiffness", "theta0"}, ow, {"theta0"})
+    check_keys(osc, {"omega0", "inertia", "stiffness", "theta0", "restoring"}, ow, {"theta0"})
+    restoring = _read_restoring(osc, doc, switching, ow)
     params = ParamSet()
     inertia = None
     if "inertia" in osc:
@@ -127,13 +134,33 @@ def parse(doc: Mapping[str, Any], *, where: str, text: str) -> BalanceScene:
             for p in ps:
                 params.add(p)
     _resolve_ties(params)
+    if restoring == "pendulum" and not abs(params["oscillator.theta0"].value) < math.pi:
+        raise SceneError(f"a pendulum released at |theta0| >= 180 deg never swings back; got theta0 = "
+                         f"{params['oscillator.theta0'].value:g} rad (must lie within +-pi)", f"{ow}.theta0")
     bank = next((e for e in effects if e.key == "banking"), None)
     if bank is not None and abs(params["oscillator.theta0"].value) > bank.angle:
         raise SceneError(f"theta0 = {params['oscillator.theta0'].value:g} rad lies beyond the banking angle "
                          f"{bank.angle:g} rad", f"{ow}.theta0")
     title = doc.get("title", "")
-    extra = {k: doc[k] for k in ("observation", "fit") if k in doc}
-    return BalanceScene(switching, tuple(effects), params, swings, inertia, text, where, str(title), extra)
+    extra = {k: doc[k] for k in ("observation", "fit", "recording") if k in doc}
+    return BalanceScene(switching, tuple(effects), params, swings, inertia, text, where, str(title), extra,
+                        restoring=restoring)
+
+
+def _read_restoring(osc: Mapping, doc: Mapping, switching: str, where: str) -> str:
+    """``[oscillator] restoring``: ``"spring"`` (default) or ``"pendulum"``, with its refusals."""
+    restoring = osc.get("restoring", "spring")
+    if restoring not in ("spring", "pendulum"):
+        raise SceneError(f"restoring must be 'spring' or 'pendulum', got {restoring!r}", f"{where}.restoring")
+    if restoring == "pendulum":
+        effects = doc.get("effects", {})
+        if isinstance(effects, Mapping) and "hairspring" in effects:
+            raise SceneError("restoring = 'pendulum' takes its restoring torque from gravity (omega0**2 * sin(theta)) "
+                             "and cannot be combined with [effects.hairspring]", f"{where}.restoring")
+        if switching == "phase":
+            raise SceneError("restoring = 'pendulum' needs switching = 'angle': phase switching assumes the fixed "
+                             "half period of a linear spring", f"{where}.restoring")
+    return restoring
 
 
 def _read_omega0(osc: Mapping, inertia: float | None, where: str) -> Param:

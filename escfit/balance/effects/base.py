@@ -57,11 +57,14 @@ class SystemBuilder:
 
     All values are per unit inertia: ``c`` (1/s), ``r`` (rad/s^2), window magnitudes
     (rad/s^2, positive drives the motion, negative opposes it), stiffness pieces
-    (1/s^2).
+    (1/s^2).  ``restoring`` is ``"spring"`` (restoring acceleration ``omega0**2 * theta``,
+    or the hairspring's pieces) or ``"pendulum"`` (``omega0**2 * sin(theta)``, gravity
+    with ``omega0 = sqrt(g/L)``; no hairspring pieces).
     """
 
     theta0: float = 0.0
     omega0: float = 1.0
+    restoring: str = "spring"
     c: float = 0.0
     r: float = 0.0
     spring_breaks: list[float] = field(default_factory=list)
