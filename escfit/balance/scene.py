@@ -97,7 +97,8 @@ def parse(doc: Mapping[str, Any], *, where: str, text: str) -> BalanceScene:
     if osc is None:
         raise SceneError("missing table [oscillator]", where)
     ow = f"{where} [oscillator]"
-    check_keys(osc, {"omega0", "inertia", "stiffness", "theta0", "restoring"}, ow, {"theta0"})
+    from_record = "recording" in doc  # a recorded decay supplies the release itself
+    check_keys(osc, {"omega0", "inertia", "stiffness", "theta0", "restoring"}, ow, set() if from_record else {"theta0"})
     restoring = _read_restoring(osc, doc, switching, ow)
     params = ParamSet()
     inertia = None
@@ -113,8 +114,12 @@ def parse(doc: Mapping[str, Any], *, where: str, text: str) -> BalanceScene:
         raise SceneError("with [effects.hairspring] give omega0 per piece there, not in [oscillator]", ow)
     if not has_spring:
         params.add(_read_omega0(osc, inertia, ow))
-    params.add(read_param(osc["theta0"], name="oscillator.theta0", kind="angle",
-                          meaning="release angle (rad); released at rest", where=f"{ow}.theta0"))
+    if "theta0" in osc:
+        params.add(read_param(osc["theta0"], name="oscillator.theta0", kind="angle",
+                              meaning="release angle (rad); released at rest", where=f"{ow}.theta0"))
+    else:  # nan: taken from the recording's reference turning point when fitting
+        params.add(Param("oscillator.theta0", math.nan, "rad",
+                         "release angle (rad); released at rest (from the recording)"))
     run = doc.get("run", {})
     check_keys(run, {"swings"}, f"{where} [run]")
     swings = run.get("swings", 120)
@@ -134,7 +139,7 @@ def parse(doc: Mapping[str, Any], *, where: str, text: str) -> BalanceScene:
             for p in ps:
                 params.add(p)
     _resolve_ties(params)
-    if restoring == "pendulum" and not abs(params["oscillator.theta0"].value) < math.pi:
+    if restoring == "pendulum" and abs(params["oscillator.theta0"].value) >= math.pi:
         raise SceneError(f"a pendulum released at |theta0| >= 180 deg never swings back; got theta0 = "
                          f"{params['oscillator.theta0'].value:g} rad (must lie within +-pi)", f"{ow}.theta0")
     bank = next((e for e in effects if e.key == "banking"), None)

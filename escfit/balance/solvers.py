@@ -64,6 +64,9 @@ def _outputs(n: int):
 
 
 def _check_system(sys: SystemBuilder, switching: str) -> None:
+    if math.isnan(sys.theta0):
+        raise SolverError("theta0 is not given: the scene takes its release from a recording; give "
+                          "[oscillator] theta0 to simulate it")
     values = {"C": sys.c, "R": sys.r, "theta0": sys.theta0, "omega0": sys.omega0}
     for name, v in values.items():
         if not math.isfinite(v):
