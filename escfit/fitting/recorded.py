@@ -38,13 +38,15 @@ def _notes_of(meta: dict) -> list[str]:
 def turning_point_curve(series, tp) -> UnitCurve:
     """The turning points of ``series`` as amplitude readings about the estimated centre.
 
-    Reading 0 is the reference turning point (the model's release); times are since then.
+    The centre and its linear drift estimated from the turning points are removed; the fit's
+    ``observation.offset`` and ``offset_rate`` are then small corrections to them.  Reading 0
+    is the reference turning point (the model's release); times are since then.
     """
-    off = float(tp.offset)
     swing = np.concatenate([[0], np.asarray(tp.swing, np.int64)])
     theta = np.concatenate([[tp.release_theta], np.asarray(tp.theta, float)])
     time = np.concatenate([[tp.release_time], np.asarray(tp.time, float)]) - tp.release_time
-    amp = np.abs(theta - off)
+    off = float(tp.offset)
+    amp = np.abs(theta - off - float(tp.offset_rate) * time)  # about the estimated (drifting) centre
     meta = dict(series.meta)
     meta.update(derived_from="time series: turning points counted as alternating extrema", period_s=repr(tp.period),
                 offset_rad=repr(off), offset_rate_rad_per_s=repr(float(getattr(tp, "offset_rate", 0.0))),

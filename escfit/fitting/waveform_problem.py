@@ -79,8 +79,8 @@ class WaveformProblem(RecordingProblem):
                            f"of motion at {end:.4g} s; a waveform fit needs a longer record", series.source)
         sigma0 = noise_from_samples(series.theta[idx])
         self.observation = WaveformObservation.from_table(
-            table, where, t_release=t_ref, period=period, offset=float(reference.offset),
-            offset_rate=float(getattr(reference, "offset_rate", 0.0)),
+            table, where, t_release=t_ref, period=period, offset=-float(reference.offset),
+            offset_rate=-float(getattr(reference, "offset_rate", 0.0)),
             sigma=sigma0 if math.isfinite(sigma0) and sigma0 > 0 else 1e-3)
         thin = self.observation.thin or max(1, math.ceil(idx.size / WaveformObservation.MAX_SAMPLES))
         idx = idx[::thin]

@@ -2,9 +2,11 @@
 
 A sample taken at time ``t`` (the recording's clock, s) reads
 
-    y = theta(t - t_release) + offset + offset_rate * (t - t_ref) + noise
+    y = theta(t - t_release) - offset - offset_rate * (t - t_ref) + noise
 
-where ``theta`` is the model's motion released at rest at ``oscillator.theta0`` at the instant
+(the sensor's zero sits at ``offset`` in the oscillator's frame, as for amplitude readings: an
+encoder reading pi at the hanging position of a pendulum has ``offset = -pi``), where ``theta``
+is the model's motion released at rest at ``oscillator.theta0`` at the instant
 ``t_release`` (a turning point of the record, so the release at rest is exact physics, not an
 approximation), ``t_ref`` the fixed reference instant of the drift (the detected release) and
 the noise Gaussian with scale ``sigma``.  A sensor that reports whole steps (an encoder count, a
@@ -70,7 +72,8 @@ class WaveformObservation:
         where
             ``"file [observation]"`` for messages.
         t_release, period, offset, offset_rate, sigma
-            Estimates from the record's turning points (s, s, rad, rad/s, rad): the defaults
+            Estimates from the record's turning points (s, s, rad, rad/s, rad; the offsets in
+            this module's convention, i.e. minus the centre on the sensor's scale): the defaults
             of parameters the table does not give.  ``t_release`` is free within a tenth of
             a period either side, the offsets and sigma are free.
         """
@@ -103,7 +106,7 @@ class WaveformObservation:
 
     def expected(self, theta: np.ndarray, t: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
         """Noise-free readings (rad) at sample times ``t`` (s) for the model angles ``theta``."""
-        return theta + values["observation.offset"] + values["observation.offset_rate"] * (t - self.t_ref)
+        return theta - values["observation.offset"] - values["observation.offset_rate"] * (t - self.t_ref)
 
     def loglike_pointwise(self, theta: np.ndarray, t: np.ndarray, y: np.ndarray,
                           values: Mapping[str, float]) -> np.ndarray:
