@@ -92,6 +92,34 @@ def _free_centre(scene: BalanceScene, curve: UnitCurve, tp) -> BalanceScene:
     return replace(scene, extra={**scene.extra, "observation": obs})
 
 
+def omega0_from_period(scene: BalanceScene, tp) -> float:
+    """Natural frequency (rad/s) implied by the record's measured period.
+
+    A spring's period does not depend on the amplitude: ``omega0 = 2 pi / P``.  A pendulum's
+    grows with it: ``P = 4 K(sin^2(A/2)) / omega0`` with ``A`` the median turning-point amplitude
+    (light damping shifts either by a fraction ``(C/2 omega0)^2``, negligible here).
+    """
+    if getattr(scene, "restoring", "spring") != "pendulum":
+        return 2.0 * math.pi / tp.period
+    from scipy.special import ellipk
+
+    amp = float(np.median(np.abs(np.asarray(tp.theta) - tp.offset)))
+    return 4.0 * float(ellipk(math.sin(0.5 * amp) ** 2)) / tp.period
+
+
+def _start_omega0(scene: BalanceScene, tp) -> list[str]:
+    """Start a free ``oscillator.omega0`` at the measured period's value, in place; notes."""
+    if "oscillator.omega0" not in scene.params or not scene.params["oscillator.omega0"].vary:
+        return []
+    p = scene.params["oscillator.omega0"]
+    w = omega0_from_period(scene, tp)
+    if not p.min <= w <= p.max:
+        return [f"the measured period {tp.period:.4g} s implies omega0 = {w:.4g} rad/s, outside the scene's range "
+                f"[{p.min:.4g}, {p.max:.4g}]: is the range right?"]
+    scene.params.params[p.name] = replace(p, value=w)
+    return [f"omega0 started at {w:.4g} rad/s from the measured period {tp.period:.4g} s"]
+
+
 def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_options: dict | None = None,
                         readings: str = "samples"):
     """The fit problem of a sampled record (see the module docstring).
@@ -125,7 +153,7 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
     from ..recordings.turning_points import reduce_series
 
     tp = reduce_series(series)
-    notes += list(getattr(tp, "notes", []))
+    notes += list(getattr(tp, "notes", [])) + _start_omega0(scene, tp)
     if model == "waveform":
         from .waveform_problem import WaveformProblem
 
@@ -138,4 +166,9 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
     notes += release_from_record(scene.params, float(tp.release_theta - tp.offset), series.source)
     problem = FitProblem(_free_centre(scene, curve, tp), curve, solver, dict(solver_options or {}))
     problem.notes = notes
+    if "oscillator.omega0" in problem.names:
+        problem.data_warnings = [
+            "turning-point amplitudes fix omega0 only through the damping per swing: fit the whole waveform "
+            f"([observation] model = \"waveform\") or fix omega0 near {omega0_from_period(scene, tp):.4g} rad/s "
+            f"(from the measured period {tp.period:.4g} s)"]
     return problem
