@@ -96,3 +96,34 @@ def test_waveform_is_tighter_than_turning_points_on_a_short_noisy_record():
         se_w = wave.stderr[wave.names.index(name)]
         se_t = turns.stderr[turns.names.index(name)]
         assert se_t / se_w > 2.5, (name, se_t, se_w)  # measured: 3.8 (C) and 4.2 (R)
+
+
+def correlated_record(seed: int, rho: float = 0.8) -> TimeSeries:
+    """As :func:`synthetic_record`, with AR(1) reading noise of marginal scale SIGMA (a tracker's)."""
+    rng = np.random.default_rng(1000 + seed)
+    t = np.arange(0.3, 6.3, 0.02)
+    theta, _ = sample_theta(truth_system(), t, "angle", "exact")
+    e = rng.standard_normal(t.size)
+    for i in range(1, e.size):
+        e[i] = rho * e[i - 1] + math.sqrt(1 - rho * rho) * e[i]
+    return TimeSeries(t, theta + OFFSET + DRIFT * t + SIGMA * e, source=f"ar1-{seed}")
+
+
+def test_correlated_noise_model_restores_calibration():
+    z = {"white": [], "ar1": []}
+    rhos = []
+    for seed in range(20):
+        record = correlated_record(seed)
+        for noise in z:
+            text = (SCENE % "waveform") + (f'noise = "{noise}"\n')
+            res = least_squares(make_problem(load_scene("s.toml", text=text), record), n_starts=1)
+            for name, truth in TRUTH.items():
+                i = res.names.index(name)
+                z[noise].append((res.value[i] - truth) / res.stderr[i])
+            if noise == "ar1":
+                rhos.append(res.values["observation.rho"])
+    white, ar1 = np.std(z["white"]), np.std(z["ar1"])
+    assert abs(np.mean(rhos) - 0.8) < 0.15  # lag-1 of residuals at a fit: biased low by what the fit absorbs
+    assert white > 1.6  # white noise assumed: intervals far too narrow (sqrt(1.8/0.2) = 3 expected)
+    assert 0.7 < ar1 < 1.35, ar1
+    assert np.mean(np.abs(z["ar1"]) < 1.96) >= 0.85

@@ -279,7 +279,8 @@ def _misfit(problem, lsq: LeastSquaresResult) -> tuple[dict, list[str]]:
     """
     coords = _obs_coords(problem)
     n = problem.n_data
-    if getattr(problem.data, "kind", "") == "notches":
+    if getattr(problem.data, "kind", "") == "notches" or getattr(problem.observation, "noise", "") == "ar1":
+        # notch counts, and correlated noise (whose innovations should be white): standardised residuals
         resid, unit = problem.residuals(lsq.values)[:n], "noise scales"
     else:
         resid, unit = problem.observed - problem.expected(lsq.values), getattr(problem, "reading_units", "rad")

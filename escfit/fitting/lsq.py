@@ -20,7 +20,7 @@ from .problem import FitProblem
 
 __all__ = ["LeastSquaresResult", "least_squares", "NOISE_PARAMS"]
 
-NOISE_PARAMS = ("observation.sigma", "observation.nu", "observation.sigma_t")
+NOISE_PARAMS = ("observation.sigma", "observation.nu", "observation.sigma_t", "observation.rho")
 
 
 @dataclass
@@ -72,7 +72,7 @@ class LeastSquaresResult:
 
 
 def least_squares(problem: FitProblem, *, n_starts: int = 8, seed: int = 0,
-                  fixed: dict[str, float] | None = None) -> LeastSquaresResult:
+                  fixed: dict[str, float] | None = None, start: dict[str, float] | None = None) -> LeastSquaresResult:
     """Minimise the standardised residuals over the structural free parameters.
 
     Parameters
@@ -86,7 +86,23 @@ def least_squares(problem: FitProblem, *, n_starts: int = 8, seed: int = 0,
         Seed of the Latin hypercube.
     fixed
         Parameters held at given values (used by profile likelihoods).
+    start
+        Values replacing the scene's in the first start point.
+
+    Notes
+    -----
+    With correlated reading noise (``observation.rho``, AR(1)) the residuals are the noise's
+    innovations at a given rho.  rho is then estimated from the lag-1 autocorrelation of the
+    readings' residuals at the optimum and the fit repeated once at that rho, from the optimum.
     """
+    if "observation.rho" in problem.names and "observation.rho" not in (fixed or {}):
+        first = least_squares(problem, n_starts=n_starts, seed=seed,
+                              fixed={**(fixed or {}), "observation.rho": 0.0}, start=start)
+        r = problem.observed - problem.expected(first.values)
+        r = r - r.mean()
+        rho = float(np.clip((r[1:] @ r[:-1]) / (r @ r), 0.0, 0.99))
+        return least_squares(problem, n_starts=1, seed=seed, fixed={**(fixed or {}), "observation.rho": rho},
+                             start={n: first.values[n] for n in first.names})
     fixed = dict(fixed or {})
     names = [n for n in problem.names if n not in NOISE_PARAMS and n not in fixed]
     if not names:
@@ -94,6 +110,8 @@ def least_squares(problem: FitProblem, *, n_starts: int = 8, seed: int = 0,
     idx = [problem.names.index(n) for n in names]
     lo, hi = (b[idx] for b in problem.bounds)
     x0 = problem.initial[idx]
+    if start:
+        x0 = np.array([start.get(n, v) for n, v in zip(names, x0)])
     for n, v in fixed.items():
         if n not in problem.names:
             raise FitError(f"cannot hold {n!r} fixed: not a free parameter of the fit")

@@ -152,7 +152,9 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
         return problem
     from ..recordings.turning_points import reduce_series
 
-    tp = reduce_series(series)
+    # a waveform fit uses the turning points only for its start (reference, period, centre): an
+    # irregular interval late in the record is a note there, not a refusal
+    tp = reduce_series(series, strict=model != "waveform")
     notes += list(getattr(tp, "notes", [])) + _start_omega0(scene, tp)
     if model == "waveform":
         from .waveform_problem import WaveformProblem

@@ -9,13 +9,18 @@ encoder reading pi at the hanging position of a pendulum has ``offset = -pi``), 
 is the model's motion released at rest at ``oscillator.theta0`` at the instant
 ``t_release`` (a turning point of the record, so the release at rest is exact physics, not an
 approximation), ``t_ref`` the fixed reference instant of the drift (the detected release) and
-the noise Gaussian with scale ``sigma``.  A sensor that reports whole steps (an encoder count, a
+the noise Gaussian with scale ``sigma``: independent from sample to sample (``noise = "white"``,
+the default) or, with ``noise = "ar1"``, correlated as a first-order autoregression in sample
+order, ``e_i = rho*e_(i-1) + innovation`` with marginal scale ``sigma``.  Video trackers and
+filtered sensors give correlated errors, and a model that misses a small effect (air drag
+growing with the speed, a marker off the axis) leaves residuals that look the same; white noise
+then makes the intervals too narrow by about ``sqrt((1 + rho)/(1 - rho))``.  A sensor that reports whole steps (an encoder count, a
 pixel) is described by ``quantum``: the reading is the step containing the true value plus
 jitter, and the likelihood of a sample is the probability mass of its step, as for notch
 counts.
 
 Parameters: ``observation.sigma`` (rad), ``observation.offset`` (rad), ``observation.offset_rate``
-(rad/s), ``observation.t_release`` (s, recording clock).  ``quantum`` (an angle) and ``thin``
+(rad/s), ``observation.t_release`` (s, recording clock), ``observation.rho`` (AR(1) noise only).  ``quantum`` (an angle) and ``thin``
 (use every n-th sample) are settings, not parameters.
 """
 
@@ -56,8 +61,9 @@ class WaveformObservation:
     thin: int
     t_ref: float
     params: tuple[Param, ...]
+    noise: str = "white"
     kind = "waveform"
-    KEYS = {"model", "sigma", "offset", "offset_rate", "t_release", "quantum", "thin"}
+    KEYS = {"model", "sigma", "offset", "offset_rate", "t_release", "quantum", "thin", "noise", "rho"}
     MAX_SAMPLES = 4000
 
     @classmethod
@@ -83,6 +89,14 @@ class WaveformObservation:
         quantum = to_canonical(table.get("quantum", 0.0), "angle", f"{where}.quantum")
         if not (math.isfinite(quantum) and quantum >= 0.0):
             raise SceneError(f"quantum must be a step angle >= 0, got {table.get('quantum')!r}", f"{where}.quantum")
+        noise = table.get("noise", "white")
+        if noise not in ("white", "ar1"):
+            raise SceneError(f"noise must be 'white' or 'ar1', got {noise!r}", f"{where}.noise")
+        if noise == "ar1" and quantum > 0.0:
+            raise SceneError("quantum (whole-step readings) goes with white noise; with correlated noise leave it out",
+                             f"{where}.quantum")
+        if noise == "white" and "rho" in table:
+            raise SceneError("rho is the correlation of AR(1) noise: it needs noise = 'ar1'", f"{where}.rho")
         thin = table.get("thin", 0)
         if isinstance(thin, bool) or not isinstance(thin, int) or not 0 <= thin <= 1_000_000:
             raise SceneError(f"thin must be a whole number >= 1 (or 0 for automatic), got {thin!r}", f"{where}.thin")
@@ -102,7 +116,12 @@ class WaveformObservation:
                            name="observation.t_release", kind="time",
                            meaning="instant the model is released at rest (s, the recording's clock)",
                            where=f"{where}.t_release")
-        return cls(quantum, thin, t_release, tuple(params) + (t_rel,))
+        if noise == "ar1":
+            params.append(read_param(table.get("rho", {"value": 0.5, "vary": True, "min": 0.0, "max": 0.99}),
+                                     name="observation.rho", kind="dimensionless", lower=-0.999, upper=0.999,
+                                     meaning="lag-1 correlation of the reading noise (AR(1), in sample order)",
+                                     where=f"{where}.rho"))
+        return cls(quantum, thin, t_release, tuple(params) + (t_rel,), noise)
 
     def expected(self, theta: np.ndarray, t: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
         """Noise-free readings (rad) at sample times ``t`` (s) for the model angles ``theta``."""
@@ -116,16 +135,35 @@ class WaveformObservation:
         if self.quantum > 0.0:
             h = 0.5 * self.quantum
             return log_interval_mass((y - h - mu) / sigma, (y + h - mu) / sigma)
-        z = (y - mu) / sigma
-        return -0.5 * z * z - (math.log(sigma) + 0.5 * math.log(2 * math.pi))
+        z, scale = self._innovations(y - mu, sigma, values)
+        return -0.5 * z * z - (np.log(scale) + 0.5 * math.log(2 * math.pi))
+
+    def _innovations(self, r: np.ndarray, sigma: float, values: Mapping[str, float]):
+        """Standardised innovations of the residuals ``r`` and the scale of each (rad)."""
+        if self.noise == "white":
+            return r / sigma, np.full(r.size, sigma)
+        rho = values["observation.rho"]
+        scale = np.full(r.size, sigma * math.sqrt(max(1.0 - rho * rho, 1e-300)))
+        scale[0] = sigma
+        e = r.copy()
+        e[1:] -= rho * r[:-1]
+        return e / scale, scale
 
     def residuals(self, theta: np.ndarray, t: np.ndarray, y: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
         """Residuals scaled by the total reading spread (noise and rounding), for least squares."""
+        if self.noise == "ar1":
+            return self._innovations(y - self.expected(theta, t, values), values["observation.sigma"], values)[0]
         spread = math.sqrt(values["observation.sigma"] ** 2 + self.quantum**2 / 12.0)
         return (y - self.expected(theta, t, values)) / spread
 
     def sample(self, theta: np.ndarray, t: np.ndarray, values: Mapping[str, float],
                rng: np.random.Generator) -> np.ndarray:
         """Synthetic readings (rad), rounded to the step when there is one."""
-        y = self.expected(theta, t, values) + values["observation.sigma"] * rng.standard_normal(theta.size)
+        e = rng.standard_normal(theta.size)
+        if self.noise == "ar1":
+            rho = values["observation.rho"]
+            s = math.sqrt(1.0 - rho * rho)
+            for i in range(1, e.size):
+                e[i] = rho * e[i - 1] + s * e[i]
+        y = self.expected(theta, t, values) + values["observation.sigma"] * e
         return np.round(y / self.quantum) * self.quantum if self.quantum > 0.0 else y
