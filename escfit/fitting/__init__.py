@@ -285,8 +285,14 @@ def _misfit(problem, lsq: LeastSquaresResult) -> tuple[dict, list[str]]:
     else:
         resid, unit = problem.observed - problem.expected(lsq.values), getattr(problem, "reading_units", "rad")
     is_turns = isinstance(problem, FitProblem)
-    return misfit_report(resid, coords["swing"][1] if is_turns else None, coords["curve"][1], unit=unit,
-                         branches=is_turns)
+    figures, warnings = misfit_report(resid, coords["swing"][1] if is_turns else None, coords["curve"][1], unit=unit,
+                                      branches=is_turns)
+    rho = lsq.values.get("observation.rho", 0.0)
+    if rho >= 0.95:
+        warnings.append(f"the residuals are nearly a smooth curve (noise correlation rho = {rho:.2f} between "
+                        "neighbouring samples): that is structure the model misses rather than reading noise; the "
+                        "intervals describe the best fit of an incomplete model")
+    return figures, warnings
 
 
 def _obs_coords(problem: FitProblem) -> dict:
