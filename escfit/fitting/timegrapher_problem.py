@@ -69,8 +69,10 @@ class TimegrapherFitProblem(RecordingProblem):
                                                              f"{scene.where} [observation]",
                                                              lift_set=data.lift_angle, release_s=data.release_s)
         self.notes = [n.strip() for n in str(data.meta.get("notes", "") or "").split(";") if n.strip()]
-        steady = data.meta.get("steady_state_warning")
-        self.data_warnings = [str(steady)] if steady else []
+        from ..recordings.tg_applog import STEADY_STATE_WARNING, is_steady_state
+
+        steady = is_steady_state(data.amp_deg, data.amp_time, resolution_deg=data.resolution_deg)
+        self.data_warnings = [STEADY_STATE_WARNING] if steady else []
         if getattr(data, "format", "") == "tg-applog" and self.observation.use_beats:
             # an app log's row times are display updates, not heard beats: fit the amplitudes alone
             self.observation = replace(self.observation, use_beats=False)
