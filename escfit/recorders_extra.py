@@ -12,10 +12,8 @@ import math
 from pathlib import Path
 
 import numpy as np
-from numba import njit
 
 from .balance import BalanceScene, solve
-from .balance.segment import propagate
 from .balance.trajectory import Trajectory
 from .errors import SceneError
 from .observation.passage_times import level_times, swing_starts
@@ -100,26 +98,17 @@ def record_pulses(scene: BalanceScene, *, notches: int = 60, sigma_t: float = 1e
                       f"<synthetic from {scene.where}>", "", meta)
 
 
-@njit(cache=True)
-def _theta_at(log, t, out):
-    n = log.shape[0]
-    r = 0
-    for i in range(t.shape[0]):
-        while r + 1 < n and log[r + 1, 0] <= t[i]:
-            r += 1
-        tau = min(t[i] - log[r, 0], log[r, 1])
-        if tau < 0.0:
-            tau = 0.0
-        xc = log[r, 5]
-        y, _ = propagate(log[r, 3] - xc, log[r, 4], tau, log[r, 7], log[r, 6])
-        out[i] = log[r, 2] * (xc + y)
-
-
 def theta_at(log: np.ndarray, t: np.ndarray) -> np.ndarray:
     """The exact angle (rad) at increasing times ``t`` (s since release) from a segment log;
-    after the last segment the balance stays where it ended."""
-    out = np.empty(t.size)
-    _theta_at(np.ascontiguousarray(log), np.ascontiguousarray(t, dtype=float), out)
+    after the last segment the balance stays where it ended (see :mod:`escfit.balance.dense`)."""
+    from .balance.dense import log_theta_at
+
+    log = np.ascontiguousarray(log, dtype=float)
+    end = np.array([log[-1, 0] + log[-1, 1]]) if log.shape[0] else np.zeros(1)
+    last = np.empty(1)
+    log_theta_at(log, end, math.nan, last)
+    out = np.empty(np.size(t))
+    log_theta_at(log, np.ascontiguousarray(t, dtype=float), float(last[0]), out)
     return out
 
 
@@ -145,10 +134,12 @@ def record_timeseries(scene: BalanceScene, *, rate_hz: float = 500.0, swings: in
     """
     if not rate_hz > 0:
         raise SceneError(f"rate_hz must be positive, got {rate_hz!r}")
-    tr = _solve(scene, swings)
+    from .balance.waveform import sample_scene
+
+    tr = solve(scene, swings=swings or scene.swings)  # the scene's default solver: pendulums too
     end = tr.time[-1] if duration is None else min(duration, tr.time[-1])
     t = np.arange(0.0, end, 1.0 / rate_hz)
-    theta = theta_at(tr.log, t)
+    theta, _ = sample_scene(scene, t)  # any restoring torque, through the scene's default solver
     rng = np.random.default_rng(seed)
     y = theta + offset + sigma * rng.standard_normal(t.size)
     if quantum > 0:
