@@ -23,7 +23,7 @@ add no error of their own beyond the integrator's local error.
 The kernel also samples theta at requested times (steps are clipped to land on them); see
 :mod:`escfit.balance.waveform`.  Like :mod:`escfit.balance.rk4` it compiles functions of
 :mod:`escfit.balance.exact` into its cache, which numba keys on this file only: after editing
-``_region_coefficients`` or ``_swing_edges`` there, touch this file too.
+``region_tables``, ``_region_coefficients`` or ``_swing_edges`` there, touch this file too.
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ from scipy.integrate._ivp import dop853_coefficients as _coefficients
 
 from ..errors import SolverError
 from .effects.base import SystemBuilder
-from .exact import _region_coefficients, _swing_edges
+from .exact import region_tables
 from .solvers import OVER_THE_TOP, STEP_BUDGET, STEP_UNDERFLOW, _check_system, static_args, status_of
 from .trajectory import Trajectory
 
@@ -252,17 +252,7 @@ def run_dop853(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, b
     n_out = amp.shape[0]
     kx = np.empty(_N + 1)
     kv = np.empty(_N + 1)
-    n_max = 2 * w_lo.shape[0] + sp_bp.shape[0] + 1
-    edge_tab = np.empty((2, n_max))
-    n_edge_tab = np.zeros(2, np.int64)
-    w2_tab = np.empty((2, n_max + 1))
-    xc_tab = np.empty((2, n_max + 1))
-    for dd in range(2):
-        sd = 1.0 if dd == 0 else -1.0
-        n_edge_tab[dd] = _swing_edges(sd, bank, sp_bp, w_lo, w_hi, w_dir, edge_tab[dd])
-        for j in range(n_edge_tab[dd] + 1):
-            w2_tab[dd, j], xc_tab[dd, j] = _region_coefficients(j, sd, edge_tab[dd], n_edge_tab[dd], sp_bp, sp_w2,
-                                                                sp_off, w_lo, w_hi, w_x, w_dir, r)
+    edge_tab, n_edge_tab, w2_tab, xc_tab = region_tables(bank, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r)
     d = 0 if s > 0.0 else 1
     h = -1.0
     rejected = False

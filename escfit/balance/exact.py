@@ -129,6 +129,27 @@ def _swing_edges(s, bank, sp_bp, w_lo, w_hi, w_dir, edges):
 
 
 @njit(cache=True)
+def region_tables(bank, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r):
+    """Switch points and region coefficients of both swing directions (row 0: s = +1, row 1: s = -1).
+
+    They are fixed for a run, so solvers tabulate them once.  Returns ``(edges, n_edges, w2, xc)``:
+    the edges of each direction in order, how many, and each region's stiffness and centre.
+    """
+    n_max = 2 * w_lo.shape[0] + sp_bp.shape[0] + 1
+    edge_tab = np.empty((2, n_max))
+    n_edge_tab = np.zeros(2, np.int64)
+    w2_tab = np.empty((2, n_max + 1))
+    xc_tab = np.empty((2, n_max + 1))
+    for d in range(2):
+        sd = 1.0 if d == 0 else -1.0
+        n_edge_tab[d] = _swing_edges(sd, bank, sp_bp, w_lo, w_hi, w_dir, edge_tab[d])
+        for j in range(n_edge_tab[d] + 1):
+            w2_tab[d, j], xc_tab[d, j] = _region_coefficients(j, sd, edge_tab[d], n_edge_tab[d], sp_bp, sp_w2,
+                                                              sp_off, w_lo, w_hi, w_x, w_dir, r)
+    return edge_tab, n_edge_tab, w2_tab, xc_tab
+
+
+@njit(cache=True)
 def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
               bank, restitution, dr_th, dr_rate, n_swings, max_seg,
               amp, theta_turn, half_period, time, banked, log):
@@ -181,19 +202,7 @@ def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
     for i in range(dr_rate.shape[0]):
         if dr_rate[i] != 0.0:
             drift = True
-    # Switch points and region coefficients of both swing directions (row 0: s = +1,
-    # row 1: s = -1) are fixed for the run, so they are tabulated once.
-    n_max = 2 * w_lo.shape[0] + sp_bp.shape[0] + 1
-    edge_tab = np.empty((2, n_max))
-    n_edge_tab = np.zeros(2, np.int64)
-    w2_tab = np.empty((2, n_max + 1))
-    xc_tab = np.empty((2, n_max + 1))
-    for d in range(2):
-        sd = 1.0 if d == 0 else -1.0
-        n_edge_tab[d] = _swing_edges(sd, bank, sp_bp, w_lo, w_hi, w_dir, edge_tab[d])
-        for j in range(n_edge_tab[d] + 1):
-            w2_tab[d, j], xc_tab[d, j] = _region_coefficients(j, sd, edge_tab[d], n_edge_tab[d], sp_bp, sp_w2,
-                                                              sp_off, w_lo, w_hi, w_x, w_dir, r)
+    edge_tab, n_edge_tab, w2_tab, xc_tab = region_tables(bank, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r)
     d = 0 if s > 0.0 else 1
     edges = edge_tab[d]
     n_edges = n_edge_tab[d]
