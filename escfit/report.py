@@ -44,7 +44,10 @@ def _figures(res: FitResult) -> dict[str, bytes]:
     figs: dict[str, bytes] = {}
     if "expected" in res.group("least_squares"):
         kind = res.attrs.get("data_kind", "amplitude")
-        figs["data and fit"] = (_data_figure if kind in ("amplitude", "notches") else _residual_figure)(res, plt)
+        if kind == "timeseries":
+            figs["data and fit"] = _waveform_figure(res, plt)
+        else:
+            figs["data and fit"] = (_data_figure if kind in ("amplitude", "notches") else _residual_figure)(res, plt)
     post = res.group("posterior")
     if post is not None:
         figs["corner plot"] = _corner(res, post, plt)
@@ -86,6 +89,34 @@ def _data_figure(res: FitResult, plt) -> bytes:
     axr.axhline(0, color="k", lw=0.5)
     axr.set_xlabel("half swing")
     axr.set_ylabel("residual (rad)")
+    return _png(fig, plt)
+
+
+def _waveform_figure(res: FitResult, plt) -> bytes:
+    """Every sample against time with the model's theta(t), and the residuals below (deg)."""
+    obs = res.group("observed_data")
+    lsq_exp = res.group("least_squares")["expected"].values
+    pp = res.group("posterior_predictive")
+    t = obs["time"].values
+    k = 180.0 / np.pi
+    y = obs["reading"].values.astype(float)
+    fig, (ax, axr) = plt.subplots(2, 1, figsize=(9, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
+    ms = 3 if y.size < 500 else 1.2
+    ax.plot(t, k * y, "o", ms=ms, color="0.45", label="recording (every sample fitted)")
+    ax.plot(t, k * lsq_exp, "-", lw=1, color="C3", label="model at the least-squares fit")
+    if pp is not None:
+        e = pp["expected"].values.reshape(-1, y.size)
+        e = e[np.all(np.isfinite(e), axis=1)]
+        if e.size:
+            lo, hi = np.quantile(e - lsq_exp, [0.025, 0.975], axis=0)
+            axr.fill_between(t, k * lo, k * hi, alpha=0.3, color="C3", label="95 % posterior band of the model")
+    axr.plot(t, k * (y - lsq_exp), "o", ms=ms, color="C0", label="recording - model")
+    axr.axhline(0, color="k", lw=0.5)
+    ax.set_ylabel("angle reading (deg)")
+    axr.set_ylabel("residual (deg)")
+    axr.set_xlabel("time on the recording's clock (s)")
+    ax.legend(fontsize=8, loc="upper right")
+    axr.legend(fontsize=8, loc="upper right")
     return _png(fig, plt)
 
 
