@@ -16,7 +16,7 @@ from .errors import DataError, EscfitError, FitError, ResultsError, SceneError, 
 from .scene import load_scene
 
 __all__ = [
-    "__version__", "load_scene", "simulate",
+    "__version__", "load_scene", "simulate", "load_fit",
     "EscfitError", "SceneError", "UnitError", "DataError", "SolverError", "FitError", "ResultsError",
 ]
 
@@ -29,7 +29,8 @@ def simulate(scene, solver: str | None = None, **options: Any):
     scene
         A scene object from :func:`load_scene`, or a path.
     solver
-        Model-specific solver name (balance: ``"exact"`` default, ``"rk4"``, ``"ivp"``).
+        Model-specific solver name (balance: ``"exact"``, the default for springs, ``"dop853"``, the
+        default for pendulums, ``"rk4"``, ``"ivp"``).
     **options
         Solver options; unknown ones are refused before any work.
 
@@ -47,3 +48,10 @@ def simulate(scene, solver: str | None = None, **options: Any):
     if solver is None:
         return module.simulate(scene, **options)
     return module.simulate(scene, solver, **options)
+
+
+def load_fit(path):
+    """Read a results file written by ``escfit fit`` (see :func:`escfit.results.load_fit`)."""
+    from .results import load_fit as _load
+
+    return _load(path)

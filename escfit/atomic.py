@@ -40,6 +40,9 @@ def atomic_path(path: str | Path, *, force: bool = False) -> Iterator[Path]:
         raise ResultsError("output directory does not exist", str(target.parent))
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent)
     os.close(fd)
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; results are for colleagues too
     tmp_path = Path(tmp)
     try:
         yield tmp_path

@@ -162,7 +162,7 @@ def charts(out_dir, c0, no_png, force):
 
 
 RECIPE_KEYS = {"data", "scene", "method", "out", "seed", "walkers", "steps", "burn", "unit", "format", "notch_deg",
-               "report", "title", "solver"}
+               "report", "title", "solver", "moves"}
 
 
 def _read_recipe(path: Path) -> dict:
@@ -203,14 +203,16 @@ def _read_recipe(path: Path) -> dict:
 @click.option("--start", "start_time", default=None, help="[recording] start of the window, e.g. '13 s'.")
 @click.option("--stop", "stop_time", default=None, help="[recording] end of the window, e.g. '60 s'.")
 @click.option("--solver", default=None, help="Forward solver (default: exact, or dop853 for a pendulum).")
+@click.option("--moves", type=click.Choice(["stretch", "de"]), default=None,
+              help="emcee proposal: stretch (default) or de (differential evolution: coupled parameters).")
 @click.option("--notch-deg", type=float, default=None, help="Notch angle for notch counts, deg.")
 @click.option("--resume", is_flag=True, help="Continue an interrupted emcee run from its checkpoint.")
 @click.option("--force", is_flag=True, help="Replace an existing results file.")
 @click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None, help="Also write a report.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 def fit(data, scene_path, method, out, seed, walkers, steps, burn, unit_id, fmt, time_column, sample_rate,
-        angle_column, angle_unit, counts_per_turn, scale, start_time, stop_time, solver, notch_deg, resume, force,
-        report_path, quiet):
+        angle_column, angle_unit, counts_per_turn, scale, start_time, stop_time, solver, moves, notch_deg, resume,
+        force, report_path, quiet):
     """Fit DATA (a recording) with --scene SCENE, or run a fit RECIPE.toml."""
     from .errors import SceneError
     from .fitting import fit as run_fit
@@ -243,7 +245,7 @@ def fit(data, scene_path, method, out, seed, walkers, steps, burn, unit_id, fmt,
                      method=method, out=out, force=force, seed=pick(seed, "seed", 0),
                      walkers=pick(walkers, "walkers", 32), steps=steps, burn=pick(burn, "burn", None),
                      resume=resume, progress=not quiet and sys.stderr.isatty(), unit=pick(unit_id, "unit", None),
-                     solver=pick(solver, "solver", None),
+                     solver=pick(solver, "solver", None), moves=pick(moves, "moves", "stretch"),
                      recording={"time_column": _column(time_column), "sample_rate": sample_rate,
                                 "angle_column": _column(angle_column), "angle_unit": angle_unit,
                                 "counts_per_turn": counts_per_turn, "scale": scale, "start": start_time,

@@ -97,8 +97,8 @@ def parse(doc: Mapping[str, Any], *, where: str, text: str) -> BalanceScene:
     if osc is None:
         raise SceneError("missing table [oscillator]", where)
     ow = f"{where} [oscillator]"
-    from_record = "recording" in doc  # a recorded decay supplies the release itself
-    check_keys(osc, {"omega0", "inertia", "stiffness", "theta0", "restoring"}, ow, set() if from_record else {"theta0"})
+    # theta0 may be left out: a sampled recording supplies the release itself (see escfit.fitting.release)
+    check_keys(osc, {"omega0", "inertia", "stiffness", "theta0", "restoring"}, ow)
     restoring = _read_restoring(osc, doc, switching, ow)
     params = ParamSet()
     inertia = None

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime as _dt
+import math
 from pathlib import Path
 
 import numpy as np
@@ -29,7 +30,8 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
         walkers: int = 32, steps: int = 2000, burn: int | None = None, n_starts: int = 8, resume: bool = False,
         progress: bool = False, solver: str | None = None, solver_options: dict | None = None,
         checkpoint: str | Path | None = None, unit: str | None = None, fmt: str | None = None,
-        notch_deg: float | None = None, predictive_draws: int = PP_DRAWS, recording: dict | None = None) -> FitResult:
+        notch_deg: float | None = None, predictive_draws: int = PP_DRAWS, recording: dict | None = None,
+        moves: str = "stretch") -> FitResult:
     """Fit a balance scene to a recording.
 
     Parameters
@@ -56,6 +58,8 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
         Forward solver (default: the scene's).
     recording
         ``[recording]`` options overriding the scene's (see :func:`make_problem`).
+    moves
+        emcee's proposal: ``"stretch"`` or ``"de"`` (see :func:`~escfit.fitting.mcmc.run_emcee`).
     predictive_draws
         Posterior draws (spread evenly over walkers and steps) at which the expected readings
         and the pointwise log-likelihood (for PSIS-LOO) are stored.
@@ -88,7 +92,7 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
             raise FitError("an interrupted run's checkpoint exists; pass --resume to continue it or --force to restart",
                            str(checkpoint))
         mc = run_emcee(problem, lsq, walkers=walkers, steps=steps, burn=burn, seed=seed, checkpoint=checkpoint,
-                       resume=resume, progress=progress)
+                       resume=resume, progress=progress, moves=moves)
     result = FitResult(_tree(problem, lsq, mc, method=method, seed=seed, started=started,
                              predictive_draws=predictive_draws))
     if out is not None:
@@ -149,7 +153,16 @@ def make_problem(scene, data, *, solver: str | None = None, solver_options: dict
                        getattr(data, "source", None))
     if isinstance(data, TimeSeries):
         readings = spec.readings if spec is not None else "samples"
-        return problem_from_series(sc, data, solver=solver, solver_options=options, readings=readings)
+        problem = problem_from_series(sc, data, solver=solver, solver_options=options, readings=readings)
+        problem.notes += _override_notes(sc, recording)
+        if data.meta.get("angle_unit_assumed"):
+            problem.data_warnings = list(getattr(problem, "data_warnings", [])) + [
+                "the recording gives no angle unit and radians were assumed: if the angles are in another unit "
+                "(deg, encoder counts, a sensor's volts, a position in mm) set [recording] angle_unit and scale"]
+        return problem
+    if math.isnan(sc.params["oscillator.theta0"].value):
+        raise FitError("the scene leaves theta0 out, which only a sampled recording (a time series) can supply; "
+                       "give [oscillator] theta0", sc.where)
     if isinstance(data, UnitCurve):
         if unit is not None:
             rows = np.flatnonzero(data.unit == unit)
@@ -179,6 +192,18 @@ def _recording_spec(scene, overrides: dict | None):
         return None
     spec = recording_spec_from_table(table or {}, f"{scene.where}")
     return merge_spec(spec, **given) if given else spec
+
+
+def _override_notes(scene, overrides: dict | None) -> list[str]:
+    """Notes for command-line options that replace a different key of the scene's ``[recording]``."""
+    table = scene.extra.get("recording") or {}
+    given = {k for k, v in (overrides or {}).items() if v is not None}
+    notes = [f"--{k.replace('_', '-')} replaces the scene's [recording] {k} = {table[k]!r}"
+             for k in sorted(given) if k in table]
+    for new, old in (("sample_rate", "time_column"), ("time_column", "sample_rate")):
+        if new in given and old in table and old not in given:
+            notes.append(f"--{new.replace('_', '-')} replaces the scene's [recording] {old} = {table[old]!r}")
+    return notes
 
 
 def _read_data(path, spec, fmt: str | None, notch_deg: float | None):
@@ -227,6 +252,7 @@ def _tree(problem: FitProblem, lsq: LeastSquaresResult, mc: McmcResult | None, *
     warnings = (correlation_warnings(lsq.names, lsq.correlation) + ridge_warnings(lsq.names, lsq.correlation)
                 + phase_mode_warning(problem))
     misfit, misfit_warnings = _misfit(problem, lsq)
+    misfit_warnings = _bound_warnings(problem, lsq) + misfit_warnings
     undefined = [n for n, e in zip(lsq.names, lsq.stderr) if not np.isfinite(e)]
     if undefined:
         warnings.append(f"least-squares standard errors undefined for {undefined} (singular or indefinite "
@@ -252,6 +278,11 @@ def _tree(problem: FitProblem, lsq: LeastSquaresResult, mc: McmcResult | None, *
             warnings.append(f"split R-hat above 1.05 for {bad}: run longer")
         if not mc.tau_reliable:
             warnings.append("the run is shorter than 50 autocorrelation times: intervals are approximate")
+        if "observation.rho" in names and not any("nearly a smooth curve" in w for w in misfit_warnings):
+            rho = float(np.median(mc.chain[:, :, names.index("observation.rho")]))
+            if rho >= 0.95:
+                warnings.append(f"the posterior noise correlation is rho = {rho:.3f}: the residuals are nearly a smooth "
+                                "curve, structure the model misses rather than reading noise")
     warnings += misfit_warnings + list(getattr(problem, "data_warnings", []))
     attrs = {
         "schema_version": SCHEMA_VERSION, "method": method, "seed": seed, "parameters": names, "units": units,
@@ -264,7 +295,7 @@ def _tree(problem: FitProblem, lsq: LeastSquaresResult, mc: McmcResult | None, *
         "notes": list(getattr(problem, "notes", [])),
     }
     if mc is not None:
-        attrs.update(walkers=mc.walkers, steps=mc.steps, burn=mc.burn, resumed=mc.resumed)
+        attrs.update(walkers=mc.walkers, steps=mc.steps, burn=mc.burn, resumed=mc.resumed, moves=mc.moves)
     root = xr.DataTree(dataset=xr.Dataset(attrs=clean_attrs(attrs)))
     for name, ds in groups.items():
         root[name] = xr.DataTree(dataset=ds)
@@ -287,12 +318,55 @@ def _misfit(problem, lsq: LeastSquaresResult) -> tuple[dict, list[str]]:
     is_turns = isinstance(problem, FitProblem)
     figures, warnings = misfit_report(resid, coords["swing"][1] if is_turns else None, coords["curve"][1], unit=unit,
                                       branches=is_turns)
+    warnings += _end_of_motion(problem, lsq)
     rho = lsq.values.get("observation.rho", 0.0)
     if rho >= 0.95:
         warnings.append(f"the residuals are nearly a smooth curve (noise correlation rho = {rho:.2f} between "
                         "neighbouring samples): that is structure the model misses rather than reading noise; the "
                         "intervals describe the best fit of an incomplete model")
     return figures, warnings
+
+
+def _end_of_motion(problem, lsq: LeastSquaresResult) -> list[str]:
+    """Waveform fits: does the model still swing as much as the record over its last period?
+
+    Friction decides when a balance stops; a model whose friction law is wrong comes to rest
+    too early or too late, which correlated-noise likelihoods can otherwise absorb.
+    """
+    from .waveform_problem import WaveformProblem
+
+    if not isinstance(problem, WaveformProblem):
+        return []
+    t = problem.sample_time
+    last = t >= t[-1] - float(problem.period)
+    if np.count_nonzero(last) < 4:
+        return []
+    y, e = problem.observed[last], problem.expected(lsq.values)[last]
+    swing_data, swing_model = float(np.ptp(y)), float(np.ptp(e))
+    noise = 4.0 * float(lsq.values.get("observation.sigma", 0.0))
+    if swing_data > noise and not 0.5 <= swing_model / swing_data <= 2.0:
+        return [f"over the last period of the record the model swings {math.degrees(swing_model):.3g} deg where the "
+                f"recording swings {math.degrees(swing_data):.3g} deg: the model's friction ends the motion "
+                f"{'too early' if swing_model < swing_data else 'too late'} (a friction law the scene lacks?)"]
+    return []
+
+
+def _bound_warnings(problem, lsq: LeastSquaresResult) -> list[str]:
+    """Parameters whose best fit sits on a bound of the scene's range."""
+    lo, hi = problem.bounds
+    out = []
+    for i, name in enumerate(problem.names):
+        if name not in lsq.names:
+            continue
+        v = float(lsq.value[lsq.names.index(name)])
+        span = hi[i] - lo[i] if np.isfinite(hi[i] - lo[i]) else max(abs(v), 1.0)
+        for edge, which in ((lo[i], "lower"), (hi[i], "upper")):
+            if np.isfinite(edge) and abs(v - edge) <= 1e-6 * span:
+                zero = which == "lower" and edge == 0.0
+                out.append(f"{name} ends on its {which} bound {edge:g}" + (
+                    ": the data find no evidence for it (an upper limit is what they give)" if zero else
+                    ": the data want it beyond the scene's range; widen the range or check the units"))
+    return out
 
 
 def _obs_coords(problem: FitProblem) -> dict:

@@ -50,6 +50,13 @@ class McmcResult:
     tau_reliable: bool
     resumed: bool = False
     failures: dict = field(default_factory=dict)
+    moves: str = "stretch"
+
+
+MOVES = {
+    "stretch": lambda: None,
+    "de": lambda: [(emcee.moves.DEMove(), 0.8), (emcee.moves.DESnookerMove(), 0.2)],
+}
 
 
 def _start(problem: FitProblem, lsq: LeastSquaresResult | None, walkers: int, rng: np.random.Generator) -> np.ndarray:
@@ -84,7 +91,7 @@ def _start(problem: FitProblem, lsq: LeastSquaresResult | None, walkers: int, rn
 
 def run_emcee(problem: FitProblem, lsq: LeastSquaresResult | None = None, *, walkers: int = 32, steps: int = 2000,
               burn: int | None = None, seed: int = 0, checkpoint: str | Path | None = None, resume: bool = False,
-              progress: bool = False, vectorize: bool | None = None) -> McmcResult:
+              progress: bool = False, vectorize: bool | None = None, moves: str = "stretch") -> McmcResult:
     """Sample the posterior.
 
     Parameters
@@ -101,6 +108,10 @@ def run_emcee(problem: FitProblem, lsq: LeastSquaresResult | None = None, *, wal
         Continue the run stored in ``checkpoint`` up to ``steps`` in total.
     progress
         Show emcee's progress bar.
+    moves
+        ``"stretch"`` (emcee's default affine-invariant stretch move) or ``"de"`` (differential
+        evolution, 80 %, with snooker updates, 20 %), which mixes faster on posteriors with
+        curved or strongly coupled directions such as a noise scale and its correlation.
     vectorize
         Evaluate each half-ensemble of proposals in one call of
         :meth:`FitProblem.log_prob_many` (emcee's ``vectorize=True``), which runs the exact
@@ -129,12 +140,16 @@ def run_emcee(problem: FitProblem, lsq: LeastSquaresResult | None = None, *, wal
                                    f"this fit has {walkers} x {ndim}", str(checkpoint))
         else:
             backend.reset(walkers, ndim)
+    if moves not in MOVES:
+        raise FitError(f"moves must be one of {sorted(MOVES)}, got {moves!r}")
+    chosen = MOVES[moves]()
     if vectorize is None:
         vectorize = bool(getattr(problem, "can_vectorize", False))
     if vectorize:
-        sampler = emcee.EnsembleSampler(walkers, ndim, problem.log_prob_many, vectorize=True, backend=backend)
+        sampler = emcee.EnsembleSampler(walkers, ndim, problem.log_prob_many, vectorize=True, backend=backend,
+                                        moves=chosen)
     else:
-        sampler = emcee.EnsembleSampler(walkers, ndim, problem.log_prob, backend=backend)
+        sampler = emcee.EnsembleSampler(walkers, ndim, problem.log_prob, backend=backend, moves=chosen)
     rng = np.random.default_rng(seed)
     if done == 0:
         sampler.random_state = np.random.RandomState(seed).get_state()
@@ -154,4 +169,4 @@ def run_emcee(problem: FitProblem, lsq: LeastSquaresResult | None = None, *, wal
     kept = chain[burn:].transpose(1, 0, 2)
     return McmcResult(list(problem.names), kept, lp[burn:].T, np.asarray(sampler.acceptance_fraction), np.asarray(tau),
                       chain.shape[0], burn, walkers, seed, bool(np.all(chain.shape[0] > 50 * np.asarray(tau))),
-                      resumed=done > 0, failures=dict(problem.failures))
+                      resumed=done > 0, failures=dict(problem.failures), moves=moves)

@@ -24,15 +24,11 @@ import numpy as np
 from ..balance import BalanceScene
 from ..params import ParamSet
 from ..recordings import UnitCurve
+from ..recordings.rawseries import notes_of
 from .problem import FitProblem
 from .release import release_from_record
 
 __all__ = ["problem_from_series", "turning_point_curve", "amplitude_readings_curve"]
-
-
-def _notes_of(meta: dict) -> list[str]:
-    text = str(meta.get("notes", "") or "")
-    return [n.strip() for n in text.split(";") if n.strip()]
 
 
 def turning_point_curve(series, tp) -> UnitCurve:
@@ -142,11 +138,11 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
         With ``notes`` saying what was done to the record.
     """
     scene = replace(scene, params=ParamSet(dict(scene.params.params)))  # the release is set on a copy
-    notes = _notes_of(series.meta)
+    notes = notes_of(series.meta)
     model = dict(scene.extra.get("observation", {})).get("model", "amplitude")
     if readings == "amplitudes":
         curve = amplitude_readings_curve(series)
-        notes += release_from_record(scene.params, float(curve.value[0]), series.source)
+        notes += release_from_record(scene.params, float(curve.value[0]), series.source, scene.restoring)
         problem = FitProblem(scene, curve, solver, dict(solver_options or {}))
         problem.notes = notes
         return problem
@@ -165,7 +161,7 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
     curve = turning_point_curve(series, tp)
     notes.append(f"{curve.value.size - 1} turning points after the reference one at t = {tp.release_time:.4g} s "
                  f"({math.degrees(tp.release_theta - tp.offset):+.2f} deg from the centre); period {tp.period:.4g} s")
-    notes += release_from_record(scene.params, float(tp.release_theta - tp.offset), series.source)
+    notes += release_from_record(scene.params, float(tp.release_theta - tp.offset), series.source, scene.restoring)
     problem = FitProblem(_free_centre(scene, curve, tp), curve, solver, dict(solver_options or {}))
     problem.notes = notes
     if "oscillator.omega0" in problem.names:

@@ -21,8 +21,10 @@ REL_TOL = 0.05  # a fixed scene theta0 may differ from the record's reference an
 FREE_SPAN = 0.2  # a free release angle may move this fraction of the reference angle either way
 
 
-def release_from_record(params: ParamSet, measured: float, source: str) -> list[str]:
+def release_from_record(params: ParamSet, measured: float, source: str, restoring: str = "spring") -> list[str]:
     """Set ``oscillator.theta0`` from the record's signed reference angle (rad), in place.
+
+    A pendulum's reference beyond 180 deg is refused (the angles are in another unit).
 
     - theta0 free in the scene: kept, but its bounds (or their mirror image: the sign is a
       convention) must contain ``measured``;
@@ -43,11 +45,16 @@ def release_from_record(params: ParamSet, measured: float, source: str) -> list[
     p = params["oscillator.theta0"]
     if not math.isfinite(measured) or measured == 0.0:
         raise DataError(f"the record's reference turning point is at {measured!r} rad: no decay to fit", source)
+    if restoring == "pendulum" and abs(measured) >= math.pi:
+        raise DataError(f"the record's reference turning point lies {math.degrees(abs(measured)):.4g} deg from the "
+                        "centre, but a pendulum cannot swing past 180 deg: are the angles in another unit? set "
+                        "[recording] angle_unit (and scale)", source)
     if math.isnan(p.value):
         span = FREE_SPAN * abs(measured)
         params.params[p.name] = replace(p, value=measured, vary=True, min=measured - span, max=measured + span,
                                         prior=None)
-        return [f"release angle free around the record's reference turning point {math.degrees(measured):+.3f} deg"]
+        return [f"release angle free around the record's reference turning point, {measured:+.5g} rad "
+                f"({math.degrees(measured):+.4g} deg) from the centre"]
     if p.vary:
         notes = []
         if not p.min <= measured <= p.max and p.min <= -measured <= p.max:

@@ -78,6 +78,9 @@ class WaveformProblem(RecordingProblem):
             raise FitError(f"only {idx.size} samples between the reference turning point at {t_ref:.4g} s and the end "
                            f"of motion at {end:.4g} s; a waveform fit needs a longer record", series.source)
         sigma0 = noise_from_samples(series.theta[idx])
+        if math.isfinite(sigma0) and sigma0 > 0.3:
+            raise FitError(f"the samples scatter by {sigma0:.3g} rad about a smooth curve: are they angles in rad? set "
+                           "[recording] angle_unit (and scale) for another unit", series.source)
         self.observation = WaveformObservation.from_table(
             table, where, t_release=t_ref, period=period, offset=-float(reference.offset),
             offset_rate=-float(getattr(reference, "offset_rate", 0.0)),
@@ -85,14 +88,14 @@ class WaveformProblem(RecordingProblem):
         thin = self.observation.thin or max(1, math.ceil(idx.size / WaveformObservation.MAX_SAMPLES))
         idx = idx[::thin]
         self.thin = thin
+        self.period = period
         self.sample_time = series.time[idx]
         self.notes = release_from_record(self.scene.params, float(reference.release_theta) - float(reference.offset),
-                                         series.source)
+                                         series.source, scene.restoring)
         self._setup_params()
         if thin > 1:
-            self.notes.append(f"waveform: every {thin}th sample used ({idx.size} of {np.count_nonzero(keep)})")
+            self.notes.append(f"waveform: one sample in {thin} used ({idx.size} of {np.count_nonzero(keep)})")
         self.curves = [Curve("waveform", math.nan, np.arange(idx.size), series.theta[idx], self.sample_time)]
-        self.n_swings = int(math.ceil(2.0 * (end - t_ref) / period)) + 2
 
     def _predict(self, vals: Mapping[str, float]) -> np.ndarray:
         """Model angle (rad, about the centre) at every sample used."""

@@ -283,6 +283,7 @@ def read_mat_series(path: str | Path, spec: RecordingSpec | None = None) -> Time
     if unit is None:
         unit = "rad"
         notes.append("no angle unit in the options, rad assumed")
+        reader["angle_unit_assumed"] = "rad"
     scale = 1.0 if spec.scale is None else spec.scale
     theta = theta_raw * (scale * rad_per_unit(unit, spec.counts_per_turn, f"{where} [recording].angle_unit"))
     reader["angle_unit"] = unit + (f" ({spec.counts_per_turn:g} per turn)" if unit.lower() in COUNT_WORDS else "")

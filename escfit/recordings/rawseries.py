@@ -139,8 +139,13 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
         if bad.size:
             raise DataError(f"{name} value {float(values[bad[0]])!r} is not a finite number", where_of_row(int(bad[0])))
     time = regular_times(np.asarray(time, dtype=float), where_of_row, notes)
+    theta = np.asarray(theta, dtype=float)
+    if meta.get("angle_unit_assumed") and np.ptp(theta) > 2.0 * math.pi:
+        raise DataError(f"the angles span {np.ptp(theta):.4g} with no unit given (rad assumed): more than a turn, so "
+                        "not radians of a swinging balance; if they are degrees set [recording] angle_unit = \"deg\" "
+                        "(or --angle-unit deg)", source)
     if spec.readings == "samples":
-        theta = unwrap_angles(np.asarray(theta, dtype=float), notes)
+        theta = unwrap_angles(theta, notes)
     if spec.start is not None or spec.stop is not None:
         lo = -math.inf if spec.start is None else spec.start
         hi = math.inf if spec.stop is None else spec.stop
@@ -172,7 +177,7 @@ def unwrap_angles(theta: np.ndarray, notes: list[str]) -> np.ndarray:
     if not jumps:
         return theta
     notes.append(f"angles written modulo one turn: {jumps} wraps at +-180 deg undone")
-    return np.unwrap(theta)
+    return np.unwrap(theta, discont=1.5 * math.pi)
 
 
 def merge_file_meta(file_meta: Mapping[str, str], reader_meta: Mapping[str, str]) -> dict[str, str]:

@@ -381,6 +381,7 @@ def _rad_factor(lay: _Layout, col: int, spec: RecordingSpec, opts: dict, notes: 
     if unit is None:
         unit = "rad"
         notes.append("no angle unit in the file or the options, rad assumed")
+        reader["angle_unit_assumed"] = "rad"
     elif spec.angle_unit and head_unit and head_unit != spec.angle_unit:
         notes.append(f"column {name!r} is labelled {head_unit!r}, read as {spec.angle_unit!r} times scale "
                      f"{scale:g} as the options say")

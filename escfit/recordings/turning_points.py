@@ -357,7 +357,8 @@ def _reference(rec: _Record, release_s: float) -> tuple[float, float, list[tuple
     if got is None:
         start = _turn_at_start(rec)
         if start is not None:
-            rec.notes.append(f"the record starts at a turning point ({math.degrees(start[1]):.4g} deg)")
+            rec.notes.append(f"the record starts at a turning point ({math.degrees(start[1]):.4g} deg on the sensor's "
+                             "scale)")
             # the turn found may be the extremum after the first sample, not the sample itself
             return start[0], start[1], cands[1:] if start[2] == is_max else cands[2:]
         cands = cands[1:]
@@ -368,7 +369,7 @@ def _reference(rec: _Record, release_s: float) -> tuple[float, float, list[tuple
         if got is None:
             raise DataError(f"the first turning point near t = {t[a]:.4g} s cannot be fitted", rec.where)
     rec.notes.append(f"the record starts mid-swing; reference: the first turning point at t = {got[0]:.4g} s "
-                     f"({math.degrees(got[1]):.4g} deg)")
+                     f"({math.degrees(got[1]):.4g} deg on the sensor's scale)")
     return got[0], got[1], cands[1:]
 
 

@@ -82,7 +82,7 @@ def main() -> None:
         doc = tomllib.loads(recipe.read_text())
         scene = load_scene((recipe.parent / doc["scene"]).resolve())
         problem = make_problem(scene, str((recipe.parent / doc["data"]).resolve()))
-        res = least_squares(problem, n_starts=3)
+        res = least_squares(problem, n_starts=8)
 
         def fmt(name):
             if name not in res.names:
