@@ -125,3 +125,29 @@ def test_pendulum_released_at_150_deg(tmp_path, observation):
                             restoring='restoring = "pendulum"', observation=observation)
     assert problem.solver == "dop853"
     assert_truth_inside(res)
+
+
+def test_degrees_without_a_unit_are_refused_with_what_to_set(tmp_path):
+    t = np.arange(0, 8, 0.01)
+    y = np.degrees(motion(t))  # a header that names no unit: 't,angle'
+    from escfit.errors import DataError
+
+    with pytest.raises(DataError, match='angle_unit = "deg"'):
+        fit_file(tmp_path, "deg.csv", "t,angle\n" + table(zip(t, y)), "")
+    problem, res = fit_file(tmp_path, "deg.csv", "t,angle\n" + table(zip(t, y)), 'angle_unit = "deg"')
+    # noiseless samples: the fit lands on the truth
+    assert abs(res.values["viscous.C"] - C_TRUE) < 0.01 and abs(res.values["coulomb.R"] - R_TRUE) < 0.01
+
+
+def test_a_parameter_on_its_bound_and_an_assumed_unit_are_warned(tmp_path):
+    from escfit.fitting import fit
+
+    rng = np.random.default_rng(6)
+    t = np.arange(0, 8, 0.01)
+    y = motion(t) + 0.003 * rng.standard_normal(t.size)
+    path = tmp_path / "no_unit.txt"
+    path.write_text(table(zip(t, y), "{:.4f} {:.6f}"))
+    text = SCENE.format(recording="", w0=W0, restoring="", observation="").replace("max = 5 }", "max = 0.3 }")
+    res = fit(load_scene(str(tmp_path / "s.toml"), text=text), str(path), method="leastsq", n_starts=1)
+    assert any("coulomb.R ends on its upper bound 0.3" in w for w in res.warnings)
+    assert any("radians were assumed" in w for w in res.warnings)
