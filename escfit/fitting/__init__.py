@@ -316,8 +316,9 @@ def _misfit(problem, lsq: LeastSquaresResult) -> tuple[dict, list[str]]:
     else:
         resid, unit = problem.observed - problem.expected(lsq.values), getattr(problem, "reading_units", "rad")
     is_turns = isinstance(problem, FitProblem)
+    ar1 = getattr(problem.observation, "noise", "") == "ar1"
     figures, warnings = misfit_report(resid, coords["swing"][1] if is_turns else None, coords["curve"][1], unit=unit,
-                                      branches=is_turns)
+                                      branches=is_turns, innovations=ar1)
     warnings += _end_of_motion(problem, lsq)
     rho = lsq.values.get("observation.rho", 0.0)
     if rho >= 0.95:

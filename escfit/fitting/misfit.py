@@ -67,19 +67,23 @@ def _runs(r: np.ndarray) -> tuple[dict, list[str]]:
                   "with the wrong model swing)"]
 
 
-def _lag1(r: np.ndarray) -> tuple[dict, list[str]]:
+def _lag1(r: np.ndarray, innovations: bool) -> tuple[dict, list[str]]:
     x = r - np.mean(r)
     den = float(x @ x)
     rho = float(x[1:] @ x[:-1]) / den if den > 0 else 0.0
     info = {"lag1_autocorrelation": rho}
     if rho <= LAG1_MAX:
         return info, []
+    if innovations:
+        return info, [f"the correlated-noise model leaves its innovations correlated too (lag-1 {rho:.2f}): the "
+                      "residuals are structure the model misses, not noise of the AR(1) kind"]
     return info, [f"neighbouring residuals are correlated (lag-1 autocorrelation {rho:.2f}): the reading noise is not "
-                  "independent or the model misses structure; intervals computed for independent noise are too narrow"]
+                  "independent or the model misses structure; intervals computed for independent noise are too narrow "
+                  "([observation] noise = \"ar1\" models correlated noise in waveform fits)"]
 
 
 def misfit_report(residual: np.ndarray, swing: np.ndarray | None, curve: np.ndarray | None, *, unit: str = "rad",
-                  branches: bool = True) -> tuple[dict, list[str]]:
+                  branches: bool = True, innovations: bool = False) -> tuple[dict, list[str]]:
     """Check residuals (observed minus expected, in reading order) for structure.
 
     Parameters
@@ -94,6 +98,8 @@ def misfit_report(residual: np.ndarray, swing: np.ndarray | None, curve: np.ndar
         Unit of the residuals, for the messages.
     branches
         Whether readings alternate sides (turning points); off for waveform samples.
+    innovations
+        The residuals are the innovations of a correlated-noise model (AR(1)), not readings.
 
     Returns
     -------
@@ -112,7 +118,7 @@ def misfit_report(residual: np.ndarray, swing: np.ndarray | None, curve: np.ndar
         if np.count_nonzero(ok) < MIN_READINGS:
             continue
         rr = rr[ok]
-        checks = [_runs(rr), _lag1(rr)]
+        checks = [_runs(rr), _lag1(rr, innovations)]
         if branches and swing is not None:
             checks.insert(0, _branches(rr, np.asarray(swing)[rows][ok], unit))
         prefix = f"{label}: " if several else ""
