@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 
 import escfit
-from escfit.fitting import fit
-from escfit.recorders import record_unit_curve
+from escfit.inference import fit
+from escfit.balance.synthetic.unit_curves import record_unit_curve
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "datasets" / "scenes" / "monday_unit_angle_fit.toml"

@@ -31,8 +31,9 @@ import numpy as np
 
 import escfit
 from escfit.balance import solve
-from escfit.fitting import FitProblem, least_squares, run_emcee
-from escfit.recorders import record_unit_curve
+from escfit.balance.problems.curves import FitProblem
+from escfit.inference import least_squares, run_emcee
+from escfit.balance.synthetic.unit_curves import record_unit_curve
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "datasets" / "scenes" / "monday_unit_angle_fit.toml"

@@ -34,8 +34,9 @@ def run(walkers: int = 32, steps: int = 5000, vectorize: bool | None = None, see
     import numpy as np
 
     import escfit
-    from escfit.fitting import FitProblem, run_emcee
-    from escfit.recorders import record_unit_curve
+    from escfit.balance.problems.curves import FitProblem
+    from escfit.inference import run_emcee
+    from escfit.balance.synthetic.unit_curves import record_unit_curve
 
     scene = escfit.load_scene(SCENE)
     data = record_unit_curve(scene, every=4, swings=SWINGS, notch_deg=6, sigma=0.03, seed=11)
@@ -49,7 +50,7 @@ def run(walkers: int = 32, steps: int = 5000, vectorize: bool | None = None, see
     flat = mc.chain.reshape(-1, len(problem.names))
     return {
         "walkers": walkers, "steps": steps, "swings": SWINGS, "parameters": problem.names,
-        "vectorized": bool(problem.can_vectorize if vectorize is None else vectorize),
+        "vectorized": bool(problem.vectorized if vectorize is None else vectorize),
         "readings": int(data.swing.size),
         "seconds_imports_and_setup": t_ready - T_START,
         "seconds_compile": t_compiled - t_ready,

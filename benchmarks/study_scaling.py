@@ -36,7 +36,7 @@ def _load() -> list[float]:
 
 
 def _warm(data: str, scene: str, unit: str) -> None:
-    from escfit.fitting import fit
+    from escfit.inference import fit
 
     fit(scene, data, unit=unit, n_starts=1)
 

@@ -18,9 +18,9 @@ import time
 import numpy as np
 
 from escfit.balance.waveform import sample_theta
-from escfit.fitting import fit
-from escfit.recordings.timeseries import TimeSeries
-from escfit.scene import load_scene
+from escfit.inference import fit
+from escfit.balance.recordings.timeseries import TimeSeries
+from escfit.core.scene import load_scene
 
 TRUTH = {"oscillator.omega0": 2 * math.pi, "viscous.C": 0.3, "coulomb.R": 0.5}
 SCENE = """model = "balance"

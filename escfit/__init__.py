@@ -12,8 +12,8 @@ from typing import Any
 
 __version__ = "0.1.0"
 
-from .errors import DataError, EscfitError, FitError, ResultsError, SceneError, SolverError, UnitError
-from .scene import load_scene
+from .core.errors import DataError, EscfitError, FitError, ResultsError, SceneError, SolverError, UnitError
+from .core.scene import load_scene
 
 __all__ = [
     "__version__", "load_scene", "simulate", "load_fit",
@@ -40,7 +40,7 @@ def simulate(scene, solver: str | None = None, **options: Any):
         Per-swing (balance) or time-history (other models) results with the run's
         ``status`` in ``attrs``.
     """
-    from .scene import model_module
+    from .core.scene import model_module
 
     if not hasattr(scene, "model"):
         scene = load_scene(scene)

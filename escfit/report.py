@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .atomic import atomic_path
+from .core.atomic import atomic_path
 from .results import FitResult, load_fit
 
 __all__ = ["make_report", "parameter_table"]

@@ -25,24 +25,13 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from .atomic import atomic_path
-from .errors import ResultsError
+from .core.atomic import atomic_path
+from .core.errors import ResultsError
+from .core.provenance import dependency_versions  # noqa: F401 - re-exported for writers
 
 __all__ = ["SCHEMA_VERSION", "FitResult", "load_fit", "write_fit"]
 
 SCHEMA_VERSION = "escfit-fit/1"
-
-
-def dependency_versions() -> dict[str, str]:
-    import importlib.metadata as md
-
-    out = {}
-    for pkg in ("escfit", "numpy", "scipy", "numba", "lmfit", "emcee", "xarray", "h5netcdf", "arviz", "pint"):
-        try:
-            out[pkg] = md.version(pkg)
-        except md.PackageNotFoundError:  # pragma: no cover
-            out[pkg] = "unknown"
-    return out
 
 
 @dataclass
@@ -71,7 +60,7 @@ class FitResult:
 
     @property
     def misfit(self) -> dict[str, float]:
-        """Residual-structure figures at the best fit (see :mod:`escfit.fitting.misfit`)."""
+        """Residual-structure figures at the best fit (see :mod:`escfit.inference.misfit`)."""
         return json.loads(self.tree.attrs.get("misfit", "{}") or "{}")
 
     @property

@@ -38,7 +38,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import escfit.study as study
-from escfit.recordings import read_unit_curve
+from escfit.balance.recordings import read_unit_curve
 from escfit.study import plots
 
 HERE = Path.cwd()

@@ -182,7 +182,7 @@ def test_cli_simulates_a_pendulum_with_dop853(tmp_path):
 
     from click.testing import CliRunner
 
-    from escfit.cli import cli
+    from escfit.cli.main import cli
 
     path = tmp_path / "pendulum.toml"
     path.write_text(as_pendulum(balance_toml(theta0=1.0, swings=3)))

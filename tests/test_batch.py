@@ -15,9 +15,10 @@ import pytest
 import escfit
 from escfit.balance.batch import SystemStack, solve_batch
 from escfit.balance.solvers import solve_exact
-from escfit.errors import SolverError
-from escfit.fitting import FitProblem, run_emcee
-from escfit.recorders import record_unit_curve
+from escfit.core.errors import SolverError
+from escfit.balance.problems.curves import FitProblem
+from escfit.inference import run_emcee
+from escfit.balance.synthetic.unit_curves import record_unit_curve
 
 from .conftest import DATASETS, balance_toml
 
@@ -196,14 +197,17 @@ def test_out_of_segments_falls_back_to_the_scalar_failure(problem):
 
 
 def test_emcee_vectorised_draws_are_the_per_walker_draws(problem):
-    assert problem.can_vectorize
+    assert problem.vectorized
     fast = run_emcee(problem, None, walkers=10, steps=40, seed=3)
     slow = run_emcee(problem, None, walkers=10, steps=40, seed=3, vectorize=False)
     np.testing.assert_array_equal(fast.chain, slow.chain)
     np.testing.assert_array_equal(fast.log_prob, slow.log_prob)
 
 
-def test_a_replaced_log_prob_keeps_per_walker_calls(problem, monkeypatch):
+def test_vectorisation_is_declared_by_the_problem_and_can_be_turned_off(problem, monkeypatch):
+    """The whole-array path is the problem's declaration (exact solver), not guessed; a caller
+    replacing log_prob turns it off explicitly and then every walker is evaluated one by one."""
+    assert not FitProblem(problem.scene, problem.data, solver="rk4", solver_options={"h": 1e-4}).vectorized
     calls = []
     original = FitProblem.log_prob
 
@@ -212,23 +216,5 @@ def test_a_replaced_log_prob_keeps_per_walker_calls(problem, monkeypatch):
         return original(self, vec)
 
     monkeypatch.setattr(FitProblem, "log_prob", counting)
-    assert not problem.can_vectorize
-    run_emcee(problem, None, walkers=8, steps=10, seed=1)
+    run_emcee(problem, None, walkers=8, steps=10, seed=1, vectorize=False)
     assert len(calls) >= 8 * 10
-
-
-def test_subclasses_replacing_what_the_batch_path_reproduces_are_not_vectorised(problem):
-    original = FitProblem.log_prob
-
-    class WithPenalty(FitProblem):
-        def log_prob(self, vec):
-            return original(self, vec) - 1.0
-
-    assert not WithPenalty(problem.scene, problem.data).can_vectorize
-
-    class OtherForward(FitProblem):
-        def predict(self, vals):
-            return [2.0 * p for p in super().predict(vals)]
-
-    assert not OtherForward(problem.scene, problem.data).can_vectorize
-    assert not FitProblem(problem.scene, problem.data, solver="rk4", solver_options={"h": 1e-4}).can_vectorize

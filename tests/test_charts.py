@@ -9,8 +9,9 @@ import pytest
 
 import escfit
 from escfit.balance import solve
-from escfit.charts import (REFERENCE_POWER_ANGLE, Pulse, amplitude_factor, equivalent_r, graph_factor, k_value,
+from escfit.balance.monday.charts import (REFERENCE_POWER_ANGLE, Pulse, amplitude_factor, equivalent_r, graph_factor, k_value,
                            steady_state, unit_curve)
+from escfit.core.errors import SceneError
 
 from .conftest import DATASETS, balance_toml
 
@@ -49,6 +50,12 @@ def test_unit_curve_equals_exact_reference_curve():
     np.testing.assert_allclose(unit_curve(C / W0, k, cycles=40)[1:], tr.amplitude[1::2], rtol=1e-10)
 
 
+@pytest.mark.parametrize("c", [2.0, -0.1, float("nan")])
+def test_overdamped_or_negative_damping_is_refused(c):
+    with pytest.raises(SceneError, match=rf"c = {c!r}"):
+        steady_state(c, SAMPLE)
+
+
 def test_amplitude_factor_matches_fig_12_reading():
     # Monday: going from C/omega0 = 0.040 to 0.060 multiplies the amplitude by 0.83/1.2
     # (computed: 0.667 against his graphical 0.692, a 4 % reading difference)
@@ -59,7 +66,7 @@ def test_amplitude_factor_matches_fig_12_reading():
 def test_charts_cli_writes_files_and_refuses_overwrite(tmp_path):
     from click.testing import CliRunner
 
-    from escfit.cli import cli
+    from escfit.cli.main import cli
 
     r = CliRunner().invoke(cli, ["charts", "--out", str(tmp_path), "--no-png"])
     assert r.exit_code == 0, r.output

@@ -8,7 +8,7 @@ import shutil
 import pytest
 from click.testing import CliRunner
 
-from escfit.cli import cli
+from escfit.cli.main import cli
 
 from .conftest import DATASETS, ROOT
 

@@ -7,7 +7,7 @@ import json
 import pytest
 from click.testing import CliRunner
 
-from escfit.cli import cli
+from escfit.cli.main import cli
 
 from .conftest import DATASETS
 

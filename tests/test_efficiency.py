@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from escfit import efficiency as eff
+from escfit.balance import efficiency as eff
+from escfit.core.errors import SceneError, SolverError
 
 deg = np.radians
 
@@ -47,8 +48,10 @@ def test_maximum_falls_as_fe_fp_grows():
 def test_one_of_six_degrees_lost_to_drop():
     assert round(eff.drop_work_index(0.5, 6.0, 1.0), 3) == 0.417
     assert eff.drop_work_index(0.5, 6.0, 0.0) == 0.5
-    with pytest.raises(ValueError, match="drop"):
+    with pytest.raises(SceneError, match=r"drop_angle = 6\.0, impulse_angle = 6\.0"):
         eff.drop_work_index(0.5, 6.0, 6.0)
+    with pytest.raises(SceneError, match=r"drop_angle = -1\.0"):
+        eff.drop_work_index(0.5, 6.0, -1.0)
 
 
 def test_brocot_work_index_is_pi_over_8():
@@ -66,8 +69,10 @@ def test_brocot_curve_is_the_thales_semicircle():
 
 
 def test_simpson_needs_even_parts():
-    with pytest.raises(ValueError, match="even"):
+    with pytest.raises(SolverError, match=r"even number of parts .*parts = 7"):
         eff.work_index(lambda t: t, parts=7)
+    with pytest.raises(SolverError, match="method = 'trapezoid'"):
+        eff.work_index(lambda t: t, method="trapezoid")
     assert eff.work_index(lambda t: t**3, parts=2) == pytest.approx(0.25, abs=1e-15)  # exact for cubics
 
 
@@ -115,8 +120,10 @@ def test_contact_work_efficiency_by_virtual_work():
 
 
 def test_negative_friction_refused():
-    with pytest.raises(ValueError, match="-0.1"):
+    with pytest.raises(SceneError, match=r"mu = -0\.1"):
         eff.transmitted_fraction(deg(45), deg(90), mu=-0.1)
+    with pytest.raises(SceneError, match="mu = nan"):
+        eff.friction_angle(float("nan"))
 
 
 @pytest.mark.parametrize("mu", [0.05, 0.1, 0.3])

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 import escfit
-from escfit.errors import SceneError
-from escfit.fitting import fit
-from escfit.recordings import read_unit_curve
+from escfit.core.errors import SceneError
+from escfit.inference import fit
+from escfit.balance.recordings import read_unit_curve
 
 from .conftest import DATASETS
 

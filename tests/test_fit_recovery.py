@@ -2,15 +2,19 @@
 
 from __future__ import annotations
 
+import hashlib
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import escfit
-from escfit.errors import FitError, ResultsError
-from escfit.fitting import FitProblem, fit, least_squares, profile
-from escfit.recorders import record_unit_curve
+from escfit.core.errors import FitError, ResultsError
+from escfit.balance.problems.curves import FitProblem
+from escfit.inference import fit, least_squares, profile
+from escfit.balance.recordings import read_unit_curve, write_unit_curve
+from escfit.balance.synthetic.unit_curves import record_unit_curve
 from escfit.results import load_fit
 
 from .conftest import DATASETS
@@ -20,9 +24,16 @@ TRUTH = {"viscous.C": 0.6, "coulomb.R": 100.0, "escapement[2].X": 1500.0}
 
 
 @pytest.fixture(scope="module")
-def monday_like():
+def monday_like(tmp_path_factory):
+    """Synthetic notch readings, written to a CSV file and read back (so they carry a file and its SHA-256)."""
     scene = escfit.load_scene(SCENE)
-    data = record_unit_curve(scene, every=4, duration=6.5, notch_deg=6, sigma=0.03, seed=11)
+    synthetic = record_unit_curve(scene, every=4, duration=6.5, notch_deg=6, sigma=0.03, seed=11)
+    path = tmp_path_factory.mktemp("data") / "monday_notches.csv"
+    write_unit_curve(path, synthetic)
+    data = read_unit_curve(path)
+    np.testing.assert_array_equal(data.swing, synthetic.swing)  # the file round trip is exact
+    np.testing.assert_array_equal(data.value, synthetic.value)
+    assert data.notch == synthetic.notch
     return scene, data
 
 
@@ -44,14 +55,20 @@ def test_emcee_intervals_contain_truth_and_lsq_within_3_se(monday_fit):
         assert abs(v - true) < 3 * se, (name, v, se)
 
 
-def test_results_file_layout_and_readers(monday_fit):
+def test_results_file_layout_and_readers(monday_like, monday_fit):
     import arviz as az
     import xarray as xr
 
+    _, data = monday_like
     res, path = monday_fit
     back = load_fit(path)
     assert back.attrs["schema_version"] == "escfit-fit/1"
-    assert back.attrs["data_sha256"] == res.attrs["data_sha256"] or res.attrs["data_sha256"] == ""
+    data_file = Path(data.source)
+    assert back.attrs["data_file"] == res.attrs["data_file"] == str(data_file)
+    sha = hashlib.sha256(data_file.read_bytes()).hexdigest()
+    assert len(sha) == 64
+    assert res.attrs["data_sha256"] == sha
+    assert back.attrs["data_sha256"] == sha
     for group in ("posterior", "sample_stats", "observed_data", "posterior_predictive", "least_squares", "diagnostics"):
         assert group in back.tree.children
     post = back.group("posterior")
@@ -138,18 +155,18 @@ def test_interrupted_emcee_run_resumes(monday_like, tmp_path, monkeypatch):
     scene, data = monday_like
     out = tmp_path / "resume.h5"
     calls = {"n": 0}
-    original = FitProblem.log_prob
+    original = FitProblem.log_prob_many  # the exact solver's whole-ensemble path
 
-    def dying(self, vec):
-        calls["n"] += 1
+    def dying(self, vecs):
+        calls["n"] += len(vecs)
         if calls["n"] > 16 * 60:
             raise KeyboardInterrupt
-        return original(self, vec)
+        return original(self, vecs)
 
-    monkeypatch.setattr(FitProblem, "log_prob", dying)
+    monkeypatch.setattr(FitProblem, "log_prob_many", dying)
     with pytest.raises(KeyboardInterrupt):
         fit(scene, data, method="emcee", walkers=16, steps=120, seed=2, out=out)
-    monkeypatch.setattr(FitProblem, "log_prob", original)
+    monkeypatch.setattr(FitProblem, "log_prob_many", original)
     assert not out.exists() and (tmp_path / "resume.h5.emcee").exists()
     with pytest.raises(FitError, match="resume"):
         fit(scene, data, method="emcee", walkers=16, steps=120, seed=2, out=out)

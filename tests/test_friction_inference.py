@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from escfit.errors import FitError
+from escfit.core.errors import FitError
 from escfit.friction import compare_laws, fit_least_squares, json_summary, sample_posterior
 from escfit.friction.readers import Readings
 from escfit.friction.rig import lever_ratio
 from escfit.friction.synthetic import SessionSpec, make_session
-from escfit.scene import load_scene
+from escfit.core.scene import load_scene
 
 GF = 0.00980665
 IN = 0.0254

@@ -10,7 +10,7 @@ import pytest
 
 from escfit.friction import compare_laws, fit_least_squares, mu_from_reading, read_readings, sample_posterior
 from escfit.friction import monday
-from escfit.scene import load_scene
+from escfit.core.scene import load_scene
 
 DATA = Path(__file__).resolve().parents[1] / "datasets" / "friction"
 TABLE = DATA / "monday1965_mu.csv"

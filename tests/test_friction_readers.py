@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from escfit.errors import DataError
+from escfit.core.errors import DataError
 from escfit.friction import parse_readings, read_readings, write_readings
 
 GF = 0.00980665

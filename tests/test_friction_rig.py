@@ -9,6 +9,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from escfit.core.errors import SceneError
 from escfit.friction import rig
 
 
@@ -77,3 +78,14 @@ def test_scale_resolution_to_load_sd():
     sd = rig.load_sd_from_scale(0.5 * 0.0254, 11.5 * 12 * 0.0254 / (5 * gf), 2)
     assert sd / gf == pytest.approx(math.sqrt(1 / 6) * 0.5 / 138 * 5, rel=1e-12)
     assert round(sd / gf, 5) == 0.0074
+
+
+def test_bad_arguments_are_refused_naming_the_value():
+    with pytest.raises(SceneError, match="load_at = 'normal'"):
+        rig.mu_from_reading(1.0, 0.1, 2.0, 1.0, "normal")
+    with pytest.raises(SceneError, match="load_at = 'normal'"):
+        rig.predicted_dw(1.0, 0.1, 2.0, 1.0, "normal")
+    with pytest.raises(SceneError, match=r"resolution = 0\.0, slope = 1\.0, settings = 2"):
+        rig.load_sd_from_scale(0.0, 1.0)
+    with pytest.raises(SceneError, match="settings = 0"):
+        rig.load_sd_from_scale(1e-3, 1.0, 0)

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from escfit.errors import SceneError, SolverError, UnitError
+from escfit.core.errors import SceneError, SolverError, UnitError
 from escfit.friction import json_summary, simulate
-from escfit.scene import load_scene
+from escfit.core.scene import load_scene
 
 GF = 0.00980665
 IN = 0.0254

@@ -7,11 +7,11 @@ import warnings
 import numpy as np
 import pytest
 
-from escfit.errors import DataError, FitError
+from escfit.core.errors import DataError, FitError
 from escfit.geneva.inference import (GenevaProblem, SpeedTrace, TerminalSpeeds, fit_least_squares,
                                      sample_posterior, synthetic_trace)
 from escfit.geneva.tables import meyer_table
-from escfit.scene import load_scene
+from escfit.core.scene import load_scene
 
 LBF_IN = 0.1129848290276167
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from escfit.errors import SceneError, SolverError, UnitError
+from escfit.core.errors import SceneError, SolverError, UnitError
 from escfit.geneva import simulate
-from escfit.scene import load_scene
+from escfit.core.scene import load_scene
 
 GOOD = {
     "slots": "4",

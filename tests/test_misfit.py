@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from escfit.fitting.misfit import misfit_report
+from escfit.inference.misfit import misfit_report
 
 
 def test_white_noise_raises_no_warning_in_200_records():

@@ -12,9 +12,10 @@ import numpy as np
 import pytest
 
 import escfit
-from escfit.fitting import FitProblem, least_squares
-from escfit.recordings import UnitCurve
-from escfit.recordings.csvtable import read_table
+from escfit.balance.problems.curves import FitProblem
+from escfit.inference import least_squares
+from escfit.balance.recordings import UnitCurve
+from escfit.core.csvtable import read_table
 
 from .conftest import SHARED
 

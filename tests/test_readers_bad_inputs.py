@@ -13,10 +13,11 @@ import re
 import pytest
 
 import escfit
-from escfit.errors import DataError, EscfitError, FitError
-from escfit.recordings.pulses import assign_pulses, read_pulses
-from escfit.recordings.timegrapher import detect_format, read_recording, read_tg_json, read_timegrapher_csv
-from escfit.recordings.timeseries import read_timeseries, timeseries_to_unit_curve
+from escfit.core.errors import DataError, EscfitError, FitError
+from escfit.balance.recordings.pulses import assign_pulses, read_pulses
+from escfit.balance.recordings.detect import detect_format, read_recording
+from escfit.balance.recordings.timegrapher import read_tg_json, read_timegrapher_csv
+from escfit.balance.recordings.timeseries import read_timeseries, timeseries_to_unit_curve
 
 from .conftest import DATASETS
 
@@ -53,8 +54,8 @@ def _ts_rows(n=40, bad=None) -> str:
 
 
 def _pulse_mismatch(tmp):
-    from escfit.fitting.pulse_problem import PulseFitProblem
-    from escfit.recorders_extra import record_pulses
+    from escfit.balance.problems.pulses import PulseFitProblem
+    from escfit.balance.synthetic.recorders import record_pulses
 
     scene = escfit.load_scene(DATASETS / "recordings" / "pulses_scene.toml")
     train = record_pulses(scene, swings=4, seed=0)
@@ -64,8 +65,8 @@ def _pulse_mismatch(tmp):
 
 
 def _tg_mismatch(tmp):
-    from escfit.fitting.timegrapher_problem import TimegrapherFitProblem
-    from escfit.recorders_extra import record_timegrapher
+    from escfit.balance.problems.timegrapher import TimegrapherFitProblem
+    from escfit.balance.synthetic.recorders import record_timegrapher
 
     scene = escfit.load_scene(DATASETS / "recordings" / "timegrapher_scene.toml")
     rec = record_timegrapher(scene, swings=30, seed=0)
@@ -75,7 +76,7 @@ def _tg_mismatch(tmp):
 
 
 def _tg_no_release(tmp):
-    from escfit.fitting.timegrapher_problem import TimegrapherFitProblem
+    from escfit.balance.problems.timegrapher import TimegrapherFitProblem
 
     p = tmp / "norelease.json"
     p.write_text(json.dumps(_tg_doc()))
@@ -92,7 +93,7 @@ def _ts_mismatch(tmp):
 
 
 def _pulse_problem_wrong_data(tmp):
-    from escfit.fitting.pulse_problem import PulseFitProblem
+    from escfit.balance.problems.pulses import PulseFitProblem
 
     p = tmp / "tg.json"
     p.write_text(json.dumps(_tg_doc()))

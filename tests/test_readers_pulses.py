@@ -14,11 +14,12 @@ import pytest
 
 import escfit
 from escfit.balance import solve
-from escfit.fitting import FitProblem, least_squares, run_emcee
-from escfit.fitting.pulse_problem import PulseFitProblem
-from escfit.observation.passage_times import level_times
-from escfit.recorders_extra import record_pulses, theta_at
-from escfit.recordings.pulses import assign_pulses, pulses_to_unit_curve, read_pulses, write_pulses
+from escfit.balance.problems.curves import FitProblem
+from escfit.inference import least_squares, run_emcee
+from escfit.balance.problems.pulses import PulseFitProblem
+from escfit.balance.observation.passage_times import level_times
+from escfit.balance.synthetic.recorders import record_pulses, theta_at
+from escfit.balance.recordings.pulses import assign_pulses, pulses_to_unit_curve, read_pulses, write_pulses
 
 from .conftest import DATASETS
 
@@ -66,7 +67,7 @@ def test_round_trip_keeps_times_kinds_and_metadata(scene, tmp_path):
     assert back.notches == 60 and back.release_s == 0.125
     header = next(i for i, line in enumerate(path.read_text().splitlines(), 1) if line.startswith("time_s"))
     assert back.lines[0] == header + 1
-    assert back.meta["seed"] == "4" and back.meta["generated_by"] == "escfit.recorders_extra.record_pulses"
+    assert back.meta["seed"] == "4" and back.meta["generated_by"] == "escfit.balance.synthetic.recorders.record_pulses"
     assert back.sha256 and back.source == str(path)
 
 

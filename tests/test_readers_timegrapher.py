@@ -10,13 +10,13 @@ import pytest
 
 import escfit
 from escfit.balance import solve
-from escfit.fitting import least_squares, run_emcee
-from escfit.fitting.timegrapher_problem import TimegrapherFitProblem
-from escfit.observation.timegrapher import TimegrapherObservation, beat_events, window_readings
-from escfit.recorders_extra import record_timegrapher
-from escfit.recordings.timegrapher import (beat_swings, detect_format, read_recording, read_tg_json,
-                                           read_timegrapher, read_timegrapher_csv, write_tg_json,
-                                           write_timegrapher_csv)
+from escfit.inference import least_squares, run_emcee
+from escfit.balance.problems.timegrapher import TimegrapherFitProblem
+from escfit.balance.observation.timegrapher import TimegrapherObservation, beat_events, window_readings
+from escfit.balance.synthetic.recorders import record_timegrapher
+from escfit.balance.recordings.detect import detect_format, read_recording, read_timegrapher
+from escfit.balance.recordings.timegrapher import (beat_swings, read_tg_json, read_timegrapher_csv, write_tg_json,
+                                                   write_timegrapher_csv)
 
 from .conftest import DATASETS, balance_toml
 

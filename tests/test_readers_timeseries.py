@@ -9,10 +9,11 @@ import pytest
 
 import escfit
 from escfit.balance import solve
-from escfit.fitting import FitProblem, least_squares
-from escfit.recorders_extra import record_timeseries, theta_at
-from escfit.recordings.timegrapher import detect_format, read_recording
-from escfit.recordings.timeseries import (TimeSeries, read_timeseries, timeseries_to_unit_curve, turning_points,
+from escfit.balance.problems.curves import FitProblem
+from escfit.inference import least_squares
+from escfit.balance.synthetic.recorders import record_timeseries, theta_at
+from escfit.balance.recordings.detect import detect_format, read_recording
+from escfit.balance.recordings.timeseries import (TimeSeries, read_timeseries, timeseries_to_unit_curve, turning_points,
                                           write_timeseries)
 
 from .conftest import DATASETS
@@ -114,7 +115,7 @@ def test_example_file_fits(scene):
 ])
 def test_record_writes_every_format_detectably(scene, tmp_path, recorder, options, kind):
     """The one entry point a command line needs: write, detect, read back, with provenance."""
-    from escfit.recorders_extra import record
+    from escfit.balance.synthetic.recorders import record
 
     suffix = ".json" if options.get("fmt") == "json" else ".csv"
     path = record(scene, recorder, tmp_path / f"rec{suffix}", noise=None, seed=5, **options)

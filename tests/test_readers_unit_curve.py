@@ -7,11 +7,11 @@ import pytest
 from click.testing import CliRunner
 
 import escfit
-from escfit.cli import cli
-from escfit.errors import DataError, FitError, SceneError
-from escfit.fitting import FitProblem
-from escfit.recorders import record_unit_curve
-from escfit.recordings import read_unit_curve, write_unit_curve
+from escfit.cli.main import cli
+from escfit.core.errors import DataError, FitError, SceneError
+from escfit.balance.problems.curves import FitProblem
+from escfit.balance.synthetic.unit_curves import record_unit_curve
+from escfit.balance.recordings import read_unit_curve, write_unit_curve
 
 from .conftest import DATASETS
 

@@ -15,8 +15,8 @@ from pathlib import Path
 
 import pytest
 
-from escfit.fitting import least_squares, make_problem
-from escfit.scene import load_scene
+from escfit.inference import least_squares, make_problem
+from escfit.core.scene import load_scene
 
 RECIPES = Path(__file__).resolve().parents[1] / "fits" / "real"
 

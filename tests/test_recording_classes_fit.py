@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from escfit.balance.waveform import sample_theta
-from escfit.fitting import least_squares, make_problem
-from escfit.scene import load_scene
+from escfit.inference import least_squares, make_problem
+from escfit.core.scene import load_scene
 
 C_TRUE, R_TRUE, W0 = 0.3, 0.5, 2 * math.pi
 
@@ -130,7 +130,7 @@ def test_pendulum_released_at_150_deg(tmp_path, observation):
 def test_degrees_without_a_unit_are_refused_with_what_to_set(tmp_path):
     t = np.arange(0, 8, 0.01)
     y = np.degrees(motion(t))  # a header that names no unit: 't,angle'
-    from escfit.errors import DataError
+    from escfit.core.errors import DataError
 
     with pytest.raises(DataError, match='angle_unit = "deg"'):
         fit_file(tmp_path, "deg.csv", "t,angle\n" + table(zip(t, y)), "")
@@ -140,7 +140,7 @@ def test_degrees_without_a_unit_are_refused_with_what_to_set(tmp_path):
 
 
 def test_a_parameter_on_its_bound_and_an_assumed_unit_are_warned(tmp_path):
-    from escfit.fitting import fit
+    from escfit.inference import fit
 
     rng = np.random.default_rng(6)
     t = np.arange(0, 8, 0.01)

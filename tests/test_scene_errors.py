@@ -71,9 +71,9 @@ def test_units_are_converted():
 def test_a_scene_without_theta0_simulates_nothing_and_fits_only_sampled_recordings():
     """theta0 may be left out (a sampled recording supplies the release); elsewhere it is refused clearly."""
     from escfit.balance import solve
-    from escfit.errors import FitError, SolverError
-    from escfit.fitting import make_problem
-    from escfit.recordings import UnitCurve
+    from escfit.core.errors import FitError, SolverError
+    from escfit.inference import make_problem
+    from escfit.balance.recordings import UnitCurve
 
     scene = load_scene("bad.toml", text=balance_toml().replace("theta0 = 1.0\n", ""))
     with pytest.raises(SolverError, match="theta0 is not given"):

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 import escfit
-from escfit.fitting import fit
+from escfit.inference import fit
 from escfit.friction.fitfile import fit_rig
-from escfit.recorders import record_unit_curve
-from escfit.recordings import UnitCurve, write_unit_curve
+from escfit.balance.synthetic.unit_curves import record_unit_curve
+from escfit.balance.recordings import UnitCurve, write_unit_curve
 
 from .conftest import DATASETS, balance_toml
 

@@ -143,7 +143,7 @@ def compiled():
 def _load(text: str):
     try:
         return escfit.load_scene("stability.toml", text=text)
-    except escfit.errors.SceneError:
+    except escfit.core.errors.SceneError:
         assume(False)  # e.g. an asymmetric pair of windows the scene reader refuses to overlap
 
 

@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 from escfit.balance import solve
-from escfit.fitting import fit
-from escfit.recorders_extra import record_timegrapher
-from escfit.scene import load_scene
+from escfit.inference import fit
+from escfit.balance.synthetic.recorders import record_timegrapher
+from escfit.core.scene import load_scene
 
 SCENE = "datasets/recordings/timegrapher_scene.toml"
 

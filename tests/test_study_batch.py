@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from escfit.cli import cli
-from escfit.errors import DataError, FitError, ResultsError
-from escfit.recordings import read_unit_curve, write_unit_curve
+from escfit.cli.main import cli
+from escfit.core.errors import DataError, FitError, ResultsError
+from escfit.balance.recordings import read_unit_curve, write_unit_curve
 from escfit.results import load_fit
 from escfit.study import LazyClient, discover_units, fit_many, load_fleet, load_summary, unit_seed
 

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 import escfit
-from escfit.errors import DataError, ResultsError, SceneError
-from escfit.fitting import FitProblem
-from escfit.recordings import read_unit_curve
+from escfit.core.errors import DataError, ResultsError, SceneError
+from escfit.balance.problems.curves import FitProblem
+from escfit.balance.recordings import read_unit_curve
 from escfit.study import (MODELS, POPULATION_PARAMS, LogNormal, Rig, fit_scene, generate_fleet, load_fleet, preset,
                           record_unit)
 

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 import escfit
-from escfit.charts import REFERENCE_POWER_ANGLE, Pulse, k_value
-from escfit.fitting import fit
-from escfit.recorders import record_unit_curve
+from escfit.balance.monday.charts import REFERENCE_POWER_ANGLE, Pulse, k_value
+from escfit.inference import fit
+from escfit.balance.synthetic.unit_curves import record_unit_curve
 
 from .conftest import DATASETS, balance_toml
 

@@ -12,10 +12,10 @@ import math
 import numpy as np
 import pytest
 
-from escfit.errors import DataError
-from escfit.recordings.extrema import spectral_period
-from escfit.recordings.timeseries import TimeSeries, timeseries_to_unit_curve
-from escfit.recordings.turning_points import TurningPoints, reduce_series
+from escfit.core.errors import DataError
+from escfit.balance.recordings.extrema import spectral_period
+from escfit.balance.recordings.timeseries import TimeSeries, timeseries_to_unit_curve
+from escfit.balance.recordings.turning_points import TurningPoints, reduce_series
 
 from .conftest import SHARED
 
@@ -74,7 +74,7 @@ def truth_index(tp: TurningPoints, tt: np.ndarray, period: float) -> np.ndarray:
 def test_closed_form_truth_is_the_exact_solvers():
     import escfit
     from escfit.balance import solve
-    from escfit.recorders_extra import theta_at
+    from escfit.balance.synthetic.recorders import theta_at
 
     text = ('model = "balance"\n[oscillator]\nomega0 = 6.283185307179586\ntheta0 = 1.0\n[run]\nswings = 12\n'
             '[effects.viscous]\nC = 0.3\n[effects.coulomb]\nR = 2.0\n')

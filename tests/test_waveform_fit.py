@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 from escfit.balance.waveform import sample_theta
-from escfit.fitting import least_squares, make_problem
-from escfit.recordings.timeseries import TimeSeries
-from escfit.scene import load_scene
+from escfit.inference import least_squares, make_problem
+from escfit.balance.recordings.timeseries import TimeSeries
+from escfit.core.scene import load_scene
 
 TRUTH = {"oscillator.omega0": 2 * math.pi, "viscous.C": 0.3, "coulomb.R": 0.5}
 SIGMA = 0.01  # rad

@@ -21,11 +21,12 @@ from pathlib import Path
 import numpy as np
 
 import escfit
-from escfit.fitting import FitProblem, least_squares, run_emcee
-from escfit.fitting.pulse_problem import PulseFitProblem
-from escfit.fitting.timegrapher_problem import TimegrapherFitProblem
-from escfit.recorders_extra import record_pulses, record_timegrapher
-from escfit.recordings.pulses import pulses_to_unit_curve
+from escfit.balance.problems.curves import FitProblem
+from escfit.inference import least_squares, run_emcee
+from escfit.balance.problems.pulses import PulseFitProblem
+from escfit.balance.problems.timegrapher import TimegrapherFitProblem
+from escfit.balance.synthetic.recorders import record_pulses, record_timegrapher
+from escfit.balance.recordings.pulses import pulses_to_unit_curve
 
 HERE = Path(__file__).resolve().parent
 NAMES = ("viscous.C", "coulomb.R", "escapement[2].X")

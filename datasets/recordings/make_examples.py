@@ -12,7 +12,7 @@ import math
 from pathlib import Path
 
 import escfit
-from escfit.recorders_extra import record
+from escfit.balance.synthetic.recorders import record
 
 HERE = Path(__file__).resolve().parent
 SCENES = HERE.parent / "scenes"

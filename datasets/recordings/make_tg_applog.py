@@ -10,7 +10,7 @@ listens at 18000 bph, locks after three beats and updates its display on every s
 
 - the amplitude: the lift angle set in it (52 deg, equal to the true one) times the harmonic
   formula averaged over the toc and the tic before it
-  (:func:`escfit.observation.timegrapher.window_readings`), plus 0.5 deg noise, whole degrees;
+  (:func:`escfit.balance.observation.timegrapher.window_readings`), plus 0.5 deg noise, whole degrees;
 - the rate over those two beats, s/day (0.1 s/d);
 - the beat error, signed: half of (the last beat interval minus the one before), ms (0.1 ms),
   so positive when the beat the app updates on comes late; here the app updates on the tocs,
@@ -23,7 +23,7 @@ The app's first update (still locking) and three later ones (noise) are flagged 
 with junk values, and the log ends in the middle of a row, as when an app is stopped mid-write.
 The ``Release`` settings line is escfit's addition (the instant the balance was let go, needed
 to fit the decay); the rest is what an app writes.  Read it with
-:func:`escfit.recordings.tg_applog.read_tg_applog` and fit it with ``beats = false``.
+:func:`escfit.balance.recordings.tg_applog.read_tg_applog` and fit it with ``beats = false``.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ import numpy as np
 
 import escfit
 from escfit.balance import solve
-from escfit.observation.timegrapher import TimegrapherObservation, beat_events, window_readings
+from escfit.balance.observation.timegrapher import TimegrapherObservation, beat_events, window_readings
 
 HERE = Path(__file__).resolve().parent
 SCENE = HERE / "timegrapher_scene.toml"

@@ -24,7 +24,7 @@ from typing import Sequence
 import numpy as np
 from numba import config, get_num_threads, set_num_threads
 
-from ..errors import SolverError
+from ..core.errors import SolverError
 from .effects.base import SystemBuilder
 from .exact import STATUS_NAMES, run_angle_many, run_phase_many
 from .solvers import check_capability
@@ -199,7 +199,7 @@ def solve_batch(systems: SystemStack | Sequence[SystemBuilder], n_swings: int, s
     threads
         numba threads to use (default: numba's current setting, all cores).
     throw
-        Raise :class:`~escfit.errors.SolverError` for a set the single-set solver would
+        Raise :class:`~escfit.core.errors.SolverError` for a set the single-set solver would
         refuse; with ``False`` such sets are skipped and get status ``"failed"`` and the
         refusal as their ``message``.
     """

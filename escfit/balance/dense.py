@@ -1,9 +1,10 @@
 """Dense output of the exact solver: theta(t) and omega(t) between the turning points.
 
 Inside each logged segment the motion is the closed form of :mod:`escfit.balance.segment`, so
-dense values are exact, not interpolated.  :func:`log_states` is the one evaluation of a
-segment-log row; :func:`dense_output` (plots) and :func:`log_theta_at` (waveform fits, see
-:mod:`escfit.balance.waveform`) both use it.
+dense values are exact, not interpolated.  :func:`row_state` is the one evaluation of a
+segment-log row; :func:`log_states` (hence :func:`dense_output`, for plots), :func:`log_theta_at`
+(waveform fits, see :mod:`escfit.balance.waveform`) and the level crossings of
+:mod:`escfit.balance.observation.passage_times` all use it.
 """
 
 from __future__ import annotations
@@ -12,21 +13,33 @@ import math
 
 import numpy as np
 import xarray as xr
-from numba import njit
 
+from ..core.kernels import kernel
 from .segment import propagate
 from .trajectory import Trajectory
 
-__all__ = ["dense_output", "log_states", "log_theta_at"]
-
-# numba caches compiled code per file and does not see edits of segment.py, whose propagate is
-# compiled into the kernels below: bump this marker with SEGMENT_REVISION in exact.py.
-SEGMENT_REVISION = 3
+__all__ = ["dense_output", "log_states", "log_theta_at", "row_state"]
 
 
-@njit(cache=True, inline="always")
-def _row_state(log, i, u):
-    """theta (rad) and omega (rad/s) a time ``u`` (s, clipped to the row) into log row ``i``."""
+@kernel(inline="always")
+def row_state(log, i, u):
+    """State a time ``u`` into row ``i`` of a segment log (compiled; inlined into callers).
+
+    Parameters
+    ----------
+    log : ndarray, shape (rows, 9)
+        Segment log of the exact solver (t0, tau, s, x0, v0, xc, w2, h, swing).
+    i : int
+        Row.
+    u : float
+        Time into the row (s), clipped to ``[0, tau]``.
+
+    Returns
+    -------
+    theta, omega : float
+        Angle (rad) and angular velocity (rad/s), signed in the balance frame: ``log[i, 2]``
+        times the swing-frame values, so ``log[i, 2] * theta`` is the swing-frame angle exactly.
+    """
     tau = log[i, 1]
     if u > tau:
         u = tau
@@ -38,7 +51,7 @@ def _row_state(log, i, u):
     return s * (xc + y), s * v
 
 
-@njit(cache=True)
+@kernel
 def log_states(log, seg, u, theta, omega):
     """Fill ``theta[k], omega[k]`` with the state ``u[k]`` seconds into log row ``seg[k]``.
 
@@ -54,10 +67,10 @@ def log_states(log, seg, u, theta, omega):
         Outputs: angle (rad) and angular velocity (rad/s), signed in the balance frame.
     """
     for k in range(seg.shape[0]):
-        theta[k], omega[k] = _row_state(log, seg[k], u[k])
+        theta[k], omega[k] = row_state(log, seg[k], u[k])
 
 
-@njit(cache=True)
+@kernel
 def log_theta_at(log, times, beyond, theta):
     """theta (rad) at ascending ``times`` (s) from a segment log.
 
@@ -75,7 +88,7 @@ def log_theta_at(log, times, beyond, theta):
             continue
         while i + 1 < n and log[i + 1, 0] <= t:
             i += 1
-        theta[k], _ = _row_state(log, i, t - log[i, 0])
+        theta[k], _ = row_state(log, i, t - log[i, 0])
 
 
 def dense_output(traj: Trajectory, *, points_per_segment: int = 24) -> xr.Dataset:
@@ -95,7 +108,9 @@ def dense_output(traj: Trajectory, *, points_per_segment: int = 24) -> xr.Datase
         dimension ``t`` (s).
     """
     if traj.log is None:
-        raise ValueError("dense output needs the segment log: solve(..., solver='exact', log=True)")
+        from ..core.errors import SolverError
+        raise SolverError("dense output needs the segment log, got traj.log = None: "
+                          "solve(..., solver='exact', log=True)")
     log = np.ascontiguousarray(traj.log, float)
     tau = log[:, 1].copy()
     creep = ~np.isfinite(tau)

@@ -22,8 +22,8 @@ add no error of their own beyond the integrator's local error.
 
 The kernel also samples theta at requested times (steps are clipped to land on them); see
 :mod:`escfit.balance.waveform`.  Like :mod:`escfit.balance.rk4` it compiles functions of
-:mod:`escfit.balance.exact` into its cache, which numba keys on this file only: after editing
-``region_tables``, ``_region_coefficients`` or ``_swing_edges`` there, touch this file too.
+:mod:`escfit.balance.exact` into its kernels; their cache (:func:`escfit.core.kernels.kernel`)
+is keyed on that file too, so an edit there recompiles them.
 """
 
 from __future__ import annotations
@@ -31,10 +31,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 from scipy.integrate._ivp import dop853_coefficients as _coefficients
 
-from ..errors import SolverError
+from ..core.errors import SolverError
+from ..core.kernels import kernel
 from .effects.base import SystemBuilder
 from .exact import region_tables
 from .solvers import OVER_THE_TOP, STEP_BUDGET, STEP_UNDERFLOW, _check_system, static_args, status_of
@@ -52,7 +52,7 @@ _EXPONENT = -1.0 / 8.0  # the error estimate is of order 7 (scipy: -1/(error_est
 _STOPPED, _MAX_SEGMENTS = 1, 3
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _acc(x, v, c, w2, xc, pend):
     """Swing-frame acceleration (rad/s^2) of the frozen regime."""
     if pend:
@@ -60,7 +60,7 @@ def _acc(x, v, c, w2, xc, pend):
     return -c * v - w2 * (x - xc)
 
 
-@njit(cache=True)
+@kernel
 def _rk_step(x, v, a, h, c, w2, xc, pend, kx, kv):
     """One DOP853 step of length ``h`` from ``(x, v)`` with acceleration ``a``; stages in kx, kv."""
     kx[0] = v
@@ -87,7 +87,7 @@ def _rk_step(x, v, a, h, c, w2, xc, pend, kx, kv):
     return x1, v1, a1
 
 
-@njit(cache=True)
+@kernel
 def _error_norm(x, v, x1, v1, h, kx, kv, rtol, atol_x, atol_v):
     """scipy's DOP853 error norm of the last step (< 1: accept)."""
     e5x = e5v = e3x = e3v = 0.0
@@ -105,7 +105,7 @@ def _error_norm(x, v, x1, v1, h, kx, kv, rtol, atol_x, atol_v):
     return abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * 2.0)
 
 
-@njit(cache=True)
+@kernel
 def _initial_step(x, v, a, c, w2, xc, pend, rtol, atol_x, atol_v):
     """scipy's ``select_initial_step`` for the 2-d state (s)."""
     sx = atol_x + abs(x) * rtol
@@ -124,7 +124,7 @@ def _initial_step(x, v, a, c, w2, xc, pend, rtol, atol_x, atol_v):
     return min(100.0 * h0, h1)
 
 
-@njit(cache=True)
+@kernel
 def _locate(x, v, a, c, w2, xc, pend, which, target, hi, x_hi, v_hi, a_hi, kx, kv):
     """Event inside a step: ``x`` rises to ``target`` (which=0) or ``v`` falls to 0 (which=1).
 
@@ -204,7 +204,7 @@ def _locate(x, v, a, c, w2, xc, pend, which, target, hi, x_hi, v_hi, a_hi, kx, k
     return tau, xe, ve, ae
 
 
-@njit(cache=True)
+@kernel
 def run_dop853(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, bank, restitution, pend,
                n_swings, rtol, atol_x, atol_v, max_seg, max_steps, sample_t, sample_theta,
                amp, theta_turn, half_period, time, banked):

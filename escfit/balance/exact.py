@@ -15,13 +15,10 @@ that frame Coulomb friction is the constant ``-R``, an unlock window contributes
 and an impulse window ``+X``.
 
 :func:`run_angle_many` and :func:`run_phase_many` run the same kernels over many parameter
-sets in parallel (front end: :mod:`escfit.balance.batch`).  They live here so that numba's
-cache, which is keyed on this file, is invalidated together for all of them.  The cache does
-not notice edits of :mod:`escfit.balance.segment`, whose functions are compiled into these
-kernels: after changing that file, bump ``SEGMENT_REVISION`` below and its copies in the other
-modules that compile it (:mod:`escfit.balance.dense`, :mod:`escfit.observation.passage_times`),
-or delete their cache files (``__pycache__/<module>.*.nb?``); tests/test_stability.py checks
-this kernel agrees.
+sets in parallel (front end: :mod:`escfit.balance.batch`).  The functions of
+:mod:`escfit.balance.segment` are compiled into all of these kernels; their on-disk cache
+(:func:`escfit.core.kernels.kernel`) is keyed on that file and on this one, so an edit of
+either recompiles them.
 
 Status codes (see :data:`STATUS_NAMES`)
 ---------------------------------------
@@ -37,20 +34,18 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
+from ..core.kernels import kernel
 from .segment import cross_time, propagate, turn_time
 
 __all__ = ["run_angle", "run_phase", "run_angle_many", "run_phase_many", "STATUS_NAMES"]
 
 STATUS_NAMES = ("ok", "stopped", "banked", "max_segments", "phase_breakdown")
 N_LOG = 9  # fields of a segment-log row: t0, tau, s, x0, v0, xc, w2, h, swing
-# numba's cache of this file does not notice edits of segment.py, whose functions are compiled
-# into the kernels below: change this line with every edit there (see the module docstring).
-SEGMENT_REVISION = 3  # cross_time: rtsafe safeguard, stops at the rounding floor of y
 
 
-@njit(cache=True)
+@kernel
 def _drift_factor(integral_c, th, rate):
     """Growth factor of C after a cycle, from the envelope exp(-int C dt / 2)."""
     env = math.exp(-0.5 * integral_c)
@@ -60,12 +55,12 @@ def _drift_factor(integral_c, th, rate):
     return 1.0 + rate[th.shape[0]]
 
 
-@njit(cache=True)
+@kernel
 def _applies(wdir, s):
     return wdir == 0 or wdir == s
 
 
-@njit(cache=True)
+@kernel
 def _region_coefficients(j, s, edges, n_edges, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r):
     """``(w2, xc)`` of region ``j``: between edges ``j-1`` and ``j`` of a swing in direction ``s``."""
     if j == 0:
@@ -87,7 +82,7 @@ def _region_coefficients(j, s, edges, n_edges, sp_bp, sp_w2, sp_off, w_lo, w_hi,
     return w2, xc
 
 
-@njit(cache=True)
+@kernel
 def _region(x, s, edges, n_edges, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r):
     """Index of the next edge above ``x`` and the region's (w2, xc)."""
     j = 0
@@ -97,7 +92,7 @@ def _region(x, s, edges, n_edges, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, 
     return j, w2, xc
 
 
-@njit(cache=True)
+@kernel
 def _swing_edges(s, bank, sp_bp, w_lo, w_hi, w_dir, edges):
     """Sorted distinct switch points of a swing in the swing frame, banking last."""
     n = 0
@@ -128,7 +123,7 @@ def _swing_edges(s, bank, sp_bp, w_lo, w_hi, w_dir, edges):
     return m
 
 
-@njit(cache=True)
+@kernel
 def region_tables(bank, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r):
     """Switch points and region coefficients of both swing directions (row 0: s = +1, row 1: s = -1).
 
@@ -149,7 +144,7 @@ def region_tables(bank, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r):
     return edge_tab, n_edge_tab, w2_tab, xc_tab
 
 
-@njit(cache=True)
+@kernel
 def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
               bank, restitution, dr_th, dr_rate, n_swings, max_seg,
               amp, theta_turn, half_period, time, banked, log):
@@ -300,7 +295,7 @@ def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
     return n_done, status, n_seg, t, s * x, s * v
 
 
-@njit(cache=True)
+@kernel
 def run_phase(theta0, c0, r, w2, w_lo, w_hi, w_x, w_dir, dr_th, dr_rate, n_swings,
               amp, theta_turn, half_period, time, banked, log):
     """Integrate half cycles with Monday's phase switching.
@@ -394,15 +389,14 @@ def run_phase(theta0, c0, r, w2, w_lo, w_hi, w_x, w_dir, dr_th, dr_rate, n_swing
     return n_done, status, n_seg, t, s * x, s * v
 
 
-@njit(parallel=True, cache=True)
+@kernel(parallel=True)
 def run_angle_many(theta0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, bank, restitution, dr_th, dr_rate,
                 active, n_swings, max_seg, amp, theta_turn, half_period, time, banked, n_done, status, n_seg, final):
     """:func:`run_angle` on each parameter set ``i`` with ``active[i]``, in parallel.
 
     Per-set inputs are rows of ``theta0, c0, r, restitution`` (n,) and ``sp_w2, sp_off,
     w_x`` (n, .); the structure is shared.  Outputs are rows of ``(n, n_swings)`` arrays
-    and ``n_done, status, n_seg`` (n,), ``final`` (n, 3).  Kept in this module so that its
-    numba cache is invalidated together with the kernel's.
+    and ``n_done, status, n_seg`` (n,), ``final`` (n, 3).
     """
     no_log = np.zeros((0, 9))
     for i in prange(theta0.shape[0]):
@@ -415,7 +409,7 @@ def run_angle_many(theta0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, 
         final[i, 0], final[i, 1], final[i, 2] = res[3], res[4], res[5]
 
 
-@njit(parallel=True, cache=True)
+@kernel(parallel=True)
 def run_phase_many(theta0, c0, r, w2, w_lo, w_hi, w_x, w_dir, dr_th, dr_rate, active, n_swings,
                 amp, theta_turn, half_period, time, banked, n_done, status, n_seg, final):
     """:func:`run_phase` on each active parameter set, in parallel (as :func:`run_angle_many`)."""

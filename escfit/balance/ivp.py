@@ -18,7 +18,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.special import ellipk
 
-from ..errors import SolverError
+from ..core.errors import SolverError
 from .effects.base import SystemBuilder
 from .exact import _region, _swing_edges
 from .solvers import OVER_THE_TOP, _check_system, static_args, status_of

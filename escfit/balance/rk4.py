@@ -19,9 +19,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-from ..errors import SolverError
+from ..core.errors import SolverError
+from ..core.kernels import kernel
 from .effects.base import SystemBuilder
 from .exact import _applies, _region, _swing_edges
 from .solvers import OVER_THE_TOP, static_args, status_of
@@ -30,7 +30,7 @@ from .trajectory import Trajectory
 __all__ = ["solve_rk4"]
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _acc(x, v, c, w2, xc, pend):
     """Swing-frame acceleration: ``-c v - w2 (x - xc)``, or ``-c v - w2 (sin x - xc)`` (pendulum)."""
     if pend:
@@ -38,7 +38,7 @@ def _acc(x, v, c, w2, xc, pend):
     return -c * v - w2 * (x - xc)
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _step(x, v, dt, c, w2, xc, pend):
     k1x = v
     k1v = _acc(x, v, c, w2, xc, pend)
@@ -58,7 +58,7 @@ def _step(x, v, dt, c, w2, xc, pend):
             v + dt / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v))
 
 
-@njit(cache=True)
+@kernel
 def _locate(x, v, dt, c, w2, xc, pend, which, target):
     """Partial step in (0, dt] at which x reaches target (which=0) or v reaches 0 (which=1)."""
     lo = 0.0
@@ -97,7 +97,7 @@ def _locate(x, v, dt, c, w2, xc, pend, which, target):
     return tau
 
 
-@njit(cache=True)
+@kernel
 def _run_located(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, bank, restitution, pend,
                  n_swings, h, max_steps, amp, theta_turn, half_period, time, banked):
     s = 1.0 if theta0 < 0.0 else -1.0
@@ -173,7 +173,7 @@ def _run_located(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
     return n_done, status, steps, t, s * x, s * v
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _accel(th, om, s, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, pend):
     i = 0
     while i < sp_bp.shape[0] and sp_bp[i] <= th:
@@ -187,7 +187,7 @@ def _accel(th, om, s, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, pend):
     return a
 
 
-@njit(cache=True)
+@kernel
 def _run_naive(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, bank, restitution, pend,
                n_swings, h, max_steps, amp, theta_turn, half_period, time, banked):
     """Steps over every switch; friction and window sign follow the sign of the stage velocity."""

@@ -6,10 +6,10 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Mapping
 
-from ..errors import SceneError
-from ..params import Param, ParamSet, read_param
-from ..scene import check_keys
-from ..units import to_canonical
+from ..core.errors import SceneError
+from ..core.params import Param, ParamSet, read_param
+from ..core.scene import check_keys
+from ..core.units import to_canonical
 from .effects import EFFECTS
 from .effects.base import ReadContext, SystemBuilder
 
@@ -97,7 +97,7 @@ def parse(doc: Mapping[str, Any], *, where: str, text: str) -> BalanceScene:
     if osc is None:
         raise SceneError("missing table [oscillator]", where)
     ow = f"{where} [oscillator]"
-    # theta0 may be left out: a sampled recording supplies the release itself (see escfit.fitting.release)
+    # theta0 may be left out: a sampled recording supplies the release itself (see escfit.balance.problems.release)
     check_keys(osc, {"omega0", "inertia", "stiffness", "theta0", "restoring"}, ow)
     restoring = _read_restoring(osc, doc, switching, ow)
     params = ParamSet()

@@ -22,12 +22,12 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+from ..core.kernels import kernel
 
 __all__ = ["propagate", "turn_time", "cross_time"]
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _ec_es(tau, h, w2):
     d = w2 - h * h
     if d > 0.0:
@@ -47,7 +47,7 @@ def _ec_es(tau, h, w2):
     return 0.5 * (a + b), 0.5 * (a - b) / k
 
 
-@njit(cache=True)
+@kernel
 def propagate(y0, v0, tau, h, w2):
     """State ``(y, v)`` a time ``tau`` >= 0 after ``(y0, v0)``.
 
@@ -66,7 +66,7 @@ def propagate(y0, v0, tau, h, w2):
     return ec * y0 + es * (v0 + h * y0), ec * v0 - es * (h * v0 + w2 * y0)
 
 
-@njit(cache=True)
+@kernel
 def turn_time(y0, v0, h, w2):
     """First time ``tau > 0`` at which the velocity returns to zero, or ``inf``.
 
@@ -90,7 +90,7 @@ def turn_time(y0, v0, h, w2):
     return math.inf
 
 
-@njit(cache=True)
+@kernel
 def cross_time(y0, v0, h, w2, target, tau_hi):
     """Time at which ``y`` rises to ``target`` on ``[0, tau_hi]``, and the velocity then.
 

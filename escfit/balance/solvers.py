@@ -2,7 +2,7 @@
 
 Each solver declares the options it takes, the switching laws and the restoring torques it
 can handle (:class:`SolverSpec`); anything else is refused with
-:class:`~escfit.errors.SolverError` before any work is done.  :func:`default_solver` picks the
+:class:`~escfit.core.errors.SolverError` before any work is done.  :func:`default_solver` picks the
 solver used when the caller names none: ``"exact"`` for a spring, ``"dop853"`` for a pendulum.
 """
 
@@ -13,7 +13,7 @@ from typing import Any, Callable, NamedTuple
 
 import numpy as np
 
-from ..errors import SolverError
+from ..core.errors import SolverError
 from .effects.base import SystemBuilder
 from .exact import STATUS_NAMES, run_angle, run_phase
 from .trajectory import Trajectory

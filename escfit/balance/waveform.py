@@ -18,9 +18,9 @@ import math
 from typing import Any, Mapping
 
 import numpy as np
-from numba import njit
 
-from ..errors import SolverError
+from ..core.errors import SolverError
+from ..core.kernels import kernel
 from .dense import log_theta_at
 from .effects.base import SystemBuilder
 from .solvers import check_capability, default_solver, solve_system, status_of
@@ -39,7 +39,7 @@ def _swings_for(sys: SystemBuilder, t_end: float) -> int:
     return int(min(t_end * sys.omega0 / math.pi * 1.1, 1e7)) + 2
 
 
-@njit(cache=True)
+@kernel
 def _ascending(t):
     for i in range(1, t.shape[0]):
         if not t[i] >= t[i - 1]:

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from ..errors import FitError
+from ..core.errors import FitError
 from .rig import lever_ratio
 from .scene import RigScene
 
@@ -130,7 +130,7 @@ def _conditional_density_at_zero(idata, scene: RigScene, parameter: str) -> floa
     only matters when a reading's mu is within a few sd of zero.)
     """
     prior = scene.priors[parameter]
-    if scene.load_at != "reading" or prior.family not in ("normal", "uniform", "halfnormal"):
+    if scene.load_at != "reading" or prior.kind not in ("normal", "uniform", "halfnormal"):
         return None
     from .likelihood import build_model
     from .readers import Readings
@@ -151,13 +151,13 @@ def _conditional_density_at_zero(idata, scene: RigScene, parameter: str) -> floa
     sd = values["reading.sd"][:, None]
     prec = np.sum((x / sd) ** 2, axis=1)
     num = np.sum(x * (readings.dw[None, :] - base) / sd**2, axis=1)
-    if prior.family in ("normal", "halfnormal"):
-        m0, s0 = (prior.args[0], prior.args[1]) if prior.family == "normal" else (0.0, prior.args[0])
+    if prior.kind in ("normal", "halfnormal"):
+        m0, s0 = (prior.args[0], prior.args[1]) if prior.kind == "normal" else (0.0, prior.args[0])
         prec, num = prec + 1.0 / s0**2, num + m0 / s0**2
     if not np.all(np.isfinite(num)) or not np.all(prec > 0):
         return None
     mean, scale = num / prec, 1.0 / np.sqrt(prec)
-    lo, hi = prior.support
+    lo, hi = prior.lo, prior.hi
     mass = stats.norm.cdf((hi - mean) / scale) - stats.norm.cdf((lo - mean) / scale)
     if not lo <= 0.0 <= hi:
         return 0.0

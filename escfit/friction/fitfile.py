@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from ..atomic import refuse_existing
+from ..core.atomic import refuse_existing
 from ..results import SCHEMA_VERSION, FitResult, clean_attrs, dependency_versions, write_fit
 from .inference import fit_least_squares, sample_posterior
 from .readers import read_readings

@@ -29,8 +29,8 @@ import lmfit
 import numpy as np
 import xarray as xr
 
-from ..errors import FitError
-from ..params import safe_name
+from ..core.errors import FitError
+from ..core.params import safe_name
 from .likelihood import SessionModel, build_model
 from .readers import Readings
 from .rig import lever_ratio
@@ -141,7 +141,7 @@ def fit_least_squares(scene: RigScene, readings: Readings, *, max_iter: int = 50
     params = lmfit.Parameters()
     start = _initial_values(model)
     for name in names:
-        lo, hi = scene.priors[name].support
+        lo, hi = scene.priors[name].lo, scene.priors[name].hi
         params.add(safe_name(name), value=float(np.clip(start[name], lo, hi)), min=lo, max=hi)
     result = None
     for _ in range(max_iter if estimate_sd else 1):
@@ -186,9 +186,9 @@ def _residual(params: lmfit.Parameters, model: SessionModel, names: list[str], s
     for name in names:
         prior = model.scene.priors[name]
         x = params[safe_name(name)].value
-        if prior.family == "normal":
+        if prior.kind == "normal":
             resid.append(np.array([(x - prior.args[0]) / prior.args[1]]))
-        elif prior.family == "halfnormal":
+        elif prior.kind == "halfnormal":
             resid.append(np.array([x / prior.args[0]]))
     out = np.concatenate(resid)
     # an impossible point (negative mu, friction out-levering the load) is far from the data

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import FitError
+from ..core.errors import FitError
 from .readers import Readings
 from .rig import mu_law, predicted_dw
 from .scene import RigScene

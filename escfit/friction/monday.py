@@ -16,8 +16,8 @@ import io
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import DataError
-from ..units import ureg
+from ..core.errors import DataError
+from ..core.units import ureg
 from .readers import Readings, write_readings
 from .scene import RigScene, parse
 from .synthetic import SessionSpec, make_session

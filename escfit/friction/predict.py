@@ -9,8 +9,8 @@ from typing import Any, Sequence
 import numpy as np
 import xarray as xr
 
-from ..errors import SolverError
-from ..units import ureg
+from ..core.errors import SolverError
+from ..core.units import ureg
 from .rig import lever_ratio, mu_law, predicted_dw
 from .scene import RigScene
 

@@ -38,8 +38,8 @@ from typing import Sequence
 import numpy as np
 import pint
 
-from ..errors import DataError
-from ..units import ureg
+from ..core.errors import DataError
+from ..core.units import ureg
 
 __all__ = ["Readings", "read_readings", "parse_readings", "write_readings"]
 

@@ -38,6 +38,8 @@ from typing import Literal
 
 import numpy as np
 
+from ..core.errors import SceneError
+
 __all__ = [
     "LOAD_AT",
     "lever_ratio",
@@ -115,7 +117,7 @@ def _normal_force(load, dw, load_at):
         return load
     if load_at == "calibration":
         return load + dw
-    raise ValueError(f"load_at must be one of {LOAD_AT}, got {load_at!r}")
+    raise SceneError(f"load_at must be one of {LOAD_AT}, got load_at = {load_at!r}")
 
 
 def predicted_dw(load, mu, k, d, load_at: Literal["reading", "calibration"] = "reading"):
@@ -143,7 +145,7 @@ def predicted_dw(load, mu, k, d, load_at: Literal["reading", "calibration"] = "r
     if load_at == "calibration":
         with np.errstate(invalid="ignore", divide="ignore"):
             return np.where(mu < r, mu * load / (r - mu), np.nan)
-    raise ValueError(f"load_at must be one of {LOAD_AT}, got {load_at!r}")
+    raise SceneError(f"load_at must be one of {LOAD_AT}, got load_at = {load_at!r}")
 
 
 def mu_law(mu0, load, speed, *, mu_w=0.0, mu_v=0.0, load_ref=0.0, speed_ref=0.0):
@@ -198,5 +200,6 @@ def load_sd_from_scale(resolution: float, slope: float, settings: int = 2) -> fl
         Standard deviation of a single ``dw`` reading, N.
     """
     if not (resolution > 0 and slope > 0 and settings >= 1):
-        raise ValueError("resolution and slope must be positive and settings >= 1")
+        raise SceneError(f"resolution and slope must be positive and settings >= 1, got resolution = "
+                         f"{resolution!r}, slope = {slope!r}, settings = {settings!r}")
     return math.sqrt(settings / 12.0) * resolution / slope

@@ -33,11 +33,11 @@ from typing import Any, Mapping
 
 import pint
 
-from ..errors import SceneError, UnitError
-from ..params import Param, ParamSet, read_param
-from ..scene import check_keys
-from ..units import to_canonical, ureg
-from .priors import Prior, loguniform, normal, parse_prior, uniform
+from ..core.errors import SceneError, UnitError
+from ..core.params import Param, ParamSet, read_param
+from ..core.scene import check_keys
+from ..core.units import to_canonical, ureg
+from ..likelihood.priors import Prior, loguniform, normal, parse_prior, uniform
 from .rig import LOAD_AT, load_sd_from_scale
 
 __all__ = ["RigScene", "parse", "DEFAULT_SD_RANGE"]
@@ -104,7 +104,7 @@ class RigScene:
                 continue
             params.params[name] = replace(p, sd=p.sd * factor)
             pr = priors[name]
-            if pr.family == "normal":
+            if pr.kind == "normal":
                 priors[name] = replace(pr, args=(pr.args[0], pr.args[1] * factor))
         return replace(self, params=params, priors=priors)
 
@@ -179,7 +179,7 @@ def _shown(raw: Any) -> str:
 
 def _quantity(raw: Any, unit: str, where: str, *, nonneg: bool = False, positive: bool = False) -> float:
     """A number (canonical) or a string with unit, converted to ``unit`` (or a kind name)."""
-    from ..units import CANONICAL
+    from ..core.units import CANONICAL
 
     if unit in CANONICAL:
         value = to_canonical(raw, unit, where)

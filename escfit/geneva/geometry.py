@@ -45,7 +45,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from ..errors import SceneError
+from ..core.errors import SceneError
 
 __all__ = ["Geometry", "COMPAT_MODES", "coefficients", "speed_ratio", "speed_ratio_slope", "follower_angle"]
 

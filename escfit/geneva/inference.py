@@ -14,7 +14,7 @@ Layers, each explicit:
   known standard deviation ``sd`` (given with the data, or estimated once from the
   least-squares residuals and then held fixed, which is recorded);
 * priors: one per free parameter, read from the scene (``prior = "..."`` in a parameter
-  table, see :mod:`escfit.fitting.priors`); a free parameter needs finite bounds or a
+  table, see :mod:`escfit.likelihood.priors`); a free parameter needs finite bounds or a
   proper prior;
 * least squares with lmfit (start and Laplace covariance), then emcee with a fixed seed,
   returned as :class:`arviz.InferenceData` (``posterior`` with dims ``chain, draw``).
@@ -39,9 +39,9 @@ import emcee
 import lmfit
 import numpy as np
 
-from ..errors import DataError, FitError
-from ..fitting.priors import Prior, parse_prior
-from ..params import Param, safe_name
+from ..core.errors import DataError, FitError
+from ..likelihood.priors import Prior, prior_of
+from ..core.params import Param, safe_name
 from .engines import ENGINES
 from .simulate import forward
 from .terminal import terminal_cycle
@@ -169,9 +169,9 @@ class GenevaProblem:
             raise FitError("no free parameter: mark one with vary = true (e.g. mu = { value = 0.2, vary = true, "
                            "min = 0, max = 1 })", self.scene.where)
         self.names = [p.name for p in free]
-        self.priors = {p.name: parse_prior(p, f"{self.scene.where} [{p.name}]") for p in free}
+        self.priors = {p.name: prior_of(p, f"{self.scene.where} [{p.name}]", allow_improper=True) for p in free}
         for n, pr in self.priors.items():
-            if pr.kind == "uniform" and not (math.isfinite(pr.lo) and math.isfinite(pr.hi)):
+            if not pr.proper:
                 raise FitError(f"{n} needs finite min and max or a proper prior (e.g. prior = 'uniform(0, 1)')",
                                self.scene.where)
         self.start = np.array([p.value for p in free])

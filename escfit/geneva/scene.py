@@ -24,10 +24,10 @@ import math
 from dataclasses import dataclass, field, replace
 from typing import Any, Mapping
 
-from ..errors import SceneError
-from ..params import ParamSet, read_param
-from ..scene import check_keys
-from ..units import to_canonical
+from ..core.errors import SceneError
+from ..core.params import ParamSet, read_param
+from ..core.scene import check_keys
+from ..core.units import to_canonical
 from .geometry import ALLOWED_SLOTS, COMPAT_MODES, Geometry
 
 __all__ = ["GenevaScene", "parse", "PARAM_NAMES"]

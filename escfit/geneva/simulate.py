@@ -14,7 +14,7 @@ from typing import Any, Mapping
 import numpy as np
 import xarray as xr
 
-from ..errors import SolverError
+from ..core.errors import SolverError
 from .dynamics import acceleration
 from .engines import ENGINES
 from .geometry import Geometry, follower_angle, speed_ratio, speed_ratio_slope

@@ -14,8 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import DataError
-from ..units import ureg
+from ..core.errors import DataError
+from ..core.units import ureg
 
 __all__ = ["read_table", "MEYER_TABLES", "meyer_table"]
 

@@ -29,9 +29,9 @@ from typing import Any, Callable, Iterable, Sequence
 import numpy as np
 import xarray as xr
 
-from ..atomic import atomic_path
-from ..errors import DataError, EscfitError, FitError, ResultsError
-from ..recordings import UnitCurve, read_unit_curve
+from ..core.atomic import atomic_path
+from ..core.errors import DataError, EscfitError, FitError, ResultsError
+from ..balance.recordings import UnitCurve, read_unit_curve
 from ..results import SCHEMA_VERSION, FitResult, clean_attrs, dependency_versions
 
 __all__ = ["UnitTask", "BatchResult", "discover_units", "fit_many", "fit_fleet", "summarize", "load_summary",
@@ -155,8 +155,8 @@ def _fit_task(scene_text: str, scene_where: str, curve: UnitCurve, options: dict
     """Worker side: fit one unit; never raises (a failure comes back as a message)."""
     started = time.perf_counter()
     try:
-        from ..fitting import fit
-        from ..scene import load_scene
+        from ..inference import fit
+        from ..core.scene import load_scene
 
         scene = load_scene(scene_where, text=scene_text)
         opts = dict(options)
@@ -313,14 +313,14 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
     Parameters
     ----------
     data
-        Unit-curve CSV file(s) or :class:`~escfit.recordings.UnitCurve` objects; units come
+        Unit-curve CSV file(s) or :class:`~escfit.balance.recordings.UnitCurve` objects; units come
         from the ``unit`` column, or one unit per file without one.
     scene
         Scene file (TOML) with the free parameters, the same for every unit.
     out_dir
         Results directory (created): ``<unit>.h5`` per unit and ``summary.nc``.
     method
-        ``"leastsq"`` or ``"emcee"`` (see :func:`escfit.fitting.fit`).
+        ``"leastsq"`` or ``"emcee"`` (see :func:`escfit.inference.fit`).
     scheduler
         ``None``: a LocalCluster on this machine (processes, one thread each); an address
         such as ``"tcp://10.0.0.5:8786"``: that running cluster; a ``distributed.Client``; or
@@ -331,7 +331,7 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
     seed
         Batch seed; each unit is fitted with :func:`unit_seed` (seed, unit name).
     walkers, steps, burn, n_starts, solver
-        Passed to :func:`escfit.fitting.fit`.
+        Passed to :func:`escfit.inference.fit`.
     units
         Fit only these units (default: all).
     notch_deg
@@ -340,14 +340,14 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
         ``True`` prints one line per unit to stderr; a callable receives those lines.
     predictive_draws
         Thinned posterior draws whose pointwise log-likelihood each results file keeps (more
-        lowers the Pareto k of PSIS-LOO; see :func:`escfit.fitting.fit`).
+        lowers the Pareto k of PSIS-LOO; see :func:`escfit.inference.fit`).
 
     Returns
     -------
     BatchResult
         Its ``failed`` maps unit -> error message; failures are also printed to stderr.
     """
-    from ..scene import load_scene
+    from ..core.scene import load_scene
 
     if method not in ("leastsq", "emcee"):
         raise FitError(f"method must be 'leastsq' or 'emcee', got {method!r}")

@@ -25,7 +25,7 @@ from typing import Mapping, Sequence
 import numpy as np
 import xarray as xr
 
-from ..errors import ResultsError
+from ..core.errors import ResultsError
 from ..results import SCHEMA_VERSION, clean_attrs
 
 __all__ = ["ModelComparison", "compare_models", "decay_residuals", "chapter5_contrast", "unit_files"]

@@ -30,7 +30,7 @@ import numpy as np
 import xarray as xr
 from scipy.special import logsumexp
 
-from ..errors import FitError, ResultsError
+from ..core.errors import FitError, ResultsError
 from ..results import FitResult, clean_attrs
 from .scenes import POPULATION_PARAMS
 
@@ -109,8 +109,8 @@ def collect_draws(results: str | Path | Iterable[str | Path | FitResult], *,
     ResultsError
         A file has no posterior, misses a parameter or holds non-positive draws.
     """
-    from ..fitting.priors import parse_prior
-    from ..scene import load_scene
+    from ..likelihood.priors import prior_of
+    from ..core.scene import load_scene
 
     items = _result_files(results)
     labels = [Path(r.path).stem if isinstance(r, FitResult) else Path(r).stem for r in items]
@@ -138,7 +138,7 @@ def collect_draws(results: str | Path | Iterable[str | Path | FitResult], *,
         if not np.all(flat > 0):
             raise ResultsError("population parameters must be positive in every draw", f.path or label)
         scene = load_scene(f.attrs.get("scene_file") or label, text=f.attrs["scene"])
-        priors = [parse_prior(scene.params[n]) for n in names]
+        priors = [prior_of(scene.params[n], allow_improper=True) for n in names]
         lp = np.array([[p.logpdf(float(v)) for p, v in zip(priors, row)] for row in flat]).sum(axis=1)
         if not np.all(np.isfinite(lp)):
             raise ResultsError("draws outside the fit's prior support", f.path or label)
@@ -338,7 +338,7 @@ class PopulationResult:
         return ds
 
     def write(self, path: str | Path, *, force: bool = False) -> None:
-        from ..atomic import atomic_path
+        from ..core.atomic import atomic_path
 
         with atomic_path(path, force=force) as tmp:
             self.to_dataset().to_netcdf(tmp, engine="h5netcdf")

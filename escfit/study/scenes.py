@@ -101,7 +101,7 @@ class Rig:
 
 def _check_model(model: str) -> None:
     if model not in MODELS:
-        from ..errors import SceneError
+        from ..core.errors import SceneError
 
         raise SceneError(f"model must be one of {list(MODELS)}, got {model!r}")
 

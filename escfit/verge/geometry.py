@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 from typing import Mapping, NamedTuple
 
-from ..errors import SceneError
+from ..core.errors import SceneError
 
 __all__ = ["Constants", "FuzeAngles", "fuze_angles", "build_constants", "mesh_limits"]
 

@@ -51,9 +51,9 @@ import emcee
 import lmfit
 import numpy as np
 
-from ..errors import DataError, FitError, SceneError
-from ..fitting.priors import Prior, parse_prior
-from ..params import Param, safe_name
+from ..core.errors import DataError, FitError, SceneError
+from ..likelihood.priors import Prior, prior_of
+from ..core.params import Param, safe_name
 from .scene import VergeScene
 from .simulate import forward
 
@@ -156,7 +156,7 @@ def _free_params(scene: VergeScene, free: Sequence[str], tie_mu1: bool, priors: 
         spec = priors.get(name)
         if spec is None:
             raise FitError(f"no prior for {name!r}: give one explicitly (e.g. 'uniform(0, 0.3)')", "priors")
-        out.append(parse_prior(Param(name, p.value, p.unit, p.meaning, True, p.min, p.max, spec), f"priors[{name}]"))
+        out.append(prior_of(Param(name, p.value, p.unit, p.meaning, True, p.min, p.max, spec), f"priors[{name}]"))
     return out
 
 
@@ -174,7 +174,7 @@ class TurnsProblem:
     tie_mu1 : bool
         Keep ``verge.mu1`` equal to ``verge.mu`` (the report's system coefficient).
     priors : mapping
-        Prior string per free parameter (see :mod:`escfit.fitting.priors`); defaults to
+        Prior string per free parameter (see :mod:`escfit.likelihood.priors`); defaults to
         :data:`DEFAULT_PRIORS`.
     step : float
         RK4 step of the forward model (rad of spin).

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from typing import Mapping
 
+from ..core.errors import SceneError
 from .coefficients import mesh_phase
 from .dynamics import coupled_eval, coupled_signs, free_eval
 from .impact import impact_map, normal_speeds
@@ -19,7 +20,7 @@ __all__ = ["coupled_state", "free_state", "impact"]
 
 def _side(side: str) -> float:
     if side not in ("entrance", "exit"):
-        raise ValueError(f"side must be 'entrance' or 'exit', got {side!r}")
+        raise SceneError(f"side must be 'entrance' or 'exit', got side = {side!r}")
     return 1.0 if side == "entrance" else -1.0
 
 
@@ -54,7 +55,7 @@ def coupled_state(scene: VergeScene, phi: float, phidot: float = 0.0, phi_total:
     elif at_rest_signs in ("listing", "motion"):
         s4, s5 = coupled_signs(k, s, phi, phidot, 1.0)
     else:
-        raise ValueError(f"at_rest_signs must be 'listing' or 'motion', got {at_rest_signs!r}")
+        raise SceneError(f"at_rest_signs must be 'listing' or 'motion', got at_rest_signs = {at_rest_signs!r}")
     mus = 1.0 if phidot >= 0 else -1.0
     r = coupled_eval(k, s, phi, phidot, phi_total, n1, n2, s1, s2, s4, s5, mus, 0.0, 0.0)
     phidd, psi, psid, psidd, f23, f12, pn, pnv, g = r[:9]
@@ -90,7 +91,7 @@ def impact(scene: VergeScene, phi: float, psi: float, phidot: float, psidot: flo
     alpha = k.alpha_en if s > 0 else k.alpha_ex
     e = k.erest if restitution is None else float(restitution)
     if not 0.0 <= e <= 1.0 or math.isnan(e):
-        raise ValueError(f"restitution must lie in [0, 1], got {restitution!r}")
+        raise SceneError(f"restitution must lie in [0, 1], got restitution = {restitution!r}")
     vs, vp, _a, _d = normal_speeds(k, alpha, phi, psi, phidot, psidot)
     pf, qf = impact_map(k, alpha, phi, psi, phidot, psidot, e)
     vs_f, vp_f, _a, _d = normal_speeds(k, alpha, phi, psi, pf, qf)

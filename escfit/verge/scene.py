@@ -35,10 +35,10 @@ from typing import Any, Mapping
 
 import pint
 
-from ..errors import SceneError, UnitError
-from ..params import Param, ParamSet, read_param
-from ..scene import check_keys
-from ..units import ureg
+from ..core.errors import SceneError, UnitError
+from ..core.params import Param, ParamSet, read_param
+from ..core.scene import check_keys
+from ..core.units import ureg
 from .geometry import Constants, build_constants
 from .kinematics import coupled_kinematics
 

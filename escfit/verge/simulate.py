@@ -15,7 +15,7 @@ from typing import Mapping
 import numpy as np
 import xarray as xr
 
-from ..errors import SolverError
+from ..core.errors import SolverError
 from .hybrid import DEFAULT_STEP, IMPACT_FIELDS, RunResult, run_rk4
 from .integrator import COLUMNS
 from .scene import VergeScene

@@ -17,16 +17,16 @@ from pathlib import Path
 
 import numpy as np
 
-from escfit.fitting import least_squares, make_problem
-from escfit.scene import load_scene
+from escfit.inference import least_squares, make_problem
+from escfit.core.scene import load_scene
 
 HERE = Path(__file__).resolve().parent
 
 
 def envelope_c(problem) -> float:
     """C (1/s) of an exponential through the turning-point amplitudes (the naive method)."""
-    from escfit.recordings.turning_points import reduce_series
-    from escfit.recordings.unit_curve import UnitCurve
+    from escfit.balance.recordings.turning_points import reduce_series
+    from escfit.balance.recordings.unit_curve import UnitCurve
 
     data = problem.data
     if isinstance(data, UnitCurve):
@@ -76,7 +76,7 @@ def main() -> None:
     out.mkdir(parents=True, exist_ok=True)
     print("| recording | read as | C (1/s) | R (rad/s^2) | omega0 (rad/s) | envelope C (1/s) | reading scatter | misfit |")
     print("|---|---|---|---|---|---|---|---|")
-    from escfit.fitting import _misfit
+    from escfit.inference.fit import _misfit
 
     for recipe in sorted(HERE.glob("*.toml")):
         doc = tomllib.loads(recipe.read_text())
@@ -91,7 +91,8 @@ def main() -> None:
             i = res.names.index(name)
             return f"{res.value[i]:.4g} +- {1.96 * res.stderr[i]:.2g}"
 
-        _, warnings = _misfit(problem, res)
+        _, warnings = _misfit(problem, res, problem.obs_coords())
+        warnings = warnings + problem.checks_at_best_fit(res.values)[1]
         kind = "waveform" if problem.curves[0].label == "waveform" else "turning points"
         print(f"| {recipe.stem} | {kind}, {problem.n_data} readings | {fmt('viscous.C')} | {fmt('coulomb.R')} | "
               f"{fmt('oscillator.omega0')} | {envelope_c(problem):.4g} | {res.sigma_hat:.3g} | "

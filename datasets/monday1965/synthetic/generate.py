@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 import escfit
-from escfit.recorders import record_unit_curve
+from escfit.balance.synthetic.unit_curves import record_unit_curve
 
 HERE = Path(__file__).resolve().parent
 TABLE = HERE.parent / "table1_unit_curve_comparisons.csv"

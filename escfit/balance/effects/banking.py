@@ -10,10 +10,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Mapping
 
-from ...errors import SceneError
-from ...params import Param, read_param
-from ...scene import check_keys
-from ...units import to_canonical
+from ...core.errors import SceneError
+from ...core.params import Param, read_param
+from ...core.scene import check_keys
+from ...core.units import to_canonical
 from .base import ReadContext, SystemBuilder
 
 __all__ = ["Banking"]

@@ -1,7 +1,7 @@
 """What every balance effect shares: the reading context and the system builder.
 
 An effect is a small frozen dataclass holding structure only (window angles, which
-swings); its numeric parameters are declared as :class:`escfit.params.Param` when the
+swings); its numeric parameters are declared as :class:`escfit.core.params.Param` when the
 scene is read and their values are passed to :meth:`apply` at compile time, so effects are
 cheap to send to worker processes and a fit never mutates them.
 """
@@ -14,7 +14,7 @@ from typing import Mapping
 
 import numpy as np
 
-from ...errors import SceneError
+from ...core.errors import SceneError
 
 __all__ = ["ReadContext", "SystemBuilder", "per_inertia"]
 
@@ -128,7 +128,7 @@ def read_either(
     unit
         The per-inertia unit of the result.
     """
-    from ...params import read_param
+    from ...core.params import read_param
 
     (dkey, dkind), (pkey, pkind) = direct, physical
     if (dkey in table) == (pkey in table):

@@ -10,8 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Mapping
 
-from ...params import Param
-from ...scene import check_keys
+from ...core.params import Param
+from ...core.scene import check_keys
 from .base import ReadContext, SystemBuilder, read_either
 
 __all__ = ["Coulomb"]

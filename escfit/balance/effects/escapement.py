@@ -18,10 +18,10 @@ import math
 from dataclasses import dataclass
 from typing import Mapping, Sequence
 
-from ...errors import SceneError
-from ...params import Param, read_param
-from ...scene import check_keys
-from ...units import to_canonical
+from ...core.errors import SceneError
+from ...core.params import Param, read_param
+from ...core.scene import check_keys
+from ...core.units import to_canonical
 from .base import ReadContext, SystemBuilder, read_either
 
 __all__ = ["Window", "Escapement"]

@@ -11,9 +11,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Mapping
 
-from ...errors import SceneError
-from ...params import Param
-from ...scene import check_keys
+from ...core.errors import SceneError
+from ...core.params import Param
+from ...core.scene import check_keys
 from .base import ReadContext, SystemBuilder
 
 __all__ = ["ViscousDrift"]

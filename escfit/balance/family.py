@@ -1,0 +1,188 @@
+"""The balance wheel's (and the gravity pendulum's) entry in the model-family registry.
+
+:data:`FAMILY` tells the inference layer how to read a balance recording of any supported
+format and build its fit problem: unit curves (amplitudes or notch counts per swing),
+photo-cell passage times, timegrapher readings and sampled angles (turning points or the
+whole waveform), including raw tables and MATLAB files read with a scene's ``[recording]``
+options.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..core.errors import DataError, FitError
+from ..core.scene import load_scene
+from .recordings import UnitCurve
+
+__all__ = ["FAMILY", "make_problem"]
+
+PROBLEM_OPTIONS = {"solver", "solver_options", "unit", "fmt", "notch_deg", "recording"}
+
+
+def make_problem(scene, data, *, solver: str | None = None, solver_options: dict | None = None,
+                 unit: str | None = None, fmt: str | None = None, notch_deg: float | None = None,
+                 recording: dict | None = None):
+    """The fit problem of a balance scene and a recording of any supported format.
+
+    Parameters
+    ----------
+    scene
+        Balance scene (object or path).
+    data
+        A :class:`~escfit.balance.recordings.UnitCurve` (amplitudes or notch counts per swing), a
+        :class:`~escfit.balance.recordings.pulses.PulseTrain` (photo-cell passage times), a
+        :class:`~escfit.balance.recordings.timegrapher.TimegrapherRecording`, a
+        :class:`~escfit.balance.recordings.timeseries.TimeSeries` (a sampled angle: turning points or
+        the whole waveform are fitted, see :mod:`escfit.balance.problems.recorded`), or the path of a
+        file holding one of them, including raw tables and MATLAB files.
+    solver, solver_options
+        Forward solver (default: the scene's, see :func:`escfit.balance.default_solver`);
+        passage-time and timegrapher fits need the exact solver's log.
+    unit
+        Keep only this unit of a multi-unit unit-curve file.
+    fmt
+        ``"unit-curve"``, ``"pulses"``, ``"timegrapher"``, ``"timeseries"`` or ``"raw"``
+        (a raw table or ``.mat`` file read with the scene's ``[recording]`` options); detected
+        from the file's content when ``None``.
+    notch_deg
+        Notch angle of notch counts (deg) when the file does not say.
+    recording
+        ``[recording]`` options overriding the scene's key by key (the command line's).
+
+    Returns
+    -------
+    FitProblem, WaveformProblem or RecordingProblem
+    """
+    from . import default_solver
+    from .recordings.pulses import PulseTrain
+    from .recordings.timegrapher import TimegrapherRecording
+    from .recordings.timeseries import TimeSeries
+    from .problems.curves import FitProblem
+    from .problems.recorded import problem_from_series
+
+    sc = load_scene(scene) if not hasattr(scene, "model") else scene
+    solver = solver or default_solver(sc)
+    spec = _recording_spec(sc, recording)
+    if isinstance(data, (str, Path)):
+        data = _read_data(data, spec, fmt, notch_deg)
+    options = dict(solver_options or {})
+    if unit is not None and not isinstance(data, UnitCurve):
+        raise FitError("--unit selects a unit of a unit-curve file; this recording holds one unit",
+                       getattr(data, "source", None))
+    if isinstance(data, TimeSeries):
+        readings = spec.readings if spec is not None else "samples"
+        problem = problem_from_series(sc, data, solver=solver, solver_options=options, readings=readings)
+        problem.notes += _override_notes(sc, recording)
+        if data.meta.get("angle_unit_assumed"):
+            problem.data_warnings = list(getattr(problem, "data_warnings", [])) + [
+                "the recording gives no angle unit and radians were assumed: if the angles are in another unit "
+                "(deg, encoder counts, a sensor's volts, a position in mm) set [recording] angle_unit and scale"]
+        return problem
+    if math.isnan(sc.params["oscillator.theta0"].value):
+        raise FitError("the scene leaves theta0 out, which only a sampled recording (a time series) can supply; "
+                       "give [oscillator] theta0", sc.where)
+    if isinstance(data, UnitCurve):
+        if unit is not None:
+            rows = np.flatnonzero(data.unit == unit)
+            if not rows.size:
+                raise FitError(f"no readings of unit {unit!r}; units in the file: {sorted(set(data.unit))}",
+                               data.source)
+            data = data.select(rows)
+        return FitProblem(sc, data, solver, options)
+    if isinstance(data, PulseTrain):
+        from .problems.pulses import PulseFitProblem
+
+        return PulseFitProblem(sc, data, solver, options)
+    if isinstance(data, TimegrapherRecording):
+        from .problems.timegrapher import TimegrapherFitProblem
+
+        return TimegrapherFitProblem(sc, data, solver, options)
+    raise FitError(f"cannot fit data of type {type(data).__name__}; give a recording or a file path")
+
+
+def _recording_spec(scene, overrides: dict | None):
+    """The scene's ``[recording]`` options with command-line overrides, or ``None`` if neither."""
+    from .recordings.recording_spec import merge_spec, recording_spec_from_table
+
+    table = scene.extra.get("recording")
+    given = {k: v for k, v in (overrides or {}).items() if v is not None}
+    if table is None and not given:
+        return None
+    spec = recording_spec_from_table(table or {}, f"{scene.where}")
+    return merge_spec(spec, **given) if given else spec
+
+
+def _override_notes(scene, overrides: dict | None) -> list[str]:
+    """Notes for command-line options that replace a different key of the scene's ``[recording]``."""
+    table = scene.extra.get("recording") or {}
+    given = {k for k, v in (overrides or {}).items() if v is not None}
+    notes = [f"--{k.replace('_', '-')} replaces the scene's [recording] {k} = {table[k]!r}"
+             for k in sorted(given) if k in table]
+    for new, old in (("sample_rate", "time_column"), ("time_column", "sample_rate")):
+        if new in given and old in table and old not in given:
+            notes.append(f"--{new.replace('_', '-')} replaces the scene's [recording] {old} = {table[old]!r}")
+    return notes
+
+
+def _read_data(path, spec, fmt: str | None, notch_deg: float | None):
+    """Read a recording file: a known escfit format, else a raw table or MATLAB file."""
+    from .recordings.rawseries import read_raw_series
+    from .recordings.detect import detect_format, read_recording
+
+    if spec is not None or fmt == "raw":
+        return read_raw_series(path, spec)
+    detected = fmt
+    if detected is None:
+        try:
+            detected = detect_format(path)
+        except DataError as exc:
+            try:
+                return read_raw_series(path, None)
+            except DataError as raw_exc:
+                if "binary" in exc.message or "empty" in exc.message:
+                    raise exc from None
+                raise raw_exc from None
+    options = {"notch_deg": notch_deg} if notch_deg is not None and detected == "unit-curve" else {}
+    return read_recording(path, detected, **options)
+
+
+
+class BalanceFamily:
+    """Registry entry of ``model = "balance"`` (see :class:`~escfit.likelihood.problem.ModelFamily`)."""
+
+    name = "balance"
+    fit_defaults = {"walkers": 32, "steps": 2000, "n_starts": 8, "predictive_draws": 400}
+
+    @property
+    def formats(self) -> dict[str, Any]:
+        """Format name -> reader ``(path) -> recording``."""
+        from functools import partial
+
+        from .recordings.rawseries import read_raw_series
+        from .recordings.detect import read_recording
+
+        names = ("unit-curve", "pulses", "timegrapher", "tg-applog", "timeseries")
+        return {**{n: partial(read_recording, fmt=n) for n in names}, "raw": read_raw_series}
+
+    def detect(self, path) -> str:
+        from .recordings.detect import detect_format
+
+        return detect_format(path)
+
+    def problem(self, scene, data, **options):
+        unknown = sorted(set(options) - PROBLEM_OPTIONS)
+        if unknown:
+            raise FitError(f"balance fits take no option(s) {unknown}; they take {sorted(PROBLEM_OPTIONS)}",
+                           getattr(scene, "where", None))
+        return make_problem(scene, data, **options)
+
+    def figures(self, result) -> dict[str, bytes]:
+        return {}
+
+
+FAMILY = BalanceFamily()

@@ -1,0 +1,169 @@
+"""Waveform readings: every sample of a time series is a reading of theta(t).
+
+A sample taken at time ``t`` (the recording's clock, s) reads
+
+    y = theta(t - t_release) - offset - offset_rate * (t - t_ref) + noise
+
+(the sensor's zero sits at ``offset`` in the oscillator's frame, as for amplitude readings: an
+encoder reading pi at the hanging position of a pendulum has ``offset = -pi``), where ``theta``
+is the model's motion released at rest at ``oscillator.theta0`` at the instant
+``t_release`` (a turning point of the record, so the release at rest is exact physics, not an
+approximation), ``t_ref`` the fixed reference instant of the drift (the detected release) and
+the noise Gaussian with scale ``sigma``: independent from sample to sample (``noise = "white"``,
+the default) or, with ``noise = "ar1"``, correlated as a first-order autoregression in sample
+order, ``e_i = rho*e_(i-1) + innovation`` with marginal scale ``sigma``.  Video trackers and
+filtered sensors give correlated errors, and a model that misses a small effect (air drag
+growing with the speed, a marker off the axis) leaves residuals that look the same; white noise
+then makes the intervals too narrow by about ``sqrt((1 + rho)/(1 - rho))``.  A sensor that reports whole steps (an encoder count, a
+pixel) is described by ``quantum``: the reading is the step containing the true value plus
+jitter, and the likelihood of a sample is the probability mass of its step, as for notch
+counts.
+
+Parameters: ``observation.sigma`` (rad), ``observation.offset`` (rad), ``observation.offset_rate``
+(rad/s), ``observation.t_release`` (s, recording clock), ``observation.rho`` (AR(1) noise only).  ``quantum`` (an angle) and ``thin``
+(use every n-th sample) are settings, not parameters.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Mapping
+
+import numpy as np
+
+from ...core.errors import SceneError
+from ...core.params import Param, read_param
+from ...core.units import to_canonical
+from .amplitude import drift_param, noise_params
+from .notches import log_interval_mass
+
+__all__ = ["WaveformObservation"]
+
+
+@dataclass(frozen=True)
+class WaveformObservation:
+    """Samples of theta(t) with Gaussian noise and an optional quantisation step.
+
+    Attributes
+    ----------
+    quantum
+        Step of the sensor's readings (rad); 0 for continuous readings.
+    thin
+        Use every ``thin``-th sample (0: choose so that at most :attr:`MAX_SAMPLES` remain).
+    t_ref
+        Reference instant of the offset drift (s, recording clock).
+    params
+        ``observation.sigma``, ``offset``, ``offset_rate``, ``t_release``.
+    """
+
+    quantum: float
+    thin: int
+    t_ref: float
+    params: tuple[Param, ...]
+    noise: str = "white"
+    kind = "waveform"
+    KEYS = {"model", "sigma", "offset", "offset_rate", "t_release", "quantum", "thin", "noise", "rho"}
+    MAX_SAMPLES = 4000
+
+    @classmethod
+    def from_table(cls, table: Mapping, where: str, *, t_release: float, period: float, offset: float,
+                   offset_rate: float, sigma: float) -> "WaveformObservation":
+        """Read ``[observation]`` with ``model = "waveform"``.
+
+        Parameters
+        ----------
+        table
+            The scene's table (keys :attr:`KEYS`).
+        where
+            ``"file [observation]"`` for messages.
+        t_release, period, offset, offset_rate, sigma
+            Estimates from the record's turning points (s, s, rad, rad/s, rad; the offsets in
+            this module's convention, i.e. minus the centre on the sensor's scale): the defaults
+            of parameters the table does not give.  ``t_release`` is free within a tenth of
+            a period either side, the offsets and sigma are free.
+        """
+        unknown = sorted(set(table) - cls.KEYS)
+        if unknown:
+            raise SceneError(f"unknown key(s) {unknown}; known: {sorted(cls.KEYS)}", where)
+        quantum = to_canonical(table.get("quantum", 0.0), "angle", f"{where}.quantum")
+        if not (math.isfinite(quantum) and quantum >= 0.0):
+            raise SceneError(f"quantum must be a step angle >= 0, got {table.get('quantum')!r}", f"{where}.quantum")
+        noise = table.get("noise", "white")
+        if noise not in ("white", "ar1"):
+            raise SceneError(f"noise must be 'white' or 'ar1', got {noise!r}", f"{where}.noise")
+        if noise == "ar1" and quantum > 0.0:
+            raise SceneError("quantum (whole-step readings) goes with white noise; with correlated noise leave it out",
+                             f"{where}.quantum")
+        if noise == "white" and "rho" in table:
+            raise SceneError("rho is the correlation of AR(1) noise: it needs noise = 'ar1'", f"{where}.rho")
+        thin = table.get("thin", 0)
+        if isinstance(thin, bool) or not isinstance(thin, int) or not 0 <= thin <= 1_000_000:
+            raise SceneError(f"thin must be a whole number >= 1 (or 0 for automatic), got {thin!r}", f"{where}.thin")
+        guess = dict(table)
+        floor = max(quantum / 10.0, 1e-9)
+        guess.setdefault("sigma", {"value": max(sigma, 2 * floor), "vary": True, "min": floor, "max": 1.0,
+                                   "prior": f"loguniform({floor!r}, 1.0)"})
+        span = abs(offset) + 1.0
+        guess.setdefault("offset", {"value": offset, "vary": True, "min": offset - span, "max": offset + span})
+        rate_span = abs(offset_rate) + 0.1
+        guess.setdefault("offset_rate", {"value": offset_rate, "vary": True, "min": offset_rate - rate_span,
+                                         "max": offset_rate + rate_span})
+        params = noise_params(guess, where, sigma) + [drift_param(guess, where)]
+        half = 0.1 * period
+        t_rel = read_param(table.get("t_release", {"value": t_release, "vary": True, "min": t_release - half,
+                                                   "max": t_release + half}),
+                           name="observation.t_release", kind="time",
+                           meaning="instant the model is released at rest (s, the recording's clock)",
+                           where=f"{where}.t_release")
+        if noise == "ar1":
+            params.append(read_param(table.get("rho", {"value": 0.5, "vary": True, "min": 0.0, "max": 0.99}),
+                                     name="observation.rho", kind="dimensionless", lower=-0.999, upper=0.999,
+                                     meaning="lag-1 correlation of the reading noise (AR(1), in sample order)",
+                                     where=f"{where}.rho"))
+        return cls(quantum, thin, t_release, tuple(params) + (t_rel,), noise)
+
+    def expected(self, theta: np.ndarray, t: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
+        """Noise-free readings (rad) at sample times ``t`` (s) for the model angles ``theta``."""
+        return theta - values["observation.offset"] - values["observation.offset_rate"] * (t - self.t_ref)
+
+    def loglike_pointwise(self, theta: np.ndarray, t: np.ndarray, y: np.ndarray,
+                          values: Mapping[str, float]) -> np.ndarray:
+        """Log-likelihood of each sample ``y`` (rad)."""
+        mu = self.expected(theta, t, values)
+        sigma = values["observation.sigma"]
+        if self.quantum > 0.0:
+            h = 0.5 * self.quantum
+            return log_interval_mass((y - h - mu) / sigma, (y + h - mu) / sigma)
+        z, scale = self._innovations(y - mu, sigma, values)
+        return -0.5 * z * z - (np.log(scale) + 0.5 * math.log(2 * math.pi))
+
+    def _innovations(self, r: np.ndarray, sigma: float, values: Mapping[str, float]):
+        """Standardised innovations of the residuals ``r`` and the scale of each (rad)."""
+        if self.noise == "white":
+            return r / sigma, np.full(r.size, sigma)
+        rho = values["observation.rho"]
+        scale = np.full(r.size, sigma * math.sqrt(max(1.0 - rho * rho, 1e-300)))
+        scale[0] = sigma
+        e = r.copy()
+        e[1:] -= rho * r[:-1]
+        return e / scale, scale
+
+    def residuals(self, theta: np.ndarray, t: np.ndarray, y: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
+        """Residuals scaled by the total reading spread (noise and rounding), for least squares."""
+        if self.noise == "ar1":
+            return self._innovations(y - self.expected(theta, t, values), values["observation.sigma"], values)[0]
+        spread = math.sqrt(values["observation.sigma"] ** 2 + self.quantum**2 / 12.0)
+        return (y - self.expected(theta, t, values)) / spread
+
+    def sample(self, theta: np.ndarray, t: np.ndarray, values: Mapping[str, float],
+               rng: np.random.Generator) -> np.ndarray:
+        """Synthetic readings (rad), rounded to the step when there is one."""
+        e = rng.standard_normal(theta.size)
+        if self.noise == "ar1":
+            rho = values["observation.rho"]
+            s = math.sqrt(1.0 - rho * rho)
+            for i in range(1, e.size):
+                e[i] = rho * e[i - 1] + s * e[i]
+        y = self.expected(theta, t, values) + values["observation.sigma"] * e
+        return np.round(y / self.quantum) * self.quantum if self.quantum > 0.0 else y

@@ -1,0 +1,1 @@
+"""Balance-wheel and pendulum fit problems: scene + recording + observation model -> likelihood."""

@@ -1,0 +1,94 @@
+"""What every balance fit problem offers the inference layer beyond its likelihood.
+
+:class:`BalanceProblem` fills in the parts of :class:`~escfit.likelihood.problem.Problem`
+that are the same for unit curves, passage times, timegrapher readings and sampled
+waveforms: units and meanings from the scene's parameters, the readings' coordinates,
+provenance, Monday's derived ``K`` and the structural checks of
+:mod:`escfit.balance.problems.checks`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Mapping
+
+import numpy as np
+
+from ...likelihood.problem import ProblemBase
+from .checks import end_of_motion, monday_k, phase_mode_warning
+
+__all__ = ["BalanceProblem", "NOISE_PARAMS"]
+
+# noise parameters of the balance observation models: least squares profiles or holds them
+NOISE_PARAMS = ("observation.sigma", "observation.nu", "observation.sigma_t", "observation.rho")
+
+
+class BalanceProblem(ProblemBase):
+    """Mixin for balance fit problems (which set ``scene``, ``data``, ``params``, ``curves``,
+    ``observation``, ``solver`` and ``solver_options``)."""
+
+    family = "balance"
+    reading_units = "rad"
+
+    @property
+    def noise_names(self) -> tuple[str, ...]:
+        return tuple(n for n in NOISE_PARAMS if n in self.names)
+
+    @property
+    def units(self) -> dict[str, str]:
+        out = {p.name: p.unit for p in self.params}
+        out["K"] = ""
+        return out
+
+    @property
+    def meanings(self) -> dict[str, str]:
+        out = {p.name: p.meaning for p in self.params}
+        out["K"] = "Monday's combined K (derived)"
+        return out
+
+    @property
+    def misfit_options(self) -> dict[str, bool]:
+        """How the generic residual checks read this problem's residuals."""
+        ar1 = getattr(self.observation, "noise", "") == "ar1"
+        return {"standardised": getattr(self.data, "kind", "") == "notches" or ar1,
+                "branches": type(self).__name__ == "FitProblem", "innovations": ar1}
+
+    def obs_coords(self) -> dict[str, Any]:
+        swing = np.concatenate([c.swing for c in self.curves])
+        curve = np.concatenate([[c.label] * c.swing.size for c in self.curves])
+        load = np.concatenate([[c.load] * c.swing.size for c in self.curves])
+        coords = {"obs": np.arange(swing.size), "swing": ("obs", swing), "curve": ("obs", curve.astype(str)),
+                  "load": ("obs", load)}
+        times = [getattr(c, "time", None) for c in self.curves]
+        if all(t is not None for t in times):
+            coords["time"] = ("obs", np.concatenate(times), {"units": "s"})
+        return coords
+
+    def provenance(self) -> dict[str, Any]:
+        return {"scene": self.scene.text, "scene_file": self.scene.where, "switching": self.scene.switching,
+                "data_file": self.data.source, "data_sha256": self.data.sha256, "data_kind": self.data.kind,
+                "solver": self.solver, "solver_options": self.solver_options}
+
+    def derived(self, values: Mapping[str, float]) -> dict[str, float]:
+        """Monday's combined K when his phase convention leaves only K determined."""
+        if not phase_mode_warning(self):
+            return {}
+        return {"K": monday_k(self, values)}
+
+    def checks_at_best_fit(self, best: Mapping[str, float]) -> tuple[dict, list[str]]:
+        warnings = phase_mode_warning(self) + end_of_motion(self, best)
+        rho = best.get("observation.rho", 0.0)
+        if rho >= 0.95:
+            warnings.append(f"the residuals are nearly a smooth curve (noise correlation rho = {rho:.2f} between "
+                            "neighbouring samples): that is structure the model misses rather than reading noise; "
+                            "the intervals describe the best fit of an incomplete model")
+        return {}, warnings
+
+    def checks_of_posterior(self, chain: np.ndarray) -> list[str]:
+        warnings = phase_mode_warning(self)
+        if "observation.rho" in self.names:
+            rho = float(np.median(chain[:, :, self.names.index("observation.rho")]))
+            if rho >= 0.95:
+                warnings.append(f"the posterior noise correlation is rho = {rho:.3f}: the residuals are nearly a "
+                                "smooth curve, structure the model misses rather than reading noise")
+        return warnings

@@ -1,0 +1,276 @@
+"""The fit problem: scene + recording + observation model -> likelihood and residuals.
+
+Data flow is one way: parameter vector -> values by name -> balance system per curve (load)
+-> exact solver -> signed turning points at the recorded swings -> observation model ->
+log-likelihood.  A failed solve or a non-finite number becomes ``-inf`` (or large residuals)
+and the reason is counted in :attr:`FitProblem.failures`, never an exception.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import Mapping
+
+import numpy as np
+
+from .. import BalanceScene
+from ...core.errors import EscfitError, FitError
+from ..observation import observation_from_table
+from ...core.params import ParamSet
+from ..recordings import UnitCurve
+from ...core.scene import check_keys
+from ...likelihood.freeparams import FreeParameters
+from .common import BalanceProblem
+from .loads import LoadRule
+
+__all__ = ["FitProblem", "Curve"]
+
+FAIL_RESIDUAL = 1e6
+
+
+def _at_recorded_swings(curve: "Curve", theta0: float, theta_turn: np.ndarray) -> np.ndarray:
+    """Signed angle ending each recorded half swing (swing 0: the release angle).
+
+    Swings after the balance stopped read 0: it stays at rest where it stopped.
+    """
+    turns = np.concatenate([[theta0], theta_turn])
+    k = curve.swing
+    inside = k <= theta_turn.size
+    theta = np.zeros(k.size)
+    theta[inside] = turns[k[inside]]
+    return theta
+
+
+def _at_recorded_swings_many(curve: "Curve", theta0: np.ndarray, theta_turn: np.ndarray,
+                             n_done: np.ndarray) -> np.ndarray:
+    """:func:`_at_recorded_swings` for many sets: rows of ``theta_turn`` hold ``n_done`` turns."""
+    turns = np.concatenate([theta0[:, None], theta_turn], axis=1)
+    k = curve.swing
+    inside = k[None, :] <= n_done[:, None]
+    return np.where(inside, turns[:, np.minimum(k, turns.shape[1] - 1)], 0.0)
+
+
+@dataclass(frozen=True)
+class Curve:
+    """One decay curve of the recording (a unit at one load)."""
+
+    label: str
+    load: float  # in the data's load unit; nan when none
+    swing: np.ndarray
+    y: np.ndarray
+    time: np.ndarray | None = None  # reading times since release, s (for a drifting offset)
+
+
+@dataclass
+class FitProblem(FreeParameters, BalanceProblem):
+    """Everything a fit needs, prepared once.
+
+    Parameters
+    ----------
+    scene
+        A balance scene; its free parameters (``vary = true``) are estimated.
+    data
+        The recording (one unit; several loads allowed).
+    solver, solver_options
+        Forward solver and its options (default: exact).
+
+    Attributes
+    ----------
+    params
+        Scene, load-rule and observation parameters together.
+    names
+        Names of the free parameters, in vector order.
+    priors
+        Prior of each free parameter.
+    failures
+        Counter of the reasons evaluations returned ``-inf``.
+    """
+
+    scene: BalanceScene
+    data: UnitCurve
+    solver: str = "exact"
+    solver_options: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.scene.model != "balance":
+            raise FitError(f"fitting unit curves needs a balance scene, got model {self.scene.model!r}", self.scene.where)
+        units = sorted(set(map(str, self.data.unit)))
+        if len(units) > 1:
+            raise FitError(f"the recording holds several units {units}; fit one at a time (select with --unit)",
+                           self.data.source)
+        fit_table = self.scene.extra.get("fit", {})
+        check_keys(fit_table, {"loads"}, f"{self.scene.where} [fit]")
+        self.observation = observation_from_table(self.scene.extra.get("observation"), self.scene.where,
+                                                  self.data.kind, self.data.notch)
+        params = ParamSet(dict(self.scene.params.params))
+        for p in self.observation.params:
+            params.add(p)
+        times = self.data.time
+        self.curves = [Curve(f"{u or 'unit'} load {ld:g}" if not math.isnan(ld) else (u or "curve"), ld,
+                             self.data.swing[rows], self.data.value[rows], None if times is None else times[rows])
+                       for (u, ld), rows in self.data.groups()]
+        drift = params["observation.offset_rate"]
+        if (drift.vary or drift.value != 0.0) and times is None:
+            raise FitError("observation.offset_rate (a drifting centre) needs the time of every reading; the "
+                           "recording has no time column", self.data.source)
+        self.load_rule = LoadRule.read(fit_table.get("loads"), self.scene, self.data, self.curves, params)
+        self._set_free(params, self.scene.where)
+        self.failures: Counter = Counter()
+        # the exact solver runs a whole ensemble in one parallel call (log_prob_many)
+        self.vectorized = self.solver == "exact"
+
+    # -- forward model -----------------------------------------------------------------
+    def predict(self, vals: Mapping[str, float]) -> list[np.ndarray]:
+        """Amplitude towards the nominal side at each recorded swing, per curve (rad).
+
+        With angle switching this is the signed turning-point angle theta (the observation
+        model reads ``|theta - offset|``); with phase switching it is theta measured towards
+        the side the half cycle should end on (:meth:`sides`), negative when Monday's
+        convention breaks down, so the likelihood has no fold at zero.
+
+        Raises
+        ------
+        EscfitError
+            When the solver refuses the parameters or runs out of segments.
+        """
+        out = []
+        for curve in self.curves:
+            cv = self.load_rule.apply(vals, curve.load)
+            sys = self.scene.system(cv)
+            n = int(curve.swing.max())
+            theta_turn = np.zeros(0)
+            if n > 0:
+                from ..solvers import solve_system
+
+                tr = solve_system(sys, n, self.scene.switching, self.solver, **self.solver_options)
+                if tr.status == "max_segments":
+                    raise FitError("solver ran out of segments")
+                theta_turn = tr.theta_turn
+            out.append(_at_recorded_swings(curve, sys.theta0, theta_turn))
+        return [self._nominal(t, c) for t, c in zip(out, self.curves)]
+
+    def _nominal(self, theta: np.ndarray, curve: Curve) -> np.ndarray:
+        side = self.sides(curve)
+        return theta if side is None else side * theta
+
+    def sides(self, curve: Curve) -> np.ndarray | None:
+        """Phase switching: nominal side (+1/-1) of the end of each recorded swing; else None."""
+        if self.scene.switching != "phase":
+            return None
+        sign0 = 1.0 if self.params["oscillator.theta0"].value >= 0 else -1.0
+        return sign0 * np.where(curve.swing % 2 == 0, 1.0, -1.0)
+
+    # -- likelihood --------------------------------------------------------------------
+    def log_likelihood(self, vals: Mapping[str, float]) -> float:
+        try:
+            pred = self.predict(vals)
+        except (EscfitError, ValueError, ArithmeticError) as exc:
+            self.failures[f"solve failed: {exc}"[:120]] += 1
+            return -math.inf
+        ll = sum(self.observation.loglike(p, c.y, vals, self.sides(c), c.time) for p, c in zip(pred, self.curves))
+        if not math.isfinite(ll):
+            self.failures["non-finite likelihood"] += 1
+            return -math.inf
+        return ll
+
+    # -- many parameter vectors at once ------------------------------------------------
+    def log_prob_many(self, vecs: np.ndarray) -> np.ndarray:
+        """Log posterior of each row of ``vecs``, shape ``(sets, ndim)`` -> ``(sets,)``.
+
+        The same numbers as :meth:`log_prob` row by row (and the same failure counts), but
+        with the exact solver the forward runs of all rows go through one call of
+        :func:`escfit.balance.batch.solve_batch`, in parallel over the rows.  Other solvers
+        are evaluated row by row.
+        """
+        vecs = np.atleast_2d(np.asarray(vecs, float))
+        out = np.full(vecs.shape[0], -math.inf)
+        lp = np.array([self.log_prior(v) for v in vecs])
+        rows = np.flatnonzero(np.isfinite(lp))
+        if rows.size == 0:
+            return out
+        vals = [self.values(vecs[i]) for i in rows]
+        if self.solver != "exact":
+            out[rows] = lp[rows] + np.array([self.log_likelihood(v) for v in vals])
+            return out
+        out[rows] = lp[rows] + self._log_likelihood_many(vals)
+        return out
+
+    def _log_likelihood_many(self, vals: list[dict[str, float]]) -> np.ndarray:
+        from ..batch import SystemStack, solve_batch
+
+        n_sets = len(vals)
+        preds: list[list[np.ndarray]] = [[] for _ in range(n_sets)]
+        scalar = np.zeros(n_sets, bool)  # sets handed to the one-at-a-time path (failures)
+        sides = [self.sides(c) for c in self.curves]
+        for curve in self.curves:
+            n = int(curve.swing.max())
+            systems = []
+            for i, v in enumerate(vals):
+                try:
+                    systems.append(self.scene.system(self.load_rule.apply(v, curve.load)))
+                except (EscfitError, ValueError, ArithmeticError):
+                    scalar[i] = True
+                    systems.append(None)
+            live = [i for i in range(n_sets) if not scalar[i]]
+            if not live:
+                break
+            theta0 = np.array([systems[i].theta0 for i in live])
+            if n > 0:
+                batch = solve_batch(SystemStack.from_systems([systems[i] for i in live]), n, self.scene.switching,
+                                    throw=False, max_segments=self.solver_options.get("max_segments"))
+                readings = _at_recorded_swings_many(curve, theta0, batch.theta_turn, batch.n_done)
+                failed = np.isin(batch.status, ("failed", "max_segments"))
+            else:
+                readings = _at_recorded_swings_many(curve, theta0, np.zeros((len(live), 0)), np.zeros(len(live), int))
+                failed = np.zeros(len(live), bool)
+            for j, i in enumerate(live):
+                if failed[j]:
+                    scalar[i] = True
+                else:
+                    preds[i].append(readings[j])
+        ll = np.empty(n_sets)
+        for i, v in enumerate(vals):
+            if scalar[i]:
+                # the one-at-a-time path records the same failure reason as log_prob would
+                ll[i] = self.log_likelihood(v)
+                continue
+            pred = [t if side is None else side * t for t, side in zip(preds[i], sides)]  # as _nominal
+            total = sum(self.observation.loglike(p, c.y, v, side, c.time)
+                        for p, c, side in zip(pred, self.curves, sides))
+            if not math.isfinite(total):
+                self.failures["non-finite likelihood"] += 1
+                total = -math.inf
+            ll[i] = total
+        return ll
+
+    def residuals(self, vals: Mapping[str, float]) -> np.ndarray:
+        """Standardised residuals of all readings (large values on failure)."""
+        n = sum(c.y.size for c in self.curves)
+        try:
+            pred = self.predict(vals)
+        except (EscfitError, ValueError, ArithmeticError) as exc:
+            self.failures[f"solve failed: {exc}"[:120]] += 1
+            return np.full(n, FAIL_RESIDUAL)
+        r = np.concatenate([self.observation.residuals(p, c.y, vals, self.sides(c), c.time)
+                            for p, c in zip(pred, self.curves)])
+        return np.where(np.isfinite(r), r, FAIL_RESIDUAL)
+
+    def loglike_pointwise(self, vals: Mapping[str, float]) -> np.ndarray:
+        """Log-likelihood of each reading (for PSIS-LOO); raises when the solve fails."""
+        return np.concatenate([self.observation.loglike_pointwise(p, c.y, vals, self.sides(c), c.time)
+                               for p, c in zip(self.predict(vals), self.curves)])
+
+    def expected(self, vals: Mapping[str, float]) -> np.ndarray:
+        """Noise-free expected readings (rad) of all data points, concatenated."""
+        return np.concatenate([self.observation.expected(p, vals, self.sides(c), c.time)
+                               for p, c in zip(self.predict(vals), self.curves)])
+
+    @property
+    def observed(self) -> np.ndarray:
+        return np.concatenate([c.y for c in self.curves])
+
+    @property
+    def n_data(self) -> int:
+        return int(sum(c.y.size for c in self.curves))

@@ -1,0 +1,238 @@
+"""Fit problems on passage times: photo-cell pulse trains (and the shared plumbing).
+
+:class:`RecordingProblem` offers the interface :func:`~escfit.inference.lsq.least_squares`,
+:func:`~escfit.inference.mcmc.run_emcee` and the results writer use (``names``, ``priors``,
+``bounds``, ``initial``, ``values``, ``log_prob``, ``residuals``, ``loglike_pointwise``,
+``expected``, ``observed``, ``n_data``, ``curves``, ``failures`` ...) for recordings whose
+readings are not turning-point amplitudes: the data flow is parameter vector -> values ->
+balance system -> exact solver *with its segment log* -> predicted readings -> observation
+model -> log-likelihood.  A failed solve or a non-finite number becomes ``-inf`` (or large
+residuals) with the reason counted in ``failures``.
+
+Least squares (:mod:`escfit.inference.lsq`) adds a residual per Gaussian prior, so a
+nuisance the data alone cannot pin (a timegrapher's true lift angle) is held by its prior
+as it is in the posterior.
+
+:class:`PulseFitProblem` fits a :class:`~escfit.balance.recordings.pulses.PulseTrain`: every pulse is
+a notch at a known angle crossed at a measured time (see
+:mod:`escfit.balance.observation.passage_times`).
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from collections import Counter
+from typing import Mapping
+
+import numpy as np
+
+from .. import BalanceScene
+from ..solvers import solve_system
+from ..trajectory import Trajectory
+from ...core.errors import DataError, EscfitError, FitError, SolverError
+from ..observation.passage_times import PassageTimeObservation, level_times
+from ...core.params import ParamSet
+from ..recordings.pulses import PulseTrain, assign_pulses
+from ...likelihood.freeparams import FreeParameters
+from .common import BalanceProblem
+from .curves import FAIL_RESIDUAL, Curve
+
+__all__ = ["RecordingProblem", "PulseFitProblem"]
+
+
+class RecordingProblem(FreeParameters, BalanceProblem, ABC):
+    """Parameter handling, solving and failure accounting shared by recording fits.
+
+    Subclasses set ``self.observation`` and ``self.curves`` and implement
+    :meth:`_predict`, :meth:`_pointwise`, :meth:`_residuals` and :meth:`_expected`.
+
+    Parameters
+    ----------
+    scene
+        Balance scene with angle switching; its ``vary = true`` parameters are estimated.
+    data
+        The recording.
+    solver, solver_options
+        Only the exact solver keeps the segment log passage times are read from.
+    """
+
+    reading_units = "s"
+    needs_segment_log = True  # readings come from the exact solver's segment log
+
+    def __init__(self, scene: BalanceScene, data, solver: str = "exact", solver_options: dict | None = None):
+        if getattr(scene, "model", None) != "balance":
+            raise FitError(f"fitting recordings needs a balance scene, got model {getattr(scene, 'model', None)!r}",
+                           getattr(scene, "where", None))
+        if scene.switching != "angle":
+            raise FitError("passage times need angle switching (a physical escapement): with phase switching the "
+                           "balance is not tied to angles", scene.where)
+        options = dict(solver_options or {})
+        if self.needs_segment_log:
+            if solver != "exact":
+                raise SolverError(f"passage times are read from the exact solver's segment log; solver {solver!r} "
+                                  "has none")
+            bad = sorted(set(options) - {"max_segments"})
+            if bad:
+                raise SolverError(f"fits on passage times take solver option max_segments only, not {bad}")
+        self.scene, self.data, self.solver, self.solver_options = scene, data, solver, options
+        self.failures: Counter = Counter()
+
+    def _setup_params(self) -> None:
+        params = ParamSet(dict(self.scene.params.params))
+        for p in self.observation.params:
+            params.add(p)
+        self._set_free(params, self.scene.where)
+
+    # -- forward model -----------------------------------------------------------------------
+    def trajectory(self, vals: Mapping[str, float], n_swings: int) -> Trajectory:
+        """Exact solution with its segment log for ``n_swings`` half swings.
+
+        Raises
+        ------
+        EscfitError
+            When the solver refuses the parameters or runs out of segments.
+        """
+        tr = solve_system(self.scene.system(vals), n_swings, "angle", "exact", log=True, **self.solver_options)
+        if tr.status == "max_segments":
+            raise FitError("solver ran out of segments")
+        return tr
+
+    def predict(self, vals: Mapping[str, float]):
+        """The model's side of every reading (see the subclass)."""
+        return self._predict(vals)
+
+    # -- likelihood --------------------------------------------------------------------------
+    def log_likelihood(self, vals: Mapping[str, float]) -> float:
+        try:
+            pred = self._predict(vals)
+        except (EscfitError, ValueError, ArithmeticError) as exc:
+            self.failures[f"solve failed: {exc}"[:120]] += 1
+            return -math.inf
+        ll = float(np.sum(self._pointwise(pred, vals)))
+        if not math.isfinite(ll):
+            self.failures["non-finite likelihood"] += 1
+            return -math.inf
+        return ll
+
+    def residuals(self, vals: Mapping[str, float]) -> np.ndarray:
+        """Standardised residuals of all readings (large values on failure)."""
+        try:
+            pred = self._predict(vals)
+            r = self._residuals(pred, vals)
+        except (EscfitError, ValueError, ArithmeticError) as exc:
+            self.failures[f"solve failed: {exc}"[:120]] += 1
+            return np.full(self.n_data, FAIL_RESIDUAL)
+        return np.where(np.isfinite(r), r, FAIL_RESIDUAL)
+
+    def loglike_pointwise(self, vals: Mapping[str, float]) -> np.ndarray:
+        """Log-likelihood of each reading (for PSIS-LOO); raises when the solve fails."""
+        return self._pointwise(self._predict(vals), vals)
+
+    def expected(self, vals: Mapping[str, float]) -> np.ndarray:
+        """Noise-free expected readings of all data points, concatenated."""
+        return self._expected(self._predict(vals), vals)
+
+    @property
+    def observed(self) -> np.ndarray:
+        return np.concatenate([c.y for c in self.curves])
+
+    @property
+    def n_data(self) -> int:
+        return int(sum(c.y.size for c in self.curves))
+
+    # -- what each recording defines ------------------------------------------------------------
+    @abstractmethod
+    def _predict(self, vals):
+        """The model's side of the readings for parameter values ``vals``."""
+
+    @abstractmethod
+    def _pointwise(self, pred, vals) -> np.ndarray:
+        """Log-likelihood of each reading."""
+
+    @abstractmethod
+    def _residuals(self, pred, vals) -> np.ndarray:
+        """Standardised residual of each reading."""
+
+    @abstractmethod
+    def _expected(self, pred, vals) -> np.ndarray:
+        """Noise-free expected value of each reading."""
+
+
+class PulseFitProblem(RecordingProblem):
+    """Fit a balance scene to the passage times of a photo-cell pulse train.
+
+    Each pulse used (see :func:`~escfit.balance.recordings.pulses.assign_pulses`) is the crossing of
+    notch ``tooth * notch`` in the swing frame of its half swing, observed at its time with
+    Gaussian timing noise ``observation.sigma`` (s).  The scene's ``[observation]`` table, if
+    any, must say ``model = "passage_times"`` (keys ``sigma``, ``t0``, ``offset``); ``t0``
+    defaults to the file's ``release_s`` (0 when it has none) and is fixed unless freed.
+
+    Parameters
+    ----------
+    scene
+        Balance scene (angle switching).
+    data
+        The pulse train.
+    solver, solver_options
+        ``"exact"`` (the only one with a segment log) and its ``max_segments``.
+
+    Raises
+    ------
+    DataError
+        When the train's release count contradicts the scene's (fixed) release angle.
+    """
+
+    reading_units = "s"
+
+    def __init__(self, scene: BalanceScene, data: PulseTrain, solver: str = "exact",
+                 solver_options: dict | None = None):
+        if not isinstance(data, PulseTrain):
+            raise FitError(f"PulseFitProblem needs a PulseTrain, got {type(data).__name__}",
+                           getattr(data, "source", None))
+        super().__init__(scene, data, solver, solver_options)
+        release = data.release_s if math.isfinite(data.release_s) else 0.0
+        self.observation = PassageTimeObservation.from_table(scene.extra.get("observation"),
+                                                             f"{scene.where} [observation]", release_s=release)
+        self._setup_params()
+        self.assignment = a = assign_pulses(data)
+        self._check_release(a.counts[0])
+        self.notch = data.notch
+        self.curves = [Curve("pulses", math.nan, a.swing, data.time[a.index])]
+        self._x = a.tooth * data.notch
+        self.n_swings = int(a.swing.max())
+
+    def _check_release(self, n0: int) -> None:
+        p = self.params["oscillator.theta0"]
+        if p.vary:
+            return
+        offset = self.params["observation.offset"]
+        if offset.vary:
+            return
+        implied = math.floor(abs(p.value - offset.value) / self.data.notch + 1e-9)
+        if implied != n0:
+            lo, hi = n0 * self.data.notch, (n0 + 1) * self.data.notch
+            raise DataError(f"the train has {n0} notch pulses before the first zero pulse (a release between "
+                            f"{lo:.4g} and {hi:.4g} rad) but the scene releases the balance at theta0 = {p.value:.4g} "
+                            f"rad ({implied} notches): another scene's data, or a chart started after the release",
+                            self.data.source)
+
+    def _predict(self, vals: Mapping[str, float]) -> np.ndarray:
+        """Model passage times since release (s) of the used pulses."""
+        tr = self.trajectory(vals, self.n_swings)
+        if tr.amplitude.size < self.n_swings:
+            raise FitError(f"the model balance stops after {tr.amplitude.size} half swings; the pulses run to half "
+                           f"swing {self.n_swings}")
+        t = level_times(tr.log, self.assignment.swing, self._x, vals["observation.offset"])
+        if not np.all(np.isfinite(t)):
+            raise FitError("a notch the data crossed is only approached asymptotically by the model")
+        return t
+
+    def _pointwise(self, pred, vals):
+        return self.observation.loglike_pointwise(pred, self.curves[0].y, vals)
+
+    def _residuals(self, pred, vals):
+        return self.observation.residuals(pred, self.curves[0].y, vals)
+
+    def _expected(self, pred, vals):
+        return self.observation.expected(pred, vals)

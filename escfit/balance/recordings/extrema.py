@@ -1,0 +1,233 @@
+"""Signal-level tools for sampled oscillations: period, resolution, extrema, vertex fits.
+
+These know nothing of swings, releases or files; :mod:`escfit.balance.recordings.turning_points`
+composes them into the analysis of a recorded decay.  Angles are in the series' unit (rad),
+times in s.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["spectral_period", "smooth", "resolution", "alternating_extrema", "kinked_vertex", "vertex_at"]
+
+
+def spectral_period(t: np.ndarray, x: np.ndarray, *, min_cycles: float = 2.0) -> tuple[float, float]:
+    """Dominant period of a sampled oscillation from the peak of its periodogram.
+
+    The series is resampled on a uniform grid, detrended (a drifting centre), tapered at
+    its ends only (a Hann window would hide a decay that lasts a small part of the record) and
+    zero-padded eightfold; the peak is refined by a parabola through the log powers.
+    Noise, quantisation and a resting tail spread their power over all frequencies, so the
+    oscillation's peak stands out; only periods that fit ``min_cycles`` times in the record
+    are considered.
+
+    Returns
+    -------
+    period : float
+        s (``nan`` when no interior peak exists).
+    prominence : float
+        Peak power over the median power of the searched band; white noise alone gives
+        about ``log2`` of the number of samples, a decay hundreds or more.
+    """
+    from scipy.fft import next_fast_len, rfft, rfftfreq
+    from scipy.signal.windows import tukey
+
+    n = t.size
+    dt = (t[-1] - t[0]) / (n - 1)
+    grid = t[0] + dt * np.arange(n)
+    xu = np.interp(grid, t, x)
+    s = np.arange(n) - 0.5 * (n - 1)
+    xu = xu - xu.mean() - s * (s @ xu) / (s @ s)
+    nfft = next_fast_len(8 * n)
+    power = np.abs(rfft(xu * tukey(n, 0.1), nfft)) ** 2
+    freq = rfftfreq(nfft, dt)
+    band = np.flatnonzero((freq >= min_cycles / (n * dt)) & (freq <= 0.45 / dt))
+    if band.size < 5:
+        return math.nan, 0.0
+    p = power[band]
+    interior = np.flatnonzero((p[1:-1] >= p[:-2]) & (p[1:-1] >= p[2:])) + 1
+    if not interior.size:
+        return math.nan, 0.0
+    k = interior[np.argmax(p[interior])]
+    y0, y1, y2 = np.log(p[k - 1:k + 2] + 1e-300)
+    denom = y0 - 2 * y1 + y2
+    shift = 0.5 * (y0 - y2) / denom if denom < 0 else 0.0
+    f = freq[band[k]] + shift * (freq[1] - freq[0])
+    median = float(np.median(p))
+    if median <= 0.0:
+        return 1.0 / f, math.inf if p[k] > 0 else 0.0
+    return 1.0 / f, float(p[k] / median)
+
+
+def smooth(x: np.ndarray, period_samples: float) -> np.ndarray:
+    """Savitzky-Golay smoothing (quadratic, window a tenth of a period, at least 5 samples)."""
+    from scipy.signal import savgol_filter
+
+    n = max(5, int(round(0.1 * period_samples)) | 1)
+    if n > x.size:
+        return x.astype(float)
+    return savgol_filter(x, n, 2, mode="interp")
+
+
+def resolution(x: np.ndarray, smoothed: np.ndarray) -> tuple[float, float]:
+    """Noise scale and quantisation step of the samples.
+
+    Returns
+    -------
+    sigma : float
+        Robust (MAD) scale of the samples about their smoothing.
+    quantum : float
+        The sensor's step when the samples lie on a lattice (an encoder: nine in ten
+        changes between samples are whole multiples of the smallest one), else 0.
+    """
+    sigma = float(1.4826 * np.median(np.abs(x - smoothed)))
+    d = np.abs(np.diff(x))
+    scale = float(np.max(np.abs(x))) or 1.0
+    d = d[d > 1e-9 * scale]
+    quantum = 0.0
+    if d.size >= 10:
+        q = float(np.mean(d[d < 1.5 * d.min()]))
+        r = d / q
+        if np.mean(np.abs(r - np.round(r)) < 0.05) > 0.9 and np.median(r) < 1000:
+            quantum = q
+    return sigma, quantum
+
+
+def alternating_extrema(xs: np.ndarray, threshold: float, start: int = 0, stop: int | None = None,
+                        seek: int = 0) -> list[tuple[int, int, bool]]:
+    """Alternating maxima and minima of ``xs[start:stop]`` with hysteresis.
+
+    An extremum is confirmed once the signal has come back from it by more than
+    ``threshold``, so ripples smaller than that (noise, a sensor flickering by one count) never
+    make extrema, and maxima and minima alternate by construction.  Ties extend an extremum
+    into a plateau (quantised data: several equal samples at the top).
+
+    Parameters
+    ----------
+    seek
+        ``+1`` look for a maximum first, ``-1`` a minimum, ``0`` whichever comes.
+
+    Returns
+    -------
+    list of (first, last, is_max)
+        Sample indices of the first and last sample of each extremum's plateau (equal for a
+        single sample); its centre is the candidate turning point.
+    """
+    stop = xs.size if stop is None else stop
+    eps = 1e-12 * (float(np.max(np.abs(xs[start:stop]))) or 1.0)
+    hi = lo = float(xs[start])
+    hi_a = hi_b = lo_a = lo_b = start
+    out: list[tuple[int, int, bool]] = []
+    for i in range(start + 1, stop):
+        v = float(xs[i])
+        if seek >= 0:
+            if v > hi + eps:
+                hi, hi_a, hi_b = v, i, i
+            elif v >= hi - eps:
+                hi_b = i
+            elif v < hi - threshold:
+                out.append((hi_a, hi_b, True))
+                seek, lo, lo_a, lo_b = -1, v, i, i
+                continue
+        if seek <= 0:
+            if v < lo - eps:
+                lo, lo_a, lo_b = v, i, i
+            elif v <= lo + eps:
+                lo_b = i
+            elif v > lo + threshold:
+                out.append((lo_a, lo_b, False))
+                seek, hi, hi_a, hi_b = 1, v, i, i
+    return out
+
+
+def kinked_vertex(u: np.ndarray, x: np.ndarray, degree: int = 4, *, flat: str = "",
+                  shared: bool = False) -> tuple[float, float] | None:
+    """Vertex ``(u_c, x_c)`` of a turning point from samples at scaled times ``u`` in [-1, 1].
+
+    Each side is a polynomial of ``degree`` (default: quartic) in ``s = u - u_c`` without a
+    linear term (the velocity is zero at the turn), sharing the vertex value; the curvatures
+    may differ because Coulomb friction reverses there.  A side with few samples gets a lower
+    degree (at least 2).  Linear least squares for a given ``u_c``, a bounded scalar search
+    over it.  The samples of quantised data on a plateau enter like any others, so a flat top
+    yields its centre.
+
+    Parameters
+    ----------
+    flat
+        ``"left"``: the balance was at rest before the vertex (a release from a held angle);
+        ``"right"``: at rest after it (motion stopped there); ``""``: a turning point.
+    shared
+        ``True``: only the curvature differs between the sides, the cubic and higher terms are
+        common: fewer parameters, so less noise in the vertex, at a bias that grows with the
+        friction jump and the window (up to some 2e-4 of the amplitude for a strong Coulomb
+        friction over a fifth of a period).
+
+    Returns
+    -------
+    tuple or None
+        ``None`` when a side has too few samples.  ``u_c`` lies within +-0.75; a vertex
+        far from the centre (at the bound: beyond it) is better refitted in a window centred
+        on it.
+    """
+    from scipy.optimize import minimize_scalar
+
+    n_left, n_right = int(np.sum(u < 0)), int(np.sum(u > 0))
+    if min(n_left, n_right) < 2 or n_left + n_right < 6:
+        return None
+    deg_left = 0 if flat == "left" else min(degree, max(2, n_left - 2))
+    deg_right = 0 if flat == "right" else min(degree, max(2, n_right - 2))
+    shared = shared and not flat and deg_left == deg_right
+
+    def solve(uc: float) -> tuple[float, float]:
+        s = u - uc
+        left = s < 0
+        cols = [np.ones_like(s)]
+        for p in range(2, max(deg_left, deg_right) + 1):
+            sp = s**p
+            if shared and p > 2:
+                cols.append(sp)
+                continue
+            if p <= deg_left:
+                cols.append(np.where(left, sp, 0.0))
+            if p <= deg_right:
+                cols.append(np.where(left, 0.0, sp))
+        a = np.stack(cols, axis=1)
+        coef, *_ = np.linalg.lstsq(a, x, rcond=None)
+        r = a @ coef - x
+        return float(r @ r), float(coef[0])
+
+    # the residual is not unimodal in u_c when the sides differ much (a stop, a release, an
+    # encoder's staircase): a grid first, then a bounded search around its best point
+    grid = np.linspace(-0.75, 0.75, 21)
+    best = int(np.argmin([solve(g)[0] for g in grid]))
+    lo, hi = grid[max(best - 1, 0)], grid[min(best + 1, grid.size - 1)]
+    res = minimize_scalar(lambda uc: solve(uc)[0], bounds=(lo, hi), method="bounded", options={"xatol": 1e-7})
+    return float(res.x), solve(float(res.x))[1]
+
+
+def vertex_at(s: np.ndarray, x: np.ndarray, degree: int = 4, *,
+              search: tuple[float, float] | None = None) -> tuple[float, float]:
+    """Vertex ``(s_c, x_c)`` of a polynomial without linear term in ``s - s_c`` fitted to
+    samples ``x(s)`` on one side of the vertex.
+
+    With ``search=None`` the vertex is at ``s_c = 0``: the angle of a balance known to be at
+    rest then (a given release instant), from the samples after it.  Otherwise ``s_c`` is
+    searched within those bounds: a turning point at the first sample of a record.
+    """
+    from scipy.optimize import minimize_scalar
+
+    deg = min(degree, max(2, s.size - 2))
+
+    def solve(sc: float) -> tuple[float, float]:
+        a = np.stack([np.ones_like(s)] + [(s - sc) ** p for p in range(2, deg + 1)], axis=1)
+        coef, *_ = np.linalg.lstsq(a, x, rcond=None)
+        r = a @ coef - x
+        return float(r @ r), float(coef[0])
+
+    if search is None:
+        return 0.0, solve(0.0)[1]
+    res = minimize_scalar(lambda sc: solve(sc)[0], bounds=search, method="bounded", options={"xatol": 1e-9})
+    return float(res.x), solve(float(res.x))[1]

@@ -1,0 +1,177 @@
+"""The steps every raw-recording reader shares: checking, re-timing and windowing samples.
+
+:mod:`~escfit.balance.recordings.rawtable` and :mod:`~escfit.balance.recordings.matfile` hand their
+converted columns (time s, angle rad) to :func:`build_series`, which re-times stamps written in
+bursts (:func:`regular_times`), applies the ``start``/``stop`` window and checks what is left.
+The entry point that picks the reader is :func:`~escfit.balance.recordings.rawseries.read_raw_series`
+(which re-exports these names); this module imports neither reader.
+
+Metadata convention
+-------------------
+Readers fill :attr:`TimeSeries.meta` with strings only (so it survives
+:func:`~escfit.balance.recordings.timeseries.write_timeseries` and HDF5 attributes):
+``source_format``, ``time_column``, ``angle_column``, ``angle_unit``, ``window`` and ``notes``,
+one string of sentences joined by ``"; "`` (:func:`notes_of` splits it), next to the file's own
+``# key: value`` metadata (a file key that collides is kept as ``file_<key>``).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Callable, Mapping
+
+import numpy as np
+
+from ...core.errors import DataError, SceneError
+from .recording_spec import RecordingSpec, parse_option
+from .timeseries import TimeSeries
+
+__all__ = ["build_series", "regular_times", "notes_of", "merge_file_meta", "file_options", "unwrap_angles",
+           "FILE_OPTIONS", "MIN_SAMPLES"]
+
+MIN_SAMPLES = 20
+FILE_OPTIONS = {"rate": "sample_rate", "sample_rate": "sample_rate", "samplerate": "sample_rate",
+                "sampling_rate": "sample_rate", "sample_rate_hz": "sample_rate", "rate_hz": "sample_rate",
+                "fs": "sample_rate", "dt": "dt", "dt_s": "dt", "sample_interval": "dt", "units": "angle_unit",
+                "unit": "angle_unit", "angle_unit": "angle_unit", "counts_per_turn": "counts_per_turn",
+                "scale": "scale"}
+
+
+def notes_of(meta: Mapping) -> list[str]:
+    """The reader's notes of a series' ``meta`` as a list of sentences."""
+    text = meta.get("notes", "")
+    return [s for s in text.split("; ") if s] if isinstance(text, str) else list(text)
+
+
+def regular_times(time: np.ndarray, where_of_row: Callable[[int], str], notes: list[str]) -> np.ndarray:
+    """Check that ``time`` (s) increases; re-time stamps written in bursts.
+
+    A logger may stamp rows in bursts: the same stamp repeated over many rows while the
+    sensor samples uniformly.  When at least half the steps are zero, none negative and
+    there are at least three distinct stamps, the times are replaced by a least-squares line
+    of stamp on row number, accepted when no stamp is further from it than the longest burst
+    spans (plus one sample).  A note gives the burst length and the fitted rate.
+
+    Raises
+    ------
+    DataError
+        Decreasing stamps (naming the row and both values), a repeated stamp that is not a
+        burst pattern, or bursts that do not follow a line.
+    """
+    step = np.diff(time)
+    back = np.flatnonzero(step < 0)
+    if back.size:
+        i = int(back[0]) + 1
+        raise DataError(f"time goes backwards: {float(time[i - 1])!r} then {float(time[i])!r}", where_of_row(i))
+    same = step == 0
+    if not same.any():
+        return time
+    starts = np.flatnonzero(np.r_[True, ~same])
+    runs = np.diff(np.r_[starts, time.size])
+    if same.mean() < 0.5 or starts.size < 3:
+        i = int(np.flatnonzero(same)[0]) + 1
+        raise DataError(f"time {float(time[i])!r} repeats the previous row's; times must increase", where_of_row(i))
+    rows = np.arange(time.size, dtype=float)
+    slope, intercept = np.polyfit(rows, time, 1)
+    fitted = intercept + slope * rows
+    worst = int(np.argmax(np.abs(time - fitted)))
+    if not slope > 0 or abs(time[worst] - fitted[worst]) > (runs.max() + 1) * slope:
+        raise DataError(f"time stamps repeat in bursts but do not follow a straight line (stamp {float(time[worst])!r} "
+                        f"is {abs(time[worst] - fitted[worst]):.3g} s from it)", where_of_row(worst))
+    notes.append(f"time stamps repeat in bursts of ~{np.median(runs):.0f} rows, re-timed by a line fit of stamp "
+                 f"on row number: {1.0 / slope:.6g} Hz")
+    return fitted
+
+
+def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, source: str, sha256: str,
+                 meta: dict[str, str], notes: list[str], where_of_row: Callable[[int], str],
+                 release_s: float = math.nan) -> TimeSeries:
+    """Check and window converted samples (time s, theta rad) and wrap them in a TimeSeries.
+
+    Non-finite values, decreasing or repeated times are refused (burst stamps re-timed, see
+    :func:`regular_times`); the window ``start <= t <= stop`` is applied and must keep
+    :data:`MIN_SAMPLES` samples.  ``meta`` gets ``window`` and ``notes``.
+    """
+    for name, values in (("time", time), ("angle", theta)):
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            raise DataError(f"{name} value {float(values[bad[0]])!r} is not a finite number", where_of_row(int(bad[0])))
+    time = regular_times(np.asarray(time, dtype=float), where_of_row, notes)
+    theta = np.asarray(theta, dtype=float)
+    if meta.get("angle_unit_assumed") and np.ptp(theta) > 2.0 * math.pi:
+        raise DataError(f"the angles span {np.ptp(theta):.4g} with no unit given (rad assumed): more than a turn, so "
+                        "not radians of a swinging balance; if they are degrees set [recording] angle_unit = \"deg\" "
+                        "(or --angle-unit deg)", source)
+    if spec.readings == "samples":
+        theta = unwrap_angles(theta, notes)
+    if spec.start is not None or spec.stop is not None:
+        lo = -math.inf if spec.start is None else spec.start
+        hi = math.inf if spec.stop is None else spec.stop
+        keep = (time >= lo) & (time <= hi)
+        window = f"{'' if spec.start is None else f'{lo:g} s <= '}t{'' if spec.stop is None else f' <= {hi:g} s'}"
+        if keep.sum() < MIN_SAMPLES:
+            raise DataError(f"the window {window} keeps {int(keep.sum())} of {time.size} samples (the file spans "
+                            f"{time[0]:g} to {time[-1]:g} s); at least {MIN_SAMPLES} are needed",
+                            f"{source} [recording].start/stop")
+        time, theta = time[keep], theta[keep]
+        meta["window"] = window
+    if time.size < MIN_SAMPLES:
+        raise DataError(f"only {time.size} samples; a decay needs at least {MIN_SAMPLES}", source)
+    if notes:
+        meta["notes"] = "; ".join(n.replace(";", ",") for n in notes)
+    return TimeSeries(time=time, theta=np.asarray(theta, dtype=float), release_s=release_s, source=source,
+                      sha256=sha256, meta=meta)
+
+
+def unwrap_angles(theta: np.ndarray, notes: list[str]) -> np.ndarray:
+    """Undo the wrap of angles written modulo one turn (an ``atan2`` of tracker coordinates).
+
+    A step of more than 1.5*pi rad between neighbouring samples is a wrap, not motion (the
+    motion itself moves far less between samples of any usable record); the wraps are undone
+    with a note counting them.
+    """
+    steps = np.diff(theta)
+    jumps = int(np.count_nonzero(np.abs(steps) > 1.5 * math.pi))
+    if not jumps:
+        return theta
+    notes.append(f"angles written modulo one turn: {jumps} wraps at +-180 deg undone")
+    return np.unwrap(theta, discont=1.5 * math.pi)
+
+
+def merge_file_meta(file_meta: Mapping[str, str], reader_meta: Mapping[str, str]) -> dict[str, str]:
+    """The file's ``# key: value`` metadata with the reader's keys; a clash keeps the file's as ``file_<key>``."""
+    out = {(f"file_{k}" if k in reader_meta else k): v for k, v in file_meta.items()}
+    out.update(reader_meta)
+    return out
+
+
+def file_options(given: Mapping[str, tuple[str, str]]) -> dict:
+    """Options a file gives itself (a metadata header, ``# key: value`` comments), validated.
+
+    Parameters
+    ----------
+    given
+        ``{name: (value text, "file:line [name]")}``; names outside :data:`FILE_OPTIONS` are
+        ignored, ``dt`` (s) becomes ``sample_rate``.
+
+    Raises
+    ------
+    DataError
+        A value the ``[recording]`` key would refuse.
+    """
+    out: dict = {}
+    for key, (value, where) in given.items():
+        target = FILE_OPTIONS.get(key)
+        if target is None:
+            continue
+        try:
+            if target == "dt":
+                dt = parse_option("start", value, where)
+                if not dt > 0:
+                    raise SceneError(f"the sample interval must be positive, got {value!r}", where)
+                out["sample_rate"] = 1.0 / dt
+            else:
+                out[target] = parse_option(target, value, where)
+        except SceneError as exc:
+            raise DataError(exc.message, where) from None
+    return out

@@ -1,0 +1,500 @@
+"""Turning points of a recorded free decay, numbered from a reference at rest.
+
+:func:`reduce_series` is the one entry point: it takes a
+:class:`~escfit.balance.recordings.timeseries.TimeSeries` and returns :class:`TurningPoints`.
+
+Steps
+-----
+1. **Period** from the periodogram peak of the detrended series
+   (:func:`~escfit.balance.recordings.extrema.spectral_period`): robust to noise, quantisation, a
+   drifting centre and a resting tail.  Below :data:`MIN_SAMPLES_PER_PERIOD` samples per
+   period the record is refused.
+2. **Resolution**: the noise scale about a smoothing (a tenth of a period) and the
+   quantisation step of an encoder; they set the hysteresis of the extremum search and the
+   band within which the balance counts as at rest.
+3. **Resting tail**: where the smoothed angle stays within that band of its final value for
+   at least a period, motion has stopped; the rest is cut and reported (``stop_time``,
+   ``rest_theta``).  With dry friction the balance stops at a turning point short of the
+   centre, so when the last half swing runs into the rest that stop is the last turning point.
+4. **Reference** (``release_time``, ``release_theta``, the instant the model is released at
+   rest): the series' ``release_s`` when given; else the release from a held start (the
+   angle flat for a tenth of a period or more, then moving: the release is where motion
+   starts and its angle the held one); else a turning point at the first sample; else the
+   first turning point (the record starts mid-swing: releasing the model at rest at that
+   turning point is exact, the velocity being zero there).  Either sign.
+5. **Extrema** by hysteresis on the smoothed series
+   (:func:`~escfit.balance.recordings.extrema.alternating_extrema`): maxima and minima alternate and
+   a plateau of equal samples is one extremum at its centre.  Turning points are numbered by
+   **counting** them: swing ``k`` ends at the ``k``-th turning point after the reference.
+   Times serve as a check only: every interval between consecutive turning points must lie
+   within 0.6 to 1.6 local half periods, else an extremum is missing (or spurious) and the
+   record is refused (``strict=True``) or the result carries a note.
+6. **Values and times** by the local kinked polynomial fit
+   (:func:`~escfit.balance.recordings.extrema.kinked_vertex`) to the raw samples within
+   ``+-window*period``: the velocity vanishes at the turn but the curvature jumps there as
+   Coulomb friction reverses.  Unless given, the window is a fifth of a period when the noise
+   or the quantisation step exceeds 2e-4 of the amplitude, or an eighth would hold fewer
+   than 6 samples a side; else an eighth.  A quartic over an eighth of a period is biased by
+   some 1e-6 of the amplitude, over a fifth by some 5e-5, below such noise, while the
+   wider window averages more of it (on an encoder's staircase the narrow one can misplace
+   a turn by a sample).  A quarter period would reach the escapement near the centre.  When
+   the resolution exceeds 2e-3 of the amplitude, only the curvature is kinked (the cubic and
+   quartic terms are common to both sides): fewer parameters, less scatter, and a bias (up
+   to some 2e-4 of the amplitude) well below that resolution.
+7. **Centre**: from consecutive turning points ``e1, e2, e3`` the centre estimate
+   ``((e1 + e3)/2 + e2)/2`` (exact for a linear decay) at the time of ``e2``; its drift
+   ``offset_rate`` is their Theil-Sen slope when that is significant (its 95% interval
+   excludes zero and the drift over the record exceeds a quarter of the rest band), else 0;
+   ``offset`` is the median of the estimates carried back to the release: the centre is
+   ``offset + offset_rate*(t - release_time)``.
+
+Sign convention: angles are the series' own (signed, the sensor's zero offset still in
+them); ``release_theta - offset`` is the signed release angle about the centre.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ...core.errors import DataError
+from .extrema import alternating_extrema, kinked_vertex, resolution, smooth, spectral_period, vertex_at
+
+if TYPE_CHECKING:
+    from .timeseries import TimeSeries
+
+__all__ = ["TurningPoints", "reduce_series", "turning_points", "MIN_SAMPLES_PER_PERIOD"]
+
+MIN_SAMPLES_PER_PERIOD = 16  # the local fits need some 5 samples each side of a turn
+MIN_PROMINENCE = 50.0  # periodogram peak over median power; white noise alone gives ~log2(n)
+INTERVAL_RANGE = (0.6, 1.6)  # admissible interval between turning points, in local half periods
+HOLD_PERIODS = 0.1  # a flat start at least this long is a held balance
+START_TURN_PERIODS = 0.03  # a turn this close before the first sample counts as a start at a turn
+
+
+@dataclass(frozen=True)
+class TurningPoints:
+    """Turning points of a decay, numbered from the reference at rest.
+
+    Attributes
+    ----------
+    swing : ndarray of int
+        Half swing each one ends: 1, 2, ... counted from the reference.
+    time : ndarray
+        Time of each, s (the series' clock).
+    theta : ndarray
+        Signed angle of each, rad, the zero offset not removed.
+    period : float
+        Mean period, s: twice the least-squares slope of the turning times against their
+        number.
+    offset : float
+        Centre of oscillation at ``release_time``, rad.
+    offset_rate : float
+        Linear drift of the centre, rad/s (0 unless significant).
+    release_time, release_theta : float
+        Reference instant (s) and signed angle (rad, offset not removed) at which the
+        balance is at rest: the release, or the first turning point of a record that starts
+        mid-swing.
+    stop_time, rest_theta : float
+        Where motion stopped (s) and the angle it rests at (rad, offset not removed);
+        ``nan`` when the record ends in motion.
+    notes : list of str
+        What the analysis found or assumed, as plain sentences.
+    """
+
+    swing: np.ndarray
+    time: np.ndarray
+    theta: np.ndarray
+    period: float
+    offset: float
+    offset_rate: float = 0.0
+    release_time: float = math.nan
+    release_theta: float = math.nan
+    stop_time: float = math.nan
+    rest_theta: float = math.nan
+    notes: list = field(default_factory=list)
+
+    def centre(self, t: np.ndarray | float) -> np.ndarray | float:
+        """Centre of oscillation (rad) at times ``t`` (s)."""
+        return self.offset + self.offset_rate * (np.asarray(t) - self.release_time)
+
+
+@dataclass
+class _Record:
+    """The samples and what the first steps learnt about them."""
+
+    t: np.ndarray
+    x: np.ndarray
+    xs: np.ndarray  # smoothed
+    period: float
+    dt: float
+    band: float  # half width of the rest band, rad
+    step: float  # hysteresis of the extremum search, rad
+    window: float
+    degree: int
+    where: str
+    notes: list
+    shared: bool  # noise or quantisation dominate: only the curvature kinked at a turn
+
+    def half_width(self) -> float:
+        """Half width of a local vertex fit, s: ``window`` periods, at least 4.5 samples."""
+        return min(max(self.window * self.period, 4.5 * self.dt), 0.3 * self.period)
+
+    def refine(self, first: int, last: int, *, is_max: bool | None = None, flat: str = "",
+               degree: int | None = None) -> tuple[float, float] | None:
+        """Time (s) and value (rad) of the vertex spanning samples ``first..last``.
+
+        ``None`` when the fit window does not fit in the record.  A failed fit of an extremum
+        (``is_max`` given) falls back to the smoothed extremum with a note, because the
+        numbering depends on keeping it; a failed fit of a release or stop gives ``None``.
+        ``degree`` overrides the record's polynomial degree.
+        """
+        t, x = self.t, self.x
+        tc = 0.5 * (t[first] + t[last])
+        half = max(self.half_width(), 0.5 * (t[last] - t[first]) + 3 * self.dt)
+        for _ in range(4):  # recentre on a vertex found off-centre
+            if min(tc - t[0], t[-1] - tc) < 0.4 * half:
+                return None
+            lo, hi = np.searchsorted(t, [tc - half, tc + half], side="right")
+            fit = kinked_vertex((t[lo:hi] - tc) / half, x[lo:hi], degree or self.degree, flat=flat,
+                                shared=self.shared)
+            if fit is None:
+                break
+            tc += fit[0] * half
+            if abs(fit[0]) < 0.3:
+                return tc, fit[1]
+        if fit is not None and abs(fit[0]) < 0.7:
+            return tc, fit[1]
+        if is_max is None:
+            return None
+        span = self.xs[first:last + 1]
+        i = first + int(np.argmax(span) if is_max else np.argmin(span))
+        self.notes.append(f"the local fit near t = {t[i]:.4g} s failed; the smoothed extremum is used there")
+        return float(t[i]), float(self.xs[i])
+
+
+def reduce_series(series: "TimeSeries", *, window: float | None = None, degree: int = 4,
+                  strict: bool = True) -> TurningPoints:
+    """Turning points of a sampled free decay (see the module docstring for the method).
+
+    Parameters
+    ----------
+    series
+        The samples; an explicit ``series.release_s`` fixes the reference instant.
+    window
+        Half width of the local vertex fits, in periods (widened to at least 4.5 samples);
+        ``None``: 1/8 or 1/5 by the record's resolution (module docstring, step 6).
+    degree
+        Degree of the polynomial each side of a turning point (2 to 6).
+    strict
+        Refuse a record whose turning points are irregularly spaced (a missed or spurious
+        extremum); with ``False`` the result carries a note instead.
+
+    Returns
+    -------
+    TurningPoints
+
+    Raises
+    ------
+    DataError
+        Not a free decay: no oscillation, too few samples per period (the message gives the
+        rate needed), a growing amplitude, wrapped angles, too few turning points, or
+        (``strict``) irregularly spaced turning points.
+    """
+    where = series.source
+    if not 2 <= degree <= 6:
+        raise DataError(f"degree must be 2 to 6, got {degree!r}", where)
+    t = np.asarray(series.time, dtype=float)
+    x = np.asarray(series.theta, dtype=float)
+    rec = _prepare(t, x, window, degree, where)
+    i_rest, rest_theta = _resting_tail(rec)
+    if i_rest < t.size:
+        period, prominence = spectral_period(t[:i_rest], x[:i_rest], min_cycles=1.5)
+        if math.isfinite(period) and prominence > MIN_PROMINENCE:
+            rec.period = period
+            rec.xs = smooth(x, period / rec.dt)
+    t_ref, theta_ref, cands = _reference(rec, series.release_s)
+    t_end = t[i_rest] if i_rest < t.size else math.inf
+    if t_end - t_ref < 1.5 * rec.period:
+        raise DataError(f"motion lasts from t = {t_ref:.4g} s to {t_end:.4g} s, less than one and a half periods "
+                        f"({rec.period:.4g} s each): too short a decay to analyse", where)
+    late = [c for c in cands if t[c[0]] > t_end]
+    if late:
+        rec.notes.append(f"{len(late)} extrema after motion stopped (disturbances) left out")
+    times, values = [], []
+    for a, b, is_max in (c for c in cands if t[c[0]] <= t_end):
+        got = rec.refine(a, b, is_max=is_max)
+        if got is None:
+            rec.notes.append(f"the turning point near t = {t[a]:.4g} s is too close to the end of the record for a "
+                             "local fit; left out")
+            break
+        times.append(got[0])
+        values.append(got[1])
+    stop_time = math.nan
+    if i_rest < t.size:
+        stop_time = _final_turn(rec, i_rest, rest_theta, t_ref, theta_ref, times, values)
+    if len(times) < 2:
+        raise DataError(f"only {len(times)} turning point(s) after the reference at t = {t_ref:.4g} s; a decay needs "
+                        "at least two half swings", where)
+    expected = 2.0 * (min(t_end, t[-1]) - t_ref) / rec.period
+    if len(times) < 0.5 * expected - 1:
+        raise DataError(f"only {len(times)} turning points where the period of {rec.period:.4g} s suggests about "
+                        f"{expected:.0f}: not a clear oscillation", where)
+    all_t = np.r_[t_ref, times]
+    all_v = np.r_[theta_ref, values]
+    keep = _faded_end(rec, all_t, all_v)
+    if keep < all_t.size:
+        all_t, all_v = all_t[:keep], all_v[:keep]
+        times, values = times[:keep - 1], values[:keep - 1]
+        stop_time = math.nan
+    _check_intervals(rec, all_t, strict)
+    _check_decay(all_t, all_v, where)
+    offset, rate = _centre(rec, all_t, all_v)
+    moving = all_t[:all_t.size - 1] if math.isfinite(stop_time) and stop_time == all_t[-1] else all_t
+    period = 2.0 * float(np.polyfit(np.arange(moving.size), moving, 1)[0])
+    if math.isfinite(stop_time):
+        centre = offset + rate * (stop_time - t_ref)
+        rec.notes.append(f"motion stopped at t = {stop_time:.4g} s (resting {math.degrees(rest_theta - centre):+.3g} "
+                         "deg from the centre)")
+    swing = np.arange(1, len(times) + 1, dtype=np.int64)
+    return TurningPoints(swing, np.array(times, dtype=float), np.array(values, dtype=float), float(period),
+                         float(offset), float(rate), float(t_ref), float(theta_ref), float(stop_time),
+                         float(rest_theta) if math.isfinite(stop_time) else math.nan, rec.notes)
+
+
+turning_points = reduce_series  # the earlier name
+
+
+def _prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, where: str) -> _Record:
+    """Check the samples; period, smoothing and resolution (steps 1 and 2)."""
+    if t.size < 20:
+        raise DataError(f"only {t.size} samples; a decay needs many samples per period", where)
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(x))):
+        raise DataError("times and angles must be finite numbers", where)
+    dts = np.diff(t)
+    if np.any(dts <= 0):
+        i = int(np.flatnonzero(dts <= 0)[0])
+        raise DataError(f"times must increase: {t[i]!r} then {t[i + 1]!r}", where)
+    jump = np.abs(np.diff(x))
+    if np.any(jump > 1.5 * math.pi):  # no motion sampled 16 times a period moves that far
+        i = int(np.argmax(jump))
+        raise DataError(f"the angle jumps by {math.degrees(jump[i]):.0f} deg between t = {t[i]:.4g} s and "
+                        f"{t[i + 1]:.4g} s: a wrapped angle? unwrap it (numpy.unwrap) before the analysis", where)
+    notes: list[str] = []
+    dt = float(np.median(dts))
+    gaps = np.flatnonzero(dts > 3 * dt)
+    if gaps.size:
+        notes.append(f"{gaps.size} gap(s) in the sampling, the first from t = {t[gaps[0]]:.4g} s to "
+                     f"{t[gaps[0] + 1]:.4g} s")
+    period, prominence = spectral_period(t, x)
+    if not math.isfinite(period) or prominence < MIN_PROMINENCE:
+        raise DataError(f"no oscillation found: the spectrum has no clear peak (peak {prominence:.3g} times the median "
+                        f"power, a decay gives over {MIN_PROMINENCE:g}); is this a free decay?", where)
+    spp = period / dt
+    if spp < MIN_SAMPLES_PER_PERIOD:
+        raise DataError(f"the period of {period:.4g} s spans only {spp:.1f} samples; the turning-point fits need at "
+                        f"least {MIN_SAMPLES_PER_PERIOD}: sample at {MIN_SAMPLES_PER_PERIOD / period:.3g} Hz or faster",
+                        where)
+    xs = smooth(x, spp)
+    sigma, quantum = resolution(x, xs)
+    amplitude = 0.5 * float(np.ptp(xs))
+    band = max(1.5 * quantum, 4.0 * sigma, 1e-3 * amplitude)
+    step = max(3.0 * quantum, 5.0 * sigma, 2e-3 * amplitude)
+    resolution_ratio = max(quantum, sigma) / amplitude
+    if window is None:
+        window = 0.2 if resolution_ratio > 2e-4 or 0.125 * spp < 6 else 0.125
+    shared = resolution_ratio > 2e-3
+    return _Record(t, x, xs, period, dt, band, step, window, degree, where, notes, shared)
+
+
+def _resting_tail(rec: _Record) -> tuple[int, float]:
+    """Index of the first sample at rest (``t.size`` when the record ends in motion) and the rest angle."""
+    t, n = rec.t, rec.t.size
+    final = t >= t[-1] - rec.period
+    rest = float(np.median(rec.x[final]))
+    out = np.flatnonzero(np.abs(rec.xs - rest) > rec.band)
+    if not out.size:
+        raise DataError(f"no motion: the angle stays within {math.degrees(rec.band):.3g} deg of "
+                        f"{math.degrees(rest):.4g} deg", rec.where)
+    i = int(out[-1]) + 1
+    if i >= n or t[-1] - t[i] < rec.period:
+        return n, math.nan
+    return i, float(np.median(rec.x[i:]))
+
+
+def _reference(rec: _Record, release_s: float) -> tuple[float, float, list[tuple[int, int, bool]]]:
+    """Reference instant and angle (step 4) and the extrema after it."""
+    t, x, xs, period = rec.t, rec.x, rec.xs, rec.period
+    half = rec.half_width()
+    if math.isfinite(release_s):
+        i0 = int(np.searchsorted(t, release_s))
+        if i0 >= t.size - 10:
+            raise DataError(f"release_s = {release_s!r} s leaves no samples after it", rec.where)
+        right = (t >= release_s) & (t <= release_s + half)
+        theta = vertex_at(t[right] - release_s, x[right], rec.degree)[1]
+        cands = [c for c in alternating_extrema(xs, rec.step, i0) if t[c[0]] > release_s + 0.25 * period]
+        return float(release_s), theta, cands
+    k = max(3, int(np.sum(t < t[0] + 0.05 * period)))
+    level = float(np.median(x[:k]))
+    moving = np.flatnonzero(np.abs(xs - level) > rec.band)
+    j = int(moving[0]) if moving.size else 0
+    if t[j] - t[0] >= HOLD_PERIODS * period:
+        got = rec.refine(j, j, flat="left")
+        t_ref, theta = got if got is not None else (float(t[j]), float(np.median(x[:j])))
+        rec.notes.append(f"held at {math.degrees(theta):.4g} deg until the release at t = {t_ref:.4g} s")
+        # the smoothing rings at the corner of the release: no turn comes within P/4 of it
+        cands = [c for c in alternating_extrema(xs, rec.step, j) if t[c[0]] > t_ref + 0.25 * period]
+        return t_ref, theta, cands
+    cands = alternating_extrema(xs, rec.step, 0)
+    if not cands:
+        raise DataError("no turning point found: the angle never comes back by more than "
+                        f"{math.degrees(rec.step):.3g} deg", rec.where)
+    a, b, is_max = cands[0]
+    got = rec.refine(a, b, is_max=is_max)
+    if got is None:
+        start = _turn_at_start(rec)
+        if start is not None:
+            rec.notes.append(f"the record starts at a turning point ({math.degrees(start[1]):.4g} deg on the sensor's "
+                             "scale)")
+            # the turn found may be the extremum after the first sample, not the sample itself
+            return start[0], start[1], cands[1:] if start[2] == is_max else cands[2:]
+        cands = cands[1:]
+        if not cands:
+            raise DataError("no turning point found after the first sample", rec.where)
+        a, b, is_max = cands[0]
+        got = rec.refine(a, b, is_max=is_max)
+        if got is None:
+            raise DataError(f"the first turning point near t = {t[a]:.4g} s cannot be fitted", rec.where)
+    rec.notes.append(f"the record starts mid-swing; reference: the first turning point at t = {got[0]:.4g} s "
+                     f"({math.degrees(got[1]):.4g} deg on the sensor's scale)")
+    return got[0], got[1], cands[1:]
+
+
+def _turn_at_start(rec: _Record) -> tuple[float, float, bool] | None:
+    """Time, angle and kind (maximum?) of a turning point within a few hundredths of a period
+    of the first sample; or None.
+
+    A cubic through the first fifth of a period decides (its slope vanishes there); the
+    vertex itself comes from a one-sided polynomial without linear term whose vertex time is
+    searched within 0.02 periods of that (:func:`~escfit.balance.recordings.extrema.vertex_at`).
+    """
+    t, x, period = rec.t, rec.x, rec.period
+    sel = t <= t[0] + 0.2 * period
+    s = (t[sel] - t[0]) / period
+    if s.size < 6:
+        return None
+    poly = np.polynomial.Polynomial.fit(s, x[sel], 3).convert()
+    slope = poly.deriv()
+    roots = slope.roots()
+    roots = roots[np.isreal(roots)].real
+    roots = roots[(roots >= -START_TURN_PERIODS) & (roots <= 0.05)]
+    if not roots.size:
+        return None
+    r = float(roots[np.argmin(np.abs(roots))])
+    is_max = bool(slope.deriv()(r) < 0)
+    t_turn = float(t[0] + r * period)
+    near = t <= t_turn + rec.half_width()
+    if np.count_nonzero(near) < 6:
+        return t_turn, float(poly(r)), is_max
+    bounds = (max(-START_TURN_PERIODS * period, r * period - 0.02 * period), r * period + 0.02 * period)
+    sc, value = vertex_at(t[near] - t[0], x[near], rec.degree, search=bounds)
+    return float(t[0] + sc), value, is_max
+
+
+def _final_turn(rec: _Record, i_rest: int, rest: float, t_ref: float, theta_ref: float, times: list,
+                values: list) -> float:
+    """Stop instant; appends the stop as the last turning point when a half swing runs into it."""
+    t = rec.t
+    t_last, v_last = (times[-1], values[-1]) if times else (t_ref, theta_ref)
+    if abs(rest - v_last) >= rec.step:
+        # the swing into a stop is the record's smallest and its end the flattest: a parabola
+        # times it best (higher terms trade off with the vertex time against the flat rest)
+        got = rec.refine(i_rest, i_rest, flat="right", degree=2)
+        if got is not None:
+            d = (got[0] - t_last) / (0.5 * rec.period)
+            if INTERVAL_RANGE[0] <= d <= INTERVAL_RANGE[1]:
+                times.append(got[0])
+                values.append(got[1])
+                return got[0]
+    rec.notes.append(f"the swing faded below the resolution ({math.degrees(rec.band):.2g} deg) rather than "
+                     "stopping at a turning point")
+    return float(t[i_rest])
+
+
+def _faded_end(rec: _Record, times: np.ndarray, values: np.ndarray) -> int:
+    """How many turning points to keep when the spacing breaks down only where the swing has faded.
+
+    A decay that dies into the reading noise ends in extrema of the noise, not of the motion:
+    when the first irregular interval comes after the swing has fallen below a tenth of its
+    reference amplitude (or three rest bands of the noise), the turning points from there on are dropped with a note (earlier
+    irregularities are left to :func:`_check_intervals`).
+    """
+    if times.size < 4:
+        return times.size
+    d = np.diff(times)
+    local = np.array([np.median(d[max(0, i - 3):i + 4]) for i in range(d.size)])
+    ratio = d / local
+    bad = np.flatnonzero((ratio < INTERVAL_RANGE[0]) | (ratio > INTERVAL_RANGE[1]))
+    if not bad.size:
+        return times.size
+    i = int(bad[0])
+    centre = np.median(values)
+    amp = np.abs(values - centre)
+    if amp[i] > max(0.1 * amp[0], 3.0 * rec.band):
+        return times.size
+    rec.notes.append(f"turning points from t = {times[i]:.4g} s on left out: the swing had faded to "
+                     f"{math.degrees(amp[i]):.2g} deg and their spacing is irregular (noise, not motion)")
+    return i + 1
+
+
+def _check_intervals(rec: _Record, times: np.ndarray, strict: bool) -> None:
+    """Each interval between turning points within :data:`INTERVAL_RANGE` local half periods."""
+    d = np.diff(times)
+    half = 3
+    local = np.array([np.median(d[max(0, i - half):i + half + 1]) for i in range(d.size)])
+    ratio = d / local
+    bad = np.flatnonzero((ratio < INTERVAL_RANGE[0]) | (ratio > INTERVAL_RANGE[1]))
+    if not bad.size:
+        return
+    i = int(bad[0])
+    what = "an extremum was missed or samples are missing" if ratio[i] > 1 else "a spurious extremum (noise?)"
+    message = (f"{bad.size} irregular interval(s) between turning points; the first, from t = {times[i]:.4g} s to "
+               f"{times[i + 1]:.4g} s, is {ratio[i]:.2f} local half periods ({local[i]:.4g} s): {what}; the swing "
+               "numbers after it would be wrong")
+    if strict:
+        raise DataError(message + " (cut the record there, or pass strict=False to keep it with a note)", rec.where)
+    rec.notes.append(message)
+
+
+def _check_decay(times: np.ndarray, values: np.ndarray, where: str) -> None:
+    """Refuse a swing that grows steadily: not a free decay."""
+    size = np.abs(np.diff(values))
+    if size.size < 4:
+        return
+    m = max(1, size.size // 3)
+    first, last = float(np.mean(size[:m])), float(np.mean(size[-m:]))
+    if last > 1.2 * first and np.mean(np.diff(size) > 0) > 0.6:
+        raise DataError(f"the swing grows from {math.degrees(first):.4g} to {math.degrees(last):.4g} deg "
+                        f"(peak to peak) between t = {times[0]:.4g} s and {times[-1]:.4g} s: not a free decay "
+                        "(driven, or the escapement keeps it going?)", where)
+
+
+def _centre(rec: _Record, times: np.ndarray, values: np.ndarray) -> tuple[float, float]:
+    """Centre at the first time and its drift (step 7)."""
+    if values.size < 3:
+        return float(0.5 * (values[0] + values[1])), 0.0
+    c = 0.5 * (0.5 * (values[:-2] + values[2:]) + values[1:-1])
+    tc = times[1:-1] - times[0]
+    if c.size >= 4:
+        from scipy.stats import theilslopes
+
+        rate, _, low, high = theilslopes(c, tc)
+        span = abs(rate) * (tc[-1] - tc[0])
+        if (low > 0 or high < 0) and span > 0.25 * rec.band:
+            rec.notes.append(f"the centre drifts by {math.degrees(rate * (tc[-1] - tc[0])):+.3g} deg over the "
+                             f"record ({math.degrees(rate):+.3g} deg/s)")
+            return float(np.median(c - rate * tc)), float(rate)
+    return float(np.median(c)), 0.0

@@ -1,0 +1,349 @@
+"""The ``escfit`` command line.
+
+Exit status: 0 on success, 2 on bad input or usage (one line naming the file, key or value),
+1 on an internal error.  Output files are written atomically and never replaced without
+``--force``.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import traceback
+from pathlib import Path
+
+import click
+
+from .. import __version__
+from ..core.errors import EscfitError
+
+__all__ = ["main", "cli"]
+
+
+# Commands that live beside the features they drive, imported only when used.
+LAZY_COMMANDS = {
+    "bench": "escfit.cli.bench:bench",
+    "fit-many": "escfit.cli.study:fit_many",
+}
+
+
+class _Group(click.Group):
+    """Maps escfit's errors to exit status 2 and anything unexpected to 1; loads lazy commands."""
+
+    def list_commands(self, ctx):
+        import importlib.util
+
+        def exists(module: str) -> bool:
+            try:
+                return importlib.util.find_spec(module) is not None
+            except ModuleNotFoundError:  # a missing parent package
+                return False
+
+        present = {n for n, target in LAZY_COMMANDS.items() if exists(target.split(":")[0])}
+        return sorted({*super().list_commands(ctx), *present})
+
+    def get_command(self, ctx, name):
+        cmd = super().get_command(ctx, name)
+        if cmd is None and name in LAZY_COMMANDS:
+            import importlib
+
+            module, attr = LAZY_COMMANDS[name].split(":")
+            try:
+                cmd = getattr(importlib.import_module(module), attr)
+            except (ImportError, AttributeError) as exc:
+                raise click.UsageError(f"command {name!r} is not available ({exc})") from None
+        return cmd
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except EscfitError as exc:
+            click.echo(f"escfit: error: {exc}", err=True)
+            ctx.exit(2)
+        except (click.exceptions.Exit, click.ClickException, click.exceptions.Abort):
+            raise
+        except Exception as exc:  # noqa: BLE001 - the last line of defence of a CLI
+            click.echo(f"escfit: internal error: {type(exc).__name__}: {exc}", err=True)
+            if "--debug" in sys.argv:
+                traceback.print_exc()
+            ctx.exit(1)
+
+
+@click.group(cls=_Group)
+@click.version_option(__version__, prog_name="escfit")
+def cli() -> None:
+    """Identify the physical parameters of mechanical timekeeping oscillators."""
+
+
+@cli.command()
+@click.argument("scene", type=click.Path(dir_okay=False))
+@click.option("--solver", default=None,
+              help="Solver: balance exact (default; dop853 for a pendulum) | dop853 | rk4 | ivp; "
+                   "geneva dop853 (default) | rk4; see the README.")
+@click.option("--swings", type=click.IntRange(1), default=None, help="Half swings (overrides the scene).")
+@click.option("--h", "step", type=float, default=None, help="RK4 step size, s.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object with the results.")
+@click.option("--out", type=click.Path(dir_okay=False), default=None, help="Write the dataset to FILE.nc (HDF5).")
+@click.option("--force", is_flag=True, help="Replace an existing --out file.")
+@click.option("--recorder", type=click.Choice(["unit-curve", "pulses", "timegrapher", "timeseries"]), default=None,
+              help="Write a synthetic recording of a balance scene to --out instead of the dataset "
+                   "(timegrapher: tg JSON, or the per-beat CSV when --out ends in .csv).")
+@click.option("--noise", type=click.FloatRange(0.0), default=None,
+              help="The recorder's noise sd: reading (rad), pulse timing (s), timegrapher amplitude (deg) "
+                   "or sample (rad); each recorder's default if omitted.")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the recorder's noise.")
+@click.option("--notch-deg", type=click.FloatRange(0.0, min_open=True), default=None,
+              help="unit-curve recorder: count notches of this angle (deg) instead of amplitudes.")
+def simulate(scene, solver, swings, step, as_json, out, force, recorder, noise, seed, notch_deg):
+    """Simulate SCENE (a TOML scene file), or record it with a synthetic recorder."""
+    from ..core.atomic import atomic_path, refuse_existing
+    from ..core.scene import load_scene, model_module
+
+    if out:
+        refuse_existing(out, force)
+    sc = load_scene(scene)
+    if recorder is not None:
+        _record(sc, recorder, out, force=force, noise=noise, seed=seed, swings=swings, notch_deg=notch_deg)
+        return
+    module = model_module(sc.model)
+    options = {}
+    if swings is not None:
+        options["swings"] = swings
+    if step is not None:
+        options["h"] = step
+    ds = module.simulate(sc, solver, **options) if solver else module.simulate(sc, **options)
+    if out:
+        with atomic_path(out, force=force) as tmp:
+            ds.to_netcdf(tmp, engine="h5netcdf")
+    if as_json:
+        click.echo(json.dumps(_json_safe(module.json_summary(ds))))
+    else:
+        click.echo(_describe(ds, sc))
+
+
+def _record(sc, recorder: str, out: str | None, *, force: bool, noise, seed: int, swings, notch_deg) -> None:
+    """``simulate --recorder``: one synthetic recording, written atomically."""
+    from ..core.atomic import atomic_path
+    from ..core.errors import SceneError
+    from ..balance.synthetic.recorders import record
+
+    if sc.model != "balance":
+        raise SceneError(f"--recorder records balance scenes; this scene's model is {sc.model!r}", sc.where)
+    if not out:
+        raise SceneError("--recorder needs --out FILE for the recording", sc.where)
+    options = {} if swings is None else {"swings": swings}
+    if notch_deg is not None:
+        if recorder != "unit-curve":
+            raise SceneError("--notch-deg applies to the unit-curve recorder only", sc.where)
+        options["notch_deg"] = notch_deg
+    if recorder == "timegrapher":
+        options["fmt"] = "csv" if str(out).lower().endswith(".csv") else "json"
+    with atomic_path(out, force=force) as tmp:
+        record(sc, recorder, tmp, noise=noise, seed=seed, **options)
+    click.echo(f"wrote {out} ({recorder}, seed {seed})")
+
+
+@cli.command()
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), default="charts", show_default=True,
+              help="Directory for the CSV and PNG files.")
+@click.option("--c-over-omega0", "c0", type=click.FloatRange(0.0, 1.99), default=0.05, show_default=True,
+              help="Damping ratio at which the conversion charts are drawn.")
+@click.option("--no-png", is_flag=True, help="CSV only (no matplotlib needed).")
+@click.option("--force", is_flag=True, help="Replace existing files.")
+def charts(out_dir, c0, no_png, force):
+    """Regenerate Monday's charts by computation: unit curves, conversion charts, factors."""
+    from ..balance.monday.charts import graph_factor
+    from ..balance.monday.chart_files import write_charts
+
+    files = write_charts(out_dir, c_over_w0=c0, force=force, png=not no_png)
+    for f in files:
+        click.echo(str(f))
+    click.echo(f"graph factor K/K_R at C/omega0 = {c0:g}: {graph_factor(c0):.4f}")
+
+
+RECIPE_KEYS = {"data", "scene", "method", "out", "seed", "walkers", "steps", "burn", "unit", "format", "notch_deg",
+               "report", "title", "solver", "moves"}
+
+
+def _read_recipe(path: Path) -> dict:
+    import tomllib
+
+    from ..core.errors import SceneError
+    from ..core.scene import check_keys
+
+    try:
+        doc = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise SceneError(f"cannot read fit recipe ({exc})", str(path)) from None
+    check_keys(doc, RECIPE_KEYS, f"{path} (recipe)", {"data", "scene"})
+    for key in ("data", "scene"):
+        doc[key] = str((path.parent / doc[key]).resolve())
+    return doc
+
+
+@cli.command()
+@click.argument("data", type=click.Path(dir_okay=False))
+@click.option("--scene", "scene_path", type=click.Path(dir_okay=False), default=None, help="Scene TOML with free parameters.")
+@click.option("--method", type=click.Choice(["leastsq", "emcee"]), default=None, help="Default leastsq (recipe may set it).")
+@click.option("--out", type=click.Path(dir_okay=False), default=None, help="Results file (HDF5).")
+@click.option("--seed", type=int, default=None)
+@click.option("--walkers", type=click.IntRange(2), default=None)
+@click.option("--steps", type=click.IntRange(10), default=None)
+@click.option("--burn", type=click.IntRange(0), default=None)
+@click.option("--unit", "unit_id", default=None, help="Fit only this unit of a multi-unit file.")
+@click.option("--format", "fmt", type=click.Choice(["unit-curve", "pulses", "timegrapher", "tg-applog", "timeseries", "raw"]),
+              default=None, help="Recording format (detected from the file's content; raw: a table or .mat file read "
+              "with the [recording] options).")
+@click.option("--time-column", default=None, help="[recording] time_column: name or 1-based position.")
+@click.option("--sample-rate", default=None, help="[recording] sample_rate, e.g. '500 Hz' (instead of a time column).")
+@click.option("--angle-column", default=None, help="[recording] angle_column: name or 1-based position.")
+@click.option("--angle-unit", default=None, help="[recording] angle_unit: deg, rad, ... or counts.")
+@click.option("--counts-per-turn", type=float, default=None, help="[recording] counts_per_turn (with counts).")
+@click.option("--scale", type=float, default=None, help="[recording] scale: multiplies the raw readings.")
+@click.option("--start", "start_time", default=None, help="[recording] start of the window, e.g. '13 s'.")
+@click.option("--stop", "stop_time", default=None, help="[recording] end of the window, e.g. '60 s'.")
+@click.option("--solver", default=None, help="Forward solver (default: exact, or dop853 for a pendulum).")
+@click.option("--moves", type=click.Choice(["stretch", "de"]), default=None,
+              help="emcee proposal: stretch (default) or de (differential evolution: coupled parameters).")
+@click.option("--notch-deg", type=float, default=None, help="Notch angle for notch counts, deg.")
+@click.option("--resume", is_flag=True, help="Continue an interrupted emcee run from its checkpoint.")
+@click.option("--force", is_flag=True, help="Replace an existing results file.")
+@click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None, help="Also write a report.")
+@click.option("--quiet", is_flag=True, help="No progress bar.")
+def fit(data, scene_path, method, out, seed, walkers, steps, burn, unit_id, fmt, time_column, sample_rate,
+        angle_column, angle_unit, counts_per_turn, scale, start_time, stop_time, solver, moves, notch_deg, resume,
+        force, report_path, quiet):
+    """Fit DATA (a recording) with --scene SCENE, or run a fit RECIPE.toml."""
+    from ..core.errors import SceneError
+    from ..inference import fit as run_fit
+
+    recipe: dict = {}
+    if data.endswith(".toml") and scene_path is None:
+        recipe = _read_recipe(Path(data))
+        data, scene_path = recipe["data"], recipe["scene"]
+    if scene_path is None:
+        raise SceneError("give --scene SCENE.toml (or a fit recipe)", data)
+    pick = lambda cli_value, key, default: cli_value if cli_value is not None else recipe.get(key, default)  # noqa: E731
+    method = pick(method, "method", "leastsq")
+    out = pick(out, "out", None) or f"{Path(data).stem}_fit.h5"
+    from ..core.scene import load_scene
+
+    scene = load_scene(scene_path)
+    options = {}
+    if scene.model == "balance":
+        options = {"fmt": pick(fmt, "format", None), "notch_deg": pick(notch_deg, "notch_deg", None),
+                   "unit": pick(unit_id, "unit", None), "solver": pick(solver, "solver", None),
+                   "recording": {"time_column": _column(time_column), "sample_rate": sample_rate,
+                                 "angle_column": _column(angle_column), "angle_unit": angle_unit,
+                                 "counts_per_turn": counts_per_turn, "scale": scale, "start": start_time,
+                                 "stop": stop_time}}
+    else:
+        given = {"--format": pick(fmt, "format", None), "--notch-deg": pick(notch_deg, "notch_deg", None),
+                 "--unit": pick(unit_id, "unit", None), "--solver": pick(solver, "solver", None),
+                 "--time-column": time_column, "--sample-rate": sample_rate, "--angle-column": angle_column,
+                 "--angle-unit": angle_unit, "--counts-per-turn": counts_per_turn, "--scale": scale,
+                 "--start": start_time, "--stop": stop_time}
+        used = sorted(k for k, v in given.items() if v is not None)
+        if used:
+            raise SceneError(f"{', '.join(used)} appl{'ies' if len(used) == 1 else 'y'} to balance recordings; "
+                             f"this scene's model is {scene.model!r}", scene_path)
+    result = run_fit(scene, data, method=method, out=out, force=force, seed=pick(seed, "seed", 0),
+                     walkers=pick(walkers, "walkers", None), steps=pick(steps, "steps", None),
+                     burn=pick(burn, "burn", None), resume=resume, progress=not quiet and sys.stderr.isatty(),
+                     moves=pick(moves, "moves", "stretch"), **options)
+    click.echo(f"wrote {out}")
+    _print_summary(result)
+    report_path = report_path or recipe.get("report")
+    if report_path:
+        from ..report import make_report
+
+        make_report(out, report_path, fmt="md" if str(report_path).endswith(".md") else "html", force=force)
+        click.echo(f"wrote {report_path}")
+
+
+def _column(text: str | None):
+    """A column option: a 1-based position when it is a whole number, else a name."""
+    return int(text) if text is not None and text.strip().isdigit() else text
+
+
+def _print_summary(result) -> None:
+    from ..report import parameter_table
+
+    head, rows = parameter_table(result)
+    widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(head)]
+    click.echo("  ".join(h.ljust(w) for h, w in zip(head, widths)))
+    for r in rows:
+        click.echo("  ".join(c.ljust(w) for c, w in zip(r, widths)))
+    for n in result.notes:
+        click.echo(f"note: {n}")
+    for w in result.warnings:
+        click.echo(f"warning: {w}")
+
+
+@cli.command()
+@click.argument("results", type=click.Path(dir_okay=False))
+@click.option("--json", "as_json", is_flag=True, help="Print the parameter table as JSON.")
+def summary(results, as_json):
+    """Print the parameter table of a saved fit."""
+    from ..results import load_fit
+
+    res = load_fit(results)
+    if as_json:
+        a = res.attrs
+        click.echo(json.dumps(_json_safe({"parameters": res.summary(), "warnings": res.warnings, "notes": res.notes,
+                               "misfit": res.misfit,
+                               "method": a.get("method"), "data_file": a.get("data_file"),
+                               "schema_version": a.get("schema_version")})))
+    else:
+        _print_summary(res)
+
+
+def _json_safe(obj):
+    """Replace non-finite floats by None so the output is valid JSON."""
+    import math as _math
+
+    if isinstance(obj, dict):
+        return {k: _json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_json_safe(v) for v in obj]
+    if isinstance(obj, float) and not _math.isfinite(obj):
+        return None
+    return obj
+
+
+@cli.command()
+@click.argument("results", type=click.Path(dir_okay=False))
+@click.option("--out", type=click.Path(dir_okay=False), default=None, help="Report file (default <results>.html).")
+@click.option("--format", "fmt", type=click.Choice(["html", "md"]), default="html", show_default=True)
+@click.option("--force", is_flag=True, help="Replace an existing report.")
+def report(results, out, fmt, force):
+    """Write a report (HTML with embedded figures, or Markdown) of a saved fit."""
+    from ..report import make_report
+
+    out = out or str(Path(results).with_suffix(".html" if fmt == "html" else ".md"))
+    click.echo(f"wrote {make_report(results, out, fmt=fmt, force=force)}")
+
+
+def _describe(ds, sc) -> str:
+    lines = [f"{Path(sc.where).name}: model {sc.model}, status {ds.attrs.get('status')}"]
+    if sc.model == "balance" and ds.sizes.get("swing", 0):
+        a = ds["amplitude"].values
+        lines.append(f"  {a.size} half swings; amplitude {a[0]:.6g} -> {a[-1]:.6g} rad; "
+                     f"last half period {ds['half_period'].values[-1]:.10g} s, rate {ds['rate'].values[-1]:.4f} s/day")
+    elif sc.model != "balance":
+        from ..core.scene import model_module
+
+        summary = model_module(sc.model).json_summary(ds)
+        for key, value in summary.items():
+            if key != "status" and not isinstance(value, (list, dict)):
+                lines.append(f"  {key}: {value}")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    """Console-script entry point."""
+    cli(prog_name="escfit")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,78 @@
+"""``escfit fit-many``: fit every unit of one or more recordings, in parallel.
+
+Exit status: 0 when every unit is fitted (or was done before), 3 when some units failed (the
+others are fitted and summarised; each failure is printed on stderr), 2 on bad input.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+
+import click
+
+__all__ = ["fit_many"]
+
+EXIT_SOME_FAILED = 3
+
+
+@click.command("fit-many")
+@click.argument("data", nargs=-1, required=True, type=click.Path(dir_okay=False))
+@click.option("--scene", "scene_path", required=True, type=click.Path(dir_okay=False),
+              help="Scene TOML with the free parameters (the same for every unit).")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Results directory: <unit>.h5 per unit and summary.nc.")
+@click.option("--method", type=click.Choice(["leastsq", "emcee"]), default="leastsq", show_default=True)
+@click.option("--scheduler", default=None, metavar="ADDRESS",
+              help="Address of a running dask scheduler (e.g. tcp://10.0.0.5:8786); default: a local cluster.")
+@click.option("--workers", type=click.IntRange(0), default=None,
+              help="Worker processes of the local cluster (default: CPUs available; 0: in this process).")
+@click.option("--seed", type=int, default=0, show_default=True, help="Batch seed (each unit's seed derives from it).")
+@click.option("--walkers", type=click.IntRange(2), default=32, show_default=True)
+@click.option("--steps", type=click.IntRange(10), default=2000, show_default=True)
+@click.option("--burn", type=click.IntRange(0), default=None, help="Default: half the steps.")
+@click.option("--n-starts", type=click.IntRange(1), default=8, show_default=True, help="Least-squares start points.")
+@click.option("--unit", "units", multiple=True, help="Fit only this unit (repeatable).")
+@click.option("--notch-deg", type=float, default=None, help="Notch angle for files without a '# notch_deg:' line.")
+@click.option("--quiet", is_flag=True, help="No progress lines.")
+@click.pass_context
+def fit_many(ctx, data, scene_path, out_dir, method, scheduler, workers, seed, walkers, steps, burn, n_starts, units,
+             notch_deg, quiet):
+    """Fit every unit of DATA... independently with --scene SCENE into --out DIR.
+
+    Units come from the 'unit' column of each file, or one unit per file without one.
+    Units whose results file exists and loads are skipped, so an interrupted batch is
+    finished by running the same command again.
+    """
+    from ..study.batch import fit_many as run
+
+    res = run(list(data), scene_path, out_dir, method=method, scheduler=scheduler, workers=workers, seed=seed,
+              walkers=walkers, steps=steps, burn=burn, n_starts=n_starts, units=list(units) or None,
+              notch_deg=notch_deg, progress=not quiet)
+    click.echo(format_summary(res.summary))
+    click.echo(f"{len(res.fitted)} fitted, {len(res.skipped)} done before, {len(res.failed)} failed "
+               f"in {res.elapsed:.1f} s; summary: {res.out_dir / 'summary.nc'}")
+    if res.failed:  # each failure was printed on stderr as it came back
+        click.echo(f"escfit fit-many: {len(res.failed)} unit(s) failed: {', '.join(res.failed)}", err=True)
+        ctx.exit(EXIT_SOME_FAILED)
+
+
+def format_summary(ds, *, max_params: int = 4) -> str:
+    """A fixed-width table: unit, status and median [95 % interval] of the first parameters."""
+    params = [str(p) for p in ds["parameter"].values][:max_params]
+    head = ["unit", "status", *params]
+    rows = []
+    for i, unit in enumerate(ds["unit"].values):
+        row = [str(unit), str(ds["status"].values[i])]
+        for j in range(len(params)):
+            m, lo, hi = (float(ds[k].values[i, j]) for k in ("median", "lo95", "hi95"))
+            row.append("-" if math.isnan(m) else f"{m:.4g} [{lo:.4g}, {hi:.4g}]")
+        rows.append(row)
+    widths = [max(len(h), *(len(r[k]) for r in rows)) if rows else len(h) for k, h in enumerate(head)]
+    lines = ["  ".join(h.ljust(w) for h, w in zip(head, widths))]
+    lines += ["  ".join(c.ljust(w) for c, w in zip(r, widths)) for r in rows]
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(fit_many())

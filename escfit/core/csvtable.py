@@ -1,0 +1,91 @@
+"""A small, strict CSV reader shared by the recording formats.
+
+``#`` lines are comments; ``# key: value`` comments are metadata.  Every error names the
+file, the line and the column.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .errors import DataError
+
+__all__ = ["Table", "read_table"]
+
+
+@dataclass
+class Table:
+    """Columns as lists of strings, with the file line of each row."""
+
+    path: str
+    header: list[str]
+    rows: list[list[str]]
+    lines: list[int]
+    meta: dict[str, str] = field(default_factory=dict)
+    sha256: str = ""
+
+    def column(self, name: str) -> list[str]:
+        i = self.header.index(name)
+        return [r[i] for r in self.rows]
+
+    def floats(self, name: str, *, allow_nan: bool = False, positive: bool = False, nonneg: bool = False) -> list[float]:
+        """Parse a numeric column, naming file:line [column] and the value on error."""
+        out = []
+        for line, text in zip(self.lines, self.column(name)):
+            where = f"{self.path}:{line} [{name}]"
+            try:
+                v = float(text)
+            except ValueError:
+                raise DataError(f"expected a number, got {text!r}", where) from None
+            if not allow_nan and not math.isfinite(v):
+                raise DataError(f"value {text!r} is not a finite number", where)
+            if positive and not v > 0:
+                raise DataError(f"value {text!r} must be positive", where)
+            if nonneg and v < 0:
+                raise DataError(f"value {text!r} must not be negative", where)
+            out.append(v)
+        return out
+
+
+def read_table(path: str | Path) -> Table:
+    """Read a CSV file with comment and metadata lines."""
+    p = Path(path)
+    where = str(path)
+    if not p.is_file():
+        raise DataError("data file not found", where)
+    raw = p.read_bytes()
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise DataError("not a text file (cannot decode as UTF-8)", where) from None
+    meta: dict[str, str] = {}
+    body: list[tuple[int, str]] = []
+    for n, line in enumerate(text.splitlines(), start=1):
+        s = line.strip()
+        if not s:
+            continue
+        if s.startswith("#"):
+            key, sep, value = s[1:].partition(":")
+            if sep and key.strip() and " " not in key.strip():
+                meta[key.strip().lower()] = value.strip()
+            continue
+        body.append((n, line))
+    if not body:
+        raise DataError("empty file (no header and no rows)", where)
+    rows = list(csv.reader([b for _, b in body]))
+    header = [h.strip() for h in rows[0]]
+    if len(set(header)) != len(header):
+        raise DataError(f"duplicate column names in header {header}", f"{where}:{body[0][0]}")
+    data, lines = [], []
+    for (n, _), r in zip(body[1:], rows[1:]):
+        if len(r) != len(header):
+            raise DataError(f"expected {len(header)} fields ({', '.join(header)}), found {len(r)}", f"{where}:{n}")
+        data.append([c.strip() for c in r])
+        lines.append(n)
+    if not data:
+        raise DataError("header only, no data rows", where)
+    return Table(where, header, data, lines, meta, hashlib.sha256(raw).hexdigest())

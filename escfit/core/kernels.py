@@ -1,0 +1,233 @@
+"""Compiled kernels whose on-disk cache follows every source file compiled into them.
+
+numba's ``cache=True`` stamps a function's cache with a hash of the one file that defines
+it.  A kernel's machine code, however, also holds every jitted function it calls (compiled
+into it, inlined or not) and every module-level constant it reads, wherever those are
+defined: after an edit of :mod:`escfit.balance.segment`, a cached kernel of
+:mod:`escfit.balance.exact` kept running the old ``propagate``.
+
+:func:`kernel` is ``numba.njit(cache=True, ...)`` with a wider stamp: a SHA-256 fingerprint
+of the defining module together with every module of the same top-level package that it
+imports, directly or through the modules it imports (read from their ``import`` statements,
+so nothing has to be listed or bumped by hand).  A kernel can reach other code only through
+its module's globals, and those come from these imports, so any edit that can change the
+compiled code changes the stamp; numba then finds the index stale, recompiles and overwrites
+the cache files in place.  An edit of an unrelated module leaves the cache alone.
+
+Not seen by the import scan, and to be named with ``sources=``: code reached only through a
+dynamic import, jitted functions passed in as arguments, and data files read into constants
+at import time.  Modules outside the package (numpy, scipy, numba itself) are outside the
+fingerprint, as they are outside numba's own stamp (numba's version is checked separately).
+
+The hook is numba's cache machinery (:mod:`numba.core.caching`, numba 0.68): the locator
+numba picks for the function (``__pycache__``, ``NUMBA_CACHE_DIR`` or the user-wide
+directory, unchanged) is wrapped so that its source stamp includes the fingerprint.
+``tests/test_kernel_cache.py`` checks that an edit of a helper module recompiles a kernel
+of another module that calls it, and that plain ``numba.njit(cache=True)`` does not.
+"""
+
+from __future__ import annotations
+
+import ast
+import functools
+import hashlib
+import inspect
+import os
+import weakref
+from pathlib import Path
+from typing import Any, Callable, Iterable
+
+import numba
+from numba.core import caching
+
+__all__ = ["kernel", "kernel_sources"]
+
+# py_func -> (files hashed, fingerprint); read by the cache implementation when numba builds it
+_SOURCES: "weakref.WeakKeyDictionary[Callable, tuple[tuple[Path, ...], str]]" = weakref.WeakKeyDictionary()
+
+
+def _module_file(root: Path, name: str) -> Path | None:
+    """The source file of module ``name`` under the import root ``root``, if it is there."""
+    base = root.joinpath(*name.split("."))
+    for candidate in (base.with_suffix(".py"), base / "__init__.py"):
+        if candidate.is_file():
+            return candidate
+    return None
+
+
+def _imported_modules(path: Path, module: str, top: str, root: Path) -> set[Path]:
+    """Files of package ``top`` that module ``module`` (source ``path``) imports from.
+
+    Every import statement counts, including those inside functions or ``if`` blocks: taking
+    one too many only costs a recompilation, one too few a stale cache.
+    """
+    tree = ast.parse(path.read_bytes(), filename=str(path))
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    found: set[Path] = set()
+
+    def add(name: str) -> bool:
+        if name.split(".")[0] != top:
+            return False
+        file = _module_file(root, name)
+        if file is not None:
+            found.add(file)
+        return file is not None
+
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                add(alias.name)
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                parts = package.split(".")
+                if node.level - 1 > len(parts) - 1:
+                    continue  # beyond the top-level package: not ours
+                parts = parts[:len(parts) - (node.level - 1)]
+                base = ".".join(parts + ([node.module] if node.module else []))
+            else:
+                base = node.module or ""
+            for alias in node.names:
+                # ``from pkg import sub`` brings in a module; ``from mod import name`` reads mod
+                if alias.name == "*" or not add(f"{base}.{alias.name}"):
+                    add(base)
+    return found
+
+
+@functools.lru_cache(maxsize=None)
+def _import_closure(path: Path, module: str) -> tuple[Path, ...]:
+    """``path`` and every module of its top-level package it imports, transitively, sorted.
+
+    Falls back to ``path`` alone when ``module`` does not match the file's place in a package
+    (a script run as ``__main__``, say).
+    """
+    parts = module.split(".")
+    depth = len(parts) if path.name == "__init__.py" else len(parts) - 1
+    if module == "__main__" or depth >= len(path.parents):
+        return (path,)
+    root = path.parents[depth]
+    if _module_file(root, module) != path:
+        return (path,)
+    names = {path: module}
+    todo = [path]
+    while todo:
+        file = todo.pop()
+        for dep in _imported_modules(file, names[file], parts[0], root):
+            if dep not in names:
+                rel = dep.relative_to(root).with_suffix("")
+                names[dep] = ".".join(rel.parts[:-1] if rel.name == "__init__" else rel.parts)
+                todo.append(dep)
+    return tuple(sorted(names))
+
+
+def _expand(sources: str | os.PathLike | Iterable[str | os.PathLike]) -> set[Path]:
+    """Files named by ``sources``: files as given, directories as all their ``*.py`` files."""
+    if isinstance(sources, (str, os.PathLike)):
+        sources = [sources]
+    files: set[Path] = set()
+    for item in sources:
+        p = Path(item).resolve()
+        if p.is_dir():
+            files.update(p.rglob("*.py"))
+        elif p.is_file():
+            files.add(p)
+        else:
+            raise FileNotFoundError(f"kernel source {str(p)!r} does not exist")
+    return files
+
+
+@functools.lru_cache(maxsize=None)
+def _fingerprint(files: tuple[Path, ...]) -> str:
+    """SHA-256 (hex) over the names and bytes of ``files`` (in the order given)."""
+    h = hashlib.sha256()
+    for f in files:
+        data = f.read_bytes()
+        name = os.fsencode(f.name)
+        # lengths first, so that no two different file sets give the same byte stream
+        h.update(len(name).to_bytes(8, "little") + name + len(data).to_bytes(8, "little"))
+        h.update(data)
+    return h.hexdigest()
+
+
+class _FingerprintLocator(caching._CacheLocator):
+    """numba's chosen locator, with the fingerprint added to its source stamp.
+
+    The cache directory and file names are numba's, so ``NUMBA_CACHE_DIR`` and the
+    ``__pycache__`` layout work as usual; a changed stamp makes numba treat the index as
+    stale, recompile and overwrite the cache files instead of adding new ones.
+    """
+
+    def __init__(self, inner: caching._CacheLocator, fingerprint: str):
+        self._inner = inner
+        self._fingerprint = fingerprint
+
+    def ensure_cache_path(self):
+        self._inner.ensure_cache_path()
+
+    def get_cache_path(self):
+        return self._inner.get_cache_path()
+
+    def get_source_stamp(self):
+        return (self._inner.get_source_stamp(), "escfit-kernel-sources", self._fingerprint)
+
+    def get_disambiguator(self):
+        return self._inner.get_disambiguator()
+
+
+class _KernelCacheImpl(caching.CompileResultCacheImpl):
+    def __init__(self, py_func):
+        super().__init__(py_func)
+        self._locator = _FingerprintLocator(self._locator, _SOURCES[py_func][1])
+
+
+class _KernelCache(caching.FunctionCache):
+    """numba's per-function cache (compile results) stamped with the kernel's fingerprint."""
+
+    _impl_class = _KernelCacheImpl
+
+
+def kernel(func: Callable | None = None, /, *, sources=(), cache: bool = True, **options: Any):
+    """``numba.njit`` with an on-disk cache that follows all the code compiled into the kernel.
+
+    Use as ``@kernel`` or ``@kernel(parallel=True)``, ``@kernel(inline="always")``, ... in
+    place of ``@numba.njit(cache=True, ...)``.
+
+    Parameters
+    ----------
+    func
+        The function to compile (when used as ``@kernel`` without parentheses).
+    sources
+        Further files, or directories (all their ``*.py`` files), whose contents key the
+        cache: what the import scan cannot see (see the module docstring).  Default none:
+        the defining module and the modules of its package it imports are always hashed.
+    cache
+        Cache the compiled code on disk (default).  ``False`` gives plain ``numba.njit``.
+    **options
+        Options of ``numba.njit`` (``parallel``, ``inline``, ``fastmath``, ...).
+
+    Returns
+    -------
+    numba dispatcher, or the function itself when ``NUMBA_DISABLE_JIT`` is set.
+    """
+    def wrap(fn: Callable) -> Callable:
+        disp = numba.njit(**options)(fn)
+        if not cache or disp is fn:  # NUMBA_DISABLE_JIT: plain Python, nothing to cache
+            return disp
+        path = Path(inspect.getfile(fn)).resolve()
+        files = tuple(sorted(set(_import_closure(path, fn.__module__)) | _expand(sources)))
+        _SOURCES[fn] = (files, _fingerprint(files))
+        # What Dispatcher.enable_caching does, with the stamped cache instead of FunctionCache
+        disp._cache = _KernelCache(fn)
+        return disp
+
+    return wrap(func) if func is not None else wrap
+
+
+def kernel_sources(obj: Callable) -> tuple[Path, ...]:
+    """The files whose contents key the cache of a :func:`kernel` (dispatcher or function).
+
+    Raises
+    ------
+    KeyError
+        ``obj`` was not compiled by :func:`kernel` with caching.
+    """
+    return _SOURCES[getattr(obj, "py_func", obj)][0]

@@ -1,0 +1,213 @@
+"""Parameter declarations: the one place a scene's numbers become named parameters.
+
+A scene value is either fixed (a plain number or a string with a unit) or free, written as
+a table ``{ value = 0.8, vary = true, min = 0, max = 5, prior = "lognormal(0, 1)" }``.
+Every parameter has a stable dotted name such as ``viscous.C``, ``coulomb.R`` or
+``escapement[2].X`` (windows are numbered from 1 in file order), its canonical unit and a
+one-line meaning.  Values are always stored in the canonical unit.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field, replace
+from typing import Any, Callable, Mapping
+
+from .errors import SceneError
+from .units import CANONICAL, to_canonical
+
+__all__ = ["Param", "ParamSet", "read_param", "safe_name"]
+
+_TABLE_KEYS = {"value", "vary", "min", "max", "prior", "sd"}
+
+
+@dataclass(frozen=True)
+class Param:
+    """One scalar model parameter.
+
+    Attributes
+    ----------
+    name
+        Dotted, stable name (``viscous.C``).
+    value
+        Value in the canonical unit ``unit``.
+    unit
+        Canonical unit string (pint syntax, ``""`` for dimensionless).
+    meaning
+        One line saying what the parameter is, with its sign convention.
+    vary
+        Whether fits estimate it.
+    min, max
+        Bounds in the canonical unit (``-inf``/``inf`` when open).
+    prior
+        Prior specification string (see :mod:`escfit.likelihood.priors`), or ``None`` for a
+        uniform prior between the bounds.
+    tie
+        ``(other_name, factor)`` when the value is ``factor * other`` (e.g. the unlock
+        torque ``S = eps * M``); a tied parameter never varies by itself.
+    sd
+        Measurement standard deviation of a measured-but-uncertain input, or ``None``.
+    """
+
+    name: str
+    value: float
+    unit: str = ""
+    meaning: str = ""
+    vary: bool = False
+    min: float = -math.inf
+    max: float = math.inf
+    prior: str | None = None
+    tie: tuple[str, float] | None = None
+    sd: float | None = None
+
+    def scaled(self, factor: float) -> "Param":
+        """Return a copy with value, bounds and sd multiplied by a positive ``factor``."""
+        return replace(
+            self,
+            value=self.value * factor,
+            min=self.min * factor,
+            max=self.max * factor,
+            sd=None if self.sd is None else self.sd * factor,
+        )
+
+
+def safe_name(name: str) -> str:
+    """Map a dotted parameter name to a Python identifier (for lmfit expressions).
+
+    ``escapement[2].X`` -> ``escapement_2__X``; ``viscous.C`` -> ``viscous__C``.
+    """
+    out = re.sub(r"\[(\d+)\]", r"_\1", name)
+    return out.replace(".", "__")
+
+
+def read_param(
+    raw: Any,
+    *,
+    name: str,
+    kind: str,
+    meaning: str,
+    where: str,
+    lower: float = -math.inf,
+    upper: float = math.inf,
+    lower_open: bool = False,
+    convert: Callable[[float], float] | None = None,
+    unit: str | None = None,
+) -> Param:
+    """Read a fixed or free scene value into a :class:`Param`.
+
+    Parameters
+    ----------
+    raw
+        The TOML value: number, string with unit, or a table with ``value`` and optionally
+        ``vary``, ``min``, ``max``, ``prior``, ``sd``.
+    name
+        The parameter's dotted name.
+    kind
+        Dimension kind (key of :data:`escfit.core.units.CANONICAL`) the input is read in.
+    meaning
+        One-line description.
+    where
+        ``"file [key]"`` for error messages.
+    lower, upper
+        Physically allowed range in the *output* unit; the value must lie inside
+        (strictly above ``lower`` when ``lower_open``).  Declared bounds are clipped to it.
+    convert
+        Optional increasing map from the input unit to the model unit (e.g. divide a
+        torque by the inertia).  Applied to value, bounds and sd.
+    unit
+        Unit of the converted value when ``convert`` changes it (default: the canonical
+        unit of ``kind``).
+
+    Raises
+    ------
+    SceneError
+        Unknown table keys, non-numeric entries, ``min > max``, value outside bounds or
+        outside the physical range.
+    """
+    conv = convert or (lambda v: v)
+    out_unit = CANONICAL[kind] if unit is None else unit
+    if isinstance(raw, Mapping):
+        unknown = set(raw) - _TABLE_KEYS
+        if unknown:
+            raise SceneError(
+                f"unknown key(s) {sorted(unknown)} in parameter table; allowed: {sorted(_TABLE_KEYS)}",
+                where,
+            )
+        if "value" not in raw:
+            raise SceneError("parameter table needs a 'value'", where)
+        value = conv(to_canonical(raw["value"], kind, f"{where}.value"))
+        vary = raw.get("vary", False)
+        if not isinstance(vary, bool):
+            raise SceneError(f"'vary' must be true or false, got {vary!r}", f"{where}.vary")
+        pmin = conv(to_canonical(raw["min"], kind, f"{where}.min")) if "min" in raw else lower
+        pmax = conv(to_canonical(raw["max"], kind, f"{where}.max")) if "max" in raw else upper
+        prior = raw.get("prior")
+        if prior is not None and not isinstance(prior, str):
+            raise SceneError(f"'prior' must be a string such as 'normal(0, 1)', got {prior!r}", f"{where}.prior")
+        sd = conv(to_canonical(raw["sd"], kind, f"{where}.sd")) if "sd" in raw else None
+        if sd is not None and not sd > 0:
+            raise SceneError(f"'sd' must be positive, got {raw['sd']!r}", f"{where}.sd")
+        if pmin > pmax:
+            raise SceneError(f"min {raw.get('min')!r} is above max {raw.get('max')!r}", where)
+        pmin, pmax = max(pmin, lower), min(pmax, upper)
+        if not (pmin <= value <= pmax):
+            raise SceneError(f"value {raw['value']!r} lies outside [{pmin:g}, {pmax:g}] ({out_unit or 'dimensionless'})", where)
+    else:
+        value = conv(to_canonical(raw, kind, where))
+        vary, pmin, pmax, prior, sd = False, lower, upper, None, None
+    bad_low = value <= lower if lower_open else value < lower
+    if bad_low or value > upper:
+        rng = f"({lower:g}" if lower_open else f"[{lower:g}"
+        raise SceneError(
+            f"value {raw if not isinstance(raw, Mapping) else raw['value']!r} is outside the physical range "
+            f"{rng}, {upper:g}] for {meaning or name}",
+            where,
+        )
+    return Param(name, value, out_unit, meaning, vary, pmin, pmax, prior, None, sd)
+
+
+@dataclass
+class ParamSet:
+    """Ordered collection of a scene's parameters, addressed by dotted name."""
+
+    params: dict[str, Param] = field(default_factory=dict)
+
+    def add(self, p: Param) -> None:
+        if p.name in self.params:
+            raise SceneError(f"parameter {p.name!r} declared twice")
+        self.params[p.name] = p
+
+    def __getitem__(self, name: str) -> Param:
+        return self.params[name]
+
+    def __contains__(self, name: object) -> bool:
+        return name in self.params
+
+    def __iter__(self):
+        return iter(self.params.values())
+
+    def __len__(self) -> int:
+        return len(self.params)
+
+    def values(self) -> dict[str, float]:
+        """Current values with ties resolved, by name."""
+        out = {n: p.value for n, p in self.params.items()}
+        for n, p in self.params.items():
+            if p.tie is not None:
+                other, factor = p.tie
+                out[n] = factor * out[other]
+        return out
+
+    def free(self) -> list[Param]:
+        """The parameters a fit estimates, in declaration order."""
+        return [p for p in self.params.values() if p.vary and p.tie is None]
+
+    def with_values(self, values: Mapping[str, float]) -> "ParamSet":
+        """A copy with some values replaced (ties are re-resolved by :meth:`values`)."""
+        new = dict(self.params)
+        for n, v in values.items():
+            if n not in new:
+                raise KeyError(n)
+            new[n] = replace(new[n], value=float(v))
+        return ParamSet(new)

@@ -1,0 +1,261 @@
+"""One fit for every model family: least squares, then optionally emcee, into one results schema.
+
+``fit(scene, data)`` looks the family up from the scene's ``model =``, builds its
+:class:`~escfit.likelihood.problem.Problem`, runs :func:`~escfit.inference.lsq.least_squares`
+(and :func:`~escfit.inference.mcmc.run_emcee`), checks what the data determine and how well
+the model fits, and returns a :class:`~escfit.results.FitResult` laid out as ArviZ expects
+(see :mod:`escfit.results`).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from ..core.errors import FitError
+from ..core.provenance import dependency_versions
+from ..core.scene import load_scene
+from ..likelihood.problem import Problem
+from ..results import SCHEMA_VERSION, FitResult, clean_attrs, write_fit
+from .identifiability import bound_warnings, correlation_warnings, ridge_warnings, sloppy_directions
+from .lsq import LeastSquaresResult, least_squares
+from .mcmc import McmcResult, run_emcee
+from .misfit import misfit_report
+from .registry import family
+
+__all__ = ["fit", "fit_problem", "build_tree"]
+
+GENERIC_DEFAULTS = {"walkers": 32, "steps": 2000, "n_starts": 8, "n_refine": None, "predictive_draws": 400}
+
+
+def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, force: bool = False, seed: int = 0,
+        walkers: int | None = None, steps: int | None = None, burn: int | None = None, n_starts: int | None = None,
+        resume: bool = False, progress: bool = False, checkpoint: str | Path | None = None,
+        predictive_draws: int | None = None, moves: str = "stretch", **options) -> FitResult:
+    """Fit a scene of any model family to a recording.
+
+    Parameters
+    ----------
+    scene
+        Scene object or path; ``model =`` names the family and its ``vary = true``
+        parameters are estimated.
+    data
+        A recording object of the family, or the path of a recording file.
+    method
+        ``"leastsq"`` (lmfit, multistart) or ``"emcee"`` (least squares, then MCMC).
+    out
+        Results file (HDF5); written atomically, never replacing a file without ``force``.
+    seed, walkers, steps, burn, n_starts, progress
+        Sampler and optimiser settings; ``None`` takes the family's default
+        (``fit_defaults``; ``burn`` defaults to half the steps).
+    resume
+        Continue an interrupted emcee run from its checkpoint.
+    checkpoint
+        emcee backend file (default ``<out>.emcee`` when ``out`` is given).
+    predictive_draws
+        Posterior draws at which the expected readings and the pointwise log-likelihood
+        (for PSIS-LOO) are stored.
+    moves
+        emcee's proposal: ``"stretch"`` or ``"de"`` (see :func:`~escfit.inference.mcmc.run_emcee`).
+    **options
+        The family's problem options (balance: ``solver``, ``solver_options``, ``unit``,
+        ``fmt``, ``notch_deg``, ``recording``); unknown ones are refused.
+
+    Returns
+    -------
+    FitResult
+        Also written to ``out`` when given.
+    """
+    from ..core.atomic import refuse_existing
+
+    if method not in ("leastsq", "emcee"):
+        raise FitError(f"method must be 'leastsq' or 'emcee', got {method!r}")
+    if out is not None:
+        refuse_existing(out, force)
+        if not Path(out).parent.exists():
+            raise FitError("output directory does not exist", str(Path(out).parent))
+    sc = load_scene(scene) if not hasattr(scene, "model") else scene
+    fam = family(sc.model)
+    defaults = {**GENERIC_DEFAULTS, **dict(getattr(fam, "fit_defaults", {}))}
+    pick = lambda value, key: defaults[key] if value is None else value  # noqa: E731
+    if checkpoint is None and out is not None and method == "emcee":
+        checkpoint = str(out) + ".emcee"
+    if method == "emcee" and checkpoint is not None and Path(checkpoint).exists() and not resume and not force:
+        raise FitError("an interrupted run's checkpoint exists; pass --resume to continue it or --force to restart",
+                       str(checkpoint))
+    problem = fam.problem(sc, data, **options)
+    return fit_problem(problem, method=method, out=out, force=force, seed=seed, walkers=pick(walkers, "walkers"),
+                       steps=pick(steps, "steps"), burn=burn, n_starts=pick(n_starts, "n_starts"),
+                       n_refine=defaults["n_refine"], resume=resume, progress=progress, checkpoint=checkpoint,
+                       predictive_draws=pick(predictive_draws, "predictive_draws"), moves=moves)
+
+
+def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | None = None, force: bool = False,
+                seed: int = 0, walkers: int = 32, steps: int = 2000, burn: int | None = None, n_starts: int = 8,
+                n_refine: int | None = None, resume: bool = False, progress: bool = False,
+                checkpoint: str | Path | None = None, predictive_draws: int = 400,
+                moves: str = "stretch") -> FitResult:
+    """:func:`fit` of a prepared problem (any family)."""
+    if predictive_draws < 1:
+        raise FitError(f"predictive_draws must be at least 1, got {predictive_draws}")
+    started = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+    lsq = least_squares(problem, n_starts=n_starts, n_refine=n_refine, seed=seed)
+    mc = None
+    if method == "emcee":
+        mc = run_emcee(problem, lsq, walkers=walkers, steps=steps, burn=burn, seed=seed, checkpoint=checkpoint,
+                       resume=resume, progress=progress, moves=moves)
+    result = FitResult(build_tree(problem, lsq, mc, method=method, seed=seed, started=started,
+                                  predictive_draws=predictive_draws))
+    if out is not None:
+        write_fit(result, out, force=force)
+        if checkpoint is not None and Path(checkpoint).exists():
+            Path(checkpoint).unlink()
+    return result
+
+
+def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None, *, method: str, seed: int,
+               started: str, predictive_draws: int = 400) -> xr.DataTree:
+    """The results tree of a fit (groups and attributes of :mod:`escfit.results`)."""
+    names = list(problem.names)
+    units, meanings = dict(problem.units), dict(problem.meanings)
+    obs_coords = problem.obs_coords()
+    reading_units = problem.reading_units
+    groups: dict[str, xr.Dataset] = {}
+    groups["observed_data"] = xr.Dataset({"reading": ("obs", problem.observed, {"units": reading_units})},
+                                         coords=obs_coords)
+    groups["least_squares"] = xr.Dataset(
+        {"value": ("parameter", lsq.value), "stderr": ("parameter", lsq.stderr),
+         "correlation": (("parameter", "parameter_b"), lsq.correlation),
+         "expected": ("obs", problem.expected(lsq.values),
+                      {"units": reading_units, "long_name": "expected reading at the optimum"})},
+        coords={"parameter": lsq.names, "parameter_b": lsq.names, **obs_coords},
+        attrs=clean_attrs({"chisqr": lsq.chisqr, "redchi": lsq.redchi, "sigma_hat": lsq.sigma_hat,
+                           "n_data": lsq.n_data, "aic": lsq.aic(), "bic": lsq.bic(), "success": lsq.success,
+                           "message": lsq.message, "n_starts": lsq.n_starts, "noise_profiled": lsq.profiled}))
+    misfit, family_figures = {}, {}
+    misfit_warnings: list[str] = []
+    figures, warnings_ = _misfit(problem, lsq, obs_coords)
+    misfit.update(figures)
+    misfit_warnings += warnings_
+    family_figures, family_warnings = problem.checks_at_best_fit(lsq.values)
+    misfit.update(family_figures)
+    misfit_warnings = bound_warnings(problem, lsq) + misfit_warnings + family_warnings
+    if not lsq.success:
+        misfit_warnings.append(f"least squares did not converge: {lsq.message}")
+    warnings = correlation_warnings(lsq.names, lsq.correlation) + ridge_warnings(lsq.names, lsq.correlation)
+    undefined = [n for n, e in zip(lsq.names, lsq.stderr) if not np.isfinite(e)]
+    if undefined:
+        warnings.append(f"least-squares standard errors undefined for {undefined} (singular or indefinite "
+                        "covariance): the data do not fix them locally; use --method emcee")
+    if mc is not None:
+        post = {n: (("chain", "draw"), mc.chain[:, :, i], {"units": units.get(n, ""), "long_name": meanings.get(n, "")})
+                for i, n in enumerate(names)}
+        coords = {"chain": np.arange(mc.walkers), "draw": np.arange(mc.chain.shape[1])}
+        post.update(_derived(problem, mc, units, meanings))
+        groups["posterior"] = xr.Dataset(post, coords=coords)
+        groups["sample_stats"] = xr.Dataset({"lp": (("chain", "draw"), mc.log_prob)}, coords=coords)
+        groups["diagnostics"] = _diagnostics(groups["posterior"], names, mc)
+        groups["posterior_predictive"], groups["log_likelihood"] = _predictive(problem, mc, obs_coords, reading_units,
+                                                                             predictive_draws)
+        flat = mc.chain.reshape(-1, len(names))
+        pc = np.corrcoef(flat.T) if len(names) > 1 else np.ones((1, 1))
+        warnings = correlation_warnings(names, pc) + sloppy_directions(names, flat)
+        bad = [n for n in names if float(groups["diagnostics"]["rhat"].sel(parameter=n)) > 1.05]
+        if bad:
+            warnings.append(f"split R-hat above 1.05 for {bad}: the walkers have not converged; run longer")
+        if not mc.tau_reliable:
+            warnings.append("the run is shorter than 50 autocorrelation times: intervals are approximate")
+        warnings += [w for w in problem.checks_of_posterior(mc.chain) if w not in family_warnings]
+    warnings = _unique(warnings + misfit_warnings + list(getattr(problem, "data_warnings", [])))
+    attrs = {
+        "schema_version": SCHEMA_VERSION, "model": problem.family, "method": method, "seed": seed,
+        "parameters": names, "units": units, "meanings": meanings, **problem.provenance(),
+        "versions": dependency_versions(), "started": started,
+        "finished": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "warnings": warnings, "failures": dict(problem.failures), "misfit": misfit,
+        "notes": list(getattr(problem, "notes", [])),
+    }
+    if mc is not None:
+        attrs.update(walkers=mc.walkers, steps=mc.steps, burn=mc.burn, resumed=mc.resumed, moves=mc.moves)
+    root = xr.DataTree(dataset=xr.Dataset(attrs=clean_attrs(attrs)))
+    for name, ds in groups.items():
+        root[name] = xr.DataTree(dataset=ds)
+    return root
+
+
+def _unique(items: list[str]) -> list[str]:
+    return list(dict.fromkeys(items))
+
+
+def _misfit(problem: Problem, lsq: LeastSquaresResult, coords: dict) -> tuple[dict, list[str]]:
+    """Residual structure at the least-squares optimum (see :mod:`escfit.inference.misfit`).
+
+    Readings and expectations in one unit give residuals in that unit; readings whose noise
+    is not additive in their unit (notch counts) or is correlated (whose innovations should
+    be white) are compared through the standardised residuals, as the problem's
+    ``misfit_options`` say.
+    """
+    opts = dict(getattr(problem, "misfit_options", {}) or {})
+    n = problem.n_data
+    if opts.get("standardised"):
+        resid, unit = np.asarray(problem.residuals(lsq.values), float)[:n], "noise scales"
+    else:
+        resid, unit = problem.observed - problem.expected(lsq.values), problem.reading_units
+    swing = coords["swing"][1] if opts.get("branches") and "swing" in coords else None
+    curve = coords["curve"][1] if "curve" in coords else None
+    return misfit_report(resid, swing, curve, unit=unit, branches=bool(opts.get("branches")),
+                         innovations=bool(opts.get("innovations")))
+
+
+def _derived(problem: Problem, mc: McmcResult, units: dict, meanings: dict) -> dict:
+    """Derived quantities of every posterior draw (``problem.derived``), as posterior variables."""
+    first = problem.derived(problem.values(mc.chain[0, 0]))
+    if not first:
+        return {}
+    flat = mc.chain.reshape(-1, mc.chain.shape[-1])
+    rows = [problem.derived(problem.values(x)) for x in flat]
+    out = {}
+    for key in first:
+        v = np.array([r.get(key, np.nan) for r in rows], float).reshape(mc.chain.shape[:2])
+        out[key] = (("chain", "draw"), v, {"units": units.get(key, ""), "long_name": meanings.get(key, key)})
+    return out
+
+
+def _diagnostics(post: xr.Dataset, names: list[str], mc: McmcResult) -> xr.Dataset:
+    import arviz as az
+
+    sub = post[names]
+    rhat = az.rhat(sub)
+    ess_b = az.ess(sub, method="bulk")
+    ess_t = az.ess(sub, method="tail")
+    return xr.Dataset(
+        {"rhat": ("parameter", [float(rhat[n]) for n in names]),
+         "ess_bulk": ("parameter", [float(ess_b[n]) for n in names]),
+         "ess_tail": ("parameter", [float(ess_t[n]) for n in names]),
+         "tau": ("parameter", mc.tau), "acceptance": ("chain", mc.acceptance)},
+        coords={"parameter": names, "chain": np.arange(mc.walkers)},
+        attrs={"tau_reliable": int(mc.tau_reliable)})
+
+
+def _predictive(problem: Problem, mc: McmcResult, obs_coords: dict, reading_units: str,
+                draws: int) -> tuple[xr.Dataset, xr.Dataset]:
+    """Expected readings and pointwise log-likelihood for a thinned set of draws."""
+    per_chain = max(1, draws // mc.walkers)
+    idx = np.unique(np.linspace(0, mc.chain.shape[1] - 1, per_chain).astype(int))
+    exp = np.full((mc.walkers, idx.size, problem.n_data), np.nan)
+    ll = np.full_like(exp, -np.inf)
+    for w in range(mc.walkers):
+        for j, d in enumerate(idx):
+            vals = problem.values(mc.chain[w, d])
+            try:
+                exp[w, j] = problem.expected(vals)
+                ll[w, j] = problem.loglike_pointwise(vals)
+            except Exception:  # noqa: BLE001 - a failed draw stays NaN / -inf
+                problem.failures["posterior predictive solve failed"] += 1
+    coords = {"chain": np.arange(mc.walkers), "draw": idx, **obs_coords}
+    return (xr.Dataset({"expected": (("chain", "draw", "obs"), exp, {"units": reading_units})}, coords=coords),
+            xr.Dataset({"reading": (("chain", "draw", "obs"), ll)}, coords=coords,
+                       attrs={"note": "pointwise log-likelihood on the thinned draws of posterior_predictive"}))

@@ -1,0 +1,97 @@
+"""What the data do and do not determine: correlations, ridges, parameters on a bound, profiles.
+
+These checks read only a fit's numbers (names, correlations, draws), so they serve every
+model family; a family adds its own structural checks through
+:meth:`~escfit.likelihood.problem.Problem.checks_at_best_fit`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..likelihood.problem import Problem
+from .lsq import LeastSquaresResult, least_squares
+
+__all__ = ["correlation_warnings", "sloppy_directions", "ridge_warnings", "bound_warnings", "profile"]
+
+
+def correlation_warnings(names: list[str], corr: np.ndarray, threshold: float = 0.95) -> list[str]:
+    """Messages for parameter pairs whose |correlation| exceeds ``threshold``."""
+    out = []
+    for i in range(len(names)):
+        for j in range(i + 1, len(names)):
+            r = corr[i, j]
+            if np.isfinite(r) and abs(r) > threshold:
+                out.append(f"{names[i]} and {names[j]} are correlated (r = {r:+.3f}): the data determine a combination "
+                           "of them better than either alone")
+    return out
+
+
+def sloppy_directions(names: list[str], samples: np.ndarray, ratio: float = 30.0) -> list[str]:
+    """Report a posterior ridge: a combination far better determined than the parameters.
+
+    ``samples`` has shape (n, ndim).  Each parameter is standardised (in log scale when it is
+    positive); if the smallest principal spread is ``ratio`` times below the largest, the
+    parameters move together along the largest direction and the data fix mainly the
+    combination along the smallest one.
+    """
+    x = np.asarray(samples, float)
+    if x.shape[1] < 2:
+        return []
+    z = np.where(np.all(x > 0, axis=0), np.log(np.abs(x) + 1e-300), x)
+    z = (z - z.mean(axis=0)) / (z.std(axis=0) + 1e-300)
+    return ridge_warnings(names, np.cov(z.T), ratio, "posterior")
+
+
+def ridge_warnings(names: list[str], corr: np.ndarray, ratio: float = 30.0, what: str = "least-squares fit") -> list[str]:
+    """The ridge test of :func:`sloppy_directions` on a correlation matrix of the parameters.
+
+    Standardising (and taking logs, to first order) leaves correlations unchanged, so the
+    least-squares correlation matrix gives the same principal spreads as posterior samples.
+    """
+    c = np.asarray(corr, float)
+    if c.shape[0] < 2 or not np.all(np.isfinite(c)):
+        return []
+    w, v = np.linalg.eigh(0.5 * (c + c.T))
+    w = np.maximum(w, 1e-300)
+    spread = math.sqrt(w[-1] / w[0])
+    if spread < ratio:
+        return []
+
+    def combo(vec):
+        return " ".join(f"{c:+.2f}*{n}" for c, n in zip(vec, names) if abs(c) > 0.2)
+
+    return [f"the {what} is a ridge (principal spreads differ {spread:.0f}-fold): the parameters move together along "
+            f"[{combo(v[:, -1])}] while the data fix mainly [{combo(v[:, 0])}] (standardised, log scale for positive "
+            "parameters)"]
+
+
+def bound_warnings(problem: Problem, lsq: LeastSquaresResult) -> list[str]:
+    """Parameters whose best fit sits on a bound of the scene's range."""
+    lo, hi = problem.bounds
+    out = []
+    for i, name in enumerate(problem.names):
+        if name not in lsq.names:
+            continue
+        v = float(lsq.value[lsq.names.index(name)])
+        span = hi[i] - lo[i] if np.isfinite(hi[i] - lo[i]) else max(abs(v), 1.0)
+        for edge, which in ((lo[i], "lower"), (hi[i], "upper")):
+            if np.isfinite(edge) and abs(v - edge) <= 1e-6 * span:
+                zero = which == "lower" and edge == 0.0
+                out.append(f"{name} ends on its {which} bound {edge:g}" + (
+                    ": the data find no evidence for it (an upper limit is what they give)" if zero else
+                    ": the data want it beyond the scene's range; widen the range or check the units"))
+    return out
+
+
+def profile(problem: Problem, name: str, grid, *, n_starts: int = 3, seed: int = 0) -> dict:
+    """Profile likelihood of ``name``: best chi-square over the other parameters at each grid value.
+
+    Returns a dict with ``grid``, ``chisqr`` and ``delta`` (chi-square above its minimum;
+    values below 3.84 form an approximate 95 % interval).
+    """
+    grid = np.asarray(grid, float)
+    chi = np.array([least_squares(problem, n_starts=n_starts, seed=seed, fixed={name: float(g)}).chisqr for g in grid])
+    return {"name": name, "grid": grid, "chisqr": chi, "delta": chi - chi.min()}

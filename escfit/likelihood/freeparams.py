@@ -1,0 +1,83 @@
+"""The free-parameter vector of a fit: names, priors, bounds, and values with ties resolved.
+
+Shared by every fit problem (unit curves, passage times, timegrapher readings): the sampler
+and the optimiser see a plain vector in :attr:`FreeParameters.names` order; the forward model
+sees all parameters by name (:meth:`FreeParameters.values`).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Mapping
+
+import numpy as np
+
+from ..core.errors import FitError
+from ..core.params import ParamSet
+from .priors import Prior, prior_of
+
+__all__ = ["FreeParameters"]
+
+
+class FreeParameters:
+    """Mixin holding the parameters of a fit problem.
+
+    Attributes
+    ----------
+    params
+        All parameters (scene, load rule, observation).
+    names
+        Names of the free parameters, in vector order.
+    priors
+        Prior of each free parameter (:func:`~escfit.likelihood.priors.prior_of`), truncated
+        to the parameter's bounds.  A free parameter with an infinite bound and no prior
+        string gets the improper flat prior: balance fits allow it (e.g. ``fit.kappa``, free
+        and unbounded by default), the data make the posterior proper.
+    """
+
+    def _set_free(self, params: ParamSet, where: str) -> None:
+        """Take ``params``; refuse a fit with nothing free (``where`` names the scene)."""
+        free = params.free()
+        if not free:
+            raise FitError("no free parameters: mark some with { value = ..., vary = true }", where)
+        self.params = params
+        self.names = [p.name for p in free]
+        self.priors: list[Prior] = [prior_of(p, f"{where} [{p.name}]", allow_improper=True) for p in free]
+        self._base = params.values()
+        self._ties = [(p.name, p.tie) for p in params if p.tie is not None]
+
+    @property
+    def initial(self) -> np.ndarray:
+        """The scene's values of the free parameters."""
+        return np.array([self.params[n].value for n in self.names])
+
+    @property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper bounds of the free parameters (each prior's support)."""
+        return np.array([p.lo for p in self.priors]), np.array([p.hi for p in self.priors])
+
+    def values(self, vec: np.ndarray | Mapping[str, float]) -> dict[str, float]:
+        """All parameter values by name for a free-parameter vector (ties resolved)."""
+        vals = dict(self._base)
+        if isinstance(vec, Mapping):
+            vals.update(vec)
+        else:
+            vals.update(zip(self.names, map(float, vec)))
+        for name, (other, factor) in self._ties:
+            vals[name] = factor * vals[other]
+        return vals
+
+    def log_prior(self, vec: np.ndarray) -> float:
+        """Sum of the free parameters' log prior densities (``-inf`` outside the bounds)."""
+        return float(sum(p.logpdf(float(x)) for p, x in zip(self.priors, vec)))
+
+    def log_prob(self, vec: np.ndarray) -> float:
+        """Log posterior (up to a constant); ``-inf`` outside the prior or on failure.
+
+        The problem supplies ``log_likelihood(values)``, which returns ``-inf`` (with the
+        reason counted) when the forward model fails.
+        """
+        lp = self.log_prior(vec)
+        if not math.isfinite(lp):
+            return -math.inf
+        return lp + self.log_likelihood(self.values(vec))

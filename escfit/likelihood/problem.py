@@ -1,0 +1,201 @@
+"""What a fit needs from a model family: the :class:`Problem` and :class:`ModelFamily` protocols.
+
+One inference layer (:mod:`escfit.inference`) serves every mechanism.  It sees a fit only
+through a :class:`Problem`: a free-parameter vector with priors and bounds, a log posterior,
+standardised residuals for least squares, and the readings with their coordinates.  A model
+family (balance wheel and pendulum, friction rig, Geneva escapement, verge escapement)
+supplies the problem from a scene and a recording through its :class:`ModelFamily` entry,
+registered by the scene's ``model =`` name in :data:`escfit.core.scene.MODELS`.
+
+Sign and unit conventions are the family's; every number crossing this interface is in the
+parameter's canonical unit (``units``) or the readings' unit (``reading_units``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from typing import Any, Callable, Mapping, Protocol, runtime_checkable
+
+import numpy as np
+
+from .priors import Prior
+
+__all__ = ["Problem", "ModelFamily", "ProblemBase", "gaussian_prior_residuals"]
+
+
+@runtime_checkable
+class Problem(Protocol):
+    """A fit problem: scene + recording + observation model, prepared once.
+
+    Attributes
+    ----------
+    family : str
+        The model family (``"balance"``, ``"friction_rig"``, ``"geneva"``, ``"verge"``).
+    names : list[str]
+        Free parameters, in vector order.
+    priors : list[Prior]
+        Prior of each free parameter (its support gives the bounds).
+    noise_names : tuple[str, ...]
+        Free parameters that least squares holds at their starting values instead of
+        fitting (noise scales: the fit profiles them out, the sampler samples them).
+    units, meanings : dict[str, str]
+        Canonical unit and one-line meaning of every parameter by name (free, fixed and
+        derived).
+    reading_units : str
+        Unit of :attr:`observed` (``"rad"``, ``"s"``, ``"N"``, ``"rad/s"``, ``"turns"`` ...).
+    failures : collections.Counter
+        Why evaluations returned ``-inf`` (or a large residual), counted.
+    vectorized : bool
+        Whether :meth:`log_prob_many` is a whole-array path worth calling for a whole
+        ensemble (it must give the same numbers as :meth:`log_prob` row by row).
+    notes, data_warnings : list[str]
+        What was done to the recording before fitting, and what the data themselves
+        make doubtful; both are stored with the results.
+    """
+
+    family: str
+    names: list[str]
+    priors: list[Prior]
+    noise_names: tuple[str, ...]
+    units: dict[str, str]
+    meanings: dict[str, str]
+    reading_units: str
+    failures: Counter
+    vectorized: bool
+    notes: list[str]
+    data_warnings: list[str]
+
+    @property
+    def initial(self) -> np.ndarray: ...
+
+    @property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]: ...
+
+    @property
+    def observed(self) -> np.ndarray: ...
+
+    @property
+    def n_data(self) -> int: ...
+
+    def values(self, vec: np.ndarray | Mapping[str, float]) -> dict[str, float]:
+        """Every parameter's value by name for a free-parameter vector (or partial mapping)."""
+
+    def log_prior(self, vec: np.ndarray) -> float: ...
+
+    def log_prob(self, vec: np.ndarray) -> float:
+        """Log posterior up to a constant; ``-inf`` outside the prior or when the model fails."""
+
+    def log_prob_many(self, vecs: np.ndarray) -> np.ndarray:
+        """:meth:`log_prob` of each row of ``vecs`` (shape ``(sets, ndim)``)."""
+
+    def residuals(self, values: Mapping[str, float]) -> np.ndarray:
+        """Standardised residuals of the readings (finite; large on failure)."""
+
+    def loglike_pointwise(self, values: Mapping[str, float]) -> np.ndarray:
+        """Log-likelihood of each reading (for PSIS-LOO); may raise when the model fails."""
+
+    def expected(self, values: Mapping[str, float]) -> np.ndarray:
+        """Noise-free expected readings, in :attr:`reading_units`."""
+
+    def obs_coords(self) -> dict[str, Any]:
+        """Coordinates of the readings: ``obs`` plus ``curve`` (a label per reading) and any
+        of ``x`` (the quantity readings are plotted against, with ``units`` and
+        ``long_name`` attributes), ``swing``, ``load``, ``time``."""
+
+    def provenance(self) -> dict[str, Any]:
+        """``scene`` (text), ``scene_file``, ``data_file``, ``data_sha256``, ``data_kind``,
+        ``solver``, ``solver_options`` and anything else the family records."""
+
+    def derived(self, values: Mapping[str, float]) -> dict[str, float]:
+        """Quantities computed from the parameters and stored with the posterior."""
+
+    def checks_at_best_fit(self, best: Mapping[str, float]) -> tuple[dict, list[str]]:
+        """Family-specific misfit figures and warnings at the least-squares optimum."""
+
+    def checks_of_posterior(self, chain: np.ndarray) -> list[str]:
+        """Family-specific warnings from posterior draws, shape ``(walkers, draws, ndim)``."""
+
+
+class ModelFamily(Protocol):
+    """A mechanism's entry in the registry: everything ``escfit`` commands need to know.
+
+    Attributes
+    ----------
+    name : str
+        The scene's ``model =`` value.
+    formats : Mapping[str, Callable]
+        Recording formats the family reads, name -> reader ``(path) -> data``.
+    fit_defaults : Mapping[str, Any]
+        Defaults of the sampler and optimiser for this family (``walkers``, ``steps``,
+        ``burn``, ``n_starts``, ``predictive_draws``) where the generic ones do not suit.
+    """
+
+    name: str
+    formats: Mapping[str, Callable[..., Any]]
+    fit_defaults: Mapping[str, Any]
+
+    def detect(self, path) -> str:
+        """The format of a recording file, or an escfit error naming the file."""
+
+    def problem(self, scene, data, **options) -> Problem:
+        """The fit problem of a scene and a recording (object or path); unknown options refused."""
+
+    def figures(self, result) -> dict[str, bytes]:
+        """PNG figures of a saved fit for the report (``{}`` when the generic ones suffice)."""
+
+
+def gaussian_prior_residuals(priors, x: np.ndarray) -> np.ndarray:
+    """Residuals whose squares add the Gaussian priors' ``-2 log p`` to a least-squares cost.
+
+    ``normal(mu, sd)`` gives ``(x - mu)/sd``, ``halfnormal(sd)`` gives ``x/sd`` and
+    ``lognormal(mu, s)`` gives ``(log x - mu)/s``, so least squares finds the maximum of the
+    posterior when a prior pins what the data alone cannot (measured geometry, a lift angle).
+    Flat priors (``uniform``, ``loguniform``) only bound the search and give no residual.
+    """
+    out = []
+    for pr, v in zip(priors, x):
+        a = pr.args
+        if pr.kind == "normal":
+            out.append((v - a[0]) / a[1])
+        elif pr.kind == "halfnormal":
+            out.append(v / a[0])
+        elif pr.kind == "lognormal":
+            out.append((math.log(v) - a[0]) / a[1] if v > 0 else 1e6)
+    return np.asarray(out, float)
+
+
+class ProblemBase:
+    """Defaults of the optional parts of :class:`Problem`, for families to inherit.
+
+    A subclass sets the attributes of :class:`Problem` and implements ``values``,
+    ``log_prior``, ``log_likelihood(values)``, ``residuals``, ``loglike_pointwise``,
+    ``expected``, ``observed``, ``obs_coords`` and ``provenance``.
+    """
+
+    noise_names: tuple[str, ...] = ()
+    vectorized = False
+    notes: list[str] = []
+    data_warnings: list[str] = []
+
+    def log_prob(self, vec: np.ndarray) -> float:
+        lp = self.log_prior(vec)
+        if not math.isfinite(lp):
+            return -math.inf
+        return lp + self.log_likelihood(self.values(vec))
+
+    def log_prob_many(self, vecs: np.ndarray) -> np.ndarray:
+        return np.array([self.log_prob(v) for v in np.atleast_2d(np.asarray(vecs, float))])
+
+    def derived(self, values: Mapping[str, float]) -> dict[str, float]:
+        return {}
+
+    def checks_at_best_fit(self, best: Mapping[str, float]) -> tuple[dict, list[str]]:
+        return {}, []
+
+    def checks_of_posterior(self, chain: np.ndarray) -> list[str]:
+        return []
+
+    @property
+    def n_data(self) -> int:
+        return int(np.asarray(self.observed).size)

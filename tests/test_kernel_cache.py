@@ -1,0 +1,163 @@
+"""The on-disk cache of compiled kernels follows edits of the modules compiled into them.
+
+numba stamps the cache of a ``cache=True`` function with a hash of its own file only, so a
+kernel that calls a jitted helper of another module keeps the helper's old code after that
+module is edited.  :func:`escfit.core.kernels.kernel` stamps it with every module of the
+package the kernel's module imports.  Each experiment builds a tiny package in a temporary
+directory (``dep.py``: helpers returning 1.0; ``user.py``: kernels calling them; ``other.py``:
+imported by nobody), runs it in fresh interpreters with the numba cache inside the temporary
+directory, edits ``dep.py`` only, and runs it again.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from escfit.balance import dense, dop853, exact, rk4, waveform
+from escfit.balance.observation import passage_times
+from escfit.core.kernels import kernel_sources
+
+DECORATORS = {
+    # the scheme of escfit: numba.njit(cache=True) plus the sources compiled in
+    "kernel": "from escfit.core.kernels import kernel as jit",
+    # numba's own scheme, kept here to document why escfit does not rely on it
+    "njit": "import functools, numba\njit = functools.partial(numba.njit, cache=True)",
+}
+
+DEP = '''\
+{decorator}
+
+
+@jit
+def f():
+    return {value}
+
+
+@jit(inline="always")
+def f_inline():
+    return {value}
+'''
+
+USER = '''\
+from numba import prange
+
+{decorator}
+from .dep import f, f_inline
+
+
+@jit
+def g():
+    return f()
+
+
+@jit
+def g_inline():
+    return f_inline()
+
+
+@jit(parallel=True)
+def g_parallel():
+    acc = 0.0
+    for i in prange(4):
+        acc += f()
+    return acc / 4.0
+'''
+
+RUNNER = '''\
+import json
+from tinypkg import user
+
+out = {}
+for name in ("g", "g_inline", "g_parallel"):
+    disp = getattr(user, name)
+    value = disp()
+    out[name] = [value, sum(disp.stats.cache_hits.values()), sum(disp.stats.cache_misses.values())]
+print(json.dumps(out))
+'''
+
+
+def _write_dep(pkg: Path, decorator: str, value: str) -> None:
+    (pkg / "dep.py").write_text(DEP.format(decorator=decorator, value=value))
+
+
+def _run(root: Path) -> dict[str, tuple[float, int, int]]:
+    """Run the package in a fresh interpreter: ``{kernel: (value, cache hits, cache misses)}``."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(root / "numba_cache"), PYTHONPATH=str(root))
+    env.pop("NUMBA_DISABLE_JIT", None)
+    # -B: no .pyc, whose mtime check (1 s resolution) could miss an edit of dep.py that keeps its size
+    proc = subprocess.run([sys.executable, "-B", "-c", RUNNER], cwd=root, env=env, capture_output=True,
+                          text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    return {k: tuple(v) for k, v in json.loads(proc.stdout.splitlines()[-1]).items()}
+
+
+@pytest.fixture(scope="module")
+def experiments(tmp_path_factory) -> dict[str, list[dict]]:
+    """Three runs per scheme: cold; after an edit of an unrelated module; after an edit of dep.py."""
+    results = {}
+    for scheme, decorator in DECORATORS.items():
+        root = tmp_path_factory.mktemp(scheme)
+        pkg = root / "tinypkg"
+        pkg.mkdir()
+        (pkg / "__init__.py").write_text("")
+        (pkg / "other.py").write_text("X = 1\n")
+        (pkg / "user.py").write_text(USER.format(decorator=decorator))
+        _write_dep(pkg, decorator, "1.0")
+        user_before = (pkg / "user.py").read_bytes(), os.stat(pkg / "user.py").st_mtime_ns
+        runs = [_run(root)]
+        (pkg / "other.py").write_text("X = 2  # not imported by user.py\n")
+        runs.append(_run(root))
+        _write_dep(pkg, decorator, "2.0")  # same size: only the content changes
+        assert ((pkg / "user.py").read_bytes(), os.stat(pkg / "user.py").st_mtime_ns) == user_before
+        runs.append(_run(root))
+        results[scheme] = runs
+    return results
+
+
+KERNELS = ("g", "g_inline", "g_parallel")
+
+
+@pytest.mark.parametrize("scheme", list(DECORATORS))
+def test_cache_is_used_when_nothing_compiled_in_changed(experiments, scheme):
+    cold, warm, _ = experiments[scheme]
+    for name in KERNELS:
+        assert cold[name] == (1.0, 0, 1), name  # compiled
+        assert warm[name] == (1.0, 1, 0), name  # loaded from the cache, unrelated edit ignored
+
+
+def test_kernel_recompiles_after_an_edit_of_a_called_module(experiments):
+    edited = experiments["kernel"][2]
+    for name in KERNELS:
+        assert edited[name] == (2.0, 0, 1), name
+
+
+def test_plain_njit_cache_returns_the_stale_helper(experiments):
+    """numba 0.68 keys a kernel's cache on its own file only: after the edit of dep.py the
+    cached kernels of user.py still run the old f (1.0), inlined or not, which is why
+    escfit's kernels use :func:`escfit.core.kernels.kernel`.  Should a numba release track
+    dependencies itself, this test fails and the workaround can be revisited."""
+    edited = experiments["njit"][2]
+    for name in KERNELS:
+        assert edited[name] == (1.0, 1, 0), name
+
+
+@pytest.mark.parametrize("func", [exact.run_angle, exact.run_phase, exact.run_angle_many, exact.run_phase_many,
+                                  dense.log_states, dense.log_theta_at, waveform._ascending, rk4._run_located,
+                                  rk4._run_naive, dop853.run_dop853, passage_times._level_times],
+                         ids=lambda f: f"{f.__module__}.{f.__name__}")
+def test_escfit_kernels_are_keyed_on_the_modules_compiled_into_them(func):
+    balance = Path(exact.__file__).parent
+    files = set(kernel_sources(func))
+    assert Path(func.py_func.__code__.co_filename).resolve() in files
+    assert balance / "segment.py" in files or func is waveform._ascending
+    if func in (rk4._run_located, rk4._run_naive, dop853.run_dop853):
+        assert {balance / "exact.py", balance / "solvers.py"} <= files  # region helpers, status codes
+    if func in (passage_times._level_times, dense.log_theta_at):
+        assert balance / "dense.py" in files
