@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Any
 
-__version__ = "0.1.0"
+from .core.version import __version__
 
 from .core.errors import DataError, EscfitError, FitError, ResultsError, SceneError, SolverError, UnitError
 from .core.scene import load_scene

@@ -7,13 +7,13 @@ from __future__ import annotations
 
 import base64
 import html
-import io
 import math
 from pathlib import Path
 
 import numpy as np
 
 from .core.atomic import atomic_path
+from .core.figures import png, pyplot
 from .results import FitResult, load_fit
 
 __all__ = ["make_report", "parameter_table"]
@@ -36,119 +36,56 @@ def parameter_table(res: FitResult) -> tuple[list[str], list[list[str]]]:
 
 
 def _figures(res: FitResult) -> dict[str, bytes]:
-    import matplotlib
+    """The family's figures (data against the model), else the generic one, and the corner plot."""
+    from .inference.registry import family
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     figs: dict[str, bytes] = {}
-    if "expected" in res.group("least_squares"):
-        kind = res.attrs.get("data_kind", "amplitude")
-        if kind == "timeseries":
-            figs["data and fit"] = _waveform_figure(res, plt)
-        else:
-            figs["data and fit"] = (_data_figure if kind in ("amplitude", "notches") else _residual_figure)(res, plt)
+    draw = getattr(family(res.attrs.get("model", "balance")), "figures", None)
+    if draw is not None:
+        figs.update(draw(res))
+    if "data and fit" not in figs and "expected" in res.group("least_squares"):
+        figs["data and fit"] = _generic_figure(res, plt)
     post = res.group("posterior")
     if post is not None:
         figs["corner plot"] = _corner(res, post, plt)
     return figs
 
 
-def _data_figure(res: FitResult, plt) -> bytes:
-    obs = res.group("observed_data")
-    lsq = res.group("least_squares")
-    pp = res.group("posterior_predictive")
-    kind = res.attrs.get("data_kind", "amplitude")
-    y = obs["reading"].values.astype(float)
-    swing = obs["swing"].values
-    curves = obs["curve"].values
-    fig, (ax, axr) = plt.subplots(2, 1, figsize=(8, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1]})
-    for label in dict.fromkeys(curves):
-        m = curves == label
-        if pp is not None:
-            e = pp["expected"].values.reshape(-1, y.size)[:, m]
-            e = e[np.all(np.isfinite(e), axis=1)]
-            if e.size:
-                lo, med, hi = np.quantile(e, [0.025, 0.5, 0.975], axis=0)
-                ax.fill_between(swing[m], lo, hi, alpha=0.3, label=f"95% posterior band {label}")
-                ax.plot(swing[m], med, "-", lw=1)
-        ax.plot(swing[m], lsq["expected"].values[m], "--", lw=1, label=f"least squares {label}")
-        yy = y[m] if kind == "amplitude" else None
-        if yy is not None:
-            ax.plot(swing[m], yy, "o", ms=4, label=f"data {label}")
-            axr.plot(swing[m], yy - lsq["expected"].values[m], "o", ms=4)
-    if kind == "notches":
-        scene_notch = _notch_from_scene(res)
-        for label in dict.fromkeys(curves):
-            m = curves == label
-            ax.errorbar(swing[m], (y[m] + 0.5) * scene_notch, yerr=0.5 * scene_notch, fmt="o", ms=4,
-                        label=f"notch readings {label}")
-            axr.plot(swing[m], (y[m] + 0.5) * scene_notch - lsq["expected"].values[m], "o", ms=4)
-    ax.set_ylabel("amplitude reading (rad)")
-    ax.legend(fontsize=7)
-    axr.axhline(0, color="k", lw=0.5)
-    axr.set_xlabel("half swing")
-    axr.set_ylabel("residual (rad)")
-    return _png(fig, plt)
-
-
-def _waveform_figure(res: FitResult, plt) -> bytes:
-    """Every sample against time with the model's theta(t), and the residuals below (deg)."""
-    obs = res.group("observed_data")
-    lsq_exp = res.group("least_squares")["expected"].values
-    pp = res.group("posterior_predictive")
-    t = obs["time"].values
-    k = 180.0 / np.pi
-    y = obs["reading"].values.astype(float)
-    fig, (ax, axr) = plt.subplots(2, 1, figsize=(9, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
-    ms = 3 if y.size < 500 else 1.2
-    ax.plot(t, k * y, "o", ms=ms, color="0.45", label="recording (every sample fitted)")
-    ax.plot(t, k * lsq_exp, "-", lw=1, color="C3", label="model at the least-squares fit")
-    if pp is not None:
-        e = pp["expected"].values.reshape(-1, y.size)
-        e = e[np.all(np.isfinite(e), axis=1)]
-        if e.size:
-            lo, hi = np.quantile(e - lsq_exp, [0.025, 0.975], axis=0)
-            axr.fill_between(t, k * lo, k * hi, alpha=0.3, color="C3", label="95 % posterior band of the model")
-    axr.plot(t, k * (y - lsq_exp), "o", ms=ms, color="C0", label="recording - model")
-    axr.axhline(0, color="k", lw=0.5)
-    ax.set_ylabel("angle reading (deg)")
-    axr.set_ylabel("residual (deg)")
-    axr.set_xlabel("time on the recording's clock (s)")
-    ax.legend(fontsize=8, loc="upper right")
-    axr.legend(fontsize=8, loc="upper right")
-    return _png(fig, plt)
-
-
-def _residual_figure(res: FitResult, plt) -> bytes:
-    """Recordings whose readings are times or instrument values: residuals per reading series.
-
-    Passage times and beat times grow through the run, so the informative picture is the data
-    minus the least-squares prediction, with the posterior band of the prediction around it.
-    """
+def _generic_figure(res: FitResult, plt) -> bytes:
+    """Readings against their plotting coordinate ``x`` (else their index), the model at the
+    least-squares optimum and the 95 % posterior band, per curve; residuals below."""
     obs = res.group("observed_data")
     lsq_exp = res.group("least_squares")["expected"].values
     pp = res.group("posterior_predictive")
     y = obs["reading"].values.astype(float)
-    swing, curves = obs["swing"].values, obs["curve"].values
     units = obs["reading"].attrs.get("units", "")
-    labels = list(dict.fromkeys(curves))
-    fig, axes = plt.subplots(len(labels), 1, figsize=(8, 2.8 * len(labels) + 0.8), squeeze=False)
-    for ax, label in zip(axes[:, 0], labels):
+    if "x" in obs.coords:
+        x = obs["x"].values.astype(float)
+        xlabel = f"{obs['x'].attrs.get('long_name', 'x')} ({obs['x'].attrs.get('units', '')})"
+    else:
+        x, xlabel = np.arange(y.size, dtype=float), "reading number"
+    curves = obs["curve"].values.astype(str) if "curve" in obs.coords else np.full(y.size, "")
+    fig, (ax, axr) = plt.subplots(2, 1, figsize=(8, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1.2]})
+    for k, label in enumerate(dict.fromkeys(curves)):
         m = curves == label
+        order = np.argsort(x[m], kind="stable")
+        xs, colour, name = x[m][order], f"C{k % 10}", f" ({label})" if label else ""
         if pp is not None:
-            e = pp["expected"].values.reshape(-1, y.size)[:, m]
+            e = pp["expected"].values.reshape(-1, y.size)[:, m][:, order]
             e = e[np.all(np.isfinite(e), axis=1)]
             if e.size:
-                lo, hi = np.quantile(e - lsq_exp[m], [0.025, 0.975], axis=0)
-                ax.fill_between(swing[m], lo, hi, alpha=0.3, step="mid", label="95% posterior band of the prediction")
-        ax.plot(swing[m], y[m] - lsq_exp[m], ".", ms=3, label="data")
-        ax.axhline(0, color="k", lw=0.5)
-        ax.set_ylabel(f"{label}: data - fit")
-        ax.legend(fontsize=7)
-    axes[-1, 0].set_xlabel("half swing")
-    fig.suptitle(f"residuals against the least-squares prediction (readings in {units})", fontsize=9)
-    return _png(fig, plt)
+                lo, hi = np.quantile(e, [0.025, 0.975], axis=0)
+                ax.fill_between(xs, lo, hi, alpha=0.25, color=colour, label=f"95 % posterior band{name}")
+        ax.plot(xs, lsq_exp[m][order], "-", lw=1.2, color=colour, label=f"model, best fit{name}")
+        ax.plot(xs, y[m][order], "o", ms=4, color=colour, mfc="none", label=f"readings{name}")
+        axr.plot(xs, (y[m] - lsq_exp[m])[order], "o", ms=4, color=colour, mfc="none")
+    axr.axhline(0, color="k", lw=0.5)
+    ax.set_ylabel(f"reading ({units})")
+    axr.set_ylabel(f"reading - model ({units})")
+    axr.set_xlabel(xlabel)
+    ax.legend(fontsize=8)
+    return png(fig)
 
 
 def _corner(res: FitResult, post, plt) -> bytes:
@@ -172,23 +109,7 @@ def _corner(res: FitResult, post, plt) -> bytes:
                 axx.set_ylabel(a, fontsize=7)
             axx.tick_params(labelsize=6)
     fig.suptitle("posterior (corner plot)")
-    return _png(fig, plt)
-
-
-def _notch_from_scene(res: FitResult) -> float:
-    import tomllib
-
-    doc = tomllib.loads(res.attrs["scene"])
-    nd = doc.get("observation", {}).get("notch_deg", 6.0)
-    return math.radians(float(nd))
-
-
-def _png(fig, plt) -> bytes:
-    buf = io.BytesIO()
-    fig.tight_layout()
-    fig.savefig(buf, format="png", dpi=100)
-    plt.close(fig)
-    return buf.getvalue()
+    return png(fig)
 
 
 def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: bool = False) -> Path:
@@ -229,10 +150,10 @@ def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: 
         lines += [f"- {w}" for w in warnings] or ["- no warnings"]
         if notes:
             lines += ["", "## What was done to the recording", ""] + [f"- {n}" for n in notes]
-        for title, png in figs.items():
+        for title, image in figs.items():
             img = out.with_name(f"{out.stem}_{title.replace(' ', '_')}.png")
             with atomic_path(img, force=force) as tmp:
-                tmp.write_bytes(png)
+                tmp.write_bytes(image)
             lines += ["", f"## {title.capitalize()}", "", f"![{title}]({img.name})"]
         lines += ["", "## Provenance", ""] + [f"- {k}: `{v}`" for k, v in prov]
         lines += ["", "## Scene", "", "```toml", a.get("scene", ""), "```"]
@@ -252,8 +173,8 @@ def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: 
         if notes:
             parts += ["<h2>What was done to the recording</h2><ul>"] + [f"<li>{esc(n)}</li>" for n in notes]
             parts += ["</ul>"]
-        for title, png in figs.items():
-            b64 = base64.b64encode(png).decode()
+        for title, image in figs.items():
+            b64 = base64.b64encode(image).decode()
             parts += [f"<h2>{esc(title.capitalize())}</h2><img alt='{esc(title)}' src='data:image/png;base64,{b64}'>"]
         parts += ["<h2>Provenance</h2><table>"] + [f"<tr><td>{esc(k)}</td><td>{esc(str(v))}</td></tr>" for k, v in prov]
         parts += ["</table><h2>Scene</h2><pre>" + esc(a.get("scene", "")) + "</pre></body></html>"]

@@ -156,7 +156,7 @@ def test_escfit_kernels_are_keyed_on_the_modules_compiled_into_them(func):
     balance = Path(exact.__file__).parent
     files = set(kernel_sources(func))
     assert Path(func.py_func.__code__.co_filename).resolve() in files
-    assert balance / "segment.py" in files or func is waveform._ascending
+    assert balance / "segment.py" in files
     if func in (rk4._run_located, rk4._run_naive, dop853.run_dop853):
         assert {balance / "exact.py", balance / "solvers.py"} <= files  # region helpers, status codes
     if func in (passage_times._level_times, dense.log_theta_at):

@@ -53,7 +53,7 @@ def solve(scene: BalanceScene, solver: str | None = None, *, values: dict[str, f
 def simulate(scene: BalanceScene, solver: str | None = None, *, swings: int | None = None,
              **options: Any) -> xr.Dataset:
     """Simulate a balance scene; see :func:`escfit.simulate` (solver default: :func:`default_solver`)."""
-    from .. import __version__
+    from ..core.version import __version__
 
     traj = solve(scene, solver, swings=swings, **options)
     return traj.to_dataset({

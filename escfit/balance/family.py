@@ -182,7 +182,10 @@ class BalanceFamily:
         return make_problem(scene, data, **options)
 
     def figures(self, result) -> dict[str, bytes]:
-        return {}
+        """Data against the model, drawn by the kind of the readings (see :mod:`escfit.balance.figures`)."""
+        from .figures import figures
+
+        return figures(result)
 
 
 FAMILY = BalanceFamily()

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import click
 
-from .. import __version__
+from ..core.version import __version__
 from ..core.errors import EscfitError
 
 __all__ = ["main", "cli"]

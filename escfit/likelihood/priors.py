@@ -273,10 +273,10 @@ def _problem(kind: str, args: tuple[float, ...], lower: float, upper: float) -> 
         return f"unknown prior {kind!r}; forms: " + ", ".join(f"{k}({v})" for k, v in FORMS.items())
     elif len(args) != _ARITY[kind]:
         return f"{kind}({FORMS[kind]}) takes {_ARITY[kind]} argument(s), got {len(args)}"
-    if math.isnan(lower) or math.isnan(upper):
-        return "the bounds must be numbers, not NaN"
     if not all(math.isfinite(a) for a in args):
         return "arguments must be finite numbers, got " + ", ".join(f"{a:g}" for a in args)
+    if math.isnan(lower) or math.isnan(upper):
+        return "the bounds must be numbers, not NaN"
     if kind in ("uniform", "loguniform") and not args[0] < args[1]:
         return f"{kind} needs a < b, got a = {args[0]:g}, b = {args[1]:g}"
     if kind == "loguniform" and not args[0] > 0:

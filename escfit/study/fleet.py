@@ -262,7 +262,7 @@ def generate_fleet(spec: FleetSpec, out_dir: str | Path, *, force: bool = False)
     ResultsError
         ``out_dir`` already holds a fleet and ``force`` is false.
     """
-    import escfit
+    from ..core.scene import load_scene
 
     out = Path(out_dir)
     if (out / "fleet.toml").exists() and not force:
@@ -285,7 +285,7 @@ def generate_fleet(spec: FleetSpec, out_dir: str | Path, *, force: bool = False)
         path = out / "scenes" / f"{unit}.toml"
         with atomic_path(path, force=True) as tmp:
             tmp.write_text(text)
-        curves.append(record_unit(escfit.load_scene(path), seed=seed, unit=unit))
+        curves.append(record_unit(load_scene(path), seed=seed, unit=unit))
         truth[unit], seeds[unit] = t, seed
     allc = UnitCurve(np.concatenate([c.swing for c in curves]), np.concatenate([c.value for c in curves]), "notches",
                      math.radians(rig.notch_deg), np.concatenate([c.load for c in curves]), "g",
@@ -314,7 +314,7 @@ def _toml_value(v) -> str:
 
 
 def _manifest(spec: FleetSpec) -> str:
-    import escfit
+    from ..core.version import __version__
 
     pop = spec.population.as_dict()
     lines = [
@@ -326,7 +326,7 @@ def _manifest(spec: FleetSpec) -> str:
         f"seed = {spec.seed}",
         f"friction_growth = {_toml_value(float(spec.friction_growth))}",
         f"sigma = {_toml_value(float(spec.sigma))}",
-        f"escfit_version = {_toml_value(escfit.__version__)}",
+        f"escfit_version = {_toml_value(__version__)}",
         f"generated = {_toml_value(_dt.datetime.now(_dt.timezone.utc).date().isoformat())}",
         "",
         "[population]",
