@@ -1,7 +1,8 @@
-"""``escfit fit-many``: fit every unit of one or more recordings, in parallel.
+"""``escfit fit-many``: fit every unit of a folder of recordings (any model family), in parallel.
 
 Exit status: 0 when every unit is fitted (or was done before), 3 when some units failed (the
-others are fitted and summarised; each failure is printed on stderr), 2 on bad input.
+others are fitted and summarised; each failure is printed on stderr), 2 on bad input or when
+dask.distributed (the ``study`` extra) is missing.
 """
 
 from __future__ import annotations
@@ -17,9 +18,9 @@ EXIT_SOME_FAILED = 3
 
 
 @click.command("fit-many")
-@click.argument("data", nargs=-1, required=True, type=click.Path(dir_okay=False))
+@click.argument("data", nargs=-1, required=True, type=click.Path())
 @click.option("--scene", "scene_path", required=True, type=click.Path(dir_okay=False),
-              help="Scene TOML with the free parameters (the same for every unit).")
+              help="Scene TOML with the free parameters (the same for every unit); its model = names the family.")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
               help="Results directory: <unit>.h5 per unit and summary.nc.")
 @click.option("--method", type=click.Choice(["leastsq", "emcee"]), default="leastsq", show_default=True)
@@ -28,20 +29,23 @@ EXIT_SOME_FAILED = 3
 @click.option("--workers", type=click.IntRange(0), default=None,
               help="Worker processes of the local cluster (default: CPUs available; 0: in this process).")
 @click.option("--seed", type=int, default=0, show_default=True, help="Batch seed (each unit's seed derives from it).")
-@click.option("--walkers", type=click.IntRange(2), default=32, show_default=True)
-@click.option("--steps", type=click.IntRange(10), default=2000, show_default=True)
+@click.option("--walkers", type=click.IntRange(2), default=None, help="emcee walkers (default: the family's).")
+@click.option("--steps", type=click.IntRange(10), default=None, help="emcee steps (default: the family's).")
 @click.option("--burn", type=click.IntRange(0), default=None, help="Default: half the steps.")
-@click.option("--n-starts", type=click.IntRange(1), default=8, show_default=True, help="Least-squares start points.")
+@click.option("--n-starts", type=click.IntRange(1), default=None,
+              help="Least-squares start points (default: the family's).")
 @click.option("--unit", "units", multiple=True, help="Fit only this unit (repeatable).")
-@click.option("--notch-deg", type=float, default=None, help="Notch angle for files without a '# notch_deg:' line.")
+@click.option("--notch-deg", type=float, default=None,
+              help="Balance unit curves: notch angle for files without a '# notch_deg:' line.")
 @click.option("--quiet", is_flag=True, help="No progress lines.")
 @click.pass_context
 def fit_many(ctx, data, scene_path, out_dir, method, scheduler, workers, seed, walkers, steps, burn, n_starts, units,
              notch_deg, quiet):
     """Fit every unit of DATA... independently with --scene SCENE into --out DIR.
 
-    Units come from the 'unit' column of each file, or one unit per file without one.
-    Units whose results file exists and loads are skipped, so an interrupted batch is
+    DATA is a folder of recording files (one unit per file, named after the file; any model
+    family), recording files, or balance unit-curve files whose 'unit' column holds several
+    units.  Units whose results file exists and loads are skipped, so an interrupted batch is
     finished by running the same command again.
     """
     from ..study.batch import fit_many as run

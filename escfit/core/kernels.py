@@ -206,13 +206,17 @@ def kernel(func: Callable | None = None, /, *, sources=(), cache: bool = True, *
 
     Returns
     -------
-    numba dispatcher, or the function itself when ``NUMBA_DISABLE_JIT`` is set.
+    numba.core.registry.CPUDispatcher or function
+        The compiled kernel, or ``func`` itself when ``NUMBA_DISABLE_JIT`` is set.
     """
     def wrap(fn: Callable) -> Callable:
         disp = numba.njit(**options)(fn)
         if not cache or disp is fn:  # NUMBA_DISABLE_JIT: plain Python, nothing to cache
             return disp
         path = Path(inspect.getfile(fn)).resolve()
+        if not path.is_file():  # in a zip archive or a frozen executable: numba's own cache
+            disp.enable_caching()
+            return disp
         files = tuple(sorted(set(_import_closure(path, fn.__module__)) | _expand(sources)))
         _SOURCES[fn] = (files, _fingerprint(files))
         # What Dispatcher.enable_caching does, with the stamped cache instead of FunctionCache

@@ -1,55 +1,100 @@
 """Batch fits: every unit of a fleet fitted independently, in parallel on dask.distributed.
 
-Each unit is one task.  A task carries the scene text and the unit's readings (not file
-names), so workers need no shared file system; it returns the results file as bytes and the
-client writes ``<out>/<unit>.h5`` atomically.  A unit that fails returns its error message
-instead; the others go on.  Units whose results file exists and loads are skipped, so an
-interrupted batch is finished by running it again.  On the local machine an interrupted
-emcee run also resumes from its checkpoint (``<unit>.h5.emcee``).
+Any model family: each unit is one :func:`escfit.inference.fit` of the batch's scene (its
+``model =`` names the family) to the unit's recording.  DATA is a folder of recording files
+(one unit per file, named after the file's stem), or balance unit-curve files whose ``unit``
+column holds several units.
+
+Each unit is one task.  A task carries the scene text and the unit's data (not file names),
+so workers need no shared file system: a balance unit curve travels as its in-memory
+:class:`~escfit.balance.recordings.UnitCurve` (one unit of a multi-unit file), any other
+recording as the file's name and bytes (:class:`RecordingFile`), which the worker writes to
+a temporary directory for the family's reader.  A task returns the results file as bytes,
+which the client writes to ``<out>/<unit>.h5`` atomically, and the unit's summary row.  A unit
+that fails returns its error message instead; the others go on.  Units whose results file
+exists and loads are skipped, so an interrupted batch is finished by running it again.  On
+the local machine an interrupted emcee run also resumes from its checkpoint
+(``<unit>.h5.emcee``).
 
 The combined summary ``<out>/summary.nc`` (xarray, h5netcdf) has a ``unit`` dimension: the
 posterior (or least-squares) median and 68 %/95 % intervals of every parameter, R-hat and
-ESS, the reading scatter, the fit's warnings, status, error message and run time.
+ESS, the reading scatter, the fit's warnings, status, error message and run time.  It is
+built from the rows the tasks return; only the results files of skipped units are read.
 """
 
 from __future__ import annotations
 
+import contextlib
 import datetime as _dt
 import json
 import math
 import os
 import re
 import sys
+import tempfile
 import time
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterable, Sequence
+from typing import Any, Callable, Iterable, Iterator, Sequence
 
 import numpy as np
 import xarray as xr
 
 from ..core.atomic import atomic_path
-from ..core.errors import DataError, EscfitError, FitError, ResultsError
+from ..core.errors import DataError, EscfitError, FitError, MissingDependency, ResultsError
 from ..balance.recordings import UnitCurve, read_unit_curve
 from ..results import SCHEMA_VERSION, FitResult, clean_attrs, dependency_versions
 
-__all__ = ["UnitTask", "BatchResult", "discover_units", "fit_many", "fit_fleet", "summarize", "load_summary",
-           "SUMMARY_SCHEMA", "unit_seed", "LazyClient", "local_cluster"]
+__all__ = ["UnitTask", "RecordingFile", "BatchResult", "discover_units", "recording_files", "fit_many",
+           "fit_fleet", "summarize", "summary_row", "load_summary", "SUMMARY_SCHEMA", "unit_seed", "LazyClient",
+           "local_cluster"]
 
 SUMMARY_SCHEMA = "escfit-fleet-summary/1"
 SUMMARY_FILE = "summary.nc"
 STATS = ("median", "lo68", "hi68", "lo95", "hi95", "mean", "sd", "rhat", "ess_bulk")
 
+# Files of a DATA folder that are not recordings: scenes and recipes, notes, results, figures.
+NOT_RECORDINGS = frozenset({".toml", ".md", ".rst", ".html", ".htm", ".png", ".svg", ".pdf", ".jpg", ".jpeg",
+                            ".py", ".ipynb", ".h5", ".nc", ".emcee", ".part", ".yaml", ".yml"})
+
+
+@dataclass(frozen=True)
+class RecordingFile:
+    """A recording file as a task carries it: the file's name (no directory) and its bytes."""
+
+    name: str
+    content: bytes = field(repr=False)
+
+    @classmethod
+    def read(cls, path: str | Path) -> "RecordingFile":
+        p = Path(path)
+        try:
+            return cls(p.name, p.read_bytes())
+        except FileNotFoundError:
+            raise DataError("recording file not found", str(path)) from None
+        except OSError as exc:
+            raise DataError(f"cannot read the recording file ({exc.strerror or exc})", str(path)) from None
+
 
 @dataclass(frozen=True)
 class UnitTask:
-    """One unit to fit: its name, readings, source file and results file."""
+    """One unit to fit: its name, data, source file and results file.
+
+    ``data`` is a :class:`~escfit.balance.recordings.UnitCurve` (one unit of a balance
+    unit-curve file, read by the client) or a :class:`RecordingFile` (any family's recording,
+    read by the family's reader on the worker).
+    """
 
     unit: str
-    curve: UnitCurve
+    data: UnitCurve | RecordingFile
     data_file: str
     results_file: Path
+
+    @property
+    def curve(self) -> UnitCurve | None:
+        """The unit's balance unit curve, or None for a recording file read on the worker."""
+        return self.data if isinstance(self.data, UnitCurve) else None
 
 
 @dataclass
@@ -90,36 +135,88 @@ def unit_seed(seed: int, unit: str) -> int:
     return int(np.random.SeedSequence([seed, zlib.crc32(unit.encode())]).generate_state(1)[0] % (2**31 - 1))
 
 
-def discover_units(data: Sequence[str | Path | UnitCurve], out_dir: str | Path, *,
-                   notch_deg: float | None = None) -> list[UnitTask]:
-    """The units of one or more recordings, in order of appearance.
-
-    A file with a ``unit`` column contributes each of its units; a file without one is one
-    unit named after the file (its stem).
+def recording_files(folder: str | Path) -> list[Path]:
+    """The recording files of a DATA folder, sorted by name: its regular files except hidden ones
+    and those whose suffix marks them as something else (:data:`NOT_RECORDINGS`: scenes and
+    recipes, notes, results files, figures).  Subfolders are not searched.
 
     Raises
     ------
     DataError
-        A unit name occurs in two files, or a file cannot be read.
+        The folder holds no recording file.
+    """
+    d = Path(folder)
+    files = sorted(p for p in d.iterdir()
+                   if p.is_file() and not p.name.startswith(".") and p.suffix.lower() not in NOT_RECORDINGS)
+    if not files:
+        raise DataError("no recording files in this folder (scenes, notes, results files and hidden files are "
+                        "not recordings)", str(d))
+    return files
+
+
+def _reads_unit_curves(scene) -> bool:
+    """Whether the batch reads balance unit-curve files on the client (and splits them by unit):
+    balance scenes without a ``[recording]`` table (whose files are raw tables instead)."""
+    if scene is None:
+        return True
+    return scene.model == "balance" and scene.extra.get("recording") is None
+
+
+def _is_unit_curve(path: Path) -> bool:
+    from ..balance.recordings.detect import detect_format
+
+    try:
+        return detect_format(path) == "unit-curve"
+    except (DataError, OSError):
+        return False  # not a unit curve: the family's reader on the worker says what is wrong
+
+
+def discover_units(data: Sequence[str | Path | UnitCurve], out_dir: str | Path, *,
+                   notch_deg: float | None = None, scene=None) -> list[UnitTask]:
+    """The units of one or more recordings or folders of recordings, in order of appearance.
+
+    A folder contributes its recording files (:func:`recording_files`), in name order.  With
+    a balance scene (or ``scene=None``), a unit-curve file with a ``unit`` column contributes
+    each of its units (read here, carried as :class:`~escfit.balance.recordings.UnitCurve`);
+    any other file is one unit named after the file (its stem), carried as a
+    :class:`RecordingFile` and read on the worker by the scene's family.
+
+    Raises
+    ------
+    DataError
+        A unit name occurs twice, a file is missing, or a unit-curve file cannot be read.
     """
     out = Path(out_dir)
+    curves = _reads_unit_curves(scene)
     tasks: list[UnitTask] = []
     seen: dict[str, str] = {}
+
+    def add(unit: str, part, source: str) -> None:
+        if unit in seen:
+            raise DataError(f"unit {unit!r} appears in {seen[unit]} and again here; unit names must be unique",
+                            source)
+        seen[unit] = source
+        tasks.append(UnitTask(unit, part, source, out / f"{_safe_file_name(unit)}.h5"))
+
+    items: list[str | Path | UnitCurve] = []
     for item in data:
+        if not isinstance(item, UnitCurve) and Path(item).is_dir():
+            items += recording_files(item)
+        else:
+            items.append(item)
+    for item in items:
+        if not isinstance(item, UnitCurve) and not (curves and _is_unit_curve(Path(item))):
+            add(Path(item).stem, RecordingFile.read(item), str(item))
+            continue
         curve = item if isinstance(item, UnitCurve) else read_unit_curve(item, notch_deg=notch_deg)
         source = curve.source or str(item)
         names = list(dict.fromkeys(map(str, curve.unit))) if curve.unit.size else [""]
         for name in names:
-            unit = name or Path(source).stem
-            if unit in seen:
-                raise DataError(f"unit {unit!r} appears in {seen[unit]} and again here; unit names must be unique",
-                                source)
-            seen[unit] = source
             rows = np.flatnonzero(curve.unit == name) if curve.unit.size else np.arange(curve.swing.size)
             part = curve.select(rows)
             if name:
                 part.unit = np.full(rows.size, name)
-            tasks.append(UnitTask(unit, part, source, out / f"{_safe_file_name(unit)}.h5"))
+            add(name or Path(source).stem, part, source)
     if not tasks:
         raise DataError("no units to fit: no data files given")
     return tasks
@@ -151,8 +248,34 @@ def _load_for_summary(path: Path) -> FitResult | None:
     return FitResult(tree, str(path))
 
 
-def _fit_task(scene_text: str, scene_where: str, curve: UnitCurve, options: dict) -> dict[str, Any]:
-    """Worker side: fit one unit; never raises (a failure comes back as a message)."""
+def summary_row(res: FitResult) -> dict[str, Any]:
+    """One unit's row of the fleet summary, from a fit in memory (or read back with the groups
+    :data:`SUMMARY_GROUPS`): per-parameter statistics, reading scatter and its unit, number of
+    readings, warnings."""
+    lsq = res.group("least_squares")
+    attrs = lsq.attrs if lsq is not None else {}
+    units = lsq["expected"].attrs.get("units", "") if lsq is not None and "expected" in lsq else ""
+    return {"parameters": res.summary(), "sigma_hat": float(attrs.get("sigma_hat", math.nan)),
+            "n_data": int(attrs.get("n_data", -1)), "reading_units": str(units), "warnings": res.warnings}
+
+
+@contextlib.contextmanager
+def _readable(data: UnitCurve | RecordingFile | str | Path) -> Iterator[UnitCurve | Path | str]:
+    """What :func:`escfit.inference.fit` reads: a unit curve as it is, a recording file's bytes
+    written under its own name to a temporary directory (removed afterwards)."""
+    if not isinstance(data, RecordingFile):
+        yield data
+        return
+    with tempfile.TemporaryDirectory(prefix="escfit-unit-") as d:
+        path = Path(d) / (Path(data.name).name or "recording")
+        path.write_bytes(data.content)
+        yield path
+
+
+def _fit_task(scene_text: str, scene_where: str, data: UnitCurve | RecordingFile, options: dict) -> dict[str, Any]:
+    """Worker side: fit one unit; never raises (a failure comes back as a message).
+
+    Returns the results file's bytes (``payload``) and the unit's summary row (``row``)."""
     started = time.perf_counter()
     try:
         from ..inference import fit
@@ -161,16 +284,21 @@ def _fit_task(scene_text: str, scene_where: str, curve: UnitCurve, options: dict
         scene = load_scene(scene_where, text=scene_text)
         opts = dict(options)
         checkpoint = opts.pop("checkpoint", None)
-        if checkpoint is not None and Path(checkpoint).exists() and opts.get("method") == "emcee":
-            try:
-                res = fit(scene, curve, checkpoint=checkpoint, resume=True, **opts)
-            except ResultsError:  # an unusable checkpoint: start afresh
-                Path(checkpoint).unlink(missing_ok=True)
-                res = fit(scene, curve, checkpoint=checkpoint, **opts)
-        else:
-            res = fit(scene, curve, checkpoint=checkpoint, force=True, **opts)
+        source = opts.pop("source", None)
+        with _readable(data) as readable:
+            if checkpoint is not None and Path(checkpoint).exists() and opts.get("method") == "emcee":
+                try:
+                    res = fit(scene, readable, checkpoint=checkpoint, resume=True, **opts)
+                except ResultsError:  # an unusable checkpoint: start afresh
+                    Path(checkpoint).unlink(missing_ok=True)
+                    res = fit(scene, readable, checkpoint=checkpoint, **opts)
+            else:
+                res = fit(scene, readable, checkpoint=checkpoint, force=True, **opts)
+        if isinstance(data, RecordingFile) and source and "data_file" in res.tree.attrs:
+            res.tree.attrs["data_file"] = source  # the client's file, not the worker's temporary copy
         payload = _to_bytes(res)
-        return {"status": "ok", "payload": payload, "seconds": time.perf_counter() - started}
+        return {"status": "ok", "payload": payload, "row": summary_row(res),
+                "seconds": time.perf_counter() - started}
     except Exception as exc:  # noqa: BLE001 - one unit's failure must not stop the batch
         msg = str(exc) if isinstance(exc, EscfitError) else f"{type(exc).__name__}: {exc}"
         return {"status": "failed", "error": msg or type(exc).__name__, "seconds": time.perf_counter() - started}
@@ -198,6 +326,7 @@ class _Runner:
         self.local_fs = True
         if workers == 0 and scheduler is None:
             return
+        require_distributed()
         from distributed import Client
 
         if scheduler is None:
@@ -296,6 +425,16 @@ class LazyClient:
         self._client = self._cluster = None
 
 
+def require_distributed() -> None:
+    """Import dask.distributed, or raise :class:`~escfit.core.errors.MissingDependency` naming the
+    extra that installs it (``escfit[study]``)."""
+    try:
+        import dask  # noqa: F401
+        import distributed  # noqa: F401
+    except ImportError as exc:
+        raise MissingDependency("dask.distributed", "study", "fit-many") from exc
+
+
 def _cpu_count() -> int:
     try:
         return len(os.sched_getaffinity(0))
@@ -305,18 +444,22 @@ def _cpu_count() -> int:
 
 def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], scene: str | Path, out_dir: str | Path,
              *, method: str = "leastsq", scheduler: Any = None, workers: int | None = None, seed: int = 0,
-             walkers: int = 32, steps: int = 2000, burn: int | None = None, n_starts: int = 8,
-             solver: str = "exact", units: Sequence[str] | None = None, notch_deg: float | None = None,
-             progress: bool | Callable[[str], None] = False, predictive_draws: int = 400) -> BatchResult:
+             walkers: int | None = None, steps: int | None = None, burn: int | None = None,
+             n_starts: int | None = None, solver: str | None = None, units: Sequence[str] | None = None,
+             notch_deg: float | None = None, progress: bool | Callable[[str], None] = False,
+             predictive_draws: int | None = None) -> BatchResult:
     """Fit every unit of the recordings independently and summarise the fleet.
 
     Parameters
     ----------
     data
-        Unit-curve CSV file(s) or :class:`~escfit.balance.recordings.UnitCurve` objects; units come
-        from the ``unit`` column, or one unit per file without one.
+        A folder of recording files (one unit per file, named after the file's stem; any
+        family the scene names), recording file(s), or
+        :class:`~escfit.balance.recordings.UnitCurve` objects.  A balance unit-curve file with a
+        ``unit`` column holds several units.
     scene
-        Scene file (TOML) with the free parameters, the same for every unit.
+        Scene file (TOML) with the free parameters, the same for every unit; its ``model =``
+        names the family (see :func:`escfit.inference.fit`).
     out_dir
         Results directory (created): ``<unit>.h5`` per unit and ``summary.nc``.
     method
@@ -330,24 +473,30 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
         this process without dask (for debugging and profiling).
     seed
         Batch seed; each unit is fitted with :func:`unit_seed` (seed, unit name).
-    walkers, steps, burn, n_starts, solver
-        Passed to :func:`escfit.inference.fit`.
+    walkers, steps, burn, n_starts, predictive_draws
+        Passed to :func:`escfit.inference.fit`; ``None`` takes the family's default
+        (``fit_defaults``; ``burn``: half the steps).
+    solver
+        The family's forward solver (balance: ``exact``, ``dop853`` ...); default: the scene's.
     units
         Fit only these units (default: all).
     notch_deg
-        Notch angle for files without a ``# notch_deg:`` line.
+        Notch angle of balance unit curves without a ``# notch_deg:`` line.
     progress
         ``True`` prints one line per unit to stderr; a callable receives those lines.
-    predictive_draws
-        Thinned posterior draws whose pointwise log-likelihood each results file keeps (more
-        lowers the Pareto k of PSIS-LOO; see :func:`escfit.inference.fit`).
 
     Returns
     -------
     BatchResult
         Its ``failed`` maps unit -> error message; failures are also printed to stderr.
+
+    Raises
+    ------
+    MissingDependency
+        dask.distributed is needed (a local cluster or a scheduler address) and not installed.
     """
     from ..core.scene import load_scene
+    from ..inference.registry import family
 
     if method not in ("leastsq", "emcee"):
         raise FitError(f"method must be 'leastsq' or 'emcee', got {method!r}")
@@ -355,11 +504,21 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
         raise FitError(f"workers must be >= 0, got {workers}")
     if workers == 0 and scheduler is not None:
         raise FitError("workers = 0 (in-process) and a scheduler address exclude each other")
+    if workers != 0 and (scheduler is None or isinstance(scheduler, str)):
+        require_distributed()  # refused before any data is read
     sc = load_scene(scene)
+    family(sc.model)  # an unknown family is refused here, not once per unit
+    family_options: dict[str, Any] = {}
+    if solver is not None:
+        family_options["solver"] = solver
+    if notch_deg is not None:
+        if sc.model != "balance":
+            raise FitError(f"notch_deg applies to balance unit curves; this scene's model is {sc.model!r}", str(scene))
+        family_options["notch_deg"] = notch_deg
     items = [data] if isinstance(data, (str, Path, UnitCurve)) else list(data)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    tasks = discover_units(items, out, notch_deg=notch_deg)
+    tasks = discover_units(items, out, notch_deg=notch_deg, scene=sc)
     if units is not None:
         known = {t.unit for t in tasks}
         missing = [u for u in units if u not in known]
@@ -369,7 +528,7 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
     say = progress if callable(progress) else ((lambda s: print(s, file=sys.stderr)) if progress else (lambda s: None))
     started = time.perf_counter()
     status: dict[str, dict] = {}
-    loaded: dict[str, FitResult] = {}
+    rows: dict[str, dict] = {}
     todo = []
     other: list[str] = []
     for t in tasks:
@@ -378,7 +537,7 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
                                         or done_before.attrs.get("method") != method):
             other.append(t.unit)
         elif done_before is not None:
-            loaded[t.unit] = done_before
+            rows[t.unit] = summary_row(done_before)
             status[t.unit] = {"status": "skipped", "seconds": math.nan}
             say(f"{t.unit}: done before ({t.results_file.name}), skipped")
         else:
@@ -387,15 +546,15 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
         raise ResultsError(f"units {other} were fitted here with another scene or method; use another output "
                            "directory or remove their results files", str(out))
     options = {"method": method, "walkers": walkers, "steps": steps, "burn": burn, "n_starts": n_starts,
-               "solver": solver, "predictive_draws": predictive_draws}
+               "predictive_draws": predictive_draws, **family_options}
     runner = _Runner(scheduler, workers) if todo else _Runner(None, 0)  # no cluster when nothing is left
     where = runner.description if todo else "nothing to fit"
     jobs = []
     for t in todo:
-        opts = {**options, "seed": unit_seed(seed, t.unit)}
+        opts = {**options, "seed": unit_seed(seed, t.unit), "source": t.data_file}
         if runner.local_fs and method == "emcee":
             opts["checkpoint"] = str(t.results_file) + ".emcee"
-        jobs.append((sc.text, str(scene), t.curve, opts))
+        jobs.append((sc.text, str(scene), t.data, opts))
 
     def done(i: int, res: dict) -> None:
         t = todo[i]
@@ -406,6 +565,7 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
                 ck = Path(str(t.results_file) + ".emcee")
                 if ck.exists():
                     ck.unlink()
+                rows[t.unit] = res.pop("row")
                 say(f"{t.unit}: fitted in {res['seconds']:.1f} s -> {t.results_file.name}")
             except OSError as exc:
                 res = {"status": "failed", "error": f"cannot write the results file ({exc})", "seconds": res["seconds"]}
@@ -420,9 +580,9 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
     finally:
         runner.close()
     elapsed = time.perf_counter() - started
-    summary = summarize(tasks, status, loaded=loaded, attrs={
-        "method": method, "seed": seed, "scene": sc.text, "scene_file": str(scene), "runner": where,
-        "elapsed_s": elapsed, "settings": {k: v for k, v in options.items() if v is not None}})
+    summary = summarize(tasks, status, rows=rows, attrs={
+        "method": method, "seed": seed, "model": sc.model, "scene": sc.text, "scene_file": str(scene),
+        "runner": where, "elapsed_s": elapsed, "settings": {k: v for k, v in options.items() if v is not None}})
     with atomic_path(out / SUMMARY_FILE, force=True) as tmp:
         summary.to_netcdf(tmp, engine="h5netcdf")
     return BatchResult(summary, out, [u for u, s in status.items() if s["status"] == "ok"],
@@ -431,45 +591,56 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
 
 
 def summarize(tasks: Sequence[UnitTask], status: dict[str, dict] | None = None, *,
-              loaded: dict[str, FitResult] | None = None, attrs: dict | None = None) -> xr.Dataset:
-    """The combined summary of a batch from its results files (dimension ``unit``).
+              rows: dict[str, dict] | None = None, loaded: dict[str, FitResult] | None = None,
+              attrs: dict | None = None) -> xr.Dataset:
+    """The combined summary of a batch (dimension ``unit``).
 
     Variables: ``<stat>`` (unit, parameter) for the statistics in :data:`STATS`;
-    ``status``, ``error``, ``seconds``, ``results_file``, ``data_file``, ``n_data``,
-    ``sigma_hat`` (least-squares reading scatter, rad), ``warnings`` (JSON list) per unit.
-    ``loaded`` holds results already read (by unit), which are not read again.
+    ``status``, ``error``, ``seconds``, ``results_file``, ``data_file``, ``n_data`` (readings;
+    -1 when a unit failed before they were read), ``sigma_hat`` (least-squares reading scatter,
+    in ``reading_units``), ``reading_units``, ``warnings`` (JSON list) per unit.
+
+    ``rows`` holds the units' :func:`summary_row` (as the tasks return them), ``loaded``
+    results already read (by unit); the results files of the other units that did not fail
+    are read.
     """
     status = status or {}
-    loaded = loaded or {}
-    rows: list[dict[str, dict]] = []
+    rows = dict(rows or {})
+    for unit, res in (loaded or {}).items():
+        rows.setdefault(unit, summary_row(res))
     params: list[str] = []
+    stats_rows: list[dict[str, dict]] = []
     per_unit: dict[str, list] = {k: [] for k in ("status", "error", "seconds", "results_file", "data_file", "n_data",
-                                                  "sigma_hat", "warnings")}
+                                                  "sigma_hat", "reading_units", "warnings")}
     for t in tasks:
         st = status.get(t.unit, {"status": "skipped"})
-        res = None
+        row = None
         if st["status"] != "failed":
-            res = loaded.get(t.unit) or _load_for_summary(t.results_file)
-        s = res.summary() if res is not None else {}
+            row = rows.get(t.unit)
+            if row is None:
+                res = _load_for_summary(t.results_file)
+                row = summary_row(res) if res is not None else None
+            if row is None:
+                st = {"status": "failed", "error": "results file missing or unreadable after the fit"}
+        s = row["parameters"] if row is not None else {}
         for name in s:
             if name not in params:
                 params.append(name)
-        rows.append(s)
-        lsq = res.group("least_squares") if res is not None else None
-        if st["status"] != "failed" and res is None:
-            st = {"status": "failed", "error": "results file missing or unreadable after the fit"}
+        stats_rows.append(s)
+        n_data = row["n_data"] if row is not None else (t.curve.swing.size if t.curve is not None else -1)
         per_unit["status"].append(st["status"])
         per_unit["error"].append(st.get("error", ""))
         per_unit["seconds"].append(float(st.get("seconds", math.nan)))
         per_unit["results_file"].append(t.results_file.name)
         per_unit["data_file"].append(t.data_file)
-        per_unit["n_data"].append(int(t.curve.swing.size))
-        per_unit["sigma_hat"].append(float(lsq.attrs.get("sigma_hat", math.nan)) if lsq is not None else math.nan)
-        per_unit["warnings"].append(json.dumps(res.warnings if res is not None else []))
+        per_unit["n_data"].append(int(n_data))
+        per_unit["sigma_hat"].append(float(row["sigma_hat"]) if row is not None else math.nan)
+        per_unit["reading_units"].append(row["reading_units"] if row is not None else "")
+        per_unit["warnings"].append(json.dumps(row["warnings"] if row is not None else []))
     data = {}
     for stat in STATS:
         arr = np.full((len(tasks), len(params)), np.nan)
-        for i, s in enumerate(rows):
+        for i, s in enumerate(stats_rows):
             for j, p in enumerate(params):
                 if p in s and stat in s[p]:
                     arr[i, j] = s[p][stat]
@@ -479,7 +650,9 @@ def summarize(tasks: Sequence[UnitTask], status: dict[str, dict] | None = None, 
     ds = xr.Dataset(data, coords={"unit": np.array([t.unit for t in tasks], dtype=object),
                                   "parameter": np.array(params, dtype=object)})
     ds["seconds"].attrs["units"] = "s"
-    ds["sigma_hat"].attrs["units"] = "rad"
+    reading_units = {u for u in per_unit["reading_units"] if u}
+    if len(reading_units) == 1:
+        ds["sigma_hat"].attrs["units"] = reading_units.pop()
     meta = {"schema_version": SUMMARY_SCHEMA, "n_units": len(tasks),
             "n_failed": int(sum(s == "failed" for s in per_unit["status"])),
             "created": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
@@ -527,4 +700,5 @@ def fit_fleet(fleet, model: str, out_dir: str | Path, *, units: Sequence[str] | 
         with atomic_path(scene, force=True) as tmp:
             tmp.write_text(text)
     return fit_many(fl.recordings, scene, out, method=method, walkers=walkers, steps=steps, seed=seed,
-                    scheduler=scheduler, workers=workers, units=units, progress=progress)
+                    scheduler=scheduler, workers=workers, units=units, progress=progress,
+                    predictive_draws=predictive_draws)

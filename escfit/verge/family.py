@@ -1,0 +1,61 @@
+"""The verge escapement's entry in the model-family registry.
+
+:data:`FAMILY` tells the inference layer how to read turns-to-arm readings and build their
+fit problem (:class:`~escfit.verge.problem.TurnsProblem`).
+
+Cost
+----
+One forward run of the M739 mechanism (about 360 motion phases to 26 turns) takes 0.1 to
+0.2 s, so fits are counted in forward runs: least squares needs about ten per start and
+emcee ``walkers * (steps + 1)``.  The defaults below (4 starts; 8 walkers, 60 steps; 16
+predictive draws) give a one-parameter fit in about a minute (``escfit fit
+fits/verge_m739.toml``, 8 walkers x 40 steps with a 0.2 rad RK4 step, runs in well under one).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..core.errors import DataError, FitError
+from ..core.scene import load_scene
+from .data import FORMAT, TurnsData, detect_turns, read_turns_csv
+from .problem import TurnsProblem
+
+__all__ = ["FAMILY", "VergeFamily"]
+
+PROBLEM_OPTIONS = {"step"}
+
+
+class VergeFamily:
+    """Registry entry of ``model = "verge"`` (see :class:`~escfit.likelihood.problem.ModelFamily`)."""
+
+    name = "verge"
+    formats = {FORMAT: read_turns_csv}
+    fit_defaults = {"walkers": 8, "steps": 60, "n_starts": 4, "predictive_draws": 16}
+
+    def detect(self, path) -> str:
+        """``"turns-to-arm"`` for a table with columns ``label, spin_rpm, turns``; else a DataError."""
+        return detect_turns(path)
+
+    def problem(self, scene, data, **options) -> TurnsProblem:
+        """The fit problem of a verge scene (object or path) and turns-to-arm data (object or path).
+
+        Options: ``step`` (RK4 step, rad of spin; default the scene's ``[fit] step`` or
+        :data:`~escfit.verge.problem.FIT_STEP`).
+        """
+        unknown = sorted(set(options) - PROBLEM_OPTIONS)
+        sc = load_scene(scene) if not hasattr(scene, "model") else scene
+        if unknown:
+            raise FitError(f"verge fits take no option(s) {unknown}; they take {sorted(PROBLEM_OPTIONS)}", sc.where)
+        if isinstance(data, (str, Path)):
+            fmt = self.detect(data)
+            data = self.formats[fmt](data)
+        if not isinstance(data, TurnsData):
+            raise DataError(f"a verge fit reads turns-to-arm data, got {type(data).__name__}", sc.where)
+        return TurnsProblem(sc, data, step=options.get("step"))
+
+    def figures(self, result) -> dict[str, bytes]:
+        return {}
+
+
+FAMILY = VergeFamily()
