@@ -422,14 +422,14 @@ def test_segment_budget_ends_a_run_with_a_status():
 
 
 def test_compiled_kernel_is_current_with_the_segment_functions():
-    """numba keys the on-disk cache of a kernel on its own file only, so editing segment.py
-    leaves a stale compiled copy of it inside run_angle (cached from exact.py).  Recompute every
-    crossing and turning time of a few runs with the segment functions themselves."""
+    """The compiled kernel agrees with the segment functions it inlines: recompute every crossing
+    and turning time of a few runs with the segment functions themselves (a stale cache of
+    run_angle would fail here; escfit.core.kernels keys the cache on segment.py too)."""
     texts = [PATHOLOGICAL["many_stops_and_restarts"], _grazing_ladder(),
              balance_toml(omega0=0.01, theta0=1e-12, swings=4, effects=(
                  "[effects.viscous]\nC = 0.019999999999980003\n[effects.coulomb]\nR = 1e-28\n"
                  '[[effects.escapement]]\nkind = "unlock"\nfrom = -9.999999999979999e-13\nto = 0.0\nX = 1e-28\n'))]
-    stale = "the compiled kernel disagrees with escfit.balance.segment: delete escfit/balance/__pycache__/exact.*.nb?"
+    stale = "the compiled kernel disagrees with escfit.balance.segment (a stale numba cache?)"
     for text in texts:
         log = solve(escfit.load_scene("cache.toml", text=text), swings=40, log=True).log
         for k, (t0, tau, s, x0, v0, xc, w2, h, swing) in enumerate(log):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 
 import numpy as np
 import pytest
@@ -140,3 +141,120 @@ def test_summary_records_settings_and_versions(split_files, tmp_path):
     assert json.loads(s.attrs["settings"])["n_starts"] == 2
     assert "escfit" in json.loads(s.attrs["versions"])
     assert s["median"].dims == ("unit", "parameter") and s.sizes["unit"] == 1
+
+
+# --- any model family: a folder of recording files, each read by the family on the worker -------
+
+RECORDINGS = DATASETS / "recordings"
+FRICTION = DATASETS / "friction"
+
+
+def _family_registered(module: str) -> bool:
+    import importlib.util
+
+    return importlib.util.find_spec(module) is not None
+
+
+@pytest.fixture(scope="module")
+def pulse_folder(tmp_path_factory):
+    """Two photo-cell recordings (a balance format the worker reads from the file's bytes), the
+    scene beside them and a note, which are not recordings."""
+    d = tmp_path_factory.mktemp("pulses")
+    (d / "shipped.csv").write_bytes((RECORDINGS / "monday_pulses.csv").read_bytes())
+    r = CliRunner().invoke(cli, ["simulate", str(RECORDINGS / "pulses_scene.toml"), "--recorder", "pulses",
+                                 "--noise", "1e-4", "--seed", "2", "--swings", "16", "--out", str(d / "second.csv")])
+    assert r.exit_code == 0, r.output
+    (d / "scene.toml").write_bytes((RECORDINGS / "pulses_scene.toml").read_bytes())
+    (d / "README.md").write_text("two recordings of a Monday-like unit\n")
+    return d, RECORDINGS / "pulses_scene.toml", ["second", "shipped"]
+
+
+@pytest.fixture(scope="module")
+def friction_folder(tmp_path_factory):
+    """Two of Monday's friction sessions (model = "friction_rig"), when that family is registered."""
+    if not _family_registered("escfit.friction.family"):
+        pytest.skip("the friction family (escfit/friction/family.py) is not registered yet")
+    d = tmp_path_factory.mktemp("friction")
+    names = ["monday1965_session_1095_steel", "monday1965_session_aluminum"]
+    for n in names:
+        (d / f"{n}.csv").write_bytes((FRICTION / f"{n}.csv").read_bytes())
+    return d, FRICTION / "monday1965_rig.toml", names
+
+
+@pytest.mark.parametrize("case", ["pulse_folder", "friction_folder"])
+def test_fit_many_over_a_folder_equals_single_fits(case, request, tmp_path):
+    """Each file of the folder is one unit (named after the file); its estimates are those of a
+    single `escfit fit` of the same file with the unit's seed, to 1e-10."""
+    folder, scene, units = request.getfixturevalue(case)
+    out = tmp_path / "fits"
+    r = CliRunner().invoke(cli, ["fit-many", str(folder), "--scene", str(scene), "--out", str(out),
+                                 "--method", "leastsq", "--workers", "0", "--quiet"])
+    assert r.exit_code == 0, r.output
+    assert "2 fitted, 0 done before, 0 failed" in r.output
+    s = load_summary(out)
+    assert list(s["unit"].values) == units and list(s["status"].values) == ["ok", "ok"]
+    assert s.attrs["model"] == load_fit(out / f"{units[0]}.h5").attrs["model"]
+    for u in units:
+        source = folder / f"{u}.csv"
+        ref_file = tmp_path / f"{u}-single.h5"
+        r = CliRunner().invoke(cli, ["fit", str(source), "--scene", str(scene), "--method", "leastsq",
+                                     "--seed", str(unit_seed(0, u)), "--out", str(ref_file)])
+        assert r.exit_code == 0, r.output
+        ref, got = load_fit(ref_file), load_fit(out / f"{u}.h5")
+        assert ref.parameter_names == got.parameter_names
+        want, have = ref.group("least_squares"), got.group("least_squares")
+        assert list(have["parameter"].values) == list(want["parameter"].values)
+        np.testing.assert_allclose(have["value"].values, want["value"].values, rtol=1e-10)
+        # the summary is built from the fit in memory: the same numbers as the single fit's summary
+        row = ref.summary()
+        names = list(row)
+        assert list(s["parameter"].values) == names
+        for stat in ("median", "lo95", "hi95"):
+            np.testing.assert_allclose(s[stat].sel(unit=u).values, [row[n][stat] for n in names], rtol=1e-10)
+        assert int(s["n_data"].sel(unit=u)) == ref.group("least_squares").attrs["n_data"]
+        # provenance names the client's file (not the worker's temporary copy), with its hash
+        assert got.attrs["data_file"] == str(source) and got.attrs["data_sha256"] == ref.attrs["data_sha256"]
+        assert str(s["data_file"].sel(unit=u).values) == str(source)
+        ref.tree.close()
+        got.tree.close()
+
+    # a rerun skips both (reading only their results files) and rebuilds the same summary
+    again = fit_many(folder, scene, out, workers=0, method="leastsq")
+    assert again.skipped == units and not again.fitted
+    np.testing.assert_array_equal(again.summary["median"].values, s["median"].values)
+
+
+def test_a_folder_of_unit_curve_files_keeps_the_unit_column(split_files, tmp_path):
+    """Balance unit curves in a folder are read by the client and split by their unit column;
+    scenes and notes beside them are not recordings."""
+    d = tmp_path / "data"
+    d.mkdir()
+    for name in ("pair.csv", "u03.csv"):
+        (d / name).write_bytes((split_files / name).read_bytes())
+    (d / "unit.toml").write_bytes(SCENE.read_bytes())
+    (d / "notes.md").write_text("fleet notes\n")
+    (d / ".hidden.csv").write_text("swing,notches\n")
+    tasks = discover_units([d], tmp_path / "out")
+    assert [t.unit for t in tasks] == ["u01", "u02", "u03"]
+    assert all(t.curve is not None and t.curve.swing.size == 27 for t in tasks)
+    assert {t.data_file for t in tasks} == {str(d / "pair.csv"), str(d / "u03.csv")}
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    (empty / "unit.toml").write_text("")
+    with pytest.raises(DataError, match="no recording files"):
+        discover_units([empty], tmp_path / "out")
+
+
+def test_fit_many_without_dask_names_the_extra(split_files, tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "dask", None)  # `import dask` now raises ImportError
+    monkeypatch.setitem(sys.modules, "distributed", None)
+    r = CliRunner().invoke(cli, ["fit-many", str(split_files / "u03.csv"), "--scene", str(SCENE),
+                                 "--out", str(tmp_path / "out"), "--quiet"])
+    assert r.exit_code == 2, r.output
+    lines = r.output.strip().splitlines()
+    assert len(lines) == 1 and "escfit[study]" in lines[0] and "fit-many" in lines[0], r.output
+    assert not (tmp_path / "out").exists()  # refused before anything was read or written
+    # in this process (--workers 0) no dask is needed
+    r = CliRunner().invoke(cli, ["fit-many", str(split_files / "u03.csv"), "--scene", str(SCENE),
+                                 "--out", str(tmp_path / "out"), "--workers", "0", "--n-starts", "2", "--quiet"])
+    assert r.exit_code == 0, r.output

@@ -9,11 +9,13 @@ Modules, in the order data flows:
 ``scene``
     ``friction_rig`` scene -> :class:`RigScene` (parameters, explicit priors).
 ``likelihood``
-    Shared-geometry observation model and log posterior of one session.
-``inference``
-    lmfit least squares and emcee posterior (:class:`arviz.InferenceData`).
+    Shared-geometry observation model and log posterior of one session (vectorised).
+``problem``, ``family``
+    :class:`RigProblem` (the session as a :class:`~escfit.likelihood.problem.Problem`) and the
+    registry entry :data:`~escfit.friction.family.FAMILY`; fits run through the one inference
+    layer, :func:`escfit.inference.fit` (``escfit fit``), into one results schema.
 ``evidence``
-    Bayes factors for the optional friction laws (Savage-Dickey).
+    Bayes factors for the optional friction laws (Savage-Dickey), from a fit's posterior.
 ``predict``
     :func:`simulate` and :func:`json_summary`.
 ``synthetic``, ``monday``
@@ -23,8 +25,8 @@ Modules, in the order data flows:
 from __future__ import annotations
 
 from .evidence import LawEvidence, compare_laws, savage_dickey
-from .inference import LeastSquaresFit, fit_least_squares, sample_posterior
 from .predict import json_summary, simulate
+from .problem import RigProblem
 from .readers import Readings, parse_readings, read_readings, write_readings
 from .rig import friction_force, lever_ratio, mu_from_reading, predicted_dw
 from .scene import RigScene, parse
@@ -42,9 +44,7 @@ __all__ = [
     "friction_force",
     "mu_from_reading",
     "predicted_dw",
-    "LeastSquaresFit",
-    "fit_least_squares",
-    "sample_posterior",
+    "RigProblem",
     "LawEvidence",
     "compare_laws",
     "savage_dickey",

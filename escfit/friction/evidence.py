@@ -22,11 +22,13 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import xarray as xr
 from scipy import stats
 
 from ..core.errors import FitError
+from .readers import Readings
 from .rig import lever_ratio
-from .scene import RigScene
+from .scene import SIGMA, RigScene
 
 __all__ = ["LawEvidence", "savage_dickey", "compare_laws", "HYPOTHESES"]
 
@@ -80,33 +82,78 @@ class LawEvidence:
         return math.log10(self.bf01) if self.bf01 > 0 else -math.inf
 
 
-def savage_dickey(idata, scene: RigScene, parameter: str) -> LawEvidence:
+def _posterior(fit):
+    """The posterior Dataset (dims chain, draw) of a FitResult, or the Dataset itself."""
+    if hasattr(fit, "group") and hasattr(fit, "tree"):
+        post = fit.group("posterior")
+        if post is None:
+            raise FitError("the fit has no posterior: fit with method = 'emcee'", getattr(fit, "path", "") or None)
+        return post
+    if isinstance(fit, xr.Dataset):
+        return fit
+    raise FitError(f"expected a FitResult or a posterior Dataset, got {type(fit).__name__}")
+
+
+def _scene_of(fit, scene: RigScene | None) -> RigScene:
+    if scene is not None:
+        return scene
+    text = fit.attrs.get("scene", "") if hasattr(fit, "attrs") else ""
+    if not text:
+        raise FitError("give the scene: the posterior carries no scene text")
+    from ..core.scene import load_scene
+
+    return load_scene(fit.attrs.get("scene_file") or "<fit scene>", text=text)
+
+
+def _readings_of(fit, readings: Readings | None) -> Readings | None:
+    """The session's readings: given, or from a FitResult's ``observed_data`` (dw, load, speed)."""
+    if readings is not None or not hasattr(fit, "group"):
+        return readings
+    obs = fit.group("observed_data")
+    if obs is None or "reading" not in obs or "x" not in obs.coords:
+        return None
+    speed = obs["speed"].values.astype(float) if "speed" in obs.coords else None
+    return Readings(load=obs["x"].values.astype(float), dw=obs["reading"].values.astype(float), speed=speed,
+                    where=str(fit.attrs.get("data_file", "<fit>")))
+
+
+def savage_dickey(fit, scene: RigScene | None, parameter: str, *, readings: Readings | None = None) -> LawEvidence:
     """Bayes factor of ``parameter = 0`` from a posterior of the model that contains it.
 
     Parameters
     ----------
-    idata
-        Result of :func:`escfit.friction.sample_posterior` for ``scene``.
+    fit
+        A :class:`~escfit.results.FitResult` of an emcee fit of ``scene`` (``escfit fit
+        --method emcee``, :func:`escfit.inference.fit`), or its ``posterior`` Dataset (dims
+        ``chain, draw``).
     scene
-        The scene sampled (supplies the coefficient's prior).
+        The scene sampled (supplies the coefficient's prior); ``None`` reads it from the
+        FitResult's provenance.
     parameter
         ``"friction.mu_v"`` or ``"friction.mu_w"``.
+    readings
+        The session's readings, for the exact conditional density at zero; read from the
+        FitResult's ``observed_data`` when omitted.  Without them (a bare posterior Dataset)
+        the kernel-density or normal estimate is used.
 
     Raises
     ------
     FitError
-        The coefficient was not sampled, or its prior has no density at zero.
+        No posterior, the coefficient was not sampled, or its prior has no density at zero.
     """
-    if parameter not in idata.posterior:
+    post = _posterior(fit)
+    scene = _scene_of(fit, scene)
+    if parameter not in post:
         raise FitError(f"{parameter} was not sampled; declare it with vary = true and a proper prior", scene.where)
     prior = scene.priors[parameter]
     prior_density = float(prior.pdf(0.0))
     if not prior_density > 0:
         raise FitError(f"the prior of {parameter} ({prior.describe()}) has no density at 0", scene.where)
-    x = np.asarray(idata.posterior[parameter].values, dtype=float).ravel()
+    x = np.asarray(post[parameter].values, dtype=float).ravel()
     mean, sd = float(np.mean(x)), float(np.std(x))
     lo, hi = np.quantile(x, [0.025, 0.975])
-    conditional = _conditional_density_at_zero(idata, scene, parameter)
+    readings = _readings_of(fit, readings)
+    conditional = None if readings is None else _conditional_density_at_zero(post, readings, scene, parameter)
     if conditional is not None:
         post_density, method = conditional, "conditional"
     elif sd > 0 and abs(mean) / sd <= 2.0:
@@ -118,7 +165,7 @@ def savage_dickey(idata, scene: RigScene, parameter: str) -> LawEvidence:
                        prior_density, method, mean, sd, (float(lo), float(hi)), _verdict(bf01))
 
 
-def _conditional_density_at_zero(idata, scene: RigScene, parameter: str) -> float | None:
+def _conditional_density_at_zero(post, readings: Readings, scene: RigScene, parameter: str) -> float | None:
     """Rao-Blackwellised posterior density of a law coefficient at zero, or ``None``.
 
     Given every other parameter, ``dw`` is linear in the coefficient ``c``:
@@ -132,14 +179,14 @@ def _conditional_density_at_zero(idata, scene: RigScene, parameter: str) -> floa
     prior = scene.priors[parameter]
     if scene.load_at != "reading" or prior.kind not in ("normal", "uniform", "halfnormal"):
         return None
+    if parameter == "friction.mu_v" and readings.speed is None:
+        return None
     from .likelihood import build_model
-    from .readers import Readings
 
-    speed = idata.constant_data["speed"].values if "speed" in idata.constant_data else None
-    readings = Readings(load=idata.constant_data["load"].values, dw=idata.observed_data["dw"].values,
-                        speed=speed, where=str(idata.attrs.get("data_file", "<posterior>")))
     model = build_model(scene, readings)
-    theta = np.column_stack([np.asarray(idata.posterior[n].values, dtype=float).ravel() for n in model.names])
+    if any(n not in post for n in model.names):
+        return None
+    theta = np.column_stack([np.asarray(post[n].values, dtype=float).ravel() for n in model.names])
     values = model.unpack(theta)
     values[parameter] = np.zeros_like(values[parameter])
     per_mu = readings.load[None, :] / lever_ratio(values["rig.k"], values["rig.d"])[:, None]
@@ -148,7 +195,7 @@ def _conditional_density_at_zero(idata, scene: RigScene, parameter: str) -> floa
         x = per_mu * (readings.load - scene.load_ref)[None, :]
     else:
         x = per_mu * (readings.speed - scene.speed_ref)[None, :]
-    sd = values["reading.sd"][:, None]
+    sd = values[SIGMA][:, None]
     prec = np.sum((x / sd) ** 2, axis=1)
     num = np.sum(x * (readings.dw[None, :] - base) / sd**2, axis=1)
     if prior.kind in ("normal", "halfnormal"):
@@ -164,9 +211,10 @@ def _conditional_density_at_zero(idata, scene: RigScene, parameter: str) -> floa
     return float(np.mean(stats.norm.pdf(0.0, mean, scale) / mass))
 
 
-def compare_laws(idata, scene: RigScene) -> dict[str, LawEvidence]:
-    """Savage-Dickey evidence for every law coefficient the posterior sampled."""
-    return {name: savage_dickey(idata, scene, name) for name in HYPOTHESES if name in idata.posterior}
+def compare_laws(fit, scene: RigScene | None = None, *, readings: Readings | None = None) -> dict[str, LawEvidence]:
+    """Savage-Dickey evidence for every law coefficient the posterior sampled (see :func:`savage_dickey`)."""
+    post = _posterior(fit)
+    return {name: savage_dickey(fit, scene, name, readings=readings) for name in HYPOTHESES if name in post}
 
 
 def _verdict(bf01: float) -> str:

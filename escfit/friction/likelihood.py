@@ -3,7 +3,8 @@
 Each reading ``i`` gives ``dw_i = g(mu_i, w_i; k, d) + e_i`` where ``g`` is the rig statics
 (:func:`escfit.friction.rig.predicted_dw`), ``mu_i`` follows the scene's friction law, the
 geometry ``(k, d)`` is the *same* for every reading of the session, and the reading errors
-``e_i ~ Normal(0, sd)`` are independent.  Measured geometry enters through normal priors
+``e_i ~ Normal(0, sigma)`` are independent, ``sigma`` being the reading noise
+``observation.sigma`` (N).  Measured geometry enters through normal priors
 centred on the measured values: the shared geometry error is a nuisance parameter that
 moves all readings together, so it does not average out with more readings.
 
@@ -20,7 +21,7 @@ import numpy as np
 from ..core.errors import FitError
 from .readers import Readings
 from .rig import mu_law, predicted_dw
-from .scene import RigScene
+from .scene import SIGMA, RigScene
 
 __all__ = ["SessionModel", "build_model"]
 
@@ -87,7 +88,7 @@ class SessionModel:
     def pointwise_loglik(self, theta) -> np.ndarray:
         """Log likelihood of each reading, shape ``(n_sets, n_readings)``."""
         v = self.unpack(theta)
-        sd = v["reading.sd"][:, None]
+        sd = v[SIGMA][:, None]
         resid = (self.readings.dw[None, :] - self.predict(theta)) / sd
         ll = -0.5 * resid**2 - np.log(sd) - 0.5 * np.log(2 * np.pi)
         return np.where(np.isfinite(ll), ll, -np.inf)
@@ -118,7 +119,8 @@ def build_model(scene: RigScene, readings: Readings) -> SessionModel:
     mats = readings.materials()
     if len(mats) > 1:
         raise FitError(
-            f"one session must hold one material, found {mats}; select one with Readings.only(...)", where
+            f"one session must hold one material, found {mats}; select one (the fit's material option, or "
+            f"Readings.only(...))", where
         )
     if "speed" in scene.laws and readings.speed is None:
         raise FitError(

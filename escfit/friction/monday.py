@@ -68,7 +68,7 @@ load_ref = "2.2 gf"
 mu_v = { value = 0.0, vary = true, prior = "normal(0, 0.005 s/ft)" } # change per ft/s
 speed_ref = "6.5 ft/s"
 
-[reading]
+[observation]               # reading noise observation.sigma from the spot resolution
 resolution = "0.5 inch"     # light spot read to 1/2 inch
 full_scale_load = "5 gf"    # assumed: the calibration spans the scale for 0 to 5 g
 scale_length = "11.5 ft"

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 from typing import Any, Sequence
 
@@ -12,7 +11,7 @@ import xarray as xr
 from ..core.errors import SolverError
 from ..core.units import ureg
 from .rig import lever_ratio, mu_law, predicted_dw
-from .scene import RigScene
+from .scene import SIGMA, RigScene
 
 __all__ = ["simulate", "json_summary"]
 
@@ -78,67 +77,75 @@ def simulate(scene: RigScene, solver: str | None = None, *, loads: Sequence[floa
             "model": "friction_rig", "kind": "prediction", "solver": "closed_form", "status": "ok",
             "scene_file": scene.where, "scene": scene.text, "load_at": scene.load_at,
             "k_m": k, "d_m": d, "lever_ratio": float(lever_ratio(k, d)),
-            "reading_sd_N": values["reading.sd"], "schema_version": 1,
+            "observation_sigma_N": values[SIGMA], "schema_version": 1,
         },
     )
     return ds
 
 
 def json_summary(ds: Any) -> dict:
-    """A JSON-serialisable summary of a rig prediction, fit or posterior.
+    """A JSON-serialisable summary of a rig prediction or fit.
 
     Parameters
     ----------
     ds
-        The Dataset from :func:`simulate`, a least-squares Dataset
-        (:meth:`~escfit.friction.inference.LeastSquaresFit.to_dataset`), or an
-        :class:`arviz.InferenceData` / posterior Dataset from
-        :func:`~escfit.friction.inference.sample_posterior`.
+        The Dataset from :func:`simulate`; a :class:`~escfit.results.FitResult` of a rig fit
+        (:func:`escfit.inference.fit`); its ``posterior`` Dataset (dims ``chain, draw``); or its
+        ``least_squares`` Dataset (``value``, ``stderr`` by ``parameter``).
 
     Returns
     -------
     dict
-        For predictions: geometry and the ``dw`` grid in gram-force.  For fits: value,
-        standard error / sd and 95% interval of every parameter, in canonical units.
+        For predictions: geometry and the ``dw`` grid in gram-force.  For fits: per parameter
+        the posterior mean, sd, median and 95 % interval, or the least-squares value, standard
+        error and normal 95 % interval, in canonical units.
     """
-    if hasattr(ds, "posterior"):
+    if hasattr(ds, "tree") and hasattr(ds, "group"):  # a FitResult
+        import json as _json
+
         attrs = dict(ds.attrs)
-        post = ds.posterior
-        kind = "posterior"
-    else:
-        attrs = dict(ds.attrs)
-        post = ds
-        kind = attrs.get("kind", "prediction")
-    if kind == "prediction":
-        return {
-            "model": "friction_rig", "kind": "prediction", "status": attrs.get("status"),
-            "solver": attrs.get("solver"), "load_at": attrs.get("load_at"),
-            "k_m": attrs.get("k_m"), "d_m": attrs.get("d_m"), "lever_ratio": attrs.get("lever_ratio"),
-            "load_gf": [round(x / _GF, 6) for x in ds["load"].values.tolist()],
-            "speed_m_s": ds["speed"].values.tolist(),
-            "dw_gf": (ds["dw"].values / _GF).round(6).tolist(),
-            "mu": ds["mu"].values.round(6).tolist(),
-        }
-    if kind == "least_squares":
-        params = {}
-        for name, var in post.data_vars.items():
-            se = float(var.attrs.get("stderr", math.nan))
-            val = float(var.values)
-            params[name] = {"value": val, "stderr": _clean(se), "units": var.attrs.get("units", ""),
-                            "free": bool(var.attrs.get("free", 0)),
-                            "ci95": [_clean(val - 1.959964 * se), _clean(val + 1.959964 * se)]}
-        return {"model": "friction_rig", "kind": kind, "where": attrs.get("where"),
-                "chisqr": attrs.get("chisqr"), "ndata": attrs.get("ndata"), "params": params}
+        units = _json.loads(attrs.get("units", "{}") or "{}")
+        post = ds.group("posterior")
+        body = (_posterior_params(post, units) if post is not None
+                else _lsq_params(ds.group("least_squares"), units))
+        return {"model": attrs.get("model"), "kind": "posterior" if post is not None else "least_squares",
+                "method": attrs.get("method"), "scene_file": attrs.get("scene_file"),
+                "data_file": attrs.get("data_file"), "seed": attrs.get("seed"), **body}
+    attrs = dict(ds.attrs)
+    if "chain" in ds.dims and "draw" in ds.dims:
+        return {"model": "friction_rig", "kind": "posterior", **_posterior_params(ds, {})}
+    if "value" in ds and "parameter" in ds.dims:
+        return {"model": "friction_rig", "kind": "least_squares", "chisqr": attrs.get("chisqr"),
+                "n_data": attrs.get("n_data"), **_lsq_params(ds, {})}
+    return {
+        "model": "friction_rig", "kind": "prediction", "status": attrs.get("status"),
+        "solver": attrs.get("solver"), "load_at": attrs.get("load_at"),
+        "k_m": attrs.get("k_m"), "d_m": attrs.get("d_m"), "lever_ratio": attrs.get("lever_ratio"),
+        "load_gf": [round(x / _GF, 6) for x in ds["load"].values.tolist()],
+        "speed_m_s": ds["speed"].values.tolist(),
+        "dw_gf": (ds["dw"].values / _GF).round(6).tolist(),
+        "mu": ds["mu"].values.round(6).tolist(),
+    }
+
+
+def _posterior_params(post: xr.Dataset, units: dict) -> dict:
     params = {}
     for name, var in post.data_vars.items():
-        x = np.asarray(var.values).ravel()
+        x = np.asarray(var.values, float).ravel()
         lo, med, hi = np.quantile(x, [0.025, 0.5, 0.975])
         params[name] = {"mean": float(np.mean(x)), "sd": float(np.std(x)), "median": float(med),
-                        "ci95": [float(lo), float(hi)], "units": var.attrs.get("units", "")}
-    return {"model": "friction_rig", "kind": "posterior", "scene_file": attrs.get("scene_file"),
-            "data_file": attrs.get("data_file"), "seed": attrs.get("seed"),
-            "acceptance_fraction": attrs.get("acceptance_fraction"),
-            "autocorr_time": json.loads(attrs.get("autocorr_time", "[]")), "params": params}
+                        "ci95": [float(lo), float(hi)], "units": var.attrs.get("units", units.get(name, ""))}
+    return {"params": params}
+
+
+def _lsq_params(lsq: xr.Dataset, units: dict) -> dict:
+    params = {}
+    for name in lsq["parameter"].values.tolist():
+        sel = lsq.sel(parameter=name)
+        val, se = float(sel["value"]), float(sel["stderr"])
+        params[name] = {"value": val, "stderr": _clean(se), "units": units.get(name, ""),
+                        "ci95": [_clean(val - 1.959964 * se), _clean(val + 1.959964 * se)]}
+    return {"chisqr": lsq.attrs.get("chisqr"), "n_data": lsq.attrs.get("n_data"), "params": params}
 
 
 def _clean(x: float):

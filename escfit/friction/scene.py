@@ -1,4 +1,4 @@
-"""The ``friction_rig`` scene: rig geometry, friction laws and reading uncertainty.
+"""The ``friction_rig`` scene: rig geometry, friction laws and the reading noise.
 
 Example::
 
@@ -16,13 +16,28 @@ Example::
     mu_v = { value = 0, vary = true, prior = "normal(0, 0.005 s/ft)" }  # optional, s/m
     speed_ref = "6.5 ft/s"
 
-    [reading]              # optional; without it the reading sd is estimated
+    [observation]          # optional; without it the reading noise is estimated
     resolution = "0.5 inch"            # smallest readable step of the spot
     full_scale_load = "5 gf"           # load that moves the spot over the whole scale
     scale_length = "11.5 ft"
 
 Geometry given with ``sd`` is a *measured* quantity: its error is shared by every reading
 of the session and is sampled as a nuisance parameter with a normal prior.
+
+The reading noise is the parameter ``observation.sigma`` (N, the standard deviation of one
+``dw`` reading), the one noise vocabulary of every model family.  The ``[observation]`` table
+gives it in one of three ways:
+
+* ``sigma = "0.0074 gf"``: known (fixed); ``sigma = { value = ..., vary = true, min = ...,
+  max = ..., prior = "..." }`` makes it free like any parameter;
+* ``resolution`` with a calibration (``slope``, ``full_scale_load`` + ``scale_length`` or
+  ``wire_stiffness`` + ``scale_distance``): known, ``sqrt(settings / 12) * resolution / slope``
+  (uniform rounding of the spot in each of ``settings`` settings);
+* no table (or an empty one): free, log-uniform on [1e-8, 1] N; least squares profiles it
+  and the sampler samples it.
+
+A scene still using the old ``[reading]`` table (``reading.sd``) is refused with a message
+saying to rename it to ``[observation]``.
 """
 
 from __future__ import annotations
@@ -40,15 +55,16 @@ from ..core.units import to_canonical, ureg
 from ..likelihood.priors import Prior, loguniform, normal, parse_prior, uniform
 from .rig import LOAD_AT, load_sd_from_scale
 
-__all__ = ["RigScene", "parse", "DEFAULT_SD_RANGE"]
+__all__ = ["RigScene", "parse", "DEFAULT_SD_RANGE", "SIGMA"]
 
-#: Bounds (N) of the log-uniform prior of the reading sd when the scene does not give it.
+#: Bounds (N) of the log-uniform prior of the reading noise when the scene does not give it.
 DEFAULT_SD_RANGE = (1e-8, 1.0)
 
-_TOP = {"model", "rig", "friction", "reading"}
+SIGMA = "observation.sigma"
+_TOP = {"model", "rig", "friction", "observation"}
 _RIG = {"k", "d", "load_at"}
 _FRICTION = {"mu", "mu_w", "load_ref", "mu_v", "speed_ref"}
-_READING = {"sd", "resolution", "slope", "full_scale_load", "scale_length", "wire_stiffness",
+_OBSERVATION = {"sigma", "resolution", "slope", "full_scale_load", "scale_length", "wire_stiffness",
             "scale_distance", "settings"}
 
 
@@ -60,7 +76,8 @@ class RigScene:
     ----------
     params
         ``rig.k``, ``rig.d`` (m), ``friction.mu``, optionally ``friction.mu_w`` (1/N) and
-        ``friction.mu_v`` (s/m), and ``reading.sd`` (N), all in canonical units.
+        ``friction.mu_v`` (s/m), and ``observation.sigma`` (N, the reading noise), all in
+        canonical units.
     text, where
         Source TOML text and file name.
     load_at
@@ -70,8 +87,11 @@ class RigScene:
         Reference load (N) and speed (m/s) at which ``mu`` is quoted.
     priors
         Explicit prior of every parameter that a fit varies, by name.
-    reading_note
-        How ``reading.sd`` was obtained (for reports).
+    noise_note
+        How ``observation.sigma`` was obtained (for reports and the results' notes).
+    noise_route
+        ``"sigma"`` (given in ``[observation]``, fixed or free), ``"resolution"`` (from the
+        spot resolution and a calibration) or ``"estimated"`` (no ``[observation]``: free).
     """
 
     params: ParamSet
@@ -81,7 +101,8 @@ class RigScene:
     load_ref: float = 0.0
     speed_ref: float = 0.0
     priors: Mapping[str, Prior] | None = None
-    reading_note: str = ""
+    noise_note: str = ""
+    noise_route: str = "estimated"
     model: str = "friction_rig"
 
     @property
@@ -125,9 +146,12 @@ def parse(doc: Mapping[str, Any], *, where: str, text: str = "") -> RigScene:
     ------
     SceneError
         Unknown or missing keys, ``d >= k``, non-positive geometry, bad units, a varying
-        parameter without a proper prior or finite bounds, or inconsistent reading keys.
-        Messages name ``file [table.key]`` and the value.
+        parameter without a proper prior or finite bounds, inconsistent ``[observation]`` keys,
+        or the old ``[reading]`` table.  Messages name ``file [table.key]`` and the value.
     """
+    if isinstance(doc, Mapping) and "reading" in doc:
+        raise SceneError("the [reading] table is now [observation] (the reading noise is observation.sigma, "
+                         "sd = ... is written sigma = ...): rename [reading] to [observation]", f"{where} [reading]")
     check_keys(doc, _TOP, where, required={"model", "rig", "friction"})
     rig = doc["rig"]
     check_keys(rig, _RIG, f"{where} [rig]", required={"k", "d"})
@@ -165,11 +189,11 @@ def parse(doc: Mapping[str, Any], *, where: str, text: str = "") -> RigScene:
     load_ref = _quantity(fr.get("load_ref", 0.0), "force", f"{where} [friction.load_ref]", nonneg=True)
     speed_ref = _quantity(fr.get("speed_ref", 0.0), "m/s", f"{where} [friction.speed_ref]", nonneg=True)
 
-    sd_param, note = _reading_sd(doc.get("reading"), f"{where} [reading]", k.value, d.value)
+    sd_param, note, route = _reading_sigma(doc.get("observation"), f"{where} [observation]", k.value, d.value)
     params.add(sd_param)
     priors = _priors(params, where)
     return RigScene(params=params, text=text, where=where, load_at=load_at, load_ref=load_ref,
-                    speed_ref=speed_ref, priors=priors, reading_note=note)
+                    speed_ref=speed_ref, priors=priors, noise_note=note, noise_route=route)
 
 
 def _shown(raw: Any) -> str:
@@ -219,32 +243,36 @@ def _read_scaled(raw: Any, name: str, unit: str, where: str, meaning: str) -> Pa
     return replace(p, unit=unit)
 
 
-def _reading_sd(table: Any, where: str, k: float, d: float) -> tuple[Param, str]:
-    """The standard deviation of one ``dw`` reading, from the ``[reading]`` table."""
-    meaning = "standard deviation of one dw reading"
-    if table is None:
+def _reading_sigma(table: Any, where: str, k: float, d: float) -> tuple[Param, str, str]:
+    """The reading noise ``observation.sigma`` (sd of one ``dw`` reading, N) from ``[observation]``."""
+    meaning = "standard deviation of one dw reading (reading noise)"
+    if table is None or (isinstance(table, Mapping) and not table):
         lo, hi = DEFAULT_SD_RANGE
-        return (Param("reading.sd", 1e-4, "N", meaning, True, lo, hi),
-                f"estimated from the data (log-uniform prior on [{lo:g}, {hi:g}] N)")
-    check_keys(table, _READING, where)
-    routes = [key for key in ("sd", "slope", "full_scale_load", "wire_stiffness") if key in table]
+        return (Param(SIGMA, 1e-4, "N", meaning, True, lo, hi),
+                f"reading noise observation.sigma estimated from the data (log-uniform prior on [{lo:g}, {hi:g}] N)",
+                "estimated")
+    if isinstance(table, Mapping) and "sd" in table:
+        raise SceneError("unknown key 'sd': the reading noise is written sigma = ... (observation.sigma)", f"{where}.sd")
+    check_keys(table, _OBSERVATION, where)
+    routes = [key for key in ("sigma", "slope", "full_scale_load", "wire_stiffness") if key in table]
     if len(routes) != 1:
         raise SceneError(
-            f"give exactly one of sd, slope, full_scale_load (with scale_length) or wire_stiffness "
+            f"give exactly one of sigma, slope, full_scale_load (with scale_length) or wire_stiffness "
             f"(with scale_distance); got {routes or 'none'}",
             where,
         )
     route = routes[0]
-    if route == "sd":
-        extra = sorted(set(table) - {"sd"})
+    if route == "sigma":
+        extra = sorted(set(table) - {"sigma"})
         if extra:
-            raise SceneError(f"keys {extra} are not used when sd is given directly", where)
-        p = read_param(table["sd"], name="reading.sd", kind="force", lower=0.0, lower_open=True,
-                       meaning=meaning, where=f"{where}.sd")
+            raise SceneError(f"keys {extra} are not used when sigma is given directly", where)
+        p = read_param(table["sigma"], name=SIGMA, kind="force", lower=0.0, lower_open=True,
+                       meaning=meaning, where=f"{where}.sigma")
         if p.vary and not (math.isfinite(p.min) and math.isfinite(p.max) and p.min > 0):
             lo, hi = max(p.min, DEFAULT_SD_RANGE[0]), min(p.max, DEFAULT_SD_RANGE[1])
             p = replace(p, min=lo, max=hi)
-        return p, ("estimated, prior log-uniform" if p.vary else "given directly")
+        return p, ("reading noise observation.sigma estimated (free in the scene)" if p.vary
+                   else f"reading noise observation.sigma = {p.value:.4g} N, given in the scene"), "sigma"
     if "resolution" not in table:
         raise SceneError(f"{route} converts the scale resolution into a load; add resolution = ...", where)
     resolution = _quantity(table["resolution"], "length", f"{where}.resolution", positive=True)
@@ -273,9 +301,9 @@ def _reading_sd(table: Any, where: str, k: float, d: float) -> tuple[Param, str]
         slope = 2.0 * dist * math.sqrt(k * k - d * d) / kappa
         how = f"wire stiffness {kappa:.4g} N*m/rad at {dist:.4g} m"
     sd = load_sd_from_scale(resolution, slope, settings)
-    note = (f"spot read to {resolution:.4g} m, {how}: uniform rounding in each of {settings} "
-            f"setting(s) gives sd {sd:.4g} N per dw")
-    return Param("reading.sd", sd, "N", meaning), note
+    note = (f"reading noise observation.sigma = {sd:.4g} N: spot read to {resolution:.4g} m, {how}, "
+            f"uniform rounding in each of {settings} setting(s)")
+    return Param(SIGMA, sd, "N", meaning), note, "resolution"
 
 
 def _only(table: Mapping[str, Any], allowed: set[str], where: str) -> None:
@@ -293,7 +321,7 @@ def _priors(params: ParamSet, where: str) -> dict[str, Prior]:
             out[p.name] = parse_prior(p.prior, unit=p.unit, where=f"{key}.prior", lower=p.min, upper=p.max)
         elif p.sd is not None:
             out[p.name] = normal(p.value, p.sd, p.min, p.max)
-        elif p.vary and p.name == "reading.sd":
+        elif p.vary and p.name == SIGMA:
             out[p.name] = loguniform(p.min, p.max)
         elif p.vary:
             if not (math.isfinite(p.min) and math.isfinite(p.max)):

@@ -135,11 +135,7 @@ def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None,
         attrs=clean_attrs({"chisqr": lsq.chisqr, "redchi": lsq.redchi, "sigma_hat": lsq.sigma_hat,
                            "n_data": lsq.n_data, "aic": lsq.aic(), "bic": lsq.bic(), "success": lsq.success,
                            "message": lsq.message, "n_starts": lsq.n_starts, "noise_profiled": lsq.profiled}))
-    misfit, family_figures = {}, {}
-    misfit_warnings: list[str] = []
-    figures, warnings_ = _misfit(problem, lsq, obs_coords)
-    misfit.update(figures)
-    misfit_warnings += warnings_
+    misfit, misfit_warnings = _misfit(problem, lsq, obs_coords)
     family_figures, family_warnings = problem.checks_at_best_fit(lsq.values)
     misfit.update(family_figures)
     misfit_warnings = bound_warnings(problem, lsq) + misfit_warnings + family_warnings

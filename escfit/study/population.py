@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable, Sequence
@@ -31,6 +32,8 @@ import xarray as xr
 from scipy.special import logsumexp
 
 from ..core.errors import FitError, ResultsError
+from ..inference.mcmc import run_emcee
+from ..likelihood.problem import ProblemBase
 from ..results import FitResult, clean_attrs
 from .scenes import POPULATION_PARAMS
 
@@ -236,6 +239,31 @@ class _Posterior:
         return out
 
 
+class _HyperProblem(ProblemBase):
+    """The hyperparameters (mu, tau) as a fit problem of the one emcee driver.
+
+    mu is the population mean of log theta (bounded by the units' prior ranges), tau its
+    sd (half-normal prior); :class:`_Posterior` evaluates every walker in one call.
+    """
+
+    family = "population"
+    vectorized = True
+
+    def __init__(self, post: _Posterior, names: Sequence[str], start: np.ndarray):
+        self.post = post
+        self.names = [f"mu[{n}]" for n in names] + [f"tau[{n}]" for n in names]
+        self.initial = np.asarray(start, float)
+        d = len(names)
+        self.bounds = (np.concatenate([post.mu_lo, np.zeros(d)]), np.concatenate([post.mu_hi, np.full(d, np.inf)]))
+        self.failures: Counter = Counter()
+
+    def log_prob(self, vec: np.ndarray) -> float:
+        return float(self.post(np.asarray(vec, float)[None])[0])
+
+    def log_prob_many(self, vecs: np.ndarray) -> np.ndarray:
+        return self.post(np.asarray(vecs, float))
+
+
 @dataclass
 class PopulationResult:
     """Posterior of the population's log-medians ``mu`` and log-sds ``tau``.
@@ -367,25 +395,18 @@ def fit_population(draws: UnitDraws, *, walkers: int = 32, steps: int = 2000, bu
     min_ess
         Warn when a unit keeps fewer effective draws under the population than this.
     """
-    import emcee
-
     if len(draws.units) < 2:
         raise FitError(f"a population needs at least two units, got {len(draws.units)}")
     d = len(draws.names)
     if walkers < 4 * d:
         raise FitError(f"use at least {4 * d} walkers for {2 * d} hyperparameters, got {walkers}")
-    burn = steps // 2 if burn is None else burn
     post = _Posterior(draws, tau_scale)
     med = np.median(draws.log_theta, axis=1)  # (n, d)
-    rng = np.random.default_rng(seed)
-    centre = np.concatenate([med.mean(axis=0), np.maximum(med.std(axis=0, ddof=1), 0.05)])
-    start = centre * (1 + 0.01 * rng.standard_normal((walkers, 2 * d))) + 0.01 * rng.standard_normal((walkers, 2 * d))
-    start[:, d:] = np.abs(start[:, d:])
-    sampler = emcee.EnsembleSampler(walkers, 2 * d, post, vectorize=True,
-                                    moves=[(emcee.moves.DEMove(), 0.8), (emcee.moves.DESnookerMove(), 0.2)])
-    sampler.random_state = np.random.RandomState(seed).get_state()
-    sampler.run_mcmc(start, steps)
-    chain = sampler.get_chain(discard=burn, flat=True)
+    problem = _HyperProblem(post, draws.names, np.concatenate([med.mean(axis=0),
+                                                               np.maximum(med.std(axis=0, ddof=1), 0.05)]))
+    mc = run_emcee(problem, None, walkers=walkers, steps=steps, burn=burn, seed=seed, moves="de")
+    burn = mc.burn
+    chain = mc.chain.reshape(-1, 2 * d)
     mu, tau = chain[:, :d], chain[:, d:]
     mid = np.median(chain, axis=0)
     lw = post.log_weights(mid[None, :d], mid[None, d:])[0]
@@ -396,7 +417,9 @@ def fit_population(draws: UnitDraws, *, walkers: int = 32, steps: int = 2000, bu
     if low:
         warnings.append(f"units {low} keep fewer than {min_ess:g} effective draws under the population: "
                         "their posteriors are too narrow or too far out for reweighting; sample them longer")
-    acc = float(np.mean(sampler.acceptance_fraction))
+    acc = float(np.mean(mc.acceptance))
+    if not mc.tau_reliable:
+        warnings.append("the hyperparameter run is shorter than 50 autocorrelation times: intervals are approximate")
     if acc < 0.1:
         warnings.append(f"hyperparameter sampler acceptance {acc:.2f} is low")
     settings = {"walkers": walkers, "steps": steps, "burn": burn, "seed": seed, "tau_scale": tau_scale,
