@@ -128,10 +128,11 @@ def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: 
     lsq = res.group("least_squares")
     prov = [("results file", str(path)), ("method", a.get("method")), ("scene file", a.get("scene_file")),
             ("switching", a.get("switching")), ("data file", a.get("data_file")), ("data SHA-256", a.get("data_sha256")),
-            ("solver", f"{a.get('solver')} {a.get('solver_options')}"), ("seed", a.get("seed")),
+            ("solver", f"{a.get('solver', '')} {a.get('solver_options', '')}".strip()), ("seed", a.get("seed")),
             ("walkers x steps (burn)", f"{a.get('walkers', '-')} x {a.get('steps', '-')} ({a.get('burn', '-')})"),
             ("started / finished", f"{a.get('started')} / {a.get('finished')}"), ("schema", a.get("schema_version")),
             ("versions", a.get("versions")), ("failed evaluations", a.get("failures"))]
+    prov = [(k, v) for k, v in prov if v not in (None, "", "None None")]
     la = lsq.attrs
     fit_stats = f"model {a.get('model', 'balance')}; least squares: chi-square {_fmt(la.get('chisqr'))}, n = {la.get('n_data')}"
     if "redchi" in la:

@@ -67,6 +67,11 @@ class FitResult:
     def parameter_names(self) -> list[str]:
         return json.loads(self.tree.attrs["parameters"])
 
+    @property
+    def derived_names(self) -> list[str]:
+        """Quantities computed from the parameters at every posterior draw (e.g. Monday's K)."""
+        return json.loads(self.tree.attrs.get("derived", "[]") or "[]")
+
     def summary(self) -> dict[str, dict[str, Any]]:
         """Per parameter: median, 68 % and 95 % intervals, unit, R-hat, ESS (posterior),
         or the least-squares value with +-1 and +-1.96 standard errors when there is none."""
@@ -75,7 +80,7 @@ class FitResult:
         diag = self.group("diagnostics")
         units = json.loads(self.tree.attrs.get("units", "{}"))
         out: dict[str, dict[str, Any]] = {}
-        for name in self.parameter_names:
+        for name in self.parameter_names + [n for n in self.derived_names if n not in self.parameter_names]:
             row: dict[str, Any] = {"unit": units.get(name, "")}
             if post is not None and name in post:
                 x = post[name].values.ravel()

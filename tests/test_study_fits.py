@@ -119,7 +119,7 @@ def test_reweighting_recovers_a_known_population_from_gaussian_posteriors():
     log_prior = np.full((n, s), -np.sum(np.log(np.log(hi / lo)))) - y.sum(axis=2)  # log-uniform density
     draws = UnitDraws([f"u{i}" for i in range(n)], list(POPULATION_PARAMS), np.exp(y), log_prior,
                       list(zip(lo, hi)))
-    res = fit_population(draws, steps=800, seed=1)
+    res = fit_population(draws, steps=2000, seed=1)  # longer than 50 autocorrelation times
     q = res.summary(level=0.95)
     for j, name in enumerate(POPULATION_PARAMS):
         assert q[name]["median_lo"] < math.exp(mu[j]) < q[name]["median_hi"], name

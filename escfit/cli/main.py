@@ -292,7 +292,8 @@ def summary(results, as_json):
         a = res.attrs
         click.echo(json.dumps(_json_safe({"parameters": res.summary(), "warnings": res.warnings, "notes": res.notes,
                                "misfit": res.misfit,
-                               "method": a.get("method"), "data_file": a.get("data_file"),
+                               "model": a.get("model", "balance"), "method": a.get("method"),
+                               "data_file": a.get("data_file"),
                                "schema_version": a.get("schema_version")})))
     else:
         _print_summary(res)

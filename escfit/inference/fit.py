@@ -150,7 +150,8 @@ def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None,
         post = {n: (("chain", "draw"), mc.chain[:, :, i], {"units": units.get(n, ""), "long_name": meanings.get(n, "")})
                 for i, n in enumerate(names)}
         coords = {"chain": np.arange(mc.walkers), "draw": np.arange(mc.chain.shape[1])}
-        post.update(_derived(problem, mc, units, meanings))
+        derived = _derived(problem, mc, units, meanings)
+        post.update(derived)
         groups["posterior"] = xr.Dataset(post, coords=coords)
         groups["sample_stats"] = xr.Dataset({"lp": (("chain", "draw"), mc.log_prob)}, coords=coords)
         groups["diagnostics"] = _diagnostics(groups["posterior"], names, mc)
@@ -175,7 +176,8 @@ def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None,
         "notes": list(getattr(problem, "notes", [])),
     }
     if mc is not None:
-        attrs.update(walkers=mc.walkers, steps=mc.steps, burn=mc.burn, resumed=mc.resumed, moves=mc.moves)
+        attrs.update(walkers=mc.walkers, steps=mc.steps, burn=mc.burn, resumed=mc.resumed, moves=mc.moves,
+                     derived=list(derived))
     root = xr.DataTree(dataset=xr.Dataset(attrs=clean_attrs(attrs)))
     for name, ds in groups.items():
         root[name] = xr.DataTree(dataset=ds)
