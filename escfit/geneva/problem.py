@@ -52,7 +52,6 @@ FIT_OPTIONS = {"dt": 1e-3}  # rk4 step in units of sqrt(I_f/K): ~1e-7 relative e
 FAIL_RESIDUAL = 1e6
 OBSERVATION_KEYS = {"sigma"}
 FIT_KEYS = {"torque_scale", "table_mu"}
-_STRUCTURAL = ("geneva.driver_inertia", "geneva.follower_inertia", "geneva.torque", TORQUE_SCALE)
 
 
 class ForwardFailure(FitError):
@@ -149,9 +148,10 @@ class GenevaProblem(FreeParameters, ProblemBase):
                               f"(of {data.mu.size})")
             return data.select(np.flatnonzero(rows))
         if data.mu is not None and np.unique(data.mu).size > 1:
-            raise FitError(f"the file holds runs at several mu {sorted(set(map(float, data.mu)))}: a terminal-speed fit "
-                           "estimates one mu from runs that share it; select one run family with [fit] table_mu = "
-                           "... in the scene (or give a file of one family)", data.source)
+            values = sorted(set(map(float, data.mu)))
+            raise FitError(f"the file holds runs at several mu {values}: a terminal-speed fit estimates one mu from "
+                           "runs that share it; select one run family with [fit] table_mu = ... in the scene (or give "
+                           "a file of one family)", data.source)
         return data
 
     def _set_noise(self, params: ParamSet, scene, data, where: str) -> None:
@@ -299,13 +299,13 @@ class GenevaProblem(FreeParameters, ProblemBase):
                 "solver_options": dict(FIT_OPTIONS), "noise_source": self.noise_source}
 
     def derived(self, values: Mapping[str, float]) -> dict[str, float]:
-        """``I_d/I_f`` and (speed traces) ``sqrt(I_f/K)`` when an inertia, the torque or its factor is free."""
-        if not any(n in self.names for n in _STRUCTURAL):
-            return {}
-        i_f = values["geneva.follower_inertia"]
-        out = {"geneva.inertia_ratio": values["geneva.driver_inertia"] / i_f}
-        if not self.terminal:
-            out["geneva.time_scale"] = math.sqrt(i_f / values["geneva.torque"])
+        """``I_d/I_f`` when an inertia is free; ``sqrt(I_f/K)`` (speed traces) when ``I_f`` or ``K`` is free."""
+        free = set(self.names)
+        out = {}
+        if free & {"geneva.driver_inertia", "geneva.follower_inertia"}:
+            out["geneva.inertia_ratio"] = values["geneva.driver_inertia"] / values["geneva.follower_inertia"]
+        if not self.terminal and free & {"geneva.follower_inertia", "geneva.torque"}:
+            out["geneva.time_scale"] = math.sqrt(values["geneva.follower_inertia"] / values["geneva.torque"])
         return out
 
     def checks_at_best_fit(self, best: Mapping[str, float]) -> tuple[dict, list[str]]:
