@@ -248,7 +248,7 @@ def _dataset(scene, values: Mapping[str, float], pred: Prediction, solver: str, 
             "engagement": ("engagement", eng, _u("", "complete engagements, 0 = first pin")),
         },
     )
-    from .. import __version__
+    from ..core.version import __version__
 
     ds.attrs.update(
         schema=SCHEMA,
