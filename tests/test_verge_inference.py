@@ -1,32 +1,27 @@
-"""Friction of the verge S&A mechanism from turns-to-arm: least squares and posterior.
+"""Friction of the verge S&A mechanism from turns-to-arm: the published numbers and recovery.
 
-The MCMC runs here are deliberately short (a one-parameter posterior, six walkers); they
-check that the machinery finds and brackets the right value, not the tails.
+Everything runs through the one inference layer (:mod:`escfit.inference`) on
+:class:`escfit.verge.problem.TurnsProblem`.  References: the report's friction coefficients
+(Lowen & Tepper 1982), the exact one-parameter posterior computed on a grid, and the truth of
+simulated readings.
 """
 
 from __future__ import annotations
 
-import math
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-from escfit.core.errors import DataError, FitError
 from escfit.core.scene import load_scene
-from escfit.verge.inference import (
-    TurnsData, TurnsProblem, credible_interval, fit_least_squares, read_turns_csv, sample_posterior,
-    synthetic_turns,
-)
+from escfit.inference import family, fit_problem, least_squares
+from escfit.verge.data import read_turns_csv
+from escfit.verge.problem import FIT_STEP
+from escfit.verge.simulate import forward
+from escfit.verge.synthetic import synthetic_turns
 
-ROOT = Path(__file__).resolve().parents[1]
-M739 = ROOT / "datasets" / "verge" / "m739.toml"
-PUBLISHED = ROOT / "datasets" / "verge" / "lowen_tepper_1982_turns.csv"
+from .conftest import DATASETS
 
-
-@pytest.fixture(scope="module")
-def scene():
-    return load_scene(M739)
+SCENE = DATASETS / "verge" / "m739_fit.toml"
+PUBLISHED = DATASETS / "verge" / "lowen_tepper_1982_turns.csv"
 
 
 @pytest.fixture(scope="module")
@@ -34,114 +29,83 @@ def published():
     return read_turns_csv(PUBLISHED)
 
 
-@pytest.mark.parametrize("index,mu_reported", [(0, 0.10), (1, 0.05), (2, 0.15)])
-def test_published_turns_give_the_reported_friction(scene, published, index, mu_reported):
-    # each published figure is one observation of a mechanism whose friction is unknown
-    problem = TurnsProblem(scene, published.subset([index]))
-    lsq = fit_least_squares(problem)
-    assert lsq.prediction[0] == pytest.approx(published.turns[index], abs=1e-3)  # one number, fitted exactly
-    assert abs(lsq.best[0] - mu_reported) < 2 * lsq.stderr[0]
-    idata = sample_posterior(problem, walkers=6, steps=24, burn=8, lsq=lsq, seed=11)
-    lo, hi = credible_interval(idata, "verge.mu", 0.95)
-    assert lo < mu_reported < hi
-    assert hi - lo < 0.05
-    assert int(idata.sample_stats["forward_status"].max()) == 0
-
-
-def test_synthetic_recovery(scene):
-    truth = 0.12
-    data = synthetic_turns(scene, {"verge.mu": truth}, [12000, 20000, 30000], sd=0.3, seed=7)
-    problem = TurnsProblem(scene, data)
-    lsq = fit_least_squares(problem)
-    assert abs(lsq.best[0] - truth) < 3 * lsq.stderr[0]
-    idata = sample_posterior(problem, walkers=6, steps=24, burn=8, lsq=lsq, seed=3)
-    lo, hi = credible_interval(idata, "verge.mu", 0.95)
-    assert lo < truth < hi
-    for group in ("posterior", "log_likelihood", "observed_data", "constant_data", "sample_stats"):
-        assert group in idata.groups()
-    assert idata.log_likelihood["turns"].shape[-1] == 3
-    assert idata.attrs["priors"] == "verge.mu: uniform(0, 0.3)"
-    # with plastic impacts the spin rate does not matter: one prediction for all three
-    pred = idata.posterior["turns_model"].values
-    assert np.allclose(pred[..., 0], pred[..., 2])
-
-
-def _grid_posterior(problem, grid):
-    logp = np.array([problem.log_prior([x]) + problem.log_likelihood(problem.predict([x])[0]).sum() for x in grid])
+def _grid_posterior(problem, centre, sd, n=31, width=4.0):
+    """The exact one-parameter posterior on a grid: mean, sd and the equal-tailed 95 % interval."""
+    grid = np.linspace(centre - width * sd, centre + width * sd, n)
+    logp = np.array([problem.log_prob(np.array([x])) for x in grid])
     w = np.exp(logp - logp.max())
-    w /= w.sum()
-    mean = float((w * grid).sum())
-    return mean, float(np.sqrt((w * (grid - mean) ** 2).sum()))
+    cdf = np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * np.diff(grid))])
+    cdf /= cdf[-1]
+    mass = w / w.sum()
+    mean = float((mass * grid).sum())
+    return mean, float(np.sqrt((mass * (grid - mean) ** 2).sum())), np.interp([0.025, 0.975], cdf, grid)
 
 
-def test_laplace_approximation_matches_exact_one_dimensional_posterior(scene, published):
-    # a one-parameter posterior can be computed on a grid: check the least-squares
-    # covariance (and with it the sampler's starting region) against it
-    problem = TurnsProblem(scene, published.subset([0]))
-    lsq = fit_least_squares(problem)
-    grid = np.linspace(lsq.best[0] - 5 * lsq.stderr[0], lsq.best[0] + 5 * lsq.stderr[0], 41)
-    mean, sd = _grid_posterior(problem, grid)
-    assert mean == pytest.approx(lsq.best[0], abs=0.1 * sd)
-    assert sd == pytest.approx(lsq.stderr[0], rel=0.1)
+@pytest.mark.parametrize("index,mu_reported", [(0, 0.10), (1, 0.05), (2, 0.15)])
+def test_published_turns_give_the_reported_friction(published, index, mu_reported):
+    # each published figure is one reading of a mechanism whose friction is unknown: the
+    # three rows are three mechanisms and are inverted one at a time
+    problem = family("verge").problem(SCENE, published.subset([index]))
+    lsq = least_squares(problem, n_starts=1)
+    mu, se = lsq.value[0], lsq.stderr[0]
+    assert problem.expected(lsq.values)[0] == pytest.approx(published.turns[index], abs=1e-3)  # fitted exactly
+    assert abs(mu - mu_reported) < 2 * se
+    # the exact posterior under the scene's uniform(0, 0.3) prior
+    mean, sd, (lo, hi) = _grid_posterior(problem, mu, se)
+    assert lo < mu_reported < hi and hi - lo < 0.05
+    # Laplace approximation (least-squares covariance) against the exact posterior
+    assert mean == pytest.approx(mu, abs=0.15 * sd)
+    assert sd == pytest.approx(se, rel=0.1)
+    assert problem.failures == {}
 
 
-@pytest.mark.slow
-def test_sampler_matches_exact_one_dimensional_posterior(scene, published):
-    problem = TurnsProblem(scene, published.subset([2]))
-    lsq = fit_least_squares(problem)
-    grid = np.linspace(lsq.best[0] - 6 * lsq.stderr[0], lsq.best[0] + 6 * lsq.stderr[0], 61)
-    mean, sd = _grid_posterior(problem, grid)
-    idata = sample_posterior(problem, walkers=8, steps=300, burn=60, lsq=lsq, seed=21)
-    draws = idata.posterior["verge.mu"].values.ravel()
-    assert draws.mean() == pytest.approx(mean, abs=0.15 * sd)
-    assert draws.std() == pytest.approx(sd, rel=0.2)
+def test_fit_step_is_converged_and_the_shipped_step_is_close():
+    scene = load_scene(DATASETS / "verge" / "m739.toml")
+    fine = forward(scene, step=0.01).turns_to_arm
+    assert forward(scene, step=FIT_STEP).turns_to_arm == pytest.approx(fine, abs=1e-6)
+    assert forward(scene, step=0.2).turns_to_arm == pytest.approx(fine, abs=2e-4)  # m739_fit.toml [fit] step
 
 
-def test_sampler_is_reproducible(scene):
-    data = TurnsData(np.array([30000.0]), np.array([25.9]), np.array([0.3]), ("a",))
-    problem = TurnsProblem(scene, data)
-    lsq = fit_least_squares(problem)
-    a = sample_posterior(problem, walkers=4, steps=4, burn=0, lsq=lsq, seed=5)
-    b = sample_posterior(problem, walkers=4, steps=4, burn=0, lsq=lsq, seed=5)
-    assert np.array_equal(a.posterior["verge.mu"].values, b.posterior["verge.mu"].values)
+def test_spin_rates_are_replicates_with_plastic_impacts():
+    scene = load_scene(SCENE)
+    data = synthetic_turns(scene, {"verge.mu": 0.1}, [12000, 30000], 0.2, seed=1)
+    problem = family("verge").problem(scene, data)
+    calls = []
+    original = problem._simulate
+    problem._simulate = lambda vals, rpm: calls.append(rpm) or original(vals, rpm)
+    pred = problem.expected(problem.values(np.array([0.1])))
+    assert len(calls) == 1 and pred[0] == pred[1]
+    # and the simulation agrees: turns to arm do not depend on spin for e = 0
+    slow = forward(scene, {"verge.spin": 12000 * np.pi / 30, "verge.mu": 0.1, "verge.mu1": 0.1}, step=0.2)
+    assert slow.turns_to_arm == pytest.approx(pred[0], abs=1e-8)
+    assert any("replicates" in n for n in problem.notes)
 
 
-def test_not_armed_has_zero_likelihood(scene):
-    data = TurnsData(np.array([30000.0]), np.array([25.9]), np.array([0.3]), ("a",))
-    problem = TurnsProblem(scene, data)
-    pred, status = problem.predict([0.25])
-    assert status == 1 and math.isnan(pred[0])
-    assert problem.log_likelihood(pred)[0] == -math.inf
-    assert problem.log_prior([0.35]) == -math.inf  # outside uniform(0, 0.3)
+def test_posterior_recovers_a_known_friction_coefficient():
+    """Synthetic readings at mu = 0.12: least squares and a converged posterior bracket the truth.
 
-
-def test_bad_inputs_are_refused(scene, tmp_path):
-    bad = tmp_path / "turns.csv"
-    bad.write_text("label,spin_rpm,turns,sd\na,30000,many,0.3\n")
-    with pytest.raises(DataError, match="many"):
-        read_turns_csv(bad)
-    bad.write_text("label,spin_rpm,turns\na,30000,25,0.3\n")
-    with pytest.raises(DataError, match="sd"):
-        read_turns_csv(bad)
-    data = TurnsData(np.array([30000.0]), np.array([25.9]), np.array([0.3]), ("a",))
-    with pytest.raises(DataError, match="sd"):
-        TurnsData(np.array([30000.0]), np.array([25.9]), np.array([0.0]), ("a",))
-    with pytest.raises(FitError, match="verge.nu"):
-        TurnsProblem(scene, data, free=("verge.nu",))
-    with pytest.raises(FitError, match="tied"):
-        TurnsProblem(scene, data, free=("verge.mu", "verge.mu1"))
-    with pytest.raises(FitError, match="prior"):
-        TurnsProblem(scene, data, free=("verge.rho1",))
-    with pytest.raises(FitError, match="walkers"):
-        sample_posterior(TurnsProblem(scene, data), walkers=3, steps=4)
-
-
-@pytest.mark.slow
-def test_separate_coefficients_trade_off(scene):
-    # turns-to-arm alone constrain a combination of mu and mu1: the posterior is a ridge
-    data = synthetic_turns(scene, {"verge.mu": 0.1, "verge.mu1": 0.1}, [20000, 30000], sd=0.2, seed=2)
-    problem = TurnsProblem(scene, data, free=("verge.mu", "verge.mu1"), tie_mu1=False)
-    idata = sample_posterior(problem, walkers=8, steps=120, burn=40, seed=4)
-    mu = idata.posterior["verge.mu"].values.ravel()
-    mu1 = idata.posterior["verge.mu1"].values.ravel()
-    assert np.corrcoef(mu, mu1)[0, 1] < -0.5
+    The mechanism is the M739 with a shorter arming stroke (phi_cut 100 deg instead of 1485:
+    six escape-wheel teeth, 2 turns, 10 turns per unit of mu) so that one forward run costs
+    ~7 ms and a converged chain (6 walkers x 400 steps, 2400 runs) fits the test budget.  Four
+    spin rates, sd 0.2 turns; walkers start from least squares (which starts from the scene's
+    0.05, not the truth); differential-evolution moves, because emcee's stretch move mixes
+    slowly in one dimension (tau ~ 27 steps against ~5).
+    """
+    truth = 0.12
+    text = SCENE.read_text().replace('phi_cut = "1485 deg"', 'phi_cut = "100 deg"')
+    assert 'phi_cut = "100 deg"' in text
+    scene = load_scene("m739_short_stroke.toml", text=text)
+    data = synthetic_turns(scene, {"verge.mu": truth}, [10000, 17000, 24000, 30000], 0.2, seed=7, step=0.2)
+    problem = family("verge").problem(scene, data)
+    res = fit_problem(problem, method="emcee", walkers=6, steps=400, burn=50, n_starts=4, seed=5, moves="de",
+                      predictive_draws=16)
+    lsq = res.group("least_squares")
+    mu, se = float(lsq["value"][0]), float(lsq["stderr"][0])
+    assert abs(mu - truth) < 1.96 * se
+    diag = res.group("diagnostics").sel(parameter="verge.mu")
+    assert float(diag["rhat"]) < 1.05 and float(diag["ess_bulk"]) > 100
+    x = res.group("posterior")["verge.mu"].values.ravel()
+    lo, hi = np.quantile(x, [0.025, 0.975])
+    assert lo < truth < hi
+    assert 0.5 < (hi - lo) / (2 * 1.96 * se) < 2.0  # the Laplace approximation's width
+    assert not any("R-hat" in w for w in res.warnings)

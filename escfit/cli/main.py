@@ -204,7 +204,8 @@ def _read_recipe(path: Path) -> dict:
 @click.option("--stop", "stop_time", default=None, help="[recording] end of the window, e.g. '60 s'.")
 @click.option("--solver", default=None, help="Forward solver (default: exact, or dop853 for a pendulum).")
 @click.option("--moves", type=click.Choice(["stretch", "de"]), default=None,
-              help="emcee proposal: stretch (default) or de (differential evolution: coupled parameters).")
+              help="emcee proposal: stretch or de (differential evolution: coupled parameters, one-parameter "
+                   "posteriors); default: the model family's.")
 @click.option("--notch-deg", type=float, default=None, help="Notch angle for notch counts, deg.")
 @click.option("--resume", is_flag=True, help="Continue an interrupted emcee run from its checkpoint.")
 @click.option("--force", is_flag=True, help="Replace an existing results file.")
@@ -250,7 +251,7 @@ def fit(data, scene_path, method, out, seed, walkers, steps, burn, unit_id, fmt,
     result = run_fit(scene, data, method=method, out=out, force=force, seed=pick(seed, "seed", 0),
                      walkers=pick(walkers, "walkers", None), steps=pick(steps, "steps", None),
                      burn=pick(burn, "burn", None), resume=resume, progress=not quiet and sys.stderr.isatty(),
-                     moves=pick(moves, "moves", "stretch"), **options)
+                     moves=pick(moves, "moves", None), **options)
     click.echo(f"wrote {out}")
     _print_summary(result)
     report_path = report_path or recipe.get("report")

@@ -28,13 +28,14 @@ from .registry import family
 
 __all__ = ["fit", "fit_problem", "build_tree"]
 
-GENERIC_DEFAULTS = {"walkers": 32, "steps": 2000, "n_starts": 8, "n_refine": None, "predictive_draws": 400}
+GENERIC_DEFAULTS = {"walkers": 32, "steps": 2000, "n_starts": 8, "n_refine": None, "predictive_draws": 400,
+                    "moves": "stretch"}
 
 
 def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, force: bool = False, seed: int = 0,
         walkers: int | None = None, steps: int | None = None, burn: int | None = None, n_starts: int | None = None,
         resume: bool = False, progress: bool = False, checkpoint: str | Path | None = None,
-        predictive_draws: int | None = None, moves: str = "stretch", **options) -> FitResult:
+        predictive_draws: int | None = None, moves: str | None = None, **options) -> FitResult:
     """Fit a scene of any model family to a recording.
 
     Parameters
@@ -59,7 +60,8 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
         Posterior draws at which the expected readings and the pointwise log-likelihood
         (for PSIS-LOO) are stored.
     moves
-        emcee's proposal: ``"stretch"`` or ``"de"`` (see :func:`~escfit.inference.mcmc.run_emcee`).
+        emcee's proposal: ``"stretch"`` or ``"de"`` (see :func:`~escfit.inference.mcmc.run_emcee`);
+        ``None`` takes the family's default.
     **options
         The family's problem options (balance: ``solver``, ``solver_options``, ``unit``,
         ``fmt``, ``notch_deg``, ``recording``); unknown ones are refused.
@@ -90,7 +92,7 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
     return fit_problem(problem, method=method, out=out, force=force, seed=seed, walkers=pick(walkers, "walkers"),
                        steps=pick(steps, "steps"), burn=burn, n_starts=pick(n_starts, "n_starts"),
                        n_refine=defaults["n_refine"], resume=resume, progress=progress, checkpoint=checkpoint,
-                       predictive_draws=pick(predictive_draws, "predictive_draws"), moves=moves)
+                       predictive_draws=pick(predictive_draws, "predictive_draws"), moves=pick(moves, "moves"))
 
 
 def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | None = None, force: bool = False,

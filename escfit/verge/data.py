@@ -103,7 +103,8 @@ def _table(path: Path) -> tuple[list[tuple[int, str]], bytes]:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise DataError(f"not a UTF-8 text file ({exc.reason} at byte {exc.start})", str(path)) from None
-    lines = [(i, ln) for i, ln in enumerate(text.splitlines(), start=1) if ln.strip() and not ln.lstrip().startswith("#")]
+    lines = [(i, ln) for i, ln in enumerate(text.splitlines(), start=1)
+             if ln.strip() and not ln.lstrip().startswith("#")]
     return lines, raw
 
 

@@ -5,11 +5,13 @@ fit problem (:class:`~escfit.verge.problem.TurnsProblem`).
 
 Cost
 ----
-One forward run of the M739 mechanism (about 360 motion phases to 26 turns) takes 0.1 to
-0.2 s, so fits are counted in forward runs: least squares needs about ten per start and
-emcee ``walkers * (steps + 1)``.  The defaults below (4 starts; 8 walkers, 60 steps; 16
-predictive draws) give a one-parameter fit in about a minute (``escfit fit
-fits/verge_m739.toml``, 8 walkers x 40 steps with a 0.2 rad RK4 step, runs in well under one).
+One forward run of the M739 mechanism (about 360 motion phases to 26 turns) takes 45 ms
+of CPU at step 0.2, so fits are counted in forward runs: least squares needs about ten per start
+and emcee ``walkers * (steps + 1)`` plus the predictive draws.  The defaults (3 starts;
+6 walkers x 100 steps; 16 predictive draws; ~650 runs) take about 30 s of CPU.  The
+shipped recipe ``escfit fit fits/verge_m739.toml`` (4 walkers x 80 steps, ~400 runs) takes
+about 20 s of CPU.  In one dimension emcee's stretch move mixes slowly (autocorrelation
+~27 steps against ~5): verge recipes say ``moves = "de"``.
 """
 
 from __future__ import annotations
@@ -31,7 +33,7 @@ class VergeFamily:
 
     name = "verge"
     formats = {FORMAT: read_turns_csv}
-    fit_defaults = {"walkers": 8, "steps": 60, "n_starts": 4, "predictive_draws": 16}
+    fit_defaults = {"walkers": 8, "steps": 300, "n_starts": 3, "predictive_draws": 16, "moves": "de"}
 
     def detect(self, path) -> str:
         """``"turns-to-arm"`` for a table with columns ``label, spin_rpm, turns``; else a DataError."""

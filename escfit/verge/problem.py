@@ -64,7 +64,9 @@ def _turns(raw: Any, where: str) -> Any:
     if isinstance(raw, str):
         try:
             q = ureg.Quantity(raw)
-            return float(q.to("turn").magnitude) if hasattr(q, "to") and not q.dimensionless else float(q.magnitude)
+            if not hasattr(q, "unitless"):
+                return float(q)
+            return float(q.magnitude) if q.unitless else float(q.to("turn").magnitude)
         except Exception as exc:  # pint raises several types
             raise SceneError(f"cannot read {raw!r} as a number of turns ({exc})", where) from None
     return raw
@@ -165,7 +167,9 @@ class TurnsProblem(FreeParameters, ProblemBase):
 
     @property
     def units(self) -> dict[str, str]:
-        return {p.name: p.unit for p in self.params}
+        out = {p.name: p.unit for p in self.params}
+        out["verge.spin"] = "rad/s"  # the scene stores the spin rate in rad/s (a frequency kind)
+        return out
 
     @property
     def meanings(self) -> dict[str, str]:

@@ -19,10 +19,15 @@ friction, restitution, cut-off angle).  Layout (see ``datasets/verge/m739.toml``
     [verge.fuze]        r1, r2, r3, r4
     [verge.gears]       ng1, ng2, np2, np3, caprp1, caprp2, rp2, rp3, theta1, theta2,
                         caprb1, caprb2, rb2, rb3, capro1, capro2, ro2, ro3, j1, j2
+    [observation]       sigma: noise of a turns-to-arm reading (fits only; see
+                        escfit/verge/problem.py, which checks the table)
+    [fit]               step: RK4 step of fits, rad of spin (fits only)
 
 Numbers without a unit are SI (m, kg, kg*m^2, rad); strings carry their unit
 (``"0.226 in"``, ``"0.3165e-4 lbf*s**2/in"``, ``"43.5352 deg"``).  Every physical value may
-be a free-parameter table ``{ value = ..., vary = true, min = ..., max = ..., prior = "..." }``.
+be a free-parameter table ``{ value = ..., vary = true, min = ..., max = ..., prior = "..." }``
+(see ``datasets/verge/m739_fit.toml``); ``mu1 = "mu"`` ties the escapement's coefficient to
+the gear train's.
 Parameters are named ``verge.<key>`` (``verge.mu``, ``verge.a``, ``verge.caprb1``).
 """
 

@@ -150,7 +150,7 @@ def simulate(scene: VergeScene, solver: str | None = None, **options) -> xr.Data
 
 def to_dataset(scene: VergeScene, res: RunResult, solver: str, options: Mapping) -> xr.Dataset:
     """Pack a :class:`RunResult` into the documented Dataset layout."""
-    from .. import __version__
+    from ..core.version import __version__
 
     tr = res.trajectory if res.trajectory is not None else np.empty((0, len(COLUMNS)))
     col = {name: tr[:, i] for i, name in enumerate(COLUMNS)}
