@@ -82,7 +82,10 @@ def test_fit_rig_and_summary(tmp_path):
     assert r.exit_code == 0, r.output
     s = json.loads(run("summary", out, "--json").output)
     mu = s["parameters"]["friction.mu"]
-    assert mu["lo95"] < 0.100 < mu["hi95"]
+    assert mu["lo95"] < 0.100 < mu["hi95"]  # Monday's printed mu for ruby on 1095 steel
+    assert s["parameters"]["rig.k"]["unit"] == "m" and "rhat" in mu
+    # 600 steps are about 11 autocorrelation times: said so (the old rig writer always wrote no warnings)
+    assert any("autocorrelation" in w for w in s["warnings"])
 
 
 @pytest.mark.parametrize("args, fragment", [

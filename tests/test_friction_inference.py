@@ -1,8 +1,10 @@
-"""Rig sessions: recovery of known friction with shared geometry errors, interval widths,
-coverage, the posterior's structure, and Savage-Dickey evidence against a closed form."""
+"""Rig sessions on the one inference layer (least squares and emcee of :mod:`escfit.inference`):
+recovery of known friction with shared geometry errors, interval widths, coverage, the
+posterior's structure, and Savage-Dickey evidence against a closed form."""
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -10,11 +12,14 @@ import pytest
 from scipy import stats
 
 from escfit.core.errors import FitError
-from escfit.friction import compare_laws, fit_least_squares, json_summary, sample_posterior
+from escfit.friction import compare_laws, json_summary
+from escfit.friction.family import FAMILY
 from escfit.friction.readers import Readings
 from escfit.friction.rig import lever_ratio
 from escfit.friction.synthetic import SessionSpec, make_session
 from escfit.core.scene import load_scene
+from escfit.inference import fit_problem, least_squares
+from escfit.results import load_fit
 
 GF = 0.00980665
 IN = 0.0254
@@ -24,13 +29,13 @@ SPEEDS = tuple(np.array([3.0, 5.0, 7.5, 10.0]) * FT_S)
 SD = 0.0074 * GF  # reading sd of the assumed rig, N
 
 
-def rig_scene(*, geom_sd="0.01 inch", reading=f'sd = "{0.0074} gf"', friction="", load_at="reading"):
+def rig_scene(*, geom_sd="0.01 inch", reading=f'sigma = "{0.0074} gf"', friction="", load_at="reading"):
     geometry = (f'k = {{ value = "2.0 inch", sd = "{geom_sd}" }}\nd = {{ value = "1.0 inch", sd = "{geom_sd}" }}\n'
                 if geom_sd else 'k = "2.0 inch"\nd = "1.0 inch"\n')
     text = (f'model = "friction_rig"\n[rig]\n{geometry}load_at = "{load_at}"\n[friction]\n'
             f'mu = {{ value = 0.1, vary = true, min = 0.0, max = 1.0 }}\n{friction}')
     if reading:
-        text += f"[reading]\n{reading}\n"
+        text += f"[observation]\n{reading}\n"
     return load_scene("rig.toml", text=text)
 
 
@@ -38,9 +43,43 @@ def session(mu=0.1, k=2.0 * IN, d=1.0 * IN, seed=0, sd=SD, **kw):
     return make_session(SessionSpec(mu=mu, loads=LOADS, speeds=SPEEDS, k=k, d=d, reading_sd=sd, **kw), seed)
 
 
-def ci95(idata, name):
-    x = idata.posterior[name].values.ravel()
-    return np.quantile(x, [0.025, 0.975])
+def lsq_fit(scene, readings, **kw):
+    """The one least-squares driver on a rig session (multistart over the priors)."""
+    return least_squares(FAMILY.problem(scene, readings), **kw)
+
+
+def interval(fit, name, level=0.95):
+    """Normal-approximation interval of a least-squares estimate."""
+    i = fit.names.index(name)
+    z = stats.norm.ppf(0.5 + level / 2)
+    return fit.value[i] - z * fit.stderr[i], fit.value[i] + z * fit.stderr[i]
+
+
+def value(fit, name):
+    return fit.value[fit.names.index(name)]
+
+
+def stderr(fit, name):
+    return fit.stderr[fit.names.index(name)]
+
+
+def posterior_fit(scene, readings, *, nwalkers=64, nsteps=1200, burn=300, seed=0):
+    """Least squares then emcee through :func:`escfit.inference.fit_problem` (a FitResult).
+
+    The log posterior is vectorised over the ensemble, so a step costs about the same for 16
+    or 64 walkers: many walkers and few steps (here about 30 autocorrelation times kept per
+    walker, 57 600 draws) buy the same precision as the old 32 x 3000 run at a third of the cost.
+    """
+    return fit_problem(FAMILY.problem(scene, readings), method="emcee", walkers=nwalkers, steps=nsteps, burn=burn,
+                       seed=seed, predictive_draws=nwalkers)
+
+
+def draws(result, name):
+    return result.group("posterior")[name].values
+
+
+def ci95(result, name):
+    return np.quantile(draws(result, name).ravel(), [0.025, 0.975])
 
 
 def geometry_rel_sd(k, d, sd):
@@ -59,12 +98,13 @@ def reading_rel_sd(mu, k, d, sd, n_speeds=len(SPEEDS)):
 def test_fixed_geometry_least_squares_is_the_closed_form():
     s = rig_scene(geom_sd=None)
     r = session(seed=3)
-    fit = fit_least_squares(s, r)
+    fit = lsq_fit(s, r)
     ratio = lever_ratio(2 * IN, 1 * IN)
     mu_hat = ratio * np.sum(r.load * r.dw) / np.sum(r.load**2)
-    assert fit.values["friction.mu"] == pytest.approx(mu_hat, rel=1e-7)
-    assert fit.stderr["friction.mu"] == pytest.approx(ratio * SD / math.sqrt(np.sum(r.load**2)), rel=1e-5)
-    assert fit.names == ("friction.mu",)
+    assert value(fit, "friction.mu") == pytest.approx(mu_hat, rel=1e-7)
+    assert stderr(fit, "friction.mu") == pytest.approx(ratio * SD / math.sqrt(np.sum(r.load**2)), rel=1e-6)
+    assert fit.names == ["friction.mu"] and not fit.profiled  # the stated noise is known: no rescaling
+    assert fit.sigma_hat == pytest.approx(SD)
 
 
 def test_known_geometry_error_recovered_within_95_percent():
@@ -72,12 +112,12 @@ def test_known_geometry_error_recovered_within_95_percent():
     k_true, d_true = 2.01 * IN, 0.99 * IN
     s = rig_scene()
     r = session(mu=0.125, k=k_true, d=d_true, seed=11)
-    idata = sample_posterior(s, r, nsteps=2500, burn=800, seed=5)
-    lo, hi = ci95(idata, "friction.mu")
+    res = posterior_fit(s, r, seed=5)
+    lo, hi = ci95(res, "friction.mu")
     assert lo < 0.125 < hi
     # the data cannot see the geometry error: the estimate moves by the ratio of lever ratios
     expected = 0.125 * lever_ratio(2 * IN, 1 * IN) / lever_ratio(k_true, d_true)
-    post = idata.posterior["friction.mu"].values
+    post = draws(res, "friction.mu")
     rel = math.hypot(geometry_rel_sd(2 * IN, 1 * IN, 0.01 * IN), reading_rel_sd(0.125, 2 * IN, 1 * IN, SD))
     assert abs(post.mean() - expected) < 1.5 * rel * 0.125
     assert post.std() == pytest.approx(rel * 0.125, rel=0.1)
@@ -86,16 +126,16 @@ def test_known_geometry_error_recovered_within_95_percent():
 def test_ignoring_geometry_uncertainty_misses_a_three_sd_geometry_error():
     k_true, d_true = 2.03 * IN, 0.97 * IN
     r = session(mu=0.125, k=k_true, d=d_true, seed=11)
-    honest = fit_least_squares(rig_scene(geom_sd="0.01 inch"), r).interval("friction.mu")
-    blind = fit_least_squares(rig_scene(geom_sd=None), r).interval("friction.mu")
+    honest = interval(lsq_fit(rig_scene(geom_sd="0.01 inch"), r), "friction.mu")
+    blind = interval(lsq_fit(rig_scene(geom_sd=None), r), "friction.mu")
     assert not blind[0] < 0.125 < blind[1]
     assert (honest[1] - honest[0]) > 1.5 * (blind[1] - blind[0])
 
 
 def test_interval_widens_with_geometry_uncertainty():
     r = session(mu=0.1, seed=21)
-    sharp = sample_posterior(rig_scene(geom_sd="0.01 inch"), r, nsteps=2500, burn=800, seed=1)
-    vague = sample_posterior(rig_scene(geom_sd="0.03 inch"), r, nsteps=2500, burn=800, seed=1)
+    sharp = posterior_fit(rig_scene(geom_sd="0.01 inch"), r, seed=1)
+    vague = posterior_fit(rig_scene(geom_sd="0.03 inch"), r, seed=1)
     w1 = np.diff(ci95(sharp, "friction.mu"))[0]
     w3 = np.diff(ci95(vague, "friction.mu"))[0]
     g = geometry_rel_sd(2 * IN, 1 * IN, 0.01 * IN)
@@ -104,8 +144,8 @@ def test_interval_widens_with_geometry_uncertainty():
     assert predicted == pytest.approx(2.39, abs=0.01)
     assert w3 / w1 == pytest.approx(predicted, rel=0.1)
     # the Laplace approximation of the least-squares fit tells the same story
-    ls1 = fit_least_squares(rig_scene(geom_sd="0.01 inch"), r).stderr["friction.mu"]
-    ls3 = fit_least_squares(rig_scene(geom_sd="0.03 inch"), r).stderr["friction.mu"]
+    ls1 = stderr(lsq_fit(rig_scene(geom_sd="0.01 inch"), r), "friction.mu")
+    ls3 = stderr(lsq_fit(rig_scene(geom_sd="0.03 inch"), r), "friction.mu")
     assert ls3 / ls1 == pytest.approx(predicted, rel=0.03)
 
 
@@ -116,68 +156,77 @@ def test_least_squares_intervals_cover_when_geometry_is_drawn_from_its_prior():
     for i in range(n):
         k = 2 * IN + 0.01 * IN * rng.standard_normal()
         d = 1 * IN + 0.01 * IN * rng.standard_normal()
-        lo, hi = fit_least_squares(s, session(mu=0.16, k=k, d=d, seed=1000 + i)).interval("friction.mu")
+        lo, hi = interval(lsq_fit(s, session(mu=0.16, k=k, d=d, seed=1000 + i), n_starts=1), "friction.mu")
         hits += lo < 0.16 < hi
     # 95 % nominal; the binomial sd over 200 sessions is 1.5 %
     assert 0.90 <= hits / n <= 0.99
 
 
-def test_reading_sd_estimated_when_not_given():
+def test_reading_noise_estimated_when_not_given():
     s = rig_scene(reading=None)
     r = session(mu=0.1, seed=8)
-    fit = fit_least_squares(s, r)
-    assert fit.sd_estimated
-    assert fit.reading_sd == pytest.approx(SD, rel=0.35)
-    idata = sample_posterior(s, r, nsteps=2000, burn=600, seed=2, start=fit)
-    lo, hi = ci95(idata, "reading.sd")
+    problem = FAMILY.problem(s, r)
+    assert problem.noise_names == ("observation.sigma",)
+    fit = least_squares(problem)
+    assert fit.profiled and "observation.sigma" not in fit.names
+    assert fit.sigma_hat == pytest.approx(SD, rel=0.35)
+    # the profiled scale is the rms reading residual over readings - 1 degrees of freedom (mu is free,
+    # k and d are pinned by their normal priors)
+    resid = r.dw - problem.expected(fit.values)
+    assert fit.sigma_hat == pytest.approx(math.sqrt(resid @ resid / (len(r) - 1)), rel=1e-8)
+    res = posterior_fit(s, r, seed=2)
+    lo, hi = ci95(res, "observation.sigma")
     assert lo < SD < hi
-    lo, hi = ci95(idata, "friction.mu")
+    lo, hi = ci95(res, "friction.mu")
     assert lo < 0.1 < hi
 
 
 def test_calibration_load_convention_recovered():
     s = rig_scene(load_at="calibration")
     r = session(mu=0.3, seed=4, load_at="calibration")
-    lo, hi = fit_least_squares(s, r).interval("friction.mu")
+    lo, hi = interval(lsq_fit(s, r), "friction.mu")
     assert lo < 0.3 < hi
     # read with the other convention the same numbers overstate mu by the factor r / (r - mu)
     ratio = lever_ratio(2 * IN, 1 * IN)
-    lo2, hi2 = fit_least_squares(rig_scene(), r).interval("friction.mu")
+    lo2, hi2 = interval(lsq_fit(rig_scene(), r), "friction.mu")
     assert lo2 < 0.3 * ratio / (ratio - 0.3) < hi2 and lo2 > hi
 
 
 def test_posterior_structure_and_reproducibility(tmp_path):
     s = rig_scene()
     r = session(seed=1)
-    a = sample_posterior(s, r, nwalkers=12, nsteps=300, burn=100, seed=7)
-    b = sample_posterior(s, r, nwalkers=12, nsteps=300, burn=100, seed=7)
-    c = sample_posterior(s, r, nwalkers=12, nsteps=300, burn=100, seed=8)
-    post = a.posterior
+    a = posterior_fit(s, r, nwalkers=12, nsteps=300, burn=100, seed=7)
+    b = posterior_fit(s, r, nwalkers=12, nsteps=300, burn=100, seed=7)
+    c = posterior_fit(s, r, nwalkers=12, nsteps=300, burn=100, seed=8)
+    post = a.group("posterior")
     assert post["friction.mu"].dims == ("chain", "draw")
     assert post.sizes["chain"] == 12 and post.sizes["draw"] == 200
     assert set(post.data_vars) == {"rig.k", "rig.d", "friction.mu", "rig.lever_ratio"}
     assert post["rig.k"].attrs["units"] == "m"
-    assert "normal" in post["rig.k"].attrs["prior"]
-    assert a.log_likelihood["dw"].dims == ("chain", "draw", "reading")
-    assert a.observed_data["dw"].shape == (len(r),)
+    # the derived lever ratio is a/d of each draw
+    assert np.allclose(post["rig.lever_ratio"].values, lever_ratio(post["rig.k"].values, post["rig.d"].values),
+                       rtol=1e-14)
+    assert "normal" in json.loads(a.attrs["priors"])["rig.k"]
+    assert a.group("log_likelihood")["reading"].dims == ("chain", "draw", "obs")
+    assert a.group("observed_data")["reading"].shape == (len(r),)
     assert a.attrs["seed"] == 7 and a.attrs["model"] == "friction_rig"
-    assert np.array_equal(post["friction.mu"].values, b.posterior["friction.mu"].values)
-    assert not np.array_equal(post["friction.mu"].values, c.posterior["friction.mu"].values)
+    assert np.array_equal(post["friction.mu"].values, b.group("posterior")["friction.mu"].values)
+    assert not np.array_equal(post["friction.mu"].values, c.group("posterior")["friction.mu"].values)
     summary = json_summary(a)
     assert summary["kind"] == "posterior" and "friction.mu" in summary["params"]
-    path = tmp_path / "post.nc"
-    a.to_netcdf(str(path), engine="h5netcdf")
-    import arviz as az
-
-    back = az.from_netcdf(str(path), engine="h5netcdf")
-    assert np.array_equal(back.posterior["friction.mu"].values, post["friction.mu"].values)
+    path = tmp_path / "post.h5"
+    a.tree.to_netcdf(path, engine="h5netcdf")
+    back = load_fit(path)
+    assert np.array_equal(back.group("posterior")["friction.mu"].values, post["friction.mu"].values)
 
 
 def test_least_squares_dataset_summary():
-    fit = fit_least_squares(rig_scene(), session(seed=2))
-    summary = json_summary(fit.to_dataset())
+    res = fit_problem(FAMILY.problem(rig_scene(), session(seed=2)), method="leastsq")
+    summary = json_summary(res)
     mu = summary["params"]["friction.mu"]
-    assert mu["free"] and mu["ci95"][0] < mu["value"] < mu["ci95"][1]
+    assert summary["kind"] == "least_squares"
+    assert mu["ci95"][0] < mu["value"] < mu["ci95"][1]
+    assert json_summary(res.group("least_squares"))["params"]["friction.mu"] == mu
 
 
 def exact_bf01(r, scene, prior_sd):
@@ -212,8 +261,8 @@ def test_savage_dickey_matches_exact_evidence_ratio(mu_v_true, seed):
     s = rig_scene(geom_sd=None, friction='mu_v = { value = 0.0, vary = true, prior = "normal(0, 0.005 s/ft)" }\n'
                                          'speed_ref = "6.5 ft/s"\n')
     r = session(mu=0.1, seed=seed, mu_v=mu_v_true, speed_ref=6.5 * FT_S)
-    idata = sample_posterior(s, r, nsteps=4000, burn=500, seed=3)
-    ev = compare_laws(idata, s)["friction.mu_v"]
+    res = posterior_fit(s, r, seed=3)
+    ev = compare_laws(res, s)["friction.mu_v"]
     exact = exact_bf01(r, s, prior_sd)
     assert ev.prior_density == pytest.approx(stats.norm.pdf(0, 0, prior_sd))
     assert ev.method == "conditional"
@@ -231,8 +280,8 @@ def test_kernel_density_fallback_near_zero():
     s_lin = rig_scene(geom_sd=None, friction=law)
     r_cal = session(mu=0.1, seed=31, load_at="calibration", speed_ref=6.5 * FT_S)
     r_lin = session(mu=0.1, seed=31, speed_ref=6.5 * FT_S)
-    ev = compare_laws(sample_posterior(s_cal, r_cal, nsteps=4000, burn=500, seed=3), s_cal)["friction.mu_v"]
-    lin = compare_laws(sample_posterior(s_lin, r_lin, nsteps=4000, burn=500, seed=3), s_lin)["friction.mu_v"]
+    ev = compare_laws(posterior_fit(s_cal, r_cal, seed=3), s_cal)["friction.mu_v"]
+    lin = compare_laws(posterior_fit(s_lin, r_lin, seed=3), s_lin)["friction.mu_v"]
     assert ev.method == "kde" and lin.method == "conditional"
     assert ev.bf01 > 3
     # same noise draws, nearly the same information about mu_v: nearly the same evidence
@@ -243,26 +292,28 @@ def test_refusals():
     s = rig_scene()
     r = session(seed=1)
     mixed = Readings(load=r.load, dw=r.dw, speed=r.speed, material=tuple(["a", "b"] * (len(r) // 2)), where="m.csv")
-    with pytest.raises(FitError, match=r"\['a', 'b'\]"):
-        fit_least_squares(s, mixed)
+    with pytest.raises(FitError, match=r"2 materials \['a', 'b'\]"):
+        lsq_fit(s, mixed)
     law = rig_scene(friction='mu_v = { value = 0.0, vary = true, prior = "normal(0, 0.005 s/ft)" }\n')
     with pytest.raises(FitError, match="speed_<unit>"):
-        fit_least_squares(law, Readings(load=r.load, dw=r.dw, where="nospeed.csv"))
-    with pytest.raises(FitError, match="nwalkers = 4"):
-        sample_posterior(s, r, nwalkers=4)
-    with pytest.raises(FitError, match="burn = 10"):
-        sample_posterior(s, r, nsteps=10, burn=10)
+        lsq_fit(law, Readings(load=r.load, dw=r.dw, where="nospeed.csv"))
+    with pytest.raises(FitError, match="at least 6 walkers"):
+        posterior_fit(s, r, nwalkers=4)
+    with pytest.raises(FitError, match="burn must lie in"):
+        posterior_fit(s, r, nsteps=10, burn=10)
     one = Readings(load=r.load[:1], dw=r.dw[:1], where="one.csv")
-    with pytest.raises(FitError, match="1 reading"):
-        fit_least_squares(rig_scene(reading=None), one)
+    with pytest.raises(FitError, match="noise scale cannot be estimated"):
+        lsq_fit(rig_scene(reading=None), one)
     fixed = load_scene("fixed.toml", text='model = "friction_rig"\n[rig]\nk = "2 inch"\nd = "1 inch"\n'
                                           '[friction]\nmu = 0.1\n')
-    with pytest.raises(FitError, match="only the reading sd varies"):
-        fit_least_squares(fixed, r)
+    with pytest.raises(FitError, match="no structural parameter"):
+        lsq_fit(fixed, r)
     with pytest.raises(FitError, match="nothing to fit"):
-        fit_least_squares(load_scene("fixed.toml", text='model = "friction_rig"\n[rig]\nk = "2 inch"\n'
-                                     'd = "1 inch"\n[friction]\nmu = 0.1\n[reading]\nsd = "0.01 gf"\n'), r)
+        lsq_fit(load_scene("fixed.toml", text='model = "friction_rig"\n[rig]\nk = "2 inch"\n'
+                                     'd = "1 inch"\n[friction]\nmu = 0.1\n[observation]\nsigma = "0.01 gf"\n'), r)
     with pytest.raises(FitError, match="was not sampled"):
         from escfit.friction import savage_dickey
 
-        savage_dickey(sample_posterior(s, r, nwalkers=8, nsteps=50, burn=10), s, "friction.mu_v")
+        savage_dickey(posterior_fit(s, r, nwalkers=8, nsteps=50, burn=10), s, "friction.mu_v")
+    with pytest.raises(FitError, match="no posterior"):
+        compare_laws(fit_problem(FAMILY.problem(s, r)), s)

@@ -1,4 +1,4 @@
-"""friction_rig scenes: parameters, priors, reading sd, forward predictions and refusals."""
+"""friction_rig scenes: parameters, priors, the reading noise observation.sigma, forward predictions and refusals."""
 
 from __future__ import annotations
 
@@ -33,29 +33,29 @@ def test_brief_example_parses_with_shared_geometry_priors():
     assert s.model == "friction_rig"
     assert s.params["rig.k"].value == pytest.approx(2 * IN)
     assert s.params["rig.d"].sd == pytest.approx(0.01 * IN)
-    assert s.free_names() == ["rig.k", "rig.d", "friction.mu", "reading.sd"]
+    assert s.free_names() == ["rig.k", "rig.d", "friction.mu", "observation.sigma"]
     assert s.priors["rig.k"].family == "normal" and s.priors["rig.k"].args == pytest.approx((2 * IN, 0.01 * IN))
     assert s.priors["friction.mu"].family == "uniform"
-    assert s.priors["reading.sd"].family == "loguniform"  # no [reading]: estimated
+    assert s.priors["observation.sigma"].family == "loguniform"  # no [observation]: estimated
     assert s.laws == ()
 
 
 def test_reading_resolution_routes_agree():
-    full = scene('[reading]\nresolution = "0.5 inch"\nfull_scale_load = "5 gf"\nscale_length = "11.5 ft"\n')
-    slope = scene('[reading]\nresolution = "0.5 inch"\nslope = "27.6 inch/gf"\n')
-    sd = full.params["reading.sd"].value
+    full = scene('[observation]\nresolution = "0.5 inch"\nfull_scale_load = "5 gf"\nscale_length = "11.5 ft"\n')
+    slope = scene('[observation]\nresolution = "0.5 inch"\nslope = "27.6 inch/gf"\n')
+    sd = full.params["observation.sigma"].value
     assert sd / GF == pytest.approx(math.sqrt(1 / 6) * 0.5 * 5 / 138, rel=1e-12)
-    assert slope.params["reading.sd"].value == pytest.approx(sd, rel=1e-12)
-    assert "reading.sd" not in full.free_names()
-    assert "uniform rounding" in full.reading_note
-    direct = scene('[reading]\nsd = "0.0074 gf"\n')
-    assert direct.params["reading.sd"].value == pytest.approx(0.0074 * GF)
+    assert slope.params["observation.sigma"].value == pytest.approx(sd, rel=1e-12)
+    assert "observation.sigma" not in full.free_names()
+    assert "uniform rounding" in full.noise_note
+    direct = scene('[observation]\nsigma = "0.0074 gf"\n')
+    assert direct.params["observation.sigma"].value == pytest.approx(0.0074 * GF)
 
 
 def test_wire_stiffness_route_uses_the_optical_lever():
-    s = scene('[reading]\nresolution = "0.5 inch"\nwire_stiffness = "1e-5 N*m"\nscale_distance = "15 ft"\n')
+    s = scene('[observation]\nresolution = "0.5 inch"\nwire_stiffness = "1e-5 N*m"\nscale_distance = "15 ft"\n')
     slope = 2 * 15 * 12 * IN * math.sqrt(3) * IN / 1e-5
-    assert s.params["reading.sd"].value == pytest.approx(math.sqrt(1 / 6) * 0.5 * IN / slope, rel=1e-12)
+    assert s.params["observation.sigma"].value == pytest.approx(math.sqrt(1 / 6) * 0.5 * IN / slope, rel=1e-12)
 
 
 def test_laws_with_units_and_references():
@@ -87,15 +87,19 @@ def test_laws_with_units_and_references():
         (BASE + 'mu_w = { value = 0, vary = true, prior = "normal(0, 0.1 s)" }\n', "rig.toml [friction.mu_w].prior",
          ["'0.1 s'", "1/N"]),
         (BASE + 'load_ref = "2 gf"\n', "rig.toml [friction.load_ref]", ["mu_w"]),
-        (BASE + '[reading]\nresolution = "0.5 inch"\n', "rig.toml [reading]", ["exactly one"]),
-        (BASE + '[reading]\nsd = "1 gf"\nslope = "1 inch/gf"\n', "rig.toml [reading]", ["exactly one"]),
-        (BASE + '[reading]\nslope = "1 inch/gf"\n', "rig.toml [reading]", ["add resolution"]),
-        (BASE + '[reading]\nresolution = "0.5 inch"\nfull_scale_load = "5 gf"\n', "rig.toml [reading]",
+        (BASE + '[observation]\nresolution = "0.5 inch"\n', "rig.toml [observation]", ["exactly one"]),
+        (BASE + '[observation]\nsigma = "1 gf"\nslope = "1 inch/gf"\n', "rig.toml [observation]", ["exactly one"]),
+        (BASE + '[observation]\nslope = "1 inch/gf"\n', "rig.toml [observation]", ["add resolution"]),
+        (BASE + '[observation]\nresolution = "0.5 inch"\nfull_scale_load = "5 gf"\n', "rig.toml [observation]",
          ["scale_length"]),
-        (BASE + '[reading]\nsd = "-1 gf"\n', "rig.toml [reading].sd", ["'-1 gf'"]),
-        (BASE + '[reading]\nresolution = "0.5 inch"\nslope = "0 inch/gf"\n', "rig.toml [reading].slope",
+        (BASE + '[observation]\nsigma = "-1 gf"\n', "rig.toml [observation].sigma", ["'-1 gf'"]),
+        (BASE + '[observation]\nresolution = "0.5 inch"\nslope = "0 inch/gf"\n', "rig.toml [observation].slope",
          ["positive", "'0 inch/gf'"]),
-        (BASE + '[reading]\nresolution = "0.5 inch"\nslope = "1 inch"\n', "rig.toml [reading].slope", ["m/N"]),
+        (BASE + '[observation]\nresolution = "0.5 inch"\nslope = "1 inch"\n', "rig.toml [observation].slope", ["m/N"]),
+        (BASE + '[observation]\nsd = "0.0074 gf"\n', "rig.toml [observation].sd", ["sigma = ..."]),
+        (BASE + '[observation]\nsigma = "0.0074 gf"\nnoise = "white"\n', "rig.toml [observation]",
+         ["unknown key(s) ['noise']"]),
+        (BASE + '[reading]\nsd = "0.0074 gf"\n', "rig.toml [reading]", ["rename [reading] to [observation]"]),
     ],
 )
 def test_refusals_name_key_and_value(text, where, words):
@@ -106,13 +110,30 @@ def test_refusals_name_key_and_value(text, where, words):
         assert w in info.value.message, info.value.message
 
 
+def test_old_reading_table_is_refused_in_one_line_naming_the_file():
+    with pytest.raises(SceneError) as info:
+        load_scene("old_rig.toml", text=BASE + '[reading]\nresolution = "0.5 inch"\nslope = "27.6 inch/gf"\n')
+    text = str(info.value)
+    assert "\n" not in text and text.startswith("old_rig.toml [reading]: ")
+    assert "[observation]" in text and "observation.sigma" in text
+
+
+def test_free_sigma_with_open_range_gets_the_default_bounds():
+    s = scene('[observation]\nsigma = { value = "0.01 gf", vary = true }\n')
+    pr = s.priors["observation.sigma"]
+    assert pr.kind == "loguniform" and (pr.lo, pr.hi) == (1e-8, 1.0)
+    assert s.noise_route == "sigma" and "free" in s.noise_note
+    given = scene('[observation]\nsigma = { value = "0.01 gf", vary = true, prior = "loguniform(1e-6 N, 1e-3 N)" }\n')
+    assert given.priors["observation.sigma"].args == pytest.approx((1e-6, 1e-3))
+
+
 def test_length_given_as_force_is_a_unit_error():
     with pytest.raises(UnitError, match="'2 gf'"):
         load_scene("rig.toml", text=BASE.replace('"2.0 inch", sd', '"2 gf", sd'))
 
 
 def test_simulate_predicts_dw_for_a_grid_of_loads():
-    s = scene('[reading]\nsd = "0.0074 gf"\n')
+    s = scene('[observation]\nsigma = "0.0074 gf"\n')
     ds = simulate(s, loads=np.array([1.0, 2.2]) * GF)
     assert ds["dw"].dims == ("load", "speed")
     assert ds["dw"].values[:, 0] / GF == pytest.approx(np.array([1.0, 2.2]) * 0.1 / math.sqrt(3))
@@ -125,7 +146,7 @@ def test_simulate_predicts_dw_for_a_grid_of_loads():
 
 
 def test_simulate_with_speed_law_spans_monday_speeds():
-    s = scene('mu_v = { value = "0.01 s/ft" }\nspeed_ref = "6.5 ft/s"\n[reading]\nsd = "0.0074 gf"\n')
+    s = scene('mu_v = { value = "0.01 s/ft" }\nspeed_ref = "6.5 ft/s"\n[observation]\nsigma = "0.0074 gf"\n')
     ds = simulate(s)
     assert ds.sizes["speed"] == 4
     assert ds["mu"].values[0] == pytest.approx(0.1 + 0.01 * (np.array([3, 5, 7.5, 10]) - 6.5))

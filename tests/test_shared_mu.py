@@ -7,7 +7,6 @@ import pytest
 
 import escfit
 from escfit.inference import fit
-from escfit.friction.fitfile import fit_rig
 from escfit.balance.synthetic.unit_curves import record_unit_curve
 from escfit.balance.recordings import UnitCurve, write_unit_curve
 
@@ -66,8 +65,8 @@ def decay_file(tmp_path_factory):
     write_unit_curve(path, UnitCurve(np.array(swing), np.array(value), "notches", np.radians(6.0), load=np.array(load),
                                      load_unit="g", unit=np.full(len(swing), "", dtype=str)), comments=["shared-mu test"])
     rig = d / "rig.h5"
-    fit_rig(escfit.load_scene(DATASETS / "friction" / "monday1965_rig.toml"),
-            DATASETS / "friction" / "monday1965_session_1095_steel.csv", method="emcee", steps=800, out=rig)
+    fit(DATASETS / "friction" / "monday1965_rig.toml", DATASETS / "friction" / "monday1965_session_1095_steel.csv",
+        method="emcee", steps=800, out=rig)
     return d, path, rig
 
 

@@ -161,8 +161,8 @@ def charts(out_dir, c0, no_png, force):
     click.echo(f"graph factor K/K_R at C/omega0 = {c0:g}: {graph_factor(c0):.4f}")
 
 
-RECIPE_KEYS = {"data", "scene", "method", "out", "seed", "walkers", "steps", "burn", "unit", "format", "notch_deg",
-               "report", "title", "solver", "moves"}
+RECIPE_KEYS = {"data", "scene", "method", "out", "seed", "walkers", "steps", "burn", "unit", "material", "format",
+               "notch_deg", "report", "title", "solver", "moves"}
 
 
 def _read_recipe(path: Path) -> dict:
@@ -191,6 +191,7 @@ def _read_recipe(path: Path) -> dict:
 @click.option("--steps", type=click.IntRange(10), default=None)
 @click.option("--burn", type=click.IntRange(0), default=None)
 @click.option("--unit", "unit_id", default=None, help="Fit only this unit of a multi-unit file.")
+@click.option("--material", default=None, help="friction_rig: fit only this material of a rig readings file.")
 @click.option("--format", "fmt", type=click.Choice(["unit-curve", "pulses", "timegrapher", "tg-applog", "timeseries", "raw"]),
               default=None, help="Recording format (detected from the file's content; raw: a table or .mat file read "
               "with the [recording] options).")
@@ -211,7 +212,7 @@ def _read_recipe(path: Path) -> dict:
 @click.option("--force", is_flag=True, help="Replace an existing results file.")
 @click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None, help="Also write a report.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def fit(data, scene_path, method, out, seed, walkers, steps, burn, unit_id, fmt, time_column, sample_rate,
+def fit(data, scene_path, method, out, seed, walkers, steps, burn, unit_id, material, fmt, time_column, sample_rate,
         angle_column, angle_unit, counts_per_turn, scale, start_time, stop_time, solver, moves, notch_deg, resume,
         force, report_path, quiet):
     """Fit DATA (a recording) with --scene SCENE, or run a fit RECIPE.toml."""
@@ -238,7 +239,12 @@ def fit(data, scene_path, method, out, seed, walkers, steps, burn, unit_id, fmt,
                                  "angle_column": _column(angle_column), "angle_unit": angle_unit,
                                  "counts_per_turn": counts_per_turn, "scale": scale, "start": start_time,
                                  "stop": stop_time}}
-    else:
+    if scene.model == "friction_rig" and pick(material, "material", None) is not None:
+        options["material"] = pick(material, "material", None)
+    elif pick(material, "material", None) is not None:
+        raise SceneError(f"--material applies to friction_rig scenes; this scene's model is {scene.model!r}",
+                         scene_path)
+    if scene.model != "balance":
         given = {"--format": pick(fmt, "format", None), "--notch-deg": pick(notch_deg, "notch_deg", None),
                  "--unit": pick(unit_id, "unit", None), "--solver": pick(solver, "solver", None),
                  "--time-column": time_column, "--sample-rate": sample_rate, "--angle-column": angle_column,

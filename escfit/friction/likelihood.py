@@ -68,39 +68,56 @@ class SessionModel:
             load_ref=self.scene.load_ref, speed_ref=self.scene.speed_ref,
         )
 
-    def predict(self, theta) -> np.ndarray:
-        """Predicted ``dw`` (N), shape ``(n_sets, n_readings)``; NaN where impossible."""
-        v = self.unpack(theta)
+    def _predicted(self, v: dict[str, np.ndarray]) -> np.ndarray:
         mu = self.mu(v)
         dw = predicted_dw(self.readings.load[None, :], mu, v["rig.k"][:, None], v["rig.d"][:, None],
                           self.scene.load_at)
         return np.where(mu >= 0, dw, np.nan)
 
-    def log_prior(self, theta) -> np.ndarray:
-        """Sum of the explicit priors, ``-inf`` outside any support or for ``d >= k``."""
-        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+    def predict(self, theta) -> np.ndarray:
+        """Predicted ``dw`` (N), shape ``(n_sets, n_readings)``; NaN where impossible."""
+        return self._predicted(self.unpack(theta))
+
+    def _log_prior(self, theta: np.ndarray, v: dict[str, np.ndarray]) -> np.ndarray:
         out = np.zeros(theta.shape[0])
         for j, n in enumerate(self.names):
             out = out + self.scene.priors[n].logpdf(theta[:, j])
-        v = self.unpack(theta)
         return np.where(v["rig.d"] < v["rig.k"], out, -np.inf)
 
-    def pointwise_loglik(self, theta) -> np.ndarray:
-        """Log likelihood of each reading, shape ``(n_sets, n_readings)``."""
-        v = self.unpack(theta)
+    def log_prior(self, theta) -> np.ndarray:
+        """Sum of the explicit priors, ``-inf`` outside any support or for ``d >= k``."""
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        return self._log_prior(theta, self.unpack(theta))
+
+    def _pointwise(self, v: dict[str, np.ndarray]) -> np.ndarray:
         sd = v[SIGMA][:, None]
-        resid = (self.readings.dw[None, :] - self.predict(theta)) / sd
+        resid = (self.readings.dw[None, :] - self._predicted(v)) / sd
         ll = -0.5 * resid**2 - np.log(sd) - 0.5 * np.log(2 * np.pi)
         return np.where(np.isfinite(ll), ll, -np.inf)
 
+    def pointwise_loglik(self, theta) -> np.ndarray:
+        """Log likelihood of each reading, shape ``(n_sets, n_readings)``."""
+        return self._pointwise(self.unpack(theta))
+
+    def log_prob_parts(self, theta) -> tuple[np.ndarray, np.ndarray]:
+        """Log prior and log likelihood of each row of ``theta`` (the likelihood ``-inf`` where the
+        model fails, ``nan`` where the prior already excludes the row), one unpacking for both."""
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        v = self.unpack(theta)
+        lp = self._log_prior(theta, v)
+        ok = np.isfinite(lp)
+        ll = np.full(lp.shape, np.nan)
+        if np.any(ok):
+            part = self._pointwise({n: a[ok] for n, a in v.items()}).sum(axis=1)
+            ll[ok] = np.where(np.isfinite(part), part, -np.inf)
+        return lp, ll
+
     def log_prob(self, theta) -> np.ndarray:
         """Log posterior (up to a constant) of each row of ``theta``; ``-inf`` when invalid."""
-        lp = self.log_prior(theta)
+        lp, ll = self.log_prob_parts(theta)
         ok = np.isfinite(lp)
         out = np.full(lp.shape, -np.inf)
-        if np.any(ok):
-            ll = self.pointwise_loglik(np.atleast_2d(theta)[ok]).sum(axis=1)
-            out[ok] = lp[ok] + np.where(np.isfinite(ll), ll, -np.inf)
+        out[ok] = lp[ok] + ll[ok]
         return out
 
 

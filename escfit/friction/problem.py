@@ -184,15 +184,14 @@ class RigProblem(ProblemBase):
     def log_prob_many(self, vecs: np.ndarray) -> np.ndarray:
         """Log posterior (up to a constant) of each row of ``vecs``, in one whole-array pass."""
         theta = np.atleast_2d(np.asarray(vecs, float))
-        lp = self.model.log_prior(theta)
-        out = np.full(lp.shape, -np.inf)
+        lp, ll = self.model.log_prob_parts(theta)
         ok = np.isfinite(lp)
-        if np.any(ok):
-            ll = self.model.pointwise_loglik(theta[ok]).sum(axis=1)
-            good = np.isfinite(ll)
-            if not np.all(good):
-                self._count_failures(theta[ok][~good])
-            out[ok] = np.where(good, lp[ok] + ll, -np.inf)
+        failed = ok & ~np.isfinite(ll)
+        if np.any(failed):
+            self._count_failures(theta[failed])
+        out = np.full(lp.shape, -np.inf)
+        good = ok & ~failed
+        out[good] = lp[good] + ll[good]
         return out
 
     def _count_failures(self, theta: np.ndarray) -> None:

@@ -252,7 +252,8 @@ def _reading_sigma(table: Any, where: str, k: float, d: float) -> tuple[Param, s
                 f"reading noise observation.sigma estimated from the data (log-uniform prior on [{lo:g}, {hi:g}] N)",
                 "estimated")
     if isinstance(table, Mapping) and "sd" in table:
-        raise SceneError("unknown key 'sd': the reading noise is written sigma = ... (observation.sigma)", f"{where}.sd")
+        raise SceneError("unknown key 'sd': the reading noise is written sigma = ... (observation.sigma)",
+                         f"{where}.sd")
     check_keys(table, _OBSERVATION, where)
     routes = [key for key in ("sigma", "slope", "full_scale_load", "wire_stiffness") if key in table]
     if len(routes) != 1:

@@ -173,7 +173,7 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
             best = res
     if best is None:
         raise FitError("least squares failed from every start point")
-    free_dof = max(n - (len(names) - pinned), 1)
+    free_dof = _data_dof(best, priors, n, len(names) - pinned)
     if iterate_scale:
         for _ in range(50):
             r = best.residual[:n] * scale[0]
@@ -186,6 +186,7 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
             if done:
                 break
             best = lmfit.minimize(residual, best.params, method="least_squares", scale_covar=False, **options)
+            free_dof = _data_dof(best, priors, n, len(names) - pinned)
     value = vector(best.params)
     stderr = np.array([np.nan if best.params[k].stderr is None else best.params[k].stderr for k in keys], float)
     corr = np.full((len(names), len(names)), np.nan)
@@ -210,6 +211,34 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
         sigma_hat = sigma
     return LeastSquaresResult(names, value, stderr, corr, chisqr, float(redchi), float(sigma_hat), int(n),
                               len(starts), bool(best.success), str(best.message), vals, profile_noise)
+
+
+def _data_dof(best, priors, n: int, unpinned: int) -> float:
+    """Degrees of freedom of the readings' residuals: readings minus the effective number of
+    parameters they determine, ``n - tr(H_d)``.
+
+    ``H_d = J_d (J^T J)^-1 J_d^T`` is the readings' block of the hat matrix of the stacked
+    residuals (readings and Gaussian priors); since ``J^T J = J_d^T J_d + J_p^T J_p``,
+    ``tr(H_d) = p - tr(C J_p^T J_p)`` with the unscaled covariance ``C``, and ``J_p`` is
+    diagonal (the priors' residual slopes).  A parameter its prior pins counts ~0, one the
+    readings determine despite a weak prior counts ~1.  Without a covariance: readings minus
+    the parameters without a Gaussian prior.
+    """
+    p = len(priors)
+    cov = getattr(best, "covar", None)
+    if cov is None or np.shape(cov) != (p, p) or not np.all(np.isfinite(np.diag(cov))):
+        return float(max(n - unpinned, 1))
+    x = np.array([best.params[k].value for k in best.var_names])
+    tr_prior = 0.0
+    for i, pr in enumerate(priors):
+        if pr.kind in ("normal", "halfnormal"):
+            slope = 1.0 / pr.args[-1]
+        elif pr.kind == "lognormal" and x[i] > 0:
+            slope = 1.0 / (x[i] * pr.args[1])
+        else:
+            continue
+        tr_prior += float(cov[i, i]) * slope * slope
+    return float(max(n - (p - tr_prior), 1.0))
 
 
 def _two_stage_ar1(problem, *, n_starts, n_refine, seed, fixed, start) -> LeastSquaresResult:
