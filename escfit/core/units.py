@@ -8,6 +8,7 @@ pint (rad), so an angle given as a length is refused by dimensional analysis.
 from __future__ import annotations
 
 import math
+import re
 from functools import lru_cache
 from typing import Any
 
@@ -15,7 +16,7 @@ import pint
 
 from .errors import UnitError
 
-__all__ = ["ureg", "to_canonical", "CANONICAL"]
+__all__ = ["ureg", "to_canonical", "CANONICAL", "safe_unit_text", "quantity", "MAX_UNIT_TEXT"]
 
 ureg = pint.UnitRegistry()
 ureg.define("gf = gram * g_0 = gram_force")  # gram-force, as in Monday's fixture data
@@ -97,3 +98,62 @@ def to_canonical(value: Any, kind: str, where: str) -> float:
     if not math.isfinite(out):
         raise UnitError(f"value {value!r} is not finite", where)
     return out
+
+
+MAX_UNIT_TEXT = 40
+_UNIT_TOKEN = re.compile(r"(?P<name>[A-Za-z_°µΩ]+(?:_\d{1,2})?(?![\w])|%)|(?P<pow>(?:\*\*|\^)\s*-?\d{1,2})(?![\d.])"
+                         r"|(?P<op>[*/])|(?P<paren>[()])|(?P<space>\s+)")
+_NUMBER = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)")
+
+
+def safe_unit_text(text: str) -> bool:
+    """Whether ``text`` (what follows an argument's number) is a unit pint may evaluate safely.
+
+    Tokens: unit names (ASCII letters, ``_``, ``°``, ``µ``, ``Ω``, optionally ending in ``_``
+    and one or two digits such as ``g_0``), ``%``, ``*``, ``/``, parentheses (depth at most 2),
+    spaces and a power ``**n`` / ``^n`` (``n`` one or two digits, optionally negative) directly
+    after a name.  No other numbers, so nothing pint evaluates can grow: ``9**9**9`` is refused.
+    """
+    if len(text) > MAX_UNIT_TEXT:
+        return False
+    pos, prev, depth = 0, "start", 0
+    while pos < len(text):
+        m = _UNIT_TOKEN.match(text, pos)
+        if not m:
+            return False
+        pos = m.end()
+        tok = m.lastgroup
+        if tok == "space":
+            continue
+        if tok == "pow" and prev != "name":
+            return False
+        if tok == "op" and prev == "op":
+            return False
+        if tok == "paren":
+            depth += 1 if m.group() == "(" else -1
+            if not 0 <= depth <= 2:
+                return False
+            tok = m.group()
+        prev = tok
+    return depth == 0 and prev not in ("op", "(")
+
+
+def quantity(text: str, where: str) -> "pint.Quantity":
+    """A number followed by an optional unit, read without letting pint evaluate arithmetic.
+
+    Raises
+    ------
+    UnitError
+        Anything but a finite number and a unit of :func:`safe_unit_text`'s grammar.
+    """
+    m = _NUMBER.match(text)
+    rest = text[m.end():].strip() if m else ""
+    if not m or not math.isfinite(float(m.group(1))) or (rest and not safe_unit_text(rest)):
+        raise UnitError(f"cannot read {text!r}: write a number and a unit, e.g. '0.3 turn' or '2 deg'", where)
+    if not rest:
+        return ureg.Quantity(float(m.group(1)))
+    units = ("1 " + rest) if rest[0] == "/" else rest.lstrip("*").strip()
+    try:
+        return ureg.Quantity(float(m.group(1)), ureg.parse_units(units))
+    except Exception:  # pint raises several types for unknown names
+        raise UnitError(f"unknown unit {rest!r} in {text!r}", where) from None

@@ -57,7 +57,7 @@ from scipy import stats
 
 from ..core.errors import SceneError
 from ..core.params import Param
-from ..core.units import ureg
+from ..core.units import MAX_UNIT_TEXT, safe_unit_text, ureg
 
 __all__ = ["Prior", "parse_prior", "prior_of", "FORMS", "uniform", "loguniform", "normal", "halfnormal",
            "lognormal", "flat"]
@@ -68,13 +68,10 @@ FORMS = {"uniform": "a, b", "loguniform": "a, b", "normal": "mu, sd", "halfnorma
 _ARITY = {k: len(v.split(",")) for k, v in FORMS.items()}
 _LOG_2PI_HALF = 0.5 * math.log(2.0 * math.pi)
 _MAX_SPEC = 200
-_MAX_UNIT = 40
 
 _SPEC = re.compile(r"^\s*([A-Za-z_]+)\s*\((.*)\)\s*$", re.S)
 _NUMBER = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)")
 _NONFINITE = re.compile(r"\s*[-+]?(?:nan|inf|infinity)\s*$", re.I)
-_UNIT_TOKEN = re.compile(r"(?P<name>[A-Za-z_°µΩ]+(?:_\d{1,2})?(?![\w])|%)|(?P<pow>(?:\*\*|\^)\s*-?\d{1,2})(?![\d.])"
-                         r"|(?P<op>[*/])|(?P<paren>[()])|(?P<space>\s+)")
 
 
 @dataclass(frozen=True)
@@ -405,7 +402,7 @@ def _argument(text: str, unit: str, kind: str, spec: str, where: str) -> float:
     if _NONFINITE.match(text):
         raise SceneError(f"prior {spec!r}: argument {text!r} is not finite", where)
     m = _NUMBER.match(text)
-    if not m or len(text) > _MAX_UNIT + 30:
+    if not m or len(text) > MAX_UNIT_TEXT + 30:
         raise SceneError(f"prior {spec!r}: cannot read argument {text!r}; {how}", where)
     value = float(m.group(1))
     rest = text[m.end():].strip()
@@ -416,9 +413,9 @@ def _argument(text: str, unit: str, kind: str, spec: str, where: str) -> float:
     if kind == "lognormal":
         raise SceneError(f"prior {spec!r}: lognormal(mu, sigma) takes plain numbers (mu and sigma of the log of "
                          f"the value in {unit or 'its dimensionless unit'}), not {text!r}", where)
-    if not _safe_unit(rest):
+    if not safe_unit_text(rest):
         raise SceneError(f"prior {spec!r}: cannot read argument {text!r}; {how}; a unit is names, * / ( ) and "
-                         f"integer powers of a name, at most {_MAX_UNIT} characters", where)
+                         f"integer powers of a name, at most {MAX_UNIT_TEXT} characters", where)
     units = ("1 " + rest) if rest[0] == "/" else rest.lstrip("*").strip()
     try:
         factor = ureg.Quantity(1.0, ureg.parse_units(units))
@@ -442,35 +439,3 @@ def _target(unit: str):
         return ureg.parse_units(unit) if unit else ureg.dimensionless
     except Exception:
         raise SceneError(f"the parameter's unit {unit!r} is not a unit pint knows") from None
-
-
-def _safe_unit(text: str) -> bool:
-    """Whether ``text`` (what follows an argument's number) is a unit pint may evaluate safely.
-
-    Tokens: unit names (ASCII letters, ``_``, ``°``, ``µ``, ``Ω``, optionally ending in ``_``
-    and one or two digits such as ``g_0``), ``%``, ``*``, ``/``, parentheses (depth at most 2),
-    spaces and a power ``**n`` / ``^n`` (``n`` one or two digits, optionally negative) directly
-    after a name.  No other numbers, so nothing pint evaluates can grow: ``9**9**9`` is refused.
-    """
-    if len(text) > _MAX_UNIT:
-        return False
-    pos, prev, depth = 0, "start", 0
-    while pos < len(text):
-        m = _UNIT_TOKEN.match(text, pos)
-        if not m:
-            return False
-        pos = m.end()
-        tok = m.lastgroup
-        if tok == "space":
-            continue
-        if tok == "pow" and prev != "name":
-            return False
-        if tok == "op" and prev == "op":
-            return False
-        if tok == "paren":
-            depth += 1 if m.group() == "(" else -1
-            if not 0 <= depth <= 2:
-                return False
-            tok = m.group()
-        prev = tok
-    return depth == 0 and prev not in ("op", "(")

@@ -40,7 +40,7 @@ import numpy as np
 from ..core.errors import EscfitError, FitError, SceneError
 from ..core.params import Param, ParamSet, read_param
 from ..core.scene import check_keys
-from ..core.units import ureg
+from ..core.units import quantity
 from ..likelihood.freeparams import FreeParameters
 from ..likelihood.problem import ProblemBase
 from .data import FORMAT, TurnsData
@@ -62,10 +62,8 @@ _LOG_SQRT_2PI = 0.5 * math.log(2 * math.pi)
 def _turns(raw: Any, where: str) -> Any:
     """A number of turns: bare numbers are turns, strings may carry an angle unit ('0.3 turn')."""
     if isinstance(raw, str):
+        q = quantity(raw, where)
         try:
-            q = ureg.Quantity(raw)
-            if not hasattr(q, "unitless"):
-                return float(q)
             return float(q.magnitude) if q.unitless else float(q.to("turn").magnitude)
         except Exception as exc:  # pint raises several types
             raise SceneError(f"cannot read {raw!r} as a number of turns ({exc})", where) from None
