@@ -27,7 +27,6 @@ import xarray as xr
 
 from .core.atomic import atomic_path
 from .core.errors import ResultsError
-from .core.provenance import dependency_versions  # noqa: F401 - re-exported for writers
 
 __all__ = ["SCHEMA_VERSION", "FitResult", "load_fit", "write_fit"]
 

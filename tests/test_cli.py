@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import json
 import shutil
+from pathlib import Path
 
+import numpy as np
 import pytest
 from click.testing import CliRunner
 
@@ -98,3 +100,36 @@ def test_errors_exit_2(args, fragment):
     r = run(*args)
     assert r.exit_code == 2, r.output
     assert fragment in r.output
+
+
+def test_balance_emcee_run_interrupted_and_resumed_from_the_command_line(tmp_path, monkeypatch):
+    """A balance recipe killed mid-run continues with --resume to the same draws as an uninterrupted run."""
+    from escfit.balance.problems.curves import FitProblem
+    from escfit.results import load_fit
+
+    recipe = ROOT / "fits" / "monday_unit4.toml"
+    args = [recipe, "--walkers", 12, "--steps", 60, "--burn", 20, "--seed", 7, "--quiet"]
+    whole = tmp_path / "whole.h5"
+    assert run("fit", *args, "--out", whole).exit_code == 0
+    out = tmp_path / "cut.h5"
+    calls = {"n": 0}
+    original = FitProblem.log_prob_many  # the exact solver evaluates each half-ensemble in one call
+
+    def dying(self, vecs):
+        calls["n"] += 1
+        if calls["n"] > 1 + 2 * 25 + 1:  # first ensemble, 25 steps, then half of one
+            raise KeyboardInterrupt
+        return original(self, vecs)
+
+    monkeypatch.setattr(FitProblem, "log_prob_many", dying)
+    cut = CliRunner().invoke(cli, ["fit", *map(str, args), "--out", str(out)])
+    monkeypatch.setattr(FitProblem, "log_prob_many", original)
+    assert cut.exit_code != 0 and not out.exists() and Path(f"{out}.emcee").exists()
+    refused = run("fit", *args, "--out", out)
+    assert refused.exit_code == 2 and "--resume" in refused.output
+    assert run("fit", *args, "--out", out, "--resume").exit_code == 0
+    a, b = load_fit(out), load_fit(whole)
+    assert a.attrs["resumed"] == 1 and a.group("posterior").sizes == {"chain": 12, "draw": 60 - 20}
+    for name in a.parameter_names:
+        np.testing.assert_array_equal(a.group("posterior")[name].values, b.group("posterior")[name].values)
+    assert not Path(f"{out}.emcee").exists()

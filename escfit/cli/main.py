@@ -192,9 +192,10 @@ def _read_recipe(path: Path) -> dict:
 @click.option("--burn", type=click.IntRange(0), default=None)
 @click.option("--unit", "unit_id", default=None, help="Fit only this unit of a multi-unit file.")
 @click.option("--material", default=None, help="friction_rig: fit only this material of a rig readings file.")
-@click.option("--format", "fmt", type=click.Choice(["unit-curve", "pulses", "timegrapher", "tg-applog", "timeseries", "raw"]),
+@click.option("--format", "fmt", type=click.Choice(["unit-curve", "pulses", "timegrapher", "tg-applog", "timeseries", "raw",
+                                                   "speed-trace", "terminal-speeds"]),
               default=None, help="Recording format (detected from the file's content; raw: a table or .mat file read "
-              "with the [recording] options).")
+              "with the [recording] options; speed-trace and terminal-speeds: Geneva data).")
 @click.option("--time-column", default=None, help="[recording] time_column: name or 1-based position.")
 @click.option("--sample-rate", default=None, help="[recording] sample_rate, e.g. '500 Hz' (instead of a time column).")
 @click.option("--angle-column", default=None, help="[recording] angle_column: name or 1-based position.")
@@ -244,8 +245,10 @@ def fit(data, scene_path, method, out, seed, walkers, steps, burn, unit_id, mate
     elif pick(material, "material", None) is not None:
         raise SceneError(f"--material applies to friction_rig scenes; this scene's model is {scene.model!r}",
                          scene_path)
+    if scene.model == "geneva" and pick(fmt, "format", None) is not None:
+        options["fmt"] = pick(fmt, "format", None)
     if scene.model != "balance":
-        given = {"--format": pick(fmt, "format", None), "--notch-deg": pick(notch_deg, "notch_deg", None),
+        given = {"--format": pick(fmt, "format", None) if scene.model != "geneva" else None, "--notch-deg": pick(notch_deg, "notch_deg", None),
                  "--unit": pick(unit_id, "unit", None), "--solver": pick(solver, "solver", None),
                  "--time-column": time_column, "--sample-rate": sample_rate, "--angle-column": angle_column,
                  "--angle-unit": angle_unit, "--counts-per-turn": counts_per_turn, "--scale": scale,

@@ -35,7 +35,7 @@ from typing import Any, Mapping
 import numpy as np
 from scipy import stats
 
-from ..likelihood.problem import ProblemBase
+from ..likelihood.problem import FAIL_RESIDUAL, ProblemBase
 from .likelihood import SessionModel, build_model
 from .readers import Readings
 from .rig import mu_from_reading
@@ -43,7 +43,6 @@ from .scene import SIGMA, RigScene
 
 __all__ = ["RigProblem", "LAW", "FAIL_RESIDUAL", "LEVER_RATIO"]
 
-FAIL_RESIDUAL = 1e6
 LAW = ("friction.mu", "friction.mu_w", "friction.mu_v")
 LEVER_RATIO = "rig.lever_ratio"
 _GEOMETRY = "no real geometry (d >= k: the stylus cannot reach the disc)"

@@ -38,7 +38,7 @@ from ..core.params import ParamSet, read_param
 from ..core.scene import check_keys
 from ..likelihood.freeparams import FreeParameters
 from ..likelihood.priors import prior_of
-from ..likelihood.problem import ProblemBase
+from ..likelihood.problem import FAIL_RESIDUAL, ProblemBase
 from .data import SpeedTrace, TerminalSpeeds
 from .engines import ENGINES
 from .simulate import forward
@@ -49,7 +49,6 @@ __all__ = ["GenevaProblem", "ForwardFailure", "TORQUE_SCALE", "FIT_OPTIONS", "OB
 TORQUE_SCALE = "geneva.torque_scale"
 SIGMA = "observation.sigma"
 FIT_OPTIONS = {"dt": 1e-3}  # rk4 step in units of sqrt(I_f/K): ~1e-7 relative error, 2x cheaper than simulate's
-FAIL_RESIDUAL = 1e6
 OBSERVATION_KEYS = {"sigma"}
 FIT_KEYS = {"torque_scale", "table_mu"}
 

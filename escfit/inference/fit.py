@@ -28,8 +28,8 @@ from .registry import family
 
 __all__ = ["fit", "fit_problem", "build_tree"]
 
-GENERIC_DEFAULTS = {"walkers": 32, "steps": 2000, "n_starts": 8, "n_refine": None, "predictive_draws": 400,
-                    "moves": "stretch"}
+GENERIC_DEFAULTS = {"walkers": 32, "steps": 2000, "burn": None, "n_starts": 8, "n_refine": None,
+                    "predictive_draws": 400, "moves": "stretch"}
 
 
 def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, force: bool = False, seed: int = 0,
@@ -63,8 +63,9 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
         emcee's proposal: ``"stretch"`` or ``"de"`` (see :func:`~escfit.inference.mcmc.run_emcee`);
         ``None`` takes the family's default.
     **options
-        The family's problem options (balance: ``solver``, ``solver_options``, ``unit``,
-        ``fmt``, ``notch_deg``, ``recording``); unknown ones are refused.
+        The family's problem options, refused when unknown: balance ``solver``,
+        ``solver_options``, ``unit``, ``fmt``, ``notch_deg``, ``recording``; friction rig
+        ``material``; Geneva ``fmt``; verge ``step`` (see each family's ``problem``).
 
     Returns
     -------
@@ -90,7 +91,7 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
                        str(checkpoint))
     problem = fam.problem(sc, data, **options)
     return fit_problem(problem, method=method, out=out, force=force, seed=seed, walkers=pick(walkers, "walkers"),
-                       steps=pick(steps, "steps"), burn=burn, n_starts=pick(n_starts, "n_starts"),
+                       steps=pick(steps, "steps"), burn=pick(burn, "burn"), n_starts=pick(n_starts, "n_starts"),
                        n_refine=defaults["n_refine"], resume=resume, progress=progress, checkpoint=checkpoint,
                        predictive_draws=pick(predictive_draws, "predictive_draws"), moves=pick(moves, "moves"))
 

@@ -25,11 +25,10 @@ import numpy as np
 from scipy.stats import qmc
 
 from ..core.errors import FitError
-from ..likelihood.problem import Problem, gaussian_prior_residuals
+from ..likelihood.problem import FAIL_RESIDUAL, Problem, gaussian_prior_residuals
 
 __all__ = ["LeastSquaresResult", "least_squares"]
 
-FAIL_RESIDUAL = 1e6
 _GAUSSIAN = ("normal", "halfnormal", "lognormal")
 
 
@@ -134,8 +133,10 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
     if problem.n_data + pinned < len(names):
         raise FitError(f"{problem.n_data} reading(s) cannot determine {len(names)} free parameters {names}: fix some "
                        "in the scene or give them informative priors")
-    profile_noise = any(n in noise for n in problem.names)
-    iterate_scale = profile_noise and pinned > 0
+    # the reading scatter is profiled when its scale observation.sigma is free; readings of several
+    # kinds (timegrapher amplitudes and beat times) share the one covariance rescale instead
+    profile_noise = "observation.sigma" in problem.names and "observation.sigma" in noise
+    iterate_scale = profile_noise and pinned > 0 and not getattr(problem, "mixed_readings", False)
     starts = _starts(priors, x0, lo, hi, n_starts, seed)
     keys = [f"p{i}" for i in range(len(names))]  # lmfit needs identifiers; names carry dots and brackets
     n = problem.n_data
@@ -247,7 +248,9 @@ def _two_stage_ar1(problem, *, n_starts, n_refine, seed, fixed, start) -> LeastS
                           fixed={**(fixed or {}), "observation.rho": 0.0}, start=start)
     r = problem.observed - problem.expected(first.values)
     r = r - r.mean()
-    rho = float(np.clip((r[1:] @ r[:-1]) / (r @ r), 0.0, 0.99))
+    i = problem.names.index("observation.rho")
+    lo, hi = (float(np.asarray(b)[i]) for b in problem.bounds)
+    rho = float(np.clip((r[1:] @ r[:-1]) / (r @ r), max(lo, -0.99), min(hi, 0.99)))
     return least_squares(problem, n_starts=1, seed=seed, fixed={**(fixed or {}), "observation.rho": rho},
                          start={n: first.values[n] for n in first.names})
 
@@ -263,10 +266,10 @@ def _starts(priors, x0: np.ndarray, lo: np.ndarray, hi: np.ndarray, n_starts: in
     pts = qmc.scale(u, span_lo, span_hi)
     for j, pr in enumerate(priors):
         ppf = getattr(pr, "ppf", None)
-        if ppf is not None and pr.kind != "uniform":
+        if ppf is not None and pr.kind != "uniform" and getattr(pr, "proper", True):
             try:
                 x = np.asarray(ppf(u[:, j]), float)
-            except (ValueError, ArithmeticError):
+            except (ValueError, ArithmeticError):  # SceneError is a ValueError
                 continue
             if np.all(np.isfinite(x)):
                 pts[:, j] = x

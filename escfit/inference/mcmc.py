@@ -75,6 +75,9 @@ def _start(problem: Problem, lsq: LeastSquaresResult | None, walkers: int, rng: 
             elif n == "observation.sigma" and np.isfinite(lsq.sigma_hat) and lsq.sigma_hat > 0:
                 centre[i] = lsq.sigma_hat
                 scale[i] = 0.05 * lsq.sigma_hat
+            elif n in lsq.values and np.isfinite(lsq.values[n]):  # a noise parameter least squares held
+                centre[i] = float(lsq.values[n])
+                scale[i] = abs(centre[i]) * 1e-2 + 1e-8
     lo, hi = problem.bounds
     span = np.where(np.isfinite(hi - lo), hi - lo, np.inf)
     centre = np.clip(centre, lo + 1e-9 * np.minimum(span, 1.0), hi - 1e-9 * np.minimum(span, 1.0))
@@ -136,10 +139,15 @@ def run_emcee(problem: Problem, lsq: LeastSquaresResult | None = None, *, walker
         if resume:
             if not Path(checkpoint).exists():
                 raise ResultsError("nothing to resume: checkpoint file not found", str(checkpoint))
-            done = backend.iteration
-            if done and backend.shape != (walkers, ndim):
-                raise ResultsError(f"checkpoint holds {backend.shape[0]} walkers x {backend.shape[1]} parameters, "
-                                   f"this fit has {walkers} x {ndim}", str(checkpoint))
+            try:
+                done = backend.iteration if backend.initialized else 0
+                shape = backend.shape if done else (walkers, ndim)
+            except (OSError, KeyError, ValueError) as exc:  # not an emcee checkpoint, or a damaged one
+                raise ResultsError(f"cannot resume from this checkpoint ({type(exc).__name__}: {exc}); pass --force "
+                                   "to start again", str(checkpoint)) from None
+            if shape != (walkers, ndim):
+                raise ResultsError(f"checkpoint holds {shape[0]} walkers x {shape[1]} parameters, this fit has "
+                                   f"{walkers} x {ndim}; pass --force to start again", str(checkpoint))
         else:
             backend.reset(walkers, ndim)
     if moves not in MOVES:

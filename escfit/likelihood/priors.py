@@ -229,6 +229,27 @@ class Prior:
         return float(out) if scalar else out
 
     # -- sampling ------------------------------------------------------------------------------
+    def ppf(self, u) -> np.ndarray:
+        """Inverse of the truncated cdf at probabilities ``u`` in [0, 1] (vectorised).
+
+        Used to spread optimiser start points over the prior (a Latin hypercube in ``u``).
+
+        Raises
+        ------
+        SceneError
+            For the improper flat prior.
+        """
+        if not self.proper:
+            raise SceneError(f"an improper flat prior on [{self.lo:g}, {self.hi:g}] has no quantiles")
+        u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
+        lo, hi = self.support
+        dist = self._dist()
+        if self._upper_tail:
+            x = dist.isf(dist.sf(lo) + u * (dist.sf(hi) - dist.sf(lo)))
+        else:
+            x = dist.ppf(dist.cdf(lo) + u * (dist.cdf(hi) - dist.cdf(lo)))
+        return np.clip(np.asarray(x, dtype=float), lo, hi)
+
     def sample(self, rng: np.random.Generator, n: int) -> np.ndarray:
         """``n`` draws from the truncated prior, by inverse cdf on ``[cdf(lo), cdf(hi)]``.
 

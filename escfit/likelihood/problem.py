@@ -21,7 +21,10 @@ import numpy as np
 
 from .priors import Prior
 
-__all__ = ["Problem", "ModelFamily", "ProblemBase", "gaussian_prior_residuals"]
+__all__ = ["Problem", "ModelFamily", "ProblemBase", "gaussian_prior_residuals", "FAIL_RESIDUAL"]
+
+#: standardised residual standing for a reading the model could not predict (a failed run)
+FAIL_RESIDUAL = 1e6
 
 
 @runtime_checkable
@@ -173,10 +176,14 @@ class ProblemBase:
     ``expected``, ``observed``, ``obs_coords`` and ``provenance``.
     """
 
-    noise_names: tuple[str, ...] = ()
     vectorized = False
-    notes: list[str] = []
-    data_warnings: list[str] = []
+    notes: tuple[str, ...] = ()  # instances set their own lists
+    data_warnings: tuple[str, ...] = ()
+
+    @property
+    def noise_names(self) -> tuple[str, ...]:
+        """``observation.sigma`` when it is free: least squares profiles it, emcee samples it."""
+        return tuple(n for n in ("observation.sigma",) if n in self.names)
 
     def log_prob(self, vec: np.ndarray) -> float:
         lp = self.log_prior(vec)

@@ -43,7 +43,8 @@ import xarray as xr
 from ..core.atomic import atomic_path
 from ..core.errors import DataError, EscfitError, FitError, ResultsError
 from ..balance.recordings import UnitCurve, read_unit_curve
-from ..results import SCHEMA_VERSION, FitResult, clean_attrs, dependency_versions
+from ..core.provenance import dependency_versions
+from ..results import SCHEMA_VERSION, FitResult, clean_attrs
 from .cluster import LazyClient, Runner, local_cluster, require_distributed
 
 __all__ = ["UnitTask", "RecordingFile", "BatchResult", "discover_units", "recording_files", "fit_many",

@@ -42,7 +42,7 @@ from ..core.params import Param, ParamSet, read_param
 from ..core.scene import check_keys
 from ..core.units import quantity
 from ..likelihood.freeparams import FreeParameters
-from ..likelihood.problem import ProblemBase
+from ..likelihood.problem import FAIL_RESIDUAL, ProblemBase
 from .data import FORMAT, TurnsData
 from .scene import VergeScene
 from .simulate import run
@@ -51,7 +51,6 @@ __all__ = ["TurnsProblem", "FIT_STEP", "FAIL_RESIDUAL", "OBSERVATION_KEYS", "FIT
 
 #: RK4 step (rad of spin) of fits: turns to arm within 1e-7 of the converged value
 FIT_STEP = 0.04
-FAIL_RESIDUAL = 1e6
 OBSERVATION_KEYS = {"sigma"}
 FIT_KEYS = {"step"}
 SIGMA = "observation.sigma"

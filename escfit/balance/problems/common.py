@@ -28,7 +28,11 @@ class BalanceProblem(ProblemBase):
     ``observation``, ``solver`` and ``solver_options``)."""
 
     family = "balance"
-    reading_units = "rad"
+
+    @property
+    def reading_units(self) -> str:
+        """``"notches"`` for notch counts, else ``"rad"`` (recordings of times set their own)."""
+        return "notches" if getattr(self.data, "kind", "") == "notches" else "rad"
 
     @property
     def noise_names(self) -> tuple[str, ...]:

@@ -22,12 +22,12 @@ from ...core.params import ParamSet
 from ..recordings import UnitCurve
 from ...core.scene import check_keys
 from ...likelihood.freeparams import FreeParameters
+from ...likelihood.problem import FAIL_RESIDUAL
 from .common import BalanceProblem
 from .loads import LoadRule
 
 __all__ = ["FitProblem", "Curve"]
 
-FAIL_RESIDUAL = 1e6
 
 
 def _at_recorded_swings(curve: "Curve", theta0: float, theta_turn: np.ndarray) -> np.ndarray:

@@ -57,6 +57,7 @@ class TimegrapherFitProblem(RecordingProblem):
     """
 
     reading_units = "deg (amplitude) and s (beats)"
+    mixed_readings = True  # amplitudes and beat times: one covariance rescale, not one profiled scale
 
     def __init__(self, scene: BalanceScene, data: TimegrapherRecording, solver: str = "exact",
                  solver_options: dict | None = None):
