@@ -78,20 +78,18 @@ class RigProblem(ProblemBase):
     misfit_options: dict = {}
     lsq_options: dict = {}
 
+    DERIVED = {LEVER_RATIO: ("", "lever ratio a/d = sqrt(k^2/d^2 - 1) of the rig (derived)")}
+
     def __init__(self, scene: RigScene, readings: Readings, *, sha256: str = "", material: str | None = None):
         self.scene = scene
         self.readings = readings
         self.model: SessionModel = build_model(scene, readings)
         self.names = list(self.model.names)
         self.priors = [scene.priors[n] for n in self.names]
-        self.noise_names = (SIGMA,) if SIGMA in self.names else ()
         self.failures: Counter = Counter()
         self.sha256 = sha256
         self.material = material
-        self.units = {p.name: p.unit for p in scene.params}
-        self.units[LEVER_RATIO] = ""
-        self.meanings = {p.name: p.meaning for p in scene.params}
-        self.meanings[LEVER_RATIO] = "lever ratio a/d = sqrt(k^2/d^2 - 1) of the rig (derived)"
+        self.params = scene.params
         self.notes = [scene.noise_note]
         if material is not None:
             self.notes.append(f"kept the {len(readings)} readings of material {material!r} from {readings.where}")

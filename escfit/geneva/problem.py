@@ -187,28 +187,13 @@ class GenevaProblem(FreeParameters, ProblemBase):
         return out
 
     # -- the Problem protocol ----------------------------------------------------------------------------
-    @property
-    def noise_names(self) -> tuple[str, ...]:
-        return (SIGMA,) if SIGMA in self.names else ()
-
-    @property
-    def units(self) -> dict[str, str]:
-        return {**{p.name: p.unit for p in self.params}, "geneva.inertia_ratio": "", "geneva.time_scale": "s"}
-
-    @property
-    def meanings(self) -> dict[str, str]:
-        return {**{p.name: p.meaning for p in self.params},
-                "geneva.inertia_ratio": "I_d/I_f, driver over follower inertia (derived)",
-                "geneva.time_scale": "sqrt(I_f/K), the one time scale of the motion (derived)"}
+    DERIVED = {"geneva.inertia_ratio": ("", "I_d/I_f, driver over follower inertia (derived)"),
+               "geneva.time_scale": ("s", "sqrt(I_f/K), the one time scale of the motion (derived)")}
 
     @property
     def observed(self) -> np.ndarray:
         d = self.data
         return d.speed if not self.terminal else np.concatenate((d.peak, d.minimum))
-
-    @property
-    def n_data(self) -> int:
-        return int(self.observed.size)
 
     def predict(self, vals: Mapping[str, float]) -> np.ndarray:
         """Expected readings (rad/s) at parameter values ``vals``.

@@ -171,7 +171,8 @@ def gaussian_prior_residuals(priors, x: np.ndarray) -> np.ndarray:
 class ProblemBase:
     """Defaults of the optional parts of :class:`Problem`, for families to inherit.
 
-    A subclass sets the attributes of :class:`Problem` and implements ``values``,
+    A subclass sets the attributes of :class:`Problem` (``params``, a
+    :class:`~escfit.core.params.ParamSet`, gives ``units`` and ``meanings``) and implements ``values``,
     ``log_prior``, ``log_likelihood(values)``, ``residuals``, ``loglike_pointwise``,
     ``expected``, ``observed``, ``obs_coords`` and ``provenance``.
     """
@@ -180,10 +181,23 @@ class ProblemBase:
     notes: tuple[str, ...] = ()  # instances set their own lists
     data_warnings: tuple[str, ...] = ()
 
+    #: derived quantities: name -> (canonical unit, meaning)
+    DERIVED: dict[str, tuple[str, str]] = {}
+
     @property
     def noise_names(self) -> tuple[str, ...]:
         """``observation.sigma`` when it is free: least squares profiles it, emcee samples it."""
         return tuple(n for n in ("observation.sigma",) if n in self.names)
+
+    @property
+    def units(self) -> dict[str, str]:
+        """Unit of every parameter (``self.params``) and derived quantity (:attr:`DERIVED`)."""
+        return {**{p.name: p.unit for p in self.params}, **{k: u for k, (u, _) in self.DERIVED.items()}}
+
+    @property
+    def meanings(self) -> dict[str, str]:
+        """One-line meaning of every parameter and derived quantity."""
+        return {**{p.name: p.meaning for p in self.params}, **{k: m for k, (_, m) in self.DERIVED.items()}}
 
     def log_prob(self, vec: np.ndarray) -> float:
         lp = self.log_prior(vec)

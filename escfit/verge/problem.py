@@ -159,18 +159,9 @@ class TurnsProblem(FreeParameters, ProblemBase):
 
     # -- the parts of Problem ------------------------------------------------------------
     @property
-    def noise_names(self) -> tuple[str, ...]:
-        return (SIGMA,) if SIGMA in self.names else ()
-
-    @property
     def units(self) -> dict[str, str]:
-        out = {p.name: p.unit for p in self.params}
-        out["verge.spin"] = "rad/s"  # the scene stores the spin rate in rad/s (a frequency kind)
-        return out
-
-    @property
-    def meanings(self) -> dict[str, str]:
-        return {p.name: p.meaning for p in self.params}
+        # the scene stores the spin rate in rad/s (a frequency kind)
+        return {**super().units, "verge.spin": "rad/s"}
 
     @property
     def observed(self) -> np.ndarray:
