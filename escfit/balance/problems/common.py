@@ -39,6 +39,15 @@ class BalanceProblem(ProblemBase):
         return tuple(n for n in NOISE_PARAMS if n in self.names)
 
     @property
+    def observed(self) -> np.ndarray:
+        """Every reading of every curve, concatenated in curve order."""
+        return np.concatenate([c.y for c in self.curves])
+
+    @property
+    def n_data(self) -> int:
+        return int(sum(c.y.size for c in self.curves))
+
+    @property
     def units(self) -> dict[str, str]:
         out = {p.name: p.unit for p in self.params}
         out["K"] = ""

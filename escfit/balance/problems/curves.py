@@ -266,11 +266,3 @@ class FitProblem(FreeParameters, BalanceProblem):
         """Noise-free expected readings (rad) of all data points, concatenated."""
         return np.concatenate([self.observation.expected(p, vals, self.sides(c), c.time)
                                for p, c in zip(self.predict(vals), self.curves)])
-
-    @property
-    def observed(self) -> np.ndarray:
-        return np.concatenate([c.y for c in self.curves])
-
-    @property
-    def n_data(self) -> int:
-        return int(sum(c.y.size for c in self.curves))

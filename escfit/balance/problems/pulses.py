@@ -133,14 +133,6 @@ class RecordingProblem(FreeParameters, BalanceProblem, ABC):
         """Noise-free expected readings of all data points, concatenated."""
         return self._expected(self._predict(vals), vals)
 
-    @property
-    def observed(self) -> np.ndarray:
-        return np.concatenate([c.y for c in self.curves])
-
-    @property
-    def n_data(self) -> int:
-        return int(sum(c.y.size for c in self.curves))
-
     # -- what each recording defines ------------------------------------------------------------
     @abstractmethod
     def _predict(self, vals):
