@@ -385,6 +385,8 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
     family(sc.model)  # an unknown family is refused here, not once per unit
     family_options: dict[str, Any] = {}
     if solver is not None:
+        if sc.model != "balance":  # the other families choose their integrators themselves
+            raise FitError(f"--solver applies to balance scenes; this scene's model is {sc.model!r}", str(scene))
         family_options["solver"] = solver
     if notch_deg is not None:
         if sc.model != "balance":
