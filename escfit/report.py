@@ -112,6 +112,33 @@ def _corner(res: FitResult, post, plt) -> bytes:
     return png(fig)
 
 
+def _fit_stats(res: FitResult, la) -> str:
+    """One line on the least-squares fit: what the reading scatter is and where it comes from.
+
+    With a free noise scale the scatter is profiled from the residuals (a reduced chi-square
+    would be 1 by construction and is not shown); with the scene's noise known, the reduced
+    chi-square says how the residuals compare with it.
+    """
+    a = res.attrs
+    n = int(la.get("n_data", 0) or 0)
+    npar = int(res.group("least_squares").sizes.get("parameter", 0))
+    units = res.group("observed_data")["reading"].attrs.get("units", "rad") if res.group("observed_data") else "rad"
+    sigma_unit = "rad" if units == "notches" else units  # notch counts: the jitter is an angle
+    head = f"model {a.get('model', 'balance')}; least squares on {n} reading(s), {npar} fitted parameter(s)"
+    if "redchi" not in la:
+        return head
+    if n <= npar:
+        return head + ": as many parameters as readings, the fit is exact and the readings give no scatter estimate"
+    mixed = " and " in units
+    if int(la.get("noise_profiled", 1) or 0):
+        scatter = "" if mixed else f"; reading scatter {_fmt(la['sigma_hat'])} {sigma_unit} (profiled from the residuals)"
+        return head + scatter + f"; AIC {_fmt(la['aic'])}, BIC {_fmt(la['bic'])}"
+    implied = _fmt(float(la["sigma_hat"]) * math.sqrt(float(la["redchi"]))) if not mixed else None
+    return (head + f"; reduced chi-square {_fmt(la['redchi'])} against the scene's reading noise "
+            f"{_fmt(la['sigma_hat'])} {sigma_unit}" + (f" (residual scatter {implied} {sigma_unit})" if implied else "")
+            + f"; AIC {_fmt(la['aic'])}, BIC {_fmt(la['bic'])}")
+
+
 def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: bool = False) -> Path:
     """Write a report of the fit stored at ``path``.
 
@@ -134,13 +161,7 @@ def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: 
             ("versions", a.get("versions")), ("failed evaluations", a.get("failures"))]
     prov = [(k, v) for k, v in prov if v not in (None, "", "None None")]
     la = lsq.attrs
-    fit_stats = f"model {a.get('model', 'balance')}; least squares: chi-square {_fmt(la.get('chisqr'))}, n = {la.get('n_data')}"
-    if "redchi" in la:
-        units = res.group("observed_data")["reading"].attrs.get("units", "rad") if res.group("observed_data") else "rad"
-        sigma_unit = "rad" if units == "notches" else units  # notch counts: the jitter is an angle
-        scatter = "" if " and " in units else f", reading scatter {_fmt(la['sigma_hat'])} {sigma_unit}"
-        fit_stats += (f", reduced chi-square {_fmt(la['redchi'])}{scatter}, "
-                      f"AIC {_fmt(la['aic'])}, BIC {_fmt(la['bic'])}")
+    fit_stats = _fit_stats(res, la)
     figs = _figures(res)
     out = Path(out)
     if fmt == "md":

@@ -232,6 +232,11 @@ def fit(data, scene_path, method, out, seed, walkers, steps, burn, unit_id, mate
     from ..core.scene import load_scene
 
     scene = load_scene(scene_path)
+    report_path = report_path or recipe.get("report")
+    if report_path:  # refused before the fit, not after it
+        from ..core.atomic import refuse_existing
+
+        refuse_existing(report_path, force)
     options = {}
     if scene.model == "balance":
         options = {"fmt": pick(fmt, "format", None), "notch_deg": pick(notch_deg, "notch_deg", None),
@@ -263,7 +268,6 @@ def fit(data, scene_path, method, out, seed, walkers, steps, burn, unit_id, mate
                      moves=pick(moves, "moves", None), **options)
     click.echo(f"wrote {out}")
     _print_summary(result)
-    report_path = report_path or recipe.get("report")
     if report_path:
         from ..report import make_report
 

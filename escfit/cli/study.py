@@ -75,6 +75,9 @@ def format_summary(ds, *, max_params: int = 4) -> str:
     widths = [max(len(h), *(len(r[k]) for r in rows)) if rows else len(h) for k, h in enumerate(head)]
     lines = ["  ".join(h.ljust(w) for h, w in zip(head, widths))]
     lines += ["  ".join(c.ljust(w) for c, w in zip(r, widths)) for r in rows]
+    more = len(ds["parameter"]) - len(params)
+    if more > 0:
+        lines.append(f"(+{more} more parameter(s) in summary.nc: {', '.join(map(str, ds['parameter'].values[len(params):]))})")
     return "\n".join(lines)
 
 
