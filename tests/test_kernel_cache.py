@@ -172,3 +172,18 @@ def test_sources_adds_files_the_import_scan_cannot_see(tmp_path):
     copy = types.FunctionType(src.__code__, src.__globals__, "_applies_copy")  # not compiled here
     files = set(kernel_sources(kernel(sources=[table])(copy)))
     assert files == set(kernel_sources(exact._applies)) | {table.resolve()}
+
+
+def test_every_compiled_kernel_of_the_package_goes_through_kernel():
+    """A direct ``numba.njit``/``jit`` in escfit would bring back caches keyed on one file only."""
+    import re
+    from pathlib import Path
+
+    import escfit
+
+    root = Path(escfit.__file__).parent
+    direct = re.compile(r"^\s*@(?:numba\.)?n?jit\b|^\s*from numba import .*\bn?jit\b", re.M)
+    offenders = [str(p.relative_to(root)) for p in root.rglob("*.py")
+                 if p.name != "kernels.py" and direct.search(p.read_text(encoding="utf-8"))]
+    assert not offenders, f"use escfit.core.kernels.kernel instead of numba.njit in {offenders}"
+    assert any("@kernel" in p.read_text(encoding="utf-8") for p in (root / "verge").glob("*.py"))

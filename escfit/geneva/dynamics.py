@@ -32,9 +32,9 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
+from ..core.kernels import kernel
 from .geometry import coefficients
 
 __all__ = ["OK", "AMBIGUOUS", "LOCKED", "acceleration", "acceleration_array", "switch_function", "wedge_margin", "friction_argument"]
@@ -44,7 +44,7 @@ AMBIGUOUS = 1
 LOCKED = 2
 
 
-@numba.njit(cache=True)
+@kernel
 def acceleration(x: float, w: float, a: float, rho: float, mu: float, e: float) -> tuple[float, float, int]:
     """Driver acceleration at local angle ``x`` and speed ``w >= 0``.
 
@@ -84,7 +84,7 @@ def acceleration(x: float, w: float, a: float, rho: float, mu: float, e: float) 
     return (e - (big_b + s * big_c) * w2) / den, den, code
 
 
-@numba.njit(cache=True)
+@kernel
 def acceleration_array(x: np.ndarray, w: np.ndarray, a: float, rho: float, mu: float, e: float) -> np.ndarray:
     """:func:`acceleration` over arrays of states (locked states give 0.0), rad/s^2."""
     out = np.empty(x.shape[0])
@@ -93,21 +93,21 @@ def acceleration_array(x: np.ndarray, w: np.ndarray, a: float, rho: float, mu: f
     return out
 
 
-@numba.njit(cache=True)
+@kernel
 def switch_function(x: float, w: float, a: float, rho: float, mu: float, e: float) -> float:
     """``Q = D*E + (A*C - B*D)*w**2``: the friction sign is ``sign(Q)``; ``alpha`` has a kink where ``Q = 0``."""
     big_a, big_b, big_c, big_d = coefficients(x, a, rho, mu)
     return big_d * e + (big_a * big_c - big_b * big_d) * w * w
 
 
-@numba.njit(cache=True)
+@kernel
 def wedge_margin(x: float, a: float, rho: float, mu: float) -> float:
     """``A - |D|``: negative where friction can wedge the pin (both or neither sign consistent)."""
     big_a, _, _, big_d = coefficients(x, a, rho, mu)
     return big_a - math.fabs(big_d)
 
 
-@numba.njit(cache=True)
+@kernel
 def friction_argument(x: float, w: float, alpha: float, a: float, rho: float, mu: float) -> float:
     """``C*w**2 + D*alpha``: the pin-slot friction torque over ``I_f`` with its sign, rad/s^2."""
     big_a, big_b, big_c, big_d = coefficients(x, a, rho, mu)

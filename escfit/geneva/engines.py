@@ -23,10 +23,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from ..core.kernels import kernel
 from .dynamics import AMBIGUOUS, LOCKED, acceleration, acceleration_array, switch_function, wedge_margin
 
 __all__ = ["EngagementResult", "rk4_engagement", "dop853_engagement", "ENGINES",
@@ -79,7 +79,7 @@ class EngagementResult:
 # ----------------------------------------------------------------------------- rk4
 
 
-@numba.njit(cache=True)
+@kernel
 def _hermite(p0: float, d0: float, p1: float, d1: float, h: float, s: float) -> float:
     s2 = s * s
     s3 = s2 * s
@@ -87,7 +87,7 @@ def _hermite(p0: float, d0: float, p1: float, d1: float, h: float, s: float) -> 
             + (-2 * s3 + 3 * s2) * p1 + (s3 - s2) * h * d1)
 
 
-@numba.njit(cache=True)
+@kernel
 def _rk4_step(x, w, al, h, a, rho, mu):
     # returns x1, w1, al1, worst code seen in the stages
     worst = 0
@@ -106,7 +106,7 @@ def _rk4_step(x, w, al, h, a, rho, mu):
     return x1, w1, al1, max(worst, c1)
 
 
-@numba.njit(cache=True)
+@kernel
 def _rk4_kernel(x0, x_end, t0, w0, t_stop, dt, a, rho, mu, samp_t, samp_x, samp_w, samp_al):
     nan = math.nan
     t = t0

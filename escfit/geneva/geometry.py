@@ -42,9 +42,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 
+from ..core.kernels import kernel
 from ..core.errors import SceneError
 
 __all__ = ["Geometry", "COMPAT_MODES", "coefficients", "speed_ratio", "speed_ratio_slope", "follower_angle"]
@@ -128,7 +128,7 @@ class Geometry:
         return int(theta // self.span)
 
 
-@numba.njit(cache=True)
+@kernel
 def coefficients(x: float, a: float, rho: float, mu: float) -> tuple[float, float, float, float]:
     """Coefficients ``(A, B, C, D)`` of the equation of motion at local angle ``x``.
 

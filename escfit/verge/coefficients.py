@@ -23,12 +23,12 @@ from __future__ import annotations
 
 import math
 
-import numba
+from ..core.kernels import kernel
 
 __all__ = ["mesh_phase", "mesh_roll", "pallet_coefficients", "wheel_coefficients", "train_coefficients"]
 
 
-@numba.njit(cache=True)
+@kernel
 def _mesh_progress(k, phi_total):
     """Driver rotation past the first contact of the starting tooth pair, both meshes (rad)."""
     u1 = (k.al1_start - k.al1_in) + k.n31 * phi_total
@@ -36,7 +36,7 @@ def _mesh_progress(k, phi_total):
     return u1, u2
 
 
-@numba.njit(cache=True)
+@kernel
 def mesh_phase(k, phi_total):
     """Which tooth pair carries each mesh, and whether it is in approach or recess.
 
@@ -62,7 +62,7 @@ def mesh_phase(k, phi_total):
     return n1, n2, s1, s2
 
 
-@numba.njit(cache=True)
+@kernel
 def mesh_roll(k, phi_total, n1, n2):
     """Roll angles (rad) of the given tooth pairs of mesh 1 and mesh 2.
 
@@ -73,7 +73,7 @@ def mesh_roll(k, phi_total, n1, n2):
     return k.al1_in + u1 - n1 * k.al1_range, k.al2_in + u2 - n2 * k.al2_range
 
 
-@numba.njit(cache=True)
+@kernel
 def pallet_coefficients(k, side, psi, psic, alpha, s4, s5, arm_c, arm_d):
     """Pallet (verge) coefficients.
 
@@ -127,7 +127,7 @@ def pallet_coefficients(k, side, psi, psic, alpha, s4, s5, arm_c, arm_d):
     return a18, a19, a20, a21, a22
 
 
-@numba.njit(cache=True)
+@kernel
 def wheel_coefficients(k, side, psi, alpha, s2, s4, mu, al2, arm_a, arm_b):
     """Escape-wheel coefficients: ``I3 phi'' = a15 F23 - a16 T3 - a17 Pn``.
 
@@ -171,7 +171,7 @@ def wheel_coefficients(k, side, psi, alpha, s2, s4, mu, al2, arm_a, arm_b):
     return a15, a16, a17
 
 
-@numba.njit(cache=True)
+@kernel
 def train_coefficients(k, phi_total, s1, s2, mu, al1, al2):
     """Rotor and gear-set-2 coefficients.
 

@@ -25,21 +25,21 @@ from __future__ import annotations
 
 import math
 
-import numba
 
+from ..core.kernels import kernel
 from .coefficients import mesh_roll, pallet_coefficients, train_coefficients, wheel_coefficients
 from .kinematics import coupled_kinematics, sliding_factor
 
 __all__ = ["coupled_eval", "free_eval", "coupled_signs", "side_alpha", "side_psic"]
 
 
-@numba.njit(cache=True)
+@kernel
 def side_alpha(k, side):
     """Face angle of the active side (+1 entrance, -1 exit)."""
     return k.alpha_en if side > 0 else k.alpha_ex
 
 
-@numba.njit(cache=True)
+@kernel
 def side_psic(k, side):
     """Eccentricity angle of the verge in the active side's reference.
 
@@ -49,12 +49,12 @@ def side_psic(k, side):
     return k.psic0 if side > 0 else k.psic0 + k.lam
 
 
-@numba.njit(cache=True)
+@kernel
 def _sgn(x):
     return 1.0 if x >= 0.0 else -1.0
 
 
-@numba.njit(cache=True)
+@kernel
 def coupled_signs(k, side, phi, phid, direction):
     """Friction signs for coupled motion at speed ``phid``.
 
@@ -73,7 +73,7 @@ def coupled_signs(k, side, phi, phid, direction):
     return s4, s5
 
 
-@numba.njit(cache=True)
+@kernel
 def _mesh_force_affine(k, phid, phi_total, s1, s2, mu, al1, al2, inertia_sign):
     """F23 = f0 + f1 * phi'' and the train coefficients needed for F12."""
     a31, a32, a33, a34, a35, a42, a43, a44, jr = train_coefficients(k, phi_total, s1, s2, mu, al1, al2)
@@ -86,12 +86,12 @@ def _mesh_force_affine(k, phid, phi_total, s1, s2, mu, al1, al2, inertia_sign):
     return f0, f1, a42, a43, a44
 
 
-@numba.njit(cache=True)
+@kernel
 def _consistent(speed, acc):
     return 1.0 if speed * acc >= 0.0 else -1.0
 
 
-@numba.njit(cache=True)
+@kernel
 def coupled_eval(k, side, phi, phid, phi_total, n1, n2, s1, s2, s4, s5, mus, rot_branch, verge_branch):
     """Escape-wheel acceleration and contact forces in coupled motion.
 
@@ -168,7 +168,7 @@ def coupled_eval(k, side, phi, phid, phi_total, n1, n2, s1, s2, s4, s5, mus, rot
             _consistent(phid, phidd), _consistent(psid, psidd))
 
 
-@numba.njit(cache=True)
+@kernel
 def free_train(k, phid, phi_total, n1, n2, s1, s2, mus, hold, rot_branch):
     """Escape-wheel acceleration and mesh forces with the verge out of contact.
 
@@ -197,7 +197,7 @@ def free_train(k, phid, phi_total, n1, n2, s1, s2, mus, hold, rot_branch):
     return phidd, f23, f12, _consistent(phid, phidd)
 
 
-@numba.njit(cache=True)
+@kernel
 def free_verge(k, side, psi, psid, s5, verge_branch):
     """Verge acceleration out of contact: pivot friction and eccentric mass only.
 
@@ -217,7 +217,7 @@ def free_verge(k, side, psi, psid, s5, verge_branch):
     return psidd, _consistent(psid, psidd)
 
 
-@numba.njit(cache=True)
+@kernel
 def free_eval(k, side, phid, psi, psid, phi_total, n1, n2, s1, s2, s5, mus, train_stuck, verge_stuck, rot_branch,
               verge_branch):
     """Accelerations and mesh forces in free motion.

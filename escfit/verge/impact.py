@@ -18,14 +18,14 @@ from __future__ import annotations
 
 import math
 
-import numba
 
+from ..core.kernels import kernel
 from .kinematics import face_position
 
 __all__ = ["impact_map", "normal_speeds"]
 
 
-@numba.njit(cache=True)
+@kernel
 def normal_speeds(k, alpha, phi, psi, phid, psid):
     """Normal speeds of the tooth tip and of the face at the contact point (in/s).
 
@@ -38,7 +38,7 @@ def normal_speeds(k, alpha, phi, psi, phid, psid):
     return arm_a * phid, arm_d * psid, arm_a, arm_d
 
 
-@numba.njit(cache=True)
+@kernel
 def impact_map(k, alpha, phi, psi, phid, psid, erest):
     """Post-impact speeds of the escape wheel and the verge.
 

@@ -22,9 +22,9 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
+from ..core.kernels import kernel
 from .coefficients import mesh_phase
 from .dynamics import coupled_eval, coupled_signs, free_eval, free_train, free_verge, side_alpha
 from .kinematics import contact_sensing, coupled_kinematics
@@ -53,12 +53,12 @@ M_N1, M_N2, M_S1, M_S2, M_S4, M_S5, M_DIR, M_TSTUCK, M_VSTUCK, M_IROT, M_IVER = 
 MX_F23, MX_F12, MX_PN, MX_FF23, MX_FF12, MX_REV = range(6)
 
 
-@numba.njit(cache=True)
+@kernel
 def _sgn(x):
     return 1.0 if x >= 0.0 else -1.0
 
 
-@numba.njit(cache=True)
+@kernel
 def _deriv(k, regime, side, phi, phid, psi, psid, off, m):
     """Derivatives, forces and phase-event values at one state (mode frozen).
 
@@ -80,7 +80,7 @@ def _deriv(k, regime, side, phi, phid, psi, psid, off, m):
     return phid, phidd, psid, psidd, f23, f12, 0.0, side * f, side * gp
 
 
-@numba.njit(cache=True)
+@kernel
 def _rk4(k, regime, side, y0, off, m, h, d1):
     """One RK4 step of length ``h`` from ``y0`` given the first-stage derivative ``d1``."""
     p0, v0, q0, w0 = y0[0], y0[1], y0[2], y0[3]
@@ -110,7 +110,7 @@ def _rk4(k, regime, side, y0, off, m, h, d1):
     return out
 
 
-@numba.njit(cache=True)
+@kernel
 def _mode_at(k, regime, side, y, off, m):
     """The mode implied by state ``y`` (speeds exactly zero keep the current direction)."""
     out = m.copy()
@@ -140,7 +140,7 @@ def _mode_at(k, regime, side, y, off, m):
     return out
 
 
-@numba.njit(cache=True)
+@kernel
 def _same_mode(a, b):
     for i in (M_N1, M_N2, M_S1, M_S2, M_S4, M_S5, M_DIR, M_IROT, M_IVER):
         if a[i] != b[i]:
@@ -148,7 +148,7 @@ def _same_mode(a, b):
     return True
 
 
-@numba.njit(cache=True)
+@kernel
 def _train_start_direction(k, regime, side, y, off, m):
     """Direction (+1/-1) the train starts to move from rest, or 0 if friction holds it."""
     phi_total = y[0] + off
@@ -164,7 +164,7 @@ def _train_start_direction(k, regime, side, y, off, m):
     return 0.0
 
 
-@numba.njit(cache=True)
+@kernel
 def _verge_start_direction(k, side, y):
     """Direction the free verge starts to move from rest, or 0 if pivot friction holds it."""
     for d in (1.0, -1.0):
@@ -173,7 +173,7 @@ def _verge_start_direction(k, side, y):
     return 0.0
 
 
-@numba.njit(cache=True)
+@kernel
 def initial_mode(k, regime, side, y, off, direction):
     """Mode at the start of a phase; bodies at rest get their friction direction from a stick test.
 
@@ -205,20 +205,20 @@ def initial_mode(k, regime, side, y, off, direction):
     return m
 
 
-@numba.njit(cache=True)
+@kernel
 def phase_start_events(k, regime, side, y, off, m):
     """Event values ``(ev0, ev1)`` at a phase start (see :func:`_deriv`)."""
     r = _deriv(k, regime, side, y[0], y[1], y[2], y[3], off, m)
     return r[7], r[8]
 
 
-@numba.njit(cache=True)
+@kernel
 def _events(k, regime, side, y, off, m):
     r = _deriv(k, regime, side, y[0], y[1], y[2], y[3], off, m)
     return r[7], r[8], k.phi_cut - (y[0] + off)
 
 
-@numba.njit(cache=True)
+@kernel
 def _fires(regime, e0, e1, e2, armed):
     """Which phase-ending event a state satisfies (-1 if none), in priority order."""
     if e2 <= 0.0:
@@ -238,7 +238,7 @@ def _fires(regime, e0, e1, e2, armed):
     return -1
 
 
-@numba.njit(cache=True)
+@kernel
 def _record(buf, n, t, y, off, regime, side, r, m):
     buf[n, 0] = t
     buf[n, 1] = y[0]
@@ -256,7 +256,7 @@ def _record(buf, n, t, y, off, regime, side, r, m):
     buf[n, 13] = m[M_DIR]
 
 
-@numba.njit(cache=True)
+@kernel
 def _track_max(mx, regime, r):
     if regime == COUPLED:
         if r[4] > mx[MX_F23]:
@@ -272,7 +272,7 @@ def _track_max(mx, regime, r):
             mx[MX_FF12] = r[5]
 
 
-@numba.njit(cache=True)
+@kernel
 def _locate_events(k, regime, side, y, off, m, d1, hs, vals0, vals1, armed, tol_h):
     """Smallest step length at which one of the phase events fires (``hs`` if none is found).
 
@@ -320,7 +320,7 @@ def _locate_events(k, regime, side, y, off, m, d1, hs, vals0, vals1, armed, tol_
     return best
 
 
-@numba.njit(cache=True)
+@kernel
 def integrate_phase(k, regime, side, y, t, off, m, armed, h, t_max, buf, n, record, mx, max_mode_changes):
     """Advance one motion phase until it ends.
 

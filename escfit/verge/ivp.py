@@ -13,10 +13,10 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from ..core.kernels import kernel
 from .coefficients import mesh_phase
 from .dynamics import coupled_signs, side_alpha
 from .geometry import Constants
@@ -35,7 +35,7 @@ __all__ = ["run_ivp", "MAX_STEP_SPIN"]
 MAX_STEP_SPIN = 0.02
 
 
-@numba.njit(cache=True)
+@kernel
 def _state_eval(k, regime, side, y, off, m):
     """Derivatives and event values with the friction signs taken from the state.
 

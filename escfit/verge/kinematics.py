@@ -22,14 +22,14 @@ from __future__ import annotations
 
 import math
 
-import numba
+from ..core.kernels import kernel
 
 __all__ = ["coupled_kinematics", "contact_sensing", "face_position", "sliding_factor"]
 
 TWO_PI = 2.0 * math.pi
 
 
-@numba.njit(cache=True)
+@kernel
 def coupled_kinematics(a, b, c, alpha, phi):
     """Verge position and its derivatives when the tooth tip slides on the face.
 
@@ -80,7 +80,7 @@ def coupled_kinematics(a, b, c, alpha, phi):
     return psi, g, u, v, arm_a, arm_b, arm_c, arm_d
 
 
-@numba.njit(cache=True)
+@kernel
 def face_position(b, c, alpha, phi, psi):
     """Position ``g`` (in) along the face line where it reaches the y' level of S.
 
@@ -90,7 +90,7 @@ def face_position(b, c, alpha, phi, psi):
     return (b * math.sin(phi) - c * math.sin(psi)) / math.sin(psi + alpha)
 
 
-@numba.njit(cache=True)
+@kernel
 def contact_sensing(a, b, c, alpha, phi, psi):
     """Normal gap ``f`` and tangential position ``g'`` of the tooth tip relative to the face.
 
@@ -109,7 +109,7 @@ def contact_sensing(a, b, c, alpha, phi, psi):
     return f, gp
 
 
-@numba.njit(cache=True)
+@kernel
 def sliding_factor(b, c, alpha, phi, psi, u):
     """Sliding speed of the tooth tip relative to the face per unit wheel speed (in/rad).
 
