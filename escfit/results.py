@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -35,10 +35,15 @@ SCHEMA_VERSION = "escfit-fit/1"
 
 @dataclass
 class FitResult:
-    """A fit read from (or about to be written to) a results file."""
+    """A fit read from (or about to be written to) a results file.
+
+    ``timings`` holds the seconds each phase of the fit took in this process (empty for a
+    fit read from a file, whose ``attrs["timings"]`` keeps them without the write).
+    """
 
     tree: xr.DataTree
     path: str = ""
+    timings: dict = field(default_factory=dict)
 
     @property
     def attrs(self) -> dict[str, Any]:

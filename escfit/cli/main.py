@@ -161,8 +161,38 @@ def charts(out_dir, c0, no_png, force):
     click.echo(f"graph factor K/K_R at C/omega0 = {c0:g}: {graph_factor(c0):.4f}")
 
 
-RECIPE_KEYS = {"data", "scene", "method", "out", "seed", "walkers", "steps", "burn", "unit", "material", "format",
-               "notch_deg", "report", "title", "solver", "moves"}
+RECIPE_KEYS = {"data", "scene", "method", "out", "seed", "walkers", "steps", "max_steps", "burn", "unit", "material",
+               "format", "notch_deg", "report", "title", "solver", "moves"}
+
+
+class StepsType(click.ParamType):
+    """``--steps``: a whole number of steps (at least 10) or ``auto`` (sample until converged)."""
+
+    name = "N|auto"
+
+    def convert(self, value, param, ctx):
+        if value == "auto" or (isinstance(value, int) and not isinstance(value, bool) and value >= 10):
+            return value
+        try:
+            n = int(str(value))
+        except ValueError:
+            n = None
+        if n is None or n < 10:
+            self.fail(f"{value!r} is neither 'auto' nor a whole number of steps >= 10", param, ctx)
+        return n
+
+
+def _recipe_steps(recipe: dict, key: str, where: str):
+    """A recipe's ``steps``/``max_steps``, refused with the file and key named when it is not one."""
+    from ..core.errors import SceneError
+
+    value = recipe.get(key)
+    ok = value is None or (key == "steps" and value == "auto") or (
+        isinstance(value, int) and not isinstance(value, bool) and value >= 10)
+    if not ok:
+        raise SceneError(f"{key} must be {'auto or ' if key == 'steps' else ''}a whole number >= 10, got {value!r}",
+                         f"{where} (recipe).{key}")
+    return value
 
 
 def _read_recipe(path: Path) -> dict:
@@ -188,7 +218,10 @@ def _read_recipe(path: Path) -> dict:
 @click.option("--out", type=click.Path(dir_okay=False), default=None, help="Results file (HDF5).")
 @click.option("--seed", type=int, default=None)
 @click.option("--walkers", type=click.IntRange(2), default=None)
-@click.option("--steps", type=click.IntRange(10), default=None)
+@click.option("--steps", type=StepsType(), default=None,
+              help="emcee steps, or 'auto' (default): sample until split R-hat <= 1.01, bulk and tail ESS >= 400 "
+                   "and 50 autocorrelation times, up to --max-steps.")
+@click.option("--max-steps", type=click.IntRange(10), default=None, help="Cap of an automatic run (default 20000).")
 @click.option("--burn", type=click.IntRange(0), default=None)
 @click.option("--unit", "unit_id", default=None, help="Fit only this unit of a multi-unit file.")
 @click.option("--material", default=None, help="friction_rig: fit only this material of a rig readings file.")
@@ -213,7 +246,7 @@ def _read_recipe(path: Path) -> dict:
 @click.option("--force", is_flag=True, help="Replace an existing results file.")
 @click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None, help="Also write a report.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def fit(data, scene_path, method, out, seed, walkers, steps, burn, unit_id, material, fmt, time_column, sample_rate,
+def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, burn, unit_id, material, fmt, time_column, sample_rate,
         angle_column, angle_unit, counts_per_turn, scale, start_time, stop_time, solver, moves, notch_deg, resume,
         force, report_path, quiet):
     """Fit DATA (a recording) with --scene SCENE, or run a fit RECIPE.toml."""
@@ -222,8 +255,11 @@ def fit(data, scene_path, method, out, seed, walkers, steps, burn, unit_id, mate
 
     recipe: dict = {}
     if data.endswith(".toml") and scene_path is None:
+        where = data
         recipe = _read_recipe(Path(data))
         data, scene_path = recipe["data"], recipe["scene"]
+        for key in ("steps", "max_steps"):
+            _recipe_steps(recipe, key, where)
     if scene_path is None:
         raise SceneError("give --scene SCENE.toml (or a fit recipe)", data)
     pick = lambda cli_value, key, default: cli_value if cli_value is not None else recipe.get(key, default)  # noqa: E731
@@ -264,6 +300,7 @@ def fit(data, scene_path, method, out, seed, walkers, steps, burn, unit_id, mate
                              f"this scene's model is {scene.model!r}", scene_path)
     result = run_fit(scene, data, method=method, out=out, force=force, seed=pick(seed, "seed", 0),
                      walkers=pick(walkers, "walkers", None), steps=pick(steps, "steps", None),
+                     max_steps=pick(max_steps, "max_steps", None),
                      burn=pick(burn, "burn", None), resume=resume, progress=not quiet and sys.stderr.isatty(),
                      moves=pick(moves, "moves", None), **options)
     click.echo(f"wrote {out}")

@@ -10,6 +10,7 @@ the model fits, and returns a :class:`~escfit.results.FitResult` laid out as Arv
 from __future__ import annotations
 
 import datetime as _dt
+import time
 from pathlib import Path
 
 import numpy as np
@@ -28,14 +29,15 @@ from .registry import family
 
 __all__ = ["fit", "fit_problem", "build_tree"]
 
-GENERIC_DEFAULTS = {"walkers": 32, "steps": 2000, "burn": None, "n_starts": 8, "n_refine": None,
-                    "predictive_draws": 400, "moves": "stretch"}
+GENERIC_DEFAULTS = {"walkers": 32, "steps": "auto", "max_steps": 20000, "burn": None, "n_starts": 8,
+                    "n_refine": None, "predictive_draws": 400, "moves": "stretch"}
 
 
 def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, force: bool = False, seed: int = 0,
-        walkers: int | None = None, steps: int | None = None, burn: int | None = None, n_starts: int | None = None,
-        resume: bool = False, progress: bool = False, checkpoint: str | Path | None = None,
-        predictive_draws: int | None = None, moves: str | None = None, **options) -> FitResult:
+        walkers: int | None = None, steps: int | str | None = None, burn: int | None = None,
+        n_starts: int | None = None, resume: bool = False, progress: bool = False,
+        checkpoint: str | Path | None = None, predictive_draws: int | None = None, moves: str | None = None,
+        max_steps: int | None = None, **options) -> FitResult:
     """Fit a scene of any model family to a recording.
 
     Parameters
@@ -51,11 +53,12 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
         Results file (HDF5); written atomically, never replacing a file without ``force``.
     seed, walkers, steps, burn, n_starts, progress
         Sampler and optimiser settings; ``None`` takes the family's default
-        (``fit_defaults``; ``burn`` defaults to half the steps).
+        (``fit_defaults``; ``burn`` defaults to half the steps).  ``steps = "auto"`` samples
+        until converged (see :func:`~escfit.inference.mcmc.run_emcee`), at most ``max_steps``.
     resume
         Continue an interrupted emcee run from its checkpoint.
     checkpoint
-        emcee backend file (default ``<out>.emcee`` when ``out`` is given).
+        Sampler checkpoint (default ``<out>.emcee`` when ``out`` is given).
     predictive_draws
         Posterior draws at which the expected readings and the pointwise log-likelihood
         (for PSIS-LOO) are stored.
@@ -93,29 +96,43 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
     return fit_problem(problem, method=method, out=out, force=force, seed=seed, walkers=pick(walkers, "walkers"),
                        steps=pick(steps, "steps"), burn=pick(burn, "burn"), n_starts=pick(n_starts, "n_starts"),
                        n_refine=defaults["n_refine"], resume=resume, progress=progress, checkpoint=checkpoint,
-                       predictive_draws=pick(predictive_draws, "predictive_draws"), moves=pick(moves, "moves"))
+                       predictive_draws=pick(predictive_draws, "predictive_draws"), moves=pick(moves, "moves"),
+                       max_steps=pick(max_steps, "max_steps"))
 
 
 def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | None = None, force: bool = False,
-                seed: int = 0, walkers: int = 32, steps: int = 2000, burn: int | None = None, n_starts: int = 8,
-                n_refine: int | None = None, resume: bool = False, progress: bool = False,
+                seed: int = 0, walkers: int = 32, steps: int | str = "auto", burn: int | None = None,
+                n_starts: int = 8, n_refine: int | None = None, resume: bool = False, progress: bool = False,
                 checkpoint: str | Path | None = None, predictive_draws: int = 400,
-                moves: str = "stretch") -> FitResult:
-    """:func:`fit` of a prepared problem (any family)."""
+                moves: str = "stretch", max_steps: int = 20000) -> FitResult:
+    """:func:`fit` of a prepared problem (any family).
+
+    The result's ``timings`` attribute holds the seconds spent in each phase (least squares,
+    sampling, checkpoint saves, diagnostics and predictive draws, writing).
+    """
     if predictive_draws < 1:
         raise FitError(f"predictive_draws must be at least 1, got {predictive_draws}")
     started = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+    clock = time.perf_counter()
     lsq = least_squares(problem, n_starts=n_starts, n_refine=n_refine, seed=seed)
+    timings = {"least_squares_s": time.perf_counter() - clock}
     mc = None
     if method == "emcee":
         mc = run_emcee(problem, lsq, walkers=walkers, steps=steps, burn=burn, seed=seed, checkpoint=checkpoint,
-                       resume=resume, progress=progress, moves=moves)
-    result = FitResult(build_tree(problem, lsq, mc, method=method, seed=seed, started=started,
-                                  predictive_draws=predictive_draws))
+                       resume=resume, progress=progress, moves=moves, max_steps=max_steps)
+        timings.update(mc.timings)
+    clock = time.perf_counter()
+    tree = build_tree(problem, lsq, mc, method=method, seed=seed, started=started, predictive_draws=predictive_draws)
+    timings["diagnostics_s"] = time.perf_counter() - clock
+    tree.attrs.update(clean_attrs({"timings": {k: round(float(v), 4) for k, v in timings.items()}}))
+    result = FitResult(tree)
     if out is not None:
+        clock = time.perf_counter()
         write_fit(result, out, force=force)
         if checkpoint is not None and Path(checkpoint).exists():
             Path(checkpoint).unlink()
+        timings["write_s"] = time.perf_counter() - clock
+    result.timings = timings
     return result
 
 
@@ -166,7 +183,10 @@ def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None,
         bad = [n for n in names if float(groups["diagnostics"]["rhat"].sel(parameter=n)) > 1.05]
         if bad:
             warnings.append(f"split R-hat above 1.05 for {bad}: the walkers have not converged; run longer")
-        if not mc.tau_reliable:
+        if mc.auto and not mc.converged:
+            warnings.append(f"the run stopped at its cap of {mc.steps} steps before the convergence criteria were "
+                            f"met ({mc.verdict}); run longer (--max-steps) or fix the model")
+        elif not mc.tau_reliable:
             warnings.append("the run is shorter than 50 autocorrelation times: intervals are approximate")
         warnings += [w for w in problem.checks_of_posterior(mc.chain) if w not in family_warnings]
     warnings = _unique(warnings + misfit_warnings + list(getattr(problem, "data_warnings", [])))
@@ -180,7 +200,9 @@ def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None,
     }
     if mc is not None:
         attrs.update(walkers=mc.walkers, steps=mc.steps, burn=mc.burn, resumed=mc.resumed, moves=mc.moves,
-                     derived=list(derived))
+                     derived=list(derived), steps_mode="auto" if mc.auto else "fixed")
+        if mc.auto:
+            attrs.update(converged=int(bool(mc.converged)), convergence=mc.verdict)
     root = xr.DataTree(dataset=xr.Dataset(attrs=clean_attrs(attrs)))
     for name, ds in groups.items():
         root[name] = xr.DataTree(dataset=ds)

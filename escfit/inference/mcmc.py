@@ -1,22 +1,32 @@
-"""Posterior sampling with emcee for every model family, resumable from its HDF5 backend.
+"""Posterior sampling with emcee for every model family, checkpointed in chunks and resumable.
 
 Walkers start in a small ball around the least-squares solution; each walker is one ArviZ
 ``chain``.  A walker position whose forward solve fails has log-probability ``-inf`` (the
 reason is counted in ``problem.failures``), which emcee simply rejects.
+
+The run length is fixed (``steps = N``) or set by convergence (``steps = "auto"``: sample
+until the criteria of :mod:`escfit.inference.convergence` hold, up to a cap).  The draws are
+kept in memory and saved to the checkpoint (:mod:`escfit.inference.checkpoint`) every
+``checkpoint_every`` seconds (the interval grows if saving would take more than a twentieth
+of the time) and when the run is interrupted (Ctrl-C, SIGTERM), so a resumed run draws
+exactly what the uninterrupted one would have.
 """
 
 from __future__ import annotations
 
-import logging
 import math
+import signal
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import emcee
 import numpy as np
 
-from ..core.errors import FitError, ResultsError
+from ..core.errors import FitError
 from ..likelihood.problem import Problem
+from .checkpoint import Checkpoint, load_checkpoint, save_checkpoint
+from .convergence import Assessment, assess, autocorr_time
 from .lsq import LeastSquaresResult
 
 __all__ = ["McmcResult", "run_emcee"]
@@ -36,6 +46,14 @@ class McmcResult:
     steps, burn, walkers, seed : int
     tau_reliable : bool
         Whether the run is longer than 50 autocorrelation times (emcee's criterion).
+    auto : bool
+        Whether the run length was set by convergence (``steps = "auto"``).
+    converged : bool or None
+        With ``auto``: whether the criteria were met before the cap.
+    verdict : str
+        With ``auto``: the convergence figures at the stop, in one line.
+    timings : dict
+        Seconds spent sampling and saving checkpoints.
     """
 
     names: list[str]
@@ -51,6 +69,10 @@ class McmcResult:
     resumed: bool = False
     failures: dict = field(default_factory=dict)
     moves: str = "stretch"
+    auto: bool = False
+    converged: bool | None = None
+    verdict: str = ""
+    timings: dict = field(default_factory=dict)
 
 
 MOVES = {
@@ -95,25 +117,36 @@ def _start(problem: Problem, lsq: LeastSquaresResult | None, walkers: int, rng: 
     return out
 
 
-def run_emcee(problem: Problem, lsq: LeastSquaresResult | None = None, *, walkers: int = 32, steps: int = 2000,
-              burn: int | None = None, seed: int = 0, checkpoint: str | Path | None = None, resume: bool = False,
-              progress: bool = False, vectorize: bool | None = None, moves: str = "stretch") -> McmcResult:
+AUTO_MIN_STEPS = 400  # first look at convergence
+AUTO_GROWTH = 1.25  # later looks: each after the run has grown by a quarter
+
+
+def run_emcee(problem: Problem, lsq: LeastSquaresResult | None = None, *, walkers: int = 32,
+              steps: int | str = 2000, burn: int | None = None, seed: int = 0, checkpoint: str | Path | None = None,
+              resume: bool = False, progress: bool = False, vectorize: bool | None = None, moves: str = "stretch",
+              max_steps: int = 20000, checkpoint_every: float = 10.0) -> McmcResult:
     """Sample the posterior.
 
     Parameters
     ----------
-    walkers, steps
-        Ensemble size (at least twice the number of free parameters) and total steps.
+    walkers
+        Ensemble size (at least twice the number of free parameters).
+    steps
+        Total steps, or ``"auto"``: sample until every parameter has split R-hat <= 1.01, bulk
+        and tail ESS >= 400 and the run is longer than 50 autocorrelation times
+        (:mod:`escfit.inference.convergence`), looking first after 400 steps and then each time
+        the run has grown by a quarter, up to ``max_steps``.
     burn
         Steps discarded at the start (default: half the run).
     seed
         Seeds the start ball and emcee's own generator.
     checkpoint
-        emcee HDF5 backend file; the run can be resumed from it after an interruption.
+        HDF5 file the draws are saved to while sampling (:mod:`escfit.inference.checkpoint`);
+        the run can be resumed from it after an interruption.
     resume
-        Continue the run stored in ``checkpoint`` up to ``steps`` in total.
+        Continue the run stored in ``checkpoint`` (to ``steps`` in total, or until converged).
     progress
-        Show emcee's progress bar.
+        Show a progress bar (tqdm).
     moves
         ``"stretch"`` (emcee's default affine-invariant stretch move) or ``"de"`` (differential
         evolution), which mixes faster on posteriors with strongly coupled directions such as
@@ -123,60 +156,168 @@ def run_emcee(problem: Problem, lsq: LeastSquaresResult | None = None, *, walker
         :meth:`Problem.log_prob_many` (emcee's ``vectorize=True``).  Default: the problem's
         own declaration :attr:`Problem.vectorized` (a whole-array path that gives the same
         numbers as ``log_prob`` walker by walker, so the draws are identical too).
+    max_steps
+        Cap of an ``"auto"`` run.
+    checkpoint_every
+        Seconds between checkpoint saves (at least; longer when a save is slow).
     """
     ndim = len(problem.names)
+    auto = steps == "auto"
+    target = int(max_steps) if auto else steps
+    if isinstance(target, bool) or not isinstance(target, (int, np.integer)):
+        raise FitError(f"steps must be a whole number or 'auto', got {steps!r}")
     if walkers < 2 * ndim:
         raise FitError(f"emcee needs at least {2 * ndim} walkers for {ndim} free parameters, got {walkers}")
-    if steps < 10:
-        raise FitError(f"steps must be at least 10, got {steps}")
-    burn = steps // 2 if burn is None else int(burn)
-    if not 0 <= burn < steps:
+    if target < 10:
+        raise FitError(f"{'max_steps' if auto else 'steps'} must be at least 10, got {target}")
+    if burn is not None and not 0 <= int(burn) < target:
         raise FitError(f"burn must lie in [0, steps), got {burn}")
-    backend = None
-    done = 0
-    if checkpoint is not None:
-        backend = emcee.backends.HDFBackend(str(checkpoint), name="mcmc")
-        if resume:
-            if not Path(checkpoint).exists():
-                raise ResultsError("nothing to resume: checkpoint file not found", str(checkpoint))
-            try:
-                done = backend.iteration if backend.initialized else 0
-                shape = backend.shape if done else (walkers, ndim)
-            except (OSError, KeyError, ValueError) as exc:  # not an emcee checkpoint, or a damaged one
-                raise ResultsError(f"cannot resume from this checkpoint ({type(exc).__name__}: {exc}); pass --force "
-                                   "to start again", str(checkpoint)) from None
-            if shape != (walkers, ndim):
-                raise ResultsError(f"checkpoint holds {shape[0]} walkers x {shape[1]} parameters, this fit has "
-                                   f"{walkers} x {ndim}; pass --force to start again", str(checkpoint))
-        else:
-            backend.reset(walkers, ndim)
     if moves not in MOVES:
         raise FitError(f"moves must be one of {sorted(MOVES)}, got {moves!r}")
-    chosen = MOVES[moves]()
+    previous = load_checkpoint(checkpoint, walkers, list(problem.names)) if resume and checkpoint else None
     if vectorize is None:
         vectorize = bool(getattr(problem, "vectorized", False))
-    if vectorize:
-        sampler = emcee.EnsembleSampler(walkers, ndim, problem.log_prob_many, vectorize=True, backend=backend,
-                                        moves=chosen)
-    else:
-        sampler = emcee.EnsembleSampler(walkers, ndim, problem.log_prob, backend=backend, moves=chosen)
-    rng = np.random.default_rng(seed)
-    if done == 0:
+    fn = problem.log_prob_many if vectorize else problem.log_prob
+    sampler = emcee.EnsembleSampler(walkers, ndim, fn, vectorize=vectorize, moves=MOVES[moves]())
+    run = _Run(problem, sampler, previous, checkpoint, seed, moves, checkpoint_every)
+    if previous is None:
         sampler.random_state = np.random.RandomState(seed).get_state()
-        start = _start(problem, lsq, walkers, rng)
-        sampler.run_mcmc(start, steps, progress=progress)
-    elif done < steps:
-        sampler.run_mcmc(None, steps - done, progress=progress)
-    chain = sampler.get_chain()  # (steps, walkers, ndim)
-    lp = sampler.get_log_prob()
-    logger = logging.getLogger("emcee.autocorr")
-    level = logger.level
-    logger.setLevel(logging.ERROR)  # short chains are reported in the results' warnings instead
-    try:
-        tau = emcee.autocorr.integrated_time(chain, quiet=True) if chain.shape[0] > 1 else np.full(ndim, np.nan)
-    finally:
-        logger.setLevel(level)
+        run.start(_start(problem, lsq, walkers, np.random.default_rng(seed)))
+    assessment = run.advance(target, auto, progress, burn)
+    chain, lp = run.chain(), run.log_prob()
+    total = chain.shape[0]
+    burn = total // 2 if burn is None else min(int(burn), total - 1)
+    tau = assessment.tau if assessment is not None and assessment.steps == total else autocorr_time(chain)
     kept = chain[burn:].transpose(1, 0, 2)
-    return McmcResult(list(problem.names), kept, lp[burn:].T, np.asarray(sampler.acceptance_fraction), np.asarray(tau),
-                      chain.shape[0], burn, walkers, seed, bool(np.all(chain.shape[0] > 50 * np.asarray(tau))),
-                      resumed=done > 0, failures=dict(problem.failures), moves=moves)
+    return McmcResult(list(problem.names), kept, lp[burn:].T, run.accepted / max(total, 1), np.asarray(tau),
+                      total, burn, walkers, seed, bool(np.all(total > 50 * np.asarray(tau))),
+                      resumed=previous is not None, failures=dict(problem.failures), moves=moves, auto=auto,
+                      converged=None if not auto else bool(assessment is not None and assessment.converged),
+                      verdict="" if assessment is None else assessment.verdict(), timings=run.timings)
+
+
+class _Run:
+    """The draws of one run in memory, advanced step by step and saved in chunks."""
+
+    def __init__(self, problem: Problem, sampler: emcee.EnsembleSampler, previous: Checkpoint | None,
+                 path: str | Path | None, seed: int, moves: str, every: float) -> None:
+        self.problem, self.sampler, self.path = problem, sampler, path
+        self.seed, self.moves, self.every = seed, moves, float(every)
+        self.parts: list[np.ndarray] = []
+        self.lp_parts: list[np.ndarray] = []
+        self.accepted = np.zeros(sampler.nwalkers, np.int64)
+        self.state: emcee.State | None = None
+        self.saved_steps = 0
+        self.timings = {"sampling_s": 0.0, "checkpoint_s": 0.0, "checkpoint_saves": 0}
+        if previous is not None:
+            self.parts, self.lp_parts = [previous.chain], [previous.log_prob]
+            self.accepted = previous.accepted.copy()
+            self.state = emcee.State(previous.chain[-1], log_prob=previous.log_prob[-1],
+                                     random_state=previous.random_state)
+            self.saved_steps = previous.steps
+
+    @property
+    def steps(self) -> int:
+        return int(sum(p.shape[0] for p in self.parts))
+
+    def chain(self) -> np.ndarray:
+        return np.concatenate(self.parts) if self.parts else np.zeros((0, self.sampler.nwalkers, self.sampler.ndim))
+
+    def log_prob(self) -> np.ndarray:
+        return np.concatenate(self.lp_parts) if self.lp_parts else np.zeros((0, self.sampler.nwalkers))
+
+    def start(self, coords: np.ndarray) -> None:
+        lp, _ = self.sampler.compute_log_prob(coords)
+        self.state = emcee.State(coords, log_prob=lp, random_state=self.sampler.random_state)
+
+    def advance(self, target: int, auto: bool, progress: bool, burn: int | None) -> Assessment | None:
+        """Sample to ``target`` steps in all (or, with ``auto``, until converged); save on the way."""
+        assessment = None
+        look = max(AUTO_MIN_STEPS, self.steps)
+        if auto and self.steps >= AUTO_MIN_STEPS:
+            assessment = assess(self.chain(), burn)
+            if assessment.converged:
+                return assessment
+            look = max(self.steps + 1, int(self.steps * AUTO_GROWTH))
+        bar = _bar(progress, self.steps, target)
+        buf, lp_buf = [], []
+        last_save = time.monotonic()
+        restore = _sigterm_as_interrupt()
+        t0, saving0 = time.perf_counter(), self.timings["checkpoint_s"]
+        try:
+            gen = self.sampler.sample(self.state, iterations=None, store=False, skip_initial_state_check=True)
+            while self.steps + len(buf) < target:
+                state = next(gen)
+                self.accepted += np.any(state.coords != self.state.coords, axis=1)
+                self.state = emcee.State(state.coords.copy(), log_prob=state.log_prob.copy(),
+                                         random_state=state.random_state)
+                buf.append(self.state.coords)
+                lp_buf.append(self.state.log_prob)
+                if bar is not None:
+                    bar.update(1)
+                done = self.steps + len(buf)
+                if auto and done >= look:
+                    self._flush(buf, lp_buf)
+                    assessment = assess(self.chain(), burn)
+                    if assessment.converged:
+                        break
+                    look = max(done + 1, int(done * AUTO_GROWTH))
+                if self.path is not None and time.monotonic() - last_save >= self.every:
+                    self._flush(buf, lp_buf)
+                    self.save()
+                    last_save = time.monotonic()
+        except KeyboardInterrupt:
+            self._flush(buf, lp_buf)  # the steps completed before the interrupt
+            if self.path is not None and self.steps > self.saved_steps:
+                self.save()
+            raise
+        finally:
+            self.timings["sampling_s"] += time.perf_counter() - t0 - (self.timings["checkpoint_s"] - saving0)
+            restore()
+            if bar is not None:
+                bar.close()
+        self._flush(buf, lp_buf)
+        if auto and (assessment is None or assessment.steps != self.steps):
+            assessment = assess(self.chain(), burn)
+        return assessment
+
+    def _flush(self, buf: list, lp_buf: list) -> None:
+        if buf:
+            self.parts.append(np.array(buf))
+            self.lp_parts.append(np.array(lp_buf))
+            buf.clear()
+            lp_buf.clear()
+
+    def save(self) -> None:
+        t0 = time.perf_counter()
+        save_checkpoint(self.path, Checkpoint(self.chain(), self.log_prob(), self.accepted, self.state.random_state,
+                                              list(self.problem.names), self.seed, self.moves))
+        self.saved_steps = self.steps
+        spent = time.perf_counter() - t0
+        self.timings["checkpoint_s"] += spent
+        self.timings["checkpoint_saves"] += 1
+        self.every = max(self.every, 20.0 * spent)  # saving costs at most a twentieth of the run
+
+
+def _bar(progress: bool, done: int, total: int):
+    if not progress:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, initial=done, unit="step", desc="emcee")
+
+
+def _sigterm_as_interrupt():
+    """Treat SIGTERM like Ctrl-C while sampling (so the steps done are saved).
+
+    Returns a function that puts the previous handler back.  Outside the main thread (a
+    worker of a batch) signals are left alone.
+    """
+    def handler(signum, frame):  # noqa: ARG001
+        raise KeyboardInterrupt
+
+    try:
+        old = signal.signal(signal.SIGTERM, handler)
+    except ValueError:
+        return lambda: None
+    return lambda: signal.signal(signal.SIGTERM, old)

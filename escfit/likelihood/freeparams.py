@@ -67,6 +67,24 @@ class FreeParameters:
             vals[name] = factor * vals[other]
         return vals
 
+    def values_many(self, vecs: np.ndarray) -> dict[str, float | np.ndarray]:
+        """:meth:`values` of every row of ``vecs`` (sets, ndim) at once: free parameters (and
+        those tied to them) as arrays of shape (sets,), the rest as numbers."""
+        vecs = np.atleast_2d(np.asarray(vecs, float))
+        vals: dict = dict(self._base)
+        vals.update({n: vecs[:, i].copy() for i, n in enumerate(self.names)})
+        for name, (other, factor) in self._ties:
+            vals[name] = factor * vals[other]
+        return vals
+
+    def log_prior_many(self, vecs: np.ndarray) -> np.ndarray:
+        """:meth:`log_prior` of every row of ``vecs`` (sets, ndim), the same sums in the same order."""
+        vecs = np.atleast_2d(np.asarray(vecs, float))
+        total = np.zeros(vecs.shape[0])
+        for i, p in enumerate(self.priors):
+            total = total + np.asarray(p.logpdf(vecs[:, i]), float)
+        return total
+
     def log_prior(self, vec: np.ndarray) -> float:
         """Sum of the free parameters' log prior densities (``-inf`` outside the bounds)."""
         return float(sum(p.logpdf(float(x)) for p, x in zip(self.priors, vec)))

@@ -70,7 +70,7 @@ def drift_param(table: Mapping, where: str) -> Param:
 def offset_at(values: Mapping[str, float], time: np.ndarray | None):
     """Zero offset (rad) at the readings' times since release (s); a number when there is no drift."""
     rate = values.get("observation.offset_rate", 0.0)
-    if rate == 0.0:
+    if np.ndim(rate) == 0 and rate == 0.0:  # (values may hold one column per parameter set)
         return values["observation.offset"]
     if time is None:
         raise SceneError("observation.offset_rate needs the time of every reading; the data have no times")
@@ -109,9 +109,9 @@ class AmplitudeObservation:
         sigma = values["observation.sigma"]
         z = (y - self.expected(theta_turn, values, side, time)) / sigma
         if self.noise == "gaussian":
-            return -0.5 * z * z - (math.log(sigma) + 0.5 * math.log(2 * math.pi))
+            return -0.5 * z * z - (np.log(sigma) + 0.5 * math.log(2 * math.pi))
         nu = values["observation.nu"]
-        c = special.gammaln((nu + 1) / 2) - special.gammaln(nu / 2) - 0.5 * math.log(nu * math.pi) - math.log(sigma)
+        c = special.gammaln((nu + 1) / 2) - special.gammaln(nu / 2) - 0.5 * np.log(nu * math.pi) - np.log(sigma)
         return c - (nu + 1) / 2 * np.log1p(z * z / nu)
 
     def loglike(self, theta_turn: np.ndarray, y: np.ndarray, values: Mapping[str, float],

@@ -180,70 +180,95 @@ class FitProblem(FreeParameters, BalanceProblem):
         """Log posterior of each row of ``vecs``, shape ``(sets, ndim)`` -> ``(sets,)``.
 
         The same numbers as :meth:`log_prob` row by row (and the same failure counts), but
-        with the exact solver the forward runs of all rows go through one call of
-        :func:`escfit.balance.batch.solve_batch`, in parallel over the rows.  Other solvers
-        are evaluated row by row.
+        with the exact solver the whole ensemble is one array computation: priors, parameter
+        values and the load rule on arrays, the systems assembled in one pass
+        (:func:`escfit.balance.arraysystem.stack_from_values`), the forward runs in one call
+        of :func:`escfit.balance.batch.solve_batch` per curve and the observation model on a
+        (sets, readings) array.  Sets the batch refuses or cannot finish go through
+        :meth:`log_likelihood` one at a time, which records why.  Other solvers are evaluated
+        row by row.
         """
         vecs = np.atleast_2d(np.asarray(vecs, float))
         out = np.full(vecs.shape[0], -math.inf)
-        lp = np.array([self.log_prior(v) for v in vecs])
+        lp = self.log_prior_many(vecs)
         rows = np.flatnonzero(np.isfinite(lp))
         if rows.size == 0:
             return out
-        vals = [self.values(vecs[i]) for i in rows]
         if self.solver != "exact":
-            out[rows] = lp[rows] + np.array([self.log_likelihood(v) for v in vals])
+            out[rows] = lp[rows] + np.array([self.log_likelihood(self.values(vecs[i])) for i in rows])
             return out
-        out[rows] = lp[rows] + self._log_likelihood_many(vals)
+        out[rows] = lp[rows] + self._log_likelihood_many(vecs[rows])
         return out
 
-    def _log_likelihood_many(self, vals: list[dict[str, float]]) -> np.ndarray:
-        from ..batch import SystemStack, solve_batch
-
-        n_sets = len(vals)
-        preds: list[list[np.ndarray]] = [[] for _ in range(n_sets)]
-        scalar = np.zeros(n_sets, bool)  # sets handed to the one-at-a-time path (failures)
-        sides = [self.sides(c) for c in self.curves]
-        for curve in self.curves:
-            n = int(curve.swing.max())
-            systems = []
-            for i, v in enumerate(vals):
-                try:
-                    systems.append(self.scene.system(self.load_rule.apply(v, curve.load)))
-                except (EscfitError, ValueError, ArithmeticError):
-                    scalar[i] = True
-                    systems.append(None)
-            live = [i for i in range(n_sets) if not scalar[i]]
-            if not live:
-                break
-            theta0 = np.array([systems[i].theta0 for i in live])
-            if n > 0:
-                batch = solve_batch(SystemStack.from_systems([systems[i] for i in live]), n, self.scene.switching,
-                                    throw=False, max_segments=self.solver_options.get("max_segments"))
-                readings = _at_recorded_swings_many(curve, theta0, batch.theta_turn, batch.n_done)
-                failed = np.isin(batch.status, ("failed", "max_segments"))
-            else:
-                readings = _at_recorded_swings_many(curve, theta0, np.zeros((len(live), 0)), np.zeros(len(live), int))
-                failed = np.zeros(len(live), bool)
-            for j, i in enumerate(live):
-                if failed[j]:
-                    scalar[i] = True
-                else:
-                    preds[i].append(readings[j])
+    def _log_likelihood_many(self, vecs: np.ndarray) -> np.ndarray:
+        n_sets = vecs.shape[0]
+        vals = self.values_many(vecs)
+        columns = {k: (v[:, None] if isinstance(v, np.ndarray) else v) for k, v in vals.items()}
+        total = np.zeros(n_sets)
+        scalar = np.zeros(n_sets, bool)  # sets handed to the one-at-a-time path (refusals, failures)
+        try:
+            turns, n_done, failed = self._solve_all_curves(vals, n_sets)
+        except (EscfitError, ValueError, ArithmeticError):
+            turns, scalar[:] = None, True
+        if turns is not None:
+            theta0 = turns[:, :, 0]
+            for j, curve in enumerate(self.curves):
+                scalar |= failed[j]
+                readings = _at_recorded_swings_many(curve, theta0[j], turns[j, :, 1:], n_done[j])
+                side = self.sides(curve)
+                pred = readings if side is None else side * readings  # as _nominal
+                with np.errstate(all="ignore"):
+                    ll = self.observation.loglike_pointwise(pred, curve.y, columns, side, curve.time)
+                total = total + np.sum(np.broadcast_to(ll, pred.shape), axis=1)
         ll = np.empty(n_sets)
-        for i, v in enumerate(vals):
+        for i in range(n_sets):
             if scalar[i]:
                 # the one-at-a-time path records the same failure reason as log_prob would
-                ll[i] = self.log_likelihood(v)
-                continue
-            pred = [t if side is None else side * t for t, side in zip(preds[i], sides)]  # as _nominal
-            total = sum(self.observation.loglike(p, c.y, v, side, c.time)
-                        for p, c, side in zip(pred, self.curves, sides))
-            if not math.isfinite(total):
+                ll[i] = self.log_likelihood(self.values(vecs[i]))
+            elif not math.isfinite(total[i]):
                 self.failures["non-finite likelihood"] += 1
-                total = -math.inf
-            ll[i] = total
+                ll[i] = -math.inf
+            else:
+                ll[i] = total[i]
         return ll
+
+    def _solve_all_curves(self, vals: Mapping, n_sets: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Turning points of every set at every curve's load, in one batch call.
+
+        The sets of all curves (loads) share one structure, so they are stacked curve after
+        curve and run to the longest curve's last recorded swing (a set's turning points do not
+        depend on how many swings are asked for; extra ones are simply not read).
+
+        Returns
+        -------
+        turns : ndarray, shape (curves, sets, 1 + swings)
+            Release angle then the signed turning points (NaN after a set's last one).
+        n_done : ndarray, shape (curves, sets)
+        failed : ndarray of bool, shape (curves, sets)
+            Refused by the batch or out of segments (to be evaluated one at a time).
+        """
+        from ..arraysystem import _column, stack_from_values
+        from ..batch import solve_batch
+
+        n_curves = len(self.curves)
+        per_curve = [self.load_rule.apply(vals, c.load) for c in self.curves]
+        merged = {k: (np.concatenate([_column(cv[k], n_sets) for cv in per_curve])
+                      if any(isinstance(cv[k], np.ndarray) or cv[k] != per_curve[0][k] for cv in per_curve)
+                      else per_curve[0][k])
+                  for k in per_curve[0]}
+        stack = stack_from_values(self.scene, merged, n_sets * n_curves)
+        n = max(int(c.swing.max()) for c in self.curves)
+        turns = np.full((n_sets * n_curves, 1 + n), np.nan)
+        turns[:, 0] = stack.theta0
+        if n > 0:
+            batch = solve_batch(stack, n, self.scene.switching, throw=False,
+                                max_segments=self.solver_options.get("max_segments"))
+            turns[:, 1:] = batch.theta_turn
+            n_done, failed = batch.n_done, (batch.status == "failed") | (batch.status == "max_segments")
+        else:
+            n_done, failed = np.zeros(n_sets * n_curves, int), np.zeros(n_sets * n_curves, bool)
+        shape = (n_curves, n_sets)
+        return turns.reshape(*shape, 1 + n), n_done.reshape(shape), failed.reshape(shape)
 
     def residuals(self, vals: Mapping[str, float]) -> np.ndarray:
         """Standardised residuals of all readings (large values on failure)."""

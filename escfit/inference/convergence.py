@@ -1,0 +1,101 @@
+"""When a sampler run is long enough: the criteria of ``--steps auto``.
+
+A run stops when, over the draws kept after burn-in (the second half of the run so far),
+
+* the rank-normalised split R-hat of every parameter is at most ``RHAT_MAX`` (1.01),
+* the bulk and the tail effective sample sizes of every parameter are at least ``ESS_MIN``
+  (400), both as ArviZ computes them with each walker taken as a chain (Vehtari et al. 2021),
+* and the whole run is longer than ``TAU_FACTOR`` (50) integrated autocorrelation times of
+  every parameter (emcee's own criterion; with 32 walkers it also gives an ensemble ESS of
+  walkers * steps / (2 tau) >= 800).
+
+:func:`assess` returns these figures; :func:`verdict` says in one line what is still missing.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Assessment", "assess", "RHAT_MAX", "ESS_MIN", "TAU_FACTOR", "autocorr_time"]
+
+RHAT_MAX = 1.01
+ESS_MIN = 400.0
+TAU_FACTOR = 50.0
+
+
+@dataclass(frozen=True)
+class Assessment:
+    """Convergence figures of a run (per parameter, in vector order).
+
+    Attributes
+    ----------
+    steps : int
+        Steps of the whole run.
+    rhat, ess_bulk, ess_tail : ndarray
+        Of the kept draws (second half).
+    tau : ndarray
+        Integrated autocorrelation time (steps) from the whole run.
+    """
+
+    steps: int
+    rhat: np.ndarray
+    ess_bulk: np.ndarray
+    ess_tail: np.ndarray
+    tau: np.ndarray
+
+    @property
+    def converged(self) -> bool:
+        return (bool(np.all(self.rhat <= RHAT_MAX)) and bool(np.all(self.ess_bulk >= ESS_MIN))
+                and bool(np.all(self.ess_tail >= ESS_MIN)) and bool(np.all(self.steps > TAU_FACTOR * self.tau)))
+
+    def verdict(self) -> str:
+        """One line: the worst figure of each criterion against its threshold."""
+        worst = lambda a, f: float(f(a)) if a.size else float("nan")  # noqa: E731
+        return (f"after {self.steps} steps: max R-hat {worst(self.rhat, np.max):.3f} (<= {RHAT_MAX}), "
+                f"min bulk ESS {worst(self.ess_bulk, np.min):.0f}, min tail ESS {worst(self.ess_tail, np.min):.0f} "
+                f"(>= {ESS_MIN:.0f}), run / max tau {self.steps / max(worst(self.tau, np.max), 1e-300):.0f} "
+                f"(> {TAU_FACTOR:.0f})")
+
+
+def autocorr_time(chain: np.ndarray) -> np.ndarray:
+    """emcee's integrated autocorrelation time per parameter, ``chain`` shaped (steps, walkers, ndim).
+
+    NaN when the run is too short to estimate it (fewer than two steps).
+    """
+    import emcee
+
+    if chain.shape[0] < 2:
+        return np.full(chain.shape[-1], np.nan)
+    logger = logging.getLogger("emcee.autocorr")
+    level = logger.level
+    logger.setLevel(logging.ERROR)  # short chains are judged by the caller, not logged
+    try:
+        return np.asarray(emcee.autocorr.integrated_time(chain, quiet=True), float)
+    finally:
+        logger.setLevel(level)
+
+
+def assess(chain: np.ndarray, burn: int | None = None) -> Assessment:
+    """Convergence figures of ``chain`` (steps, walkers, ndim) with the first ``burn`` steps dropped.
+
+    ``burn`` defaults to half the run.  Parameters that never move (a chain with zero spread)
+    get R-hat NaN and ESS NaN, which fail the criteria.
+    """
+    import arviz as az
+
+    steps = int(chain.shape[0])
+    burn = steps // 2 if burn is None else int(burn)
+    kept = np.transpose(chain[burn:], (1, 0, 2))  # (walkers, draws, ndim)
+    ndim = chain.shape[-1]
+    rhat, bulk, tail = (np.full(ndim, np.nan) for _ in range(3))
+    if kept.shape[1] >= 4:
+        for i in range(ndim):
+            x = kept[:, :, i]
+            if np.ptp(x) > 0:
+                rhat[i] = float(az.rhat(x))
+                bulk[i] = float(az.ess(x, method="bulk"))
+                tail[i] = float(az.ess(x, method="tail"))
+    return Assessment(steps, rhat, bulk, tail, autocorr_time(chain))
