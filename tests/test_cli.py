@@ -95,11 +95,23 @@ def test_fit_rig_and_summary(tmp_path):
     (["fit", DATASETS / "monday1965" / "synthetic" / "unit1.csv"], "--scene"),
     (["summary", "missing.h5"], "results file not found"),
     (["report", DATASETS / "scenes" / "horology_rk4_case.toml"], "cannot read"),
+    (["fit", ROOT / "fits" / "monday_unit3.toml", "--steps", "many"], "neither 'auto' nor a whole number"),
+    (["fit", ROOT / "fits" / "monday_unit3.toml", "--steps", "5"], "neither 'auto' nor a whole number"),
 ])
 def test_errors_exit_2(args, fragment):
     r = run(*args)
     assert r.exit_code == 2, r.output
     assert fragment in r.output
+
+
+@pytest.mark.parametrize("line", ['steps = "many"', "steps = 5", "max_steps = 2.5", "steps = true"])
+def test_recipe_run_lengths_of_the_wrong_kind_exit_2_naming_the_key(tmp_path, line):
+    recipe = tmp_path / "r.toml"
+    text = (ROOT / "fits" / "monday_unit3.toml").read_text().replace("../", str(ROOT) + "/")
+    recipe.write_text("\n".join(ln for ln in text.splitlines() if not ln.startswith("steps")) + "\n" + line + "\n")
+    r = run("fit", recipe, "--out", tmp_path / "o.h5")
+    assert r.exit_code == 2 and f"{recipe} (recipe).{line.split()[0]}" in r.output, r.output
+    assert not (tmp_path / "o.h5").exists()
 
 
 def test_balance_emcee_run_interrupted_and_resumed_from_the_command_line(tmp_path, monkeypatch):

@@ -222,6 +222,8 @@ def _read_recipe(path: Path) -> dict:
               help="emcee steps, or 'auto' (default): sample until split R-hat <= 1.01, bulk and tail ESS >= 400 "
                    "and 50 autocorrelation times, up to --max-steps.")
 @click.option("--max-steps", type=click.IntRange(10), default=None, help="Cap of an automatic run (default 20000).")
+@click.option("--checkpoint-every", type=click.FloatRange(0.0), default=10.0, show_default=True,
+              help="Seconds between saves of the sampler's checkpoint (<out>.emcee); a kill loses at most these.")
 @click.option("--burn", type=click.IntRange(0), default=None)
 @click.option("--unit", "unit_id", default=None, help="Fit only this unit of a multi-unit file.")
 @click.option("--material", default=None, help="friction_rig: fit only this material of a rig readings file.")
@@ -246,7 +248,7 @@ def _read_recipe(path: Path) -> dict:
 @click.option("--force", is_flag=True, help="Replace an existing results file.")
 @click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None, help="Also write a report.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, burn, unit_id, material, fmt, time_column, sample_rate,
+def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoint_every, burn, unit_id, material, fmt, time_column, sample_rate,
         angle_column, angle_unit, counts_per_turn, scale, start_time, stop_time, solver, moves, notch_deg, resume,
         force, report_path, quiet):
     """Fit DATA (a recording) with --scene SCENE, or run a fit RECIPE.toml."""
@@ -300,7 +302,7 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, burn, un
                              f"this scene's model is {scene.model!r}", scene_path)
     result = run_fit(scene, data, method=method, out=out, force=force, seed=pick(seed, "seed", 0),
                      walkers=pick(walkers, "walkers", None), steps=pick(steps, "steps", None),
-                     max_steps=pick(max_steps, "max_steps", None),
+                     max_steps=pick(max_steps, "max_steps", None), checkpoint_every=checkpoint_every,
                      burn=pick(burn, "burn", None), resume=resume, progress=not quiet and sys.stderr.isatty(),
                      moves=pick(moves, "moves", None), **options)
     click.echo(f"wrote {out}")
@@ -320,6 +322,13 @@ def _column(text: str | None):
 def _print_summary(result) -> None:
     from ..report import parameter_table
 
+    a = result.attrs
+    if "steps" in a and "walkers" in a:
+        how = "fixed length"
+        if a.get("steps_mode") == "auto":
+            how = ("stopped when converged, " if int(a.get("converged", 0)) else "stopped at the cap, NOT converged, ") \
+                + str(a.get("convergence", ""))
+        click.echo(f"emcee: {a['walkers']} walkers x {a['steps']} steps, first {a['burn']} discarded ({how})")
     head, rows = parameter_table(result)
     widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(head)]
     click.echo("  ".join(h.ljust(w) for h, w in zip(head, widths)))

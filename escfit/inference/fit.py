@@ -37,7 +37,7 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
         walkers: int | None = None, steps: int | str | None = None, burn: int | None = None,
         n_starts: int | None = None, resume: bool = False, progress: bool = False,
         checkpoint: str | Path | None = None, predictive_draws: int | None = None, moves: str | None = None,
-        max_steps: int | None = None, **options) -> FitResult:
+        max_steps: int | None = None, checkpoint_every: float = 10.0, **options) -> FitResult:
     """Fit a scene of any model family to a recording.
 
     Parameters
@@ -59,6 +59,8 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
         Continue an interrupted emcee run from its checkpoint.
     checkpoint
         Sampler checkpoint (default ``<out>.emcee`` when ``out`` is given).
+    checkpoint_every
+        Seconds between checkpoint saves (a kill loses at most the steps since the last one).
     predictive_draws
         Posterior draws at which the expected readings and the pointwise log-likelihood
         (for PSIS-LOO) are stored.
@@ -93,18 +95,20 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
         raise FitError("an interrupted run's checkpoint exists; pass --resume to continue it or --force to restart",
                        str(checkpoint))
     problem = fam.problem(sc, data, **options)
+    if out is not None:
+        _remove_stale_temporaries(out, checkpoint)
     return fit_problem(problem, method=method, out=out, force=force, seed=seed, walkers=pick(walkers, "walkers"),
                        steps=pick(steps, "steps"), burn=pick(burn, "burn"), n_starts=pick(n_starts, "n_starts"),
                        n_refine=defaults["n_refine"], resume=resume, progress=progress, checkpoint=checkpoint,
                        predictive_draws=pick(predictive_draws, "predictive_draws"), moves=pick(moves, "moves"),
-                       max_steps=pick(max_steps, "max_steps"))
+                       max_steps=pick(max_steps, "max_steps"), checkpoint_every=checkpoint_every)
 
 
 def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | None = None, force: bool = False,
                 seed: int = 0, walkers: int = 32, steps: int | str = "auto", burn: int | None = None,
                 n_starts: int = 8, n_refine: int | None = None, resume: bool = False, progress: bool = False,
                 checkpoint: str | Path | None = None, predictive_draws: int = 400,
-                moves: str = "stretch", max_steps: int = 20000) -> FitResult:
+                moves: str = "stretch", max_steps: int = 20000, checkpoint_every: float = 10.0) -> FitResult:
     """:func:`fit` of a prepared problem (any family).
 
     The result's ``timings`` attribute holds the seconds spent in each phase (least squares,
@@ -119,7 +123,8 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
     mc = None
     if method == "emcee":
         mc = run_emcee(problem, lsq, walkers=walkers, steps=steps, burn=burn, seed=seed, checkpoint=checkpoint,
-                       resume=resume, progress=progress, moves=moves, max_steps=max_steps)
+                       resume=resume, progress=progress, moves=moves, max_steps=max_steps,
+                       checkpoint_every=checkpoint_every)
         timings.update(mc.timings)
     clock = time.perf_counter()
     tree = build_tree(problem, lsq, mc, method=method, seed=seed, started=started, predictive_draws=predictive_draws)
@@ -134,6 +139,19 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
         timings["write_s"] = time.perf_counter() - clock
     result.timings = timings
     return result
+
+
+def _remove_stale_temporaries(out: str | Path, checkpoint: str | Path | None) -> None:
+    """Delete what an earlier run of this output killed mid-write left: its hidden ``.part`` files.
+
+    Only this run's own names are touched (``.<out name>.*.part`` and ``.<checkpoint name>.*.part``
+    beside them, written by :func:`escfit.core.atomic.atomic_path` and the checkpoint saver).
+    """
+    for target in filter(None, (out, checkpoint)):
+        target = Path(target)
+        for stale in target.parent.glob(f".{target.name}.*.part"):
+            if stale.name.count(".emcee.") == target.name.count(".emcee"):  # not the other file's temporaries
+                stale.unlink(missing_ok=True)
 
 
 def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None, *, method: str, seed: int,

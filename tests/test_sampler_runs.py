@@ -1,0 +1,163 @@
+"""The sampler driver: chunked checkpoints, exact resumption, and run length set by convergence.
+
+The reference for resumption is an uninterrupted run with the same seed (the draws must be
+bit-identical); the reference for the convergence figures is closed forms (the integrated
+autocorrelation time of an AR(1) chain, the moments of a Gaussian posterior).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+
+import h5py
+import numpy as np
+import pytest
+
+from escfit.core.errors import FitError, ResultsError
+from escfit.inference.checkpoint import load_checkpoint
+from escfit.inference.convergence import assess
+from escfit.inference.mcmc import run_emcee
+
+
+class Gaussian2D:
+    """A correlated 2-D Gaussian posterior (means 1 and -2, sds 0.5 and 2, r = 0.8), whole-array."""
+
+    names = ["a", "b"]
+    mean = np.array([1.0, -2.0])
+    cov = np.array([[0.25, 0.8 * 0.5 * 2.0], [0.8 * 0.5 * 2.0, 4.0]])
+    initial = np.array([1.0, -2.0])
+    bounds = (np.array([-50.0, -50.0]), np.array([50.0, 50.0]))
+    vectorized = True
+
+    def __init__(self, die_after: int | None = None):
+        self.failures: Counter = Counter()
+        self.prec = np.linalg.inv(self.cov)
+        self.calls = 0
+        self.die_after = die_after
+
+    def log_prob_many(self, x: np.ndarray) -> np.ndarray:
+        if np.ndim(x) == 2 and len(x) > 1:  # ensemble calls (placing the walkers goes one by one)
+            self.calls += 1
+            if self.die_after is not None and self.calls > self.die_after:
+                raise KeyboardInterrupt
+        d = np.atleast_2d(x) - self.mean
+        return -0.5 * np.einsum("ij,jk,ik->i", d, self.prec, d)
+
+    def log_prob(self, x: np.ndarray) -> float:
+        return float(self.log_prob_many(np.asarray(x)[None, :])[0])
+
+
+# -- checkpoints and resumption ----------------------------------------------------------------
+
+def test_interrupted_run_saves_its_completed_steps_and_resumes_to_identical_draws(tmp_path):
+    whole = run_emcee(Gaussian2D(), walkers=8, steps=300, seed=4, moves="de")
+    ck = tmp_path / "run.emcee"
+    # calls: the start ensemble, then two half-ensembles per step: die inside step 121
+    with pytest.raises(KeyboardInterrupt):
+        run_emcee(Gaussian2D(die_after=1 + 2 * 120 + 1), walkers=8, steps=300, seed=4, moves="de",
+                  checkpoint=ck, checkpoint_every=1e9)
+    saved = load_checkpoint(ck, 8, ["a", "b"])
+    assert saved.steps == 120  # every completed step, none of the interrupted one
+    again = run_emcee(Gaussian2D(), walkers=8, steps=300, seed=4, moves="de", checkpoint=ck, resume=True)
+    assert again.resumed and again.steps == 300 and again.chain.shape == whole.chain.shape
+    np.testing.assert_array_equal(again.chain, whole.chain)
+    np.testing.assert_array_equal(again.log_prob, whole.log_prob)
+    np.testing.assert_allclose(again.acceptance, whole.acceptance)
+
+
+def test_checkpoint_is_saved_in_chunks_not_every_step(tmp_path, monkeypatch):
+    import escfit.inference.mcmc as mcmc
+
+    saves = []
+    original = mcmc.save_checkpoint
+    monkeypatch.setattr(mcmc, "save_checkpoint", lambda path, ck: (saves.append(ck.steps), original(path, ck)))
+    run_emcee(Gaussian2D(), walkers=8, steps=200, seed=1, checkpoint=tmp_path / "c.emcee", checkpoint_every=1e9)
+    assert saves == []  # a run that finishes between saves writes none (the results file follows)
+    res = run_emcee(Gaussian2D(), walkers=8, steps=3000, seed=1, checkpoint=tmp_path / "d.emcee",
+                    checkpoint_every=0.0)
+    # asked to save all the time, it saves at most a twentieth of the time (the interval grows)
+    assert 1 <= len(saves) < 3000 and saves == sorted(set(saves))
+    t = res.timings
+    assert t["checkpoint_saves"] == len(saves)
+    assert t["checkpoint_s"] <= 0.05 * t["sampling_s"] + t["checkpoint_s"] / len(saves) + 0.05
+    assert load_checkpoint(tmp_path / "d.emcee", 8, ["a", "b"]).steps == saves[-1]
+
+
+def test_damaged_foreign_and_mismatched_checkpoints_are_refused(tmp_path):
+    ck = tmp_path / "c.emcee"
+    with pytest.raises(KeyboardInterrupt):
+        run_emcee(Gaussian2D(die_after=40), walkers=8, steps=100, seed=0, checkpoint=ck, checkpoint_every=1e9)
+    with pytest.raises(ResultsError, match="this fit has 12 x 2"):
+        run_emcee(Gaussian2D(), walkers=12, steps=100, seed=0, checkpoint=ck, resume=True)
+    other = Gaussian2D()
+    other.names = ["a", "c"]
+    with pytest.raises(ResultsError, match="--force"):
+        run_emcee(other, walkers=8, steps=100, seed=0, checkpoint=ck, resume=True)
+    with h5py.File(ck, "r") as f:
+        at = f["chain"].id.get_chunk_info(0).byte_offset  # where the stored draws begin
+    raw = bytearray(ck.read_bytes())
+    raw[at + 8: at + 16] = bytes(b ^ 0xFF for b in raw[at + 8: at + 16])  # flip one stored number's bits
+    bad = tmp_path / "bad.emcee"
+    bad.write_bytes(bytes(raw))
+    with pytest.raises(ResultsError, match="--force"):
+        load_checkpoint(bad, 8, ["a", "b"])
+    foreign = tmp_path / "foreign.emcee"
+    with h5py.File(foreign, "w") as f:
+        f["chain"] = np.zeros((3, 8, 2))
+    with pytest.raises(ResultsError, match="not an escfit sampler checkpoint"):
+        load_checkpoint(foreign, 8, ["a", "b"])
+    with pytest.raises(ResultsError, match="nothing to resume"):
+        load_checkpoint(tmp_path / "missing.emcee", 8, ["a", "b"])
+    assert not list(tmp_path.glob(".*.part"))  # no temporaries left behind
+
+
+# -- convergence figures and the automatic run length -------------------------------------------
+
+def test_autocorrelation_time_of_an_ar1_chain_matches_its_closed_form():
+    """AR(1) with coefficient phi has integrated autocorrelation time (1 + phi) / (1 - phi)."""
+    rng = np.random.default_rng(0)
+    phi, steps, walkers = 0.8, 20000, 8
+    x = np.zeros((steps, walkers, 1))
+    e = rng.standard_normal((steps, walkers)) * math.sqrt(1 - phi**2)
+    for t in range(1, steps):
+        x[t, :, 0] = phi * x[t - 1, :, 0] + e[t]
+    a = assess(x)
+    assert a.tau[0] == pytest.approx((1 + phi) / (1 - phi), rel=0.1)
+    # bulk ESS of the kept half: walkers * draws / tau
+    assert a.ess_bulk[0] == pytest.approx(walkers * steps / 2 / 9.0, rel=0.15)
+    assert a.rhat[0] < 1.01 and a.converged
+
+
+def test_walkers_that_disagree_are_not_converged():
+    rng = np.random.default_rng(1)
+    x = rng.standard_normal((2000, 16, 2))
+    x[:, :4, 1] += 0.5  # a quarter of the walkers sit half a standard deviation away
+    a = assess(x)
+    assert a.rhat[1] > 1.01 and not a.converged
+    assert "max R-hat" in a.verdict()
+
+
+def test_auto_run_stops_when_converged_and_gets_the_closed_form_moments():
+    res = run_emcee(Gaussian2D(), walkers=16, steps="auto", seed=3, moves="de", max_steps=20000)
+    assert res.auto and res.converged and res.steps < 20000
+    final = assess(np.concatenate([res.chain.transpose(1, 0, 2)]), burn=0)
+    assert np.all(final.rhat <= 1.011) and np.all(final.ess_bulk >= 390)
+    draws = res.chain.reshape(-1, 2)
+    se = np.sqrt(np.diag(Gaussian2D.cov) / final.ess_bulk)
+    assert np.all(np.abs(draws.mean(axis=0) - Gaussian2D.mean) < 4 * se)
+    assert np.corrcoef(draws.T)[0, 1] == pytest.approx(0.8, abs=0.03)
+    assert np.sqrt(np.diag(np.cov(draws.T))) == pytest.approx([0.5, 2.0], rel=0.06)
+
+
+def test_auto_run_stopped_by_its_cap_says_so():
+    res = run_emcee(Gaussian2D(), walkers=8, steps="auto", seed=3, max_steps=60)
+    assert res.steps == 60 and res.auto and res.converged is False
+    assert "after 60 steps" in res.verdict
+
+
+def test_bad_run_lengths_are_refused():
+    with pytest.raises(FitError, match="whole number or 'auto'"):
+        run_emcee(Gaussian2D(), walkers=8, steps="many")
+    with pytest.raises(FitError, match="at least 10"):
+        run_emcee(Gaussian2D(), walkers=8, steps=5)
