@@ -8,7 +8,13 @@ imported, so the time includes imports and numba compilation; ``--cold`` compile
 empty numba cache (the script re-runs itself with ``NUMBA_CACHE_DIR`` set to a new
 temporary directory), so nothing compiled earlier is reused.
 
+``--compare REV`` times the same run (warm cache, fresh interpreter each time) for this
+checkout and for the package as it was at git revision REV (extracted with ``git archive``
+into a temporary directory and put first on ``PYTHONPATH``), ``--repeat`` times each,
+alternating, and prints min/median of each and the ratio old/new of the medians.
+
 Run:  python benchmarks/posterior_speed.py [--walkers 32] [--steps 5000] [--cold] [--json]
+      python benchmarks/posterior_speed.py --compare 2e7e582 [--repeat 3]
 """
 
 from __future__ import annotations
@@ -78,6 +84,47 @@ def run_cold(walkers: int, steps: int) -> dict:
     return result
 
 
+def run_in(root: Path, walkers: int, steps: int, cache: str) -> dict:
+    """One warm run in a fresh interpreter importing escfit from ``root``."""
+    env = dict(os.environ, PYTHONPATH=str(root), NUMBA_CACHE_DIR=cache)
+    t0 = time.perf_counter()
+    out = subprocess.run([sys.executable, __file__, "--walkers", str(walkers), "--steps", str(steps), "--json"],
+                         env=env, capture_output=True, text=True, check=True)
+    result = json.loads(out.stdout)
+    result["seconds_process_wall"] = time.perf_counter() - t0
+    return result
+
+
+def compare(rev: str, walkers: int, steps: int, repeat: int) -> dict:
+    """This checkout against revision ``rev``, each run ``repeat`` times (alternating), warm caches."""
+    import statistics
+
+    with tempfile.TemporaryDirectory(prefix="escfit-compare-") as tmp:
+        base = Path(tmp) / "baseline"
+        base.mkdir()
+        archive = subprocess.run(["git", "-C", str(ROOT), "archive", rev, "escfit"], check=True,
+                                 capture_output=True).stdout
+        subprocess.run(["tar", "-x", "-C", str(base)], input=archive, check=True)
+        roots = {"baseline": base, "current": ROOT}
+        caches = {k: str(Path(tmp) / f"cache-{k}") for k in roots}
+        for k in roots:  # fill each cache once (compilation is not what is compared)
+            run_in(roots[k], walkers, 20, caches[k])
+        runs = {k: [] for k in roots}
+        for _ in range(repeat):
+            for k in roots:
+                runs[k].append(run_in(roots[k], walkers, steps, caches[k]))
+    print(f"posterior benchmark, {walkers} walkers x {steps} steps, warm cache; baseline {rev}; load average "
+          f"{os.getloadavg()[0]:.2f}")
+    summary = {"baseline": rev, "walkers": walkers, "steps": steps, "runs": runs}
+    for key in ("seconds_sampling", "seconds_process_wall"):
+        med = {k: statistics.median(r[key] for r in runs[k]) for k in runs}
+        lows = {k: min(r[key] for r in runs[k]) for k in runs}
+        print(f"{key:24s} baseline {lows['baseline']:.2f} / {med['baseline']:.2f}   current {lows['current']:.2f} / "
+              f"{med['current']:.2f}   (min / median)   ratio {med['baseline'] / med['current']:.2f}x")
+        summary[f"ratio_{key}"] = med["baseline"] / med["current"]
+    return summary
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--walkers", type=int, default=32)
@@ -85,7 +132,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--cold", action="store_true", help="empty numba cache, fresh interpreter")
     ap.add_argument("--per-walker", action="store_true", help="emcee without vectorize (for comparison)")
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--compare", metavar="REV", default=None, help="also time the package at git revision REV")
+    ap.add_argument("--repeat", type=int, default=3)
     args = ap.parse_args(argv)
+    if args.compare:
+        compare(args.compare, args.walkers, args.steps, args.repeat)
+        return 0
     if args.cold:
         result = run_cold(args.walkers, args.steps)
     else:

@@ -43,9 +43,11 @@ PHASES = ["imports", "compile", "least_squares", "sampling", "checkpoint", "diag
 HARNESS = r"""
 import json, sys, time
 t0 = time.perf_counter()
-import escfit.cli.main as cli_main
-import escfit.inference.fit as F
-import escfit.report as R
+import escfit.cli.main
+import escfit.inference.fit
+import escfit.report
+# the modules, not the functions of the same names their packages export
+cli_main, F, R = (sys.modules[m] for m in ("escfit.cli.main", "escfit.inference.fit", "escfit.report"))
 phases = {"imports": time.perf_counter() - t0}
 
 def wrap(owner, name, key):
@@ -63,10 +65,11 @@ wrap(F, "run_emcee", "emcee")
 wrap(F, "build_tree", "diagnostics")
 wrap(F, "write_fit", "write")
 wrap(R, "make_report", "report")
-try:
-    import escfit.inference.mcmc as M
+import escfit.inference.mcmc
+M = sys.modules["escfit.inference.mcmc"]
+if hasattr(M, "save_checkpoint"):
     wrap(M, "save_checkpoint", "checkpoint")  # chunked checkpoint
-except AttributeError:
+else:
     import emcee
     wrap(emcee.backends.HDFBackend, "save_step", "checkpoint")  # emcee's per-step HDF5 backend
 

@@ -30,7 +30,8 @@ Truncation
 Every prior is truncated to the parameter's ``[min, max]`` and renormalised there, so
 :meth:`Prior.logpdf` is a proper log density on :attr:`Prior.lo`, :attr:`Prior.hi` (needed by
 Savage-Dickey Bayes factors).  The log of the mass inside the bounds is computed once from
-scipy.stats cdfs (or survival functions in the upper tail).  A prior with no mass inside the
+closed-form cdfs (or survival functions in the upper tail,
+:mod:`escfit.likelihood.distributions`).  A prior with no mass inside the
 bounds, or with impossible or non-finite arguments, is refused with a :class:`SceneError`.
 
 Parameters without a prior string
@@ -53,9 +54,9 @@ from functools import lru_cache
 
 import numpy as np
 import pint
-from scipy import stats
 
 from ..core.errors import SceneError
+from .distributions import distribution
 from ..core.params import Param
 from ..core.units import MAX_UNIT_TEXT, safe_unit_text, ureg
 
@@ -164,18 +165,9 @@ class Prior:
         return self._log_mass
 
     def _dist(self):
-        a = self.args
-        if self.kind == "uniform":
-            return stats.uniform(a[0], a[1] - a[0])
-        if self.kind == "loguniform":
-            return stats.loguniform(a[0], a[1])
-        if self.kind == "normal":
-            return stats.norm(a[0], a[1])
-        if self.kind == "halfnormal":
-            return stats.halfnorm(0.0, a[0])
-        if self.kind == "lognormal":
-            return stats.lognorm(a[1], scale=math.exp(a[0]))
-        raise SceneError("an improper flat prior has no distribution")
+        if self.kind == "flat":
+            raise SceneError("an improper flat prior has no distribution")
+        return distribution(self.kind, tuple(self.args))
 
     # -- densities -----------------------------------------------------------------------------
     def logpdf(self, x):
