@@ -197,7 +197,10 @@ def solve_batch(systems: SystemStack | Sequence[SystemBuilder], n_swings: int, s
     max_segments
         Segment budget per set; default ``64*n_swings + 1000`` as for one set.
     threads
-        numba threads to use (default: numba's current setting, all cores).
+        numba threads to use.  Default: one thread when the batch is small (``sets *
+        n_swings`` below 512 half swings with angle switching, 8192 with phase switching,
+        where waking the worker threads costs more than they save), else numba's current
+        setting (all cores).
     throw
         Raise :class:`~escfit.core.errors.SolverError` for a set the single-set solver would
         refuse; with ``False`` such sets are skipped and get status ``"failed"`` and the
@@ -225,6 +228,13 @@ def solve_batch(systems: SystemStack | Sequence[SystemBuilder], n_swings: int, s
     n_seg = np.zeros(n, np.int64)
     final = np.full((n, 3), np.nan)
     previous = get_num_threads()
+    if threads is None and n * n_swings < (512 if switching == "angle" else 8192):
+        # Measured with run_angle_many on the Monday-like unit (2 shared cores): a parallel
+        # region costs ~18 us to wake its workers, the work ~0.7 us per half swing, and 2
+        # threads lost to 1 up to 240 half swings and won from 480 on; below 512 the serial
+        # loop is no slower and leaves the other core free.  A phase-convention half swing is
+        # one affine map (~0.06 us), so its break-even batch is about ten times larger.
+        threads = 1
     if threads is not None:
         set_num_threads(max(1, min(int(threads), config.NUMBA_NUM_THREADS)))
     try:

@@ -5,7 +5,11 @@ coefficient, the stiffness of the current hairspring piece, the Coulomb torque (
 is fixed within a half swing) and the escapement windows the balance is in.  Each segment
 is solved in closed form (:mod:`escfit.balance.segment`); window edges are located by a
 safeguarded root solve on that closed form and turning points analytically, so the only
-error is floating-point rounding.
+error is floating-point rounding.  With angle switching the closed form at a turning point is
+evaluated only when that point may end the half swing (:func:`_surely_crosses`), which
+leaves every result bit for bit what it was.  With phase switching every half cycle of a
+direction has the same segments, so it is one affine map of the state, tabulated once per
+parameter set (and again when damping drift changes C) and iterated with four multiply-adds.
 
 Frames and signs
 ----------------
@@ -123,6 +127,45 @@ def _swing_edges(s, bank, sp_bp, w_lo, w_hi, w_dir, edges):
     return m
 
 
+@kernel(inline="always")
+def _surely_crosses(y0, v0, h, w2, tau_turn, xc, xb):
+    """Whether a forward swing certainly passes the edge ``xb`` before its turning point.
+
+    Decides what ``xc + propagate(y0, v0, tau_turn)[0] > xb`` decides, where the answer is
+    certain, without evaluating the closed form (exp, cos, sin): ``Q = v**2 + 2*h*y*v +
+    w2*y**2`` decays as ``exp(-2*h*tau)`` under the segment's equation and equals
+    ``w2*y**2`` at a turning point, where ``y >= 0`` (a forward swing turns where the
+    acceleration is not positive), so ``y_turn = sqrt(Q0/w2)*exp(-h*tau_turn) >=
+    sqrt(Q0/w2)*p(h*tau_turn)`` with ``p`` the cubic Taylor polynomial of ``exp(-u)`` (a lower
+    bound of it).  The test is squared, so it needs no square root.  The margin, 1e-9 of the
+    magnitudes involved, is far above the rounding of either evaluation, so ``True`` never
+    contradicts the closed form; ``False`` means "evaluate the closed form at the turn".
+
+    Parameters
+    ----------
+    y0, v0 : float
+        Offset from the centre (rad) and velocity (rad/s) at the segment start (swing frame).
+    h, w2 : float
+        C/2 (1/s) and stiffness per inertia (1/s^2) of the segment.
+    tau_turn : float
+        Time of the turning point (s) from :func:`~escfit.balance.segment.turn_time`.
+    xc, xb : float
+        Centre of the segment and the edge ahead (rad, swing frame; ``inf`` for none).
+    """
+    if not (tau_turn < math.inf and xb < math.inf):
+        return False
+    margin = 1e-9 * (abs(xc) + abs(xb) + abs(y0) + tau_turn * (abs(v0) + h * abs(y0)))
+    need = (xb - xc) + margin  # y_turn must exceed this
+    if not need > 0.0:
+        return need < 0.0  # y_turn >= 0; False for a NaN
+    u = h * tau_turn
+    p = 1.0 - u * (1.0 - u * (0.5 - u * (1.0 / 6.0)))
+    if not p > 0.0:
+        return False
+    q0 = v0 * v0 + 2.0 * h * y0 * v0 + w2 * y0 * y0
+    return q0 * p * p > need * need * w2
+
+
 @kernel
 def region_tables(bank, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r):
     """Switch points and region coefficients of both swing directions (row 0: s = +1, row 1: s = -1).
@@ -203,13 +246,18 @@ def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
     n_edges = n_edge_tab[d]
     record = log.shape[0] > 0
     at_start = True
+    at_edge = False  # the state sits on edge j after a crossing
+    j = 0
     while n_done < n_swings:
         if n_seg >= max_seg:
             status = 3
             break
-        j = 0
-        while j < n_edges and edges[j] <= x:
-            j += 1
+        if at_edge:
+            j += 1  # just crossed edge j: the edges are distinct, so the region above is the next
+        else:
+            j = 0
+            while j < n_edges and edges[j] <= x:
+                j += 1
         w2 = w2_tab[d, j]
         xc = xc_tab[d, j]
         y0 = x - xc
@@ -238,12 +286,14 @@ def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
             if v <= 0.0:
                 v = 0.0  # also clears a negative zero, which would flip atan2's branch
             tau_turn = turn_time(y0, v, h, w2)
-            if math.isfinite(tau_turn):
-                y_turn, _ = propagate(y0, v, tau_turn, h, w2)
-                x_turn = xc + y_turn
-            else:
-                x_turn = xc
-            crosses = x_turn > xb
+            x_turn = xc
+            # the turning point itself is only needed when it may end the half swing
+            crosses = _surely_crosses(y0, v, h, w2, tau_turn, xc, xb)
+            if not crosses:
+                if math.isfinite(tau_turn):
+                    y_turn, _ = propagate(y0, v, tau_turn, h, w2)
+                    x_turn = xc + y_turn
+                crosses = x_turn > xb
             if crosses:
                 tau, v_new = cross_time(y0, v, h, w2, xb - xc, tau_turn)
                 x = xb
@@ -270,7 +320,8 @@ def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
         int_c += c * tau
         at_start = False
         is_bank = crosses and j == n_edges - 1 and math.isfinite(bank)
-        if crosses and not is_bank:
+        at_edge = crosses and not is_bank
+        if at_edge:
             continue
         # end of a half swing: a turning point or an impact on the banking pins
         amp[n_done] = abs(x)
@@ -296,6 +347,119 @@ def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
 
 
 @kernel
+def _phase_segments(s, w2, w1, r, w_lo, w_hi, w_x, w_dir, pts, seg_xc, seg_tau):
+    """Segments of a phase-switched half cycle in direction ``s``; returns their number.
+
+    The half cycle runs from phase 0 to pi; window limits are phase offsets from pi/2.  Fills
+    ``seg_xc`` (centre of each segment in the swing frame, rad) and ``seg_tau`` (its
+    duration, s, for the damped frequency ``w1``), in order; empty segments are left out.
+    """
+    half_pi = 0.5 * math.pi
+    n = 0
+    pts[n] = 0.0
+    n += 1
+    for k in range(w_lo.shape[0]):
+        if _applies(w_dir[k], s):
+            pts[n] = half_pi + w_lo[k]
+            pts[n + 1] = half_pi + w_hi[k]
+            n += 2
+    pts[n] = math.pi
+    n += 1
+    srt = np.sort(pts[:n])
+    m_seg = 0
+    for m in range(n - 1):
+        lo = srt[m]
+        hi = srt[m + 1]
+        if hi <= lo:
+            continue
+        mid = 0.5 * (lo + hi) - half_pi
+        force = -r
+        for k in range(w_lo.shape[0]):
+            if _applies(w_dir[k], s) and w_lo[k] <= mid < w_hi[k]:
+                force += w_x[k]
+        seg_xc[m_seg] = force / w2
+        seg_tau[m_seg] = (hi - lo) / w1
+        m_seg += 1
+    return m_seg
+
+
+@kernel
+def _phase_sweep(x, v, h, w2, seg_xc, seg_tau, n, forced):
+    """State ``(x, v)`` (swing frame, rad and rad/s) after the ``n`` segments of a half cycle.
+
+    With ``forced`` False every centre is taken as 0: the homogeneous (linear) part alone.
+    """
+    for m in range(n):
+        xc = seg_xc[m] if forced else 0.0
+        y, v = propagate(x - xc, v, seg_tau[m], h, w2)
+        x = xc + y
+    return x, v
+
+
+@kernel
+def _phase_map(h, w2, seg_xc, seg_tau, n, out):
+    """The affine map of a phase-switched half cycle, in the swing frame.
+
+    Every half cycle of a direction has the same segments, so its end state is an affine
+    function of its start state: ``x1 = a11*x + a12*v + bx``, ``v1 = a21*x + a22*v + bv``
+    (rad, rad/s), written to ``out`` in that order.  In exact arithmetic the linear part is
+    ``-q`` times the identity, ``q = exp(-pi*h/w1)`` (half a period of the damped
+    oscillation), so a half swing starting at ``x = -A`` ends at ``q*A + bx`` whatever the
+    velocity at the boundary (not zero once forcing acts); ``bx`` gathers friction (< 0)
+    and the windows.  The 2x2 form, composed from the same closed form segment by segment,
+    also carries that velocity, for the final state and the next half cycle.
+    """
+    out[0], out[2] = _phase_sweep(1.0, 0.0, h, w2, seg_xc, seg_tau, n, False)
+    out[1], out[3] = _phase_sweep(0.0, 1.0, h, w2, seg_xc, seg_tau, n, False)
+    out[4], out[5] = _phase_sweep(0.0, 0.0, h, w2, seg_xc, seg_tau, n, True)
+
+
+@kernel
+def _phase_tables(c, r, w2, w_lo, w_hi, w_x, w_dir, pts, seg_xc, seg_tau, n_seg_d, maps, t_half):
+    """Segments, affine maps (:func:`_phase_map`) and durations of both directions' half cycles
+    for viscous coefficient ``c`` (row 0: s = +1, row 1: s = -1)."""
+    h = 0.5 * c
+    w1 = math.sqrt(w2 - h * h)
+    for d in range(2):
+        sd = 1.0 if d == 0 else -1.0
+        n = _phase_segments(sd, w2, w1, r, w_lo, w_hi, w_x, w_dir, pts, seg_xc[d], seg_tau[d])
+        n_seg_d[d] = n
+        _phase_map(h, w2, seg_xc[d], seg_tau[d], n, maps[d])
+        total = 0.0
+        for m in range(n):
+            total += seg_tau[d, m]
+        t_half[d] = total
+
+
+@kernel
+def _phase_log(x, v, t, n_seg, s, c, w2, seg_xc, seg_tau, n, swing, log):
+    """Log the ``n`` segments of a half cycle starting from ``(x, v)`` at time ``t`` (rows from
+    ``n_seg`` on, as far as ``log`` reaches; columns as :func:`run_angle` logs them).
+
+    The states are swept segment by segment with the closed form; the half cycle's end state
+    itself comes from the affine map, so a run gives the same numbers with a log as without.
+    """
+    h = 0.5 * c
+    for m in range(n):
+        if n_seg + m >= log.shape[0]:
+            break
+        xc = seg_xc[m]
+        tau = seg_tau[m]
+        log[n_seg + m, 0] = t
+        log[n_seg + m, 1] = tau
+        log[n_seg + m, 2] = s
+        log[n_seg + m, 3] = x
+        log[n_seg + m, 4] = v
+        log[n_seg + m, 5] = xc
+        log[n_seg + m, 6] = w2
+        log[n_seg + m, 7] = h
+        log[n_seg + m, 8] = swing
+        y, v = propagate(x - xc, v, tau, h, w2)
+        x = xc + y
+        t += tau
+
+
+@kernel
 def run_phase(theta0, c0, r, w2, w_lo, w_hi, w_x, w_dir, dr_th, dr_rate, n_swings,
               amp, theta_turn, half_period, time, banked, log):
     """Integrate half cycles with Monday's phase switching.
@@ -307,6 +471,11 @@ def run_phase(theta0, c0, r, w2, w_lo, w_hi, w_x, w_dir, dr_th, dr_rate, n_swing
     not exactly zero when forcing acts).  Requires ``C < 2*sqrt(w2)``.  When a half cycle
     ends on the side it started the run continues, as Monday's programs did, with status
     4 (phase_breakdown) to say the numbers no longer describe a swinging balance.
+
+    The segments of a half cycle depend only on the parameters and the direction, so each
+    half cycle is one affine map of the state (:func:`_phase_map`), tabulated per direction
+    and again whenever damping drift changes C: four multiply-adds per half swing.  A segment
+    log is filled by sweeping each half cycle segment by segment from the same states.
 
     Returns
     -------
@@ -325,64 +494,42 @@ def run_phase(theta0, c0, r, w2, w_lo, w_hi, w_x, w_dir, dr_th, dr_rate, n_swing
     for i in range(dr_rate.shape[0]):
         if dr_rate[i] != 0.0:
             drift = True
-    half_pi = 0.5 * math.pi
-    nw = w_lo.shape[0]
-    pts = np.empty(2 * nw + 2)
+    n_max = 2 * w_lo.shape[0] + 1
+    pts = np.empty(n_max + 1)
+    seg_xc = np.empty((2, n_max))
+    seg_tau = np.empty((2, n_max))
+    n_seg_d = np.zeros(2, np.int64)
+    maps = np.empty((2, 6))
+    t_half = np.empty(2)
+    _phase_tables(c, r, w2, w_lo, w_hi, w_x, w_dir, pts, seg_xc, seg_tau, n_seg_d, maps, t_half)
+    half = math.pi / math.sqrt(w2 - (0.5 * c) * (0.5 * c))
     record = log.shape[0] > 0
     while n_done < n_swings:
-        h = 0.5 * c
-        w1 = math.sqrt(w2 - h * h)
-        n = 0
-        pts[n] = 0.0
-        n += 1
-        for k in range(nw):
-            if _applies(w_dir[k], s):
-                pts[n] = half_pi + w_lo[k]
-                pts[n + 1] = half_pi + w_hi[k]
-                n += 2
-        pts[n] = math.pi
-        n += 1
-        srt = np.sort(pts[:n])
-        for m in range(n - 1):
-            a = srt[m]
-            b = srt[m + 1]
-            if b <= a:
-                continue
-            mid = 0.5 * (a + b) - half_pi
-            force = -r
-            for k in range(nw):
-                if _applies(w_dir[k], s) and w_lo[k] <= mid < w_hi[k]:
-                    force += w_x[k]
-            xc = force / w2
-            tau = (b - a) / w1
-            if record and n_seg < log.shape[0]:
-                log[n_seg, 0] = t
-                log[n_seg, 1] = tau
-                log[n_seg, 2] = s
-                log[n_seg, 3] = x
-                log[n_seg, 4] = v
-                log[n_seg, 5] = xc
-                log[n_seg, 6] = w2
-                log[n_seg, 7] = h
-                log[n_seg, 8] = n_done
-            y, v = propagate(x - xc, v, tau, h, w2)
-            x = xc + y
-            t += tau
-            int_c += c * tau
-            n_seg += 1
+        d = 0 if s > 0.0 else 1
+        if record:
+            _phase_log(x, v, t, n_seg, s, c, w2, seg_xc[d], seg_tau[d], n_seg_d[d], n_done, log)
+        mp = maps[d]
+        x, v = mp[0] * x + mp[1] * v + mp[4], mp[2] * x + mp[3] * v + mp[5]
+        t += t_half[d]
+        int_c += c * t_half[d]
+        n_seg += n_seg_d[d]
         amp[n_done] = abs(x)
         theta_turn[n_done] = s * x
-        half_period[n_done] = math.pi / w1
+        half_period[n_done] = half
         time[n_done] = t
         banked[n_done] = 0
         n_done += 1
         if x <= 0.0:
             status = 4  # keep going, as Monday's programs did, but say so
         if drift and n_done % 2 == 0:
+            c_old = c
             c *= _drift_factor(int_c, dr_th, dr_rate)
             if c >= 2.0 * math.sqrt(w2):
                 status = 4
                 break
+            if c != c_old:
+                _phase_tables(c, r, w2, w_lo, w_hi, w_x, w_dir, pts, seg_xc, seg_tau, n_seg_d, maps, t_half)
+                half = math.pi / math.sqrt(w2 - (0.5 * c) * (0.5 * c))
         s = -s
         x = -x
         v = -v
