@@ -40,6 +40,7 @@ os.environ.setdefault("OMP_WAIT_POLICY", "passive")
 
 REFUSED = len(STATUS_NAMES)  # status code of a set refused before any work
 _STATUS = (*STATUS_NAMES, "failed")
+_STATUS_ARRAY = np.array(_STATUS)
 
 
 @dataclass(frozen=True)
@@ -122,6 +123,13 @@ class SystemStack:
         Mirrors :func:`escfit.balance.solvers._check_system`, vectorised.
         """
         reasons = [""] * self.size
+        with np.errstate(invalid="ignore"):
+            fine = (np.isfinite(self.theta0) & np.isfinite(self.omega0) & (self.c >= 0) & (self.r >= 0)
+                    & np.isfinite(self.c) & np.isfinite(self.r) & np.all(np.isfinite(self.w_x), axis=1))
+            if switching == "phase":
+                fine &= self.c < 2.0 * self.omega0
+        if fine.all():  # the usual case: no message to build
+            return reasons
         checks = [
             (~np.isfinite(self.c), "parameter C = {c!r} is not finite"),
             (~np.isfinite(self.r), "parameter R = {r!r} is not finite"),
@@ -250,6 +258,6 @@ def solve_batch(systems: SystemStack | Sequence[SystemBuilder], n_swings: int, s
     finally:
         set_num_threads(previous)
     # rows were written only up to n_done; the rest keep their NaN fill (np.full above)
-    names = np.array([_STATUS[k] for k in status])
+    names = _STATUS_ARRAY[status]
     return BatchTrajectory(amp, turn, half, tm, banked.astype(bool), n_done, names, n_seg, final, stack.omega0.copy(),
                            reasons, {"max_segments": nseg, "switching": switching})

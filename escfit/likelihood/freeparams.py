@@ -81,8 +81,9 @@ class FreeParameters:
         """:meth:`log_prior` of every row of ``vecs`` (sets, ndim), the same sums in the same order."""
         vecs = np.atleast_2d(np.asarray(vecs, float))
         total = np.zeros(vecs.shape[0])
-        for i, p in enumerate(self.priors):
-            total = total + np.asarray(p.logpdf(vecs[:, i]), float)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            for i, p in enumerate(self.priors):
+                total = total + p.logpdf_array(vecs[:, i])
         return total
 
     def log_prior(self, vec: np.ndarray) -> float:

@@ -177,28 +177,32 @@ class Prior:
         gives 0 inside its bounds.
         """
         scalar = np.ndim(x) == 0
-        x = np.asarray(x, dtype=float)
-        a = self.args
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            if self.kind == "uniform":
-                out = np.full(x.shape, -math.log(a[1] - a[0]))
-            elif self.kind == "loguniform":
-                out = -np.log(x) - math.log(math.log(a[1] / a[0]))
-            elif self.kind == "normal":
-                z = (x - a[0]) / a[1]
-                out = -0.5 * z * z - math.log(a[1]) - _LOG_2PI_HALF
-            elif self.kind == "halfnormal":
-                z = x / a[0]
-                out = -0.5 * z * z - math.log(a[0]) + 0.5 * math.log(2.0 / math.pi)
-            elif self.kind == "lognormal":
-                lx = np.log(x)
-                z = (lx - a[0]) / a[1]
-                out = -0.5 * z * z - lx - math.log(a[1]) - _LOG_2PI_HALF
-            else:
-                out = np.zeros(x.shape)
-            lo, hi = self.support
-            res = np.where((x >= lo) & (x <= hi), out - self._log_mass, -np.inf)
+            res = self.logpdf_array(np.asarray(x, dtype=float))
         return float(res) if scalar else res
+
+    def logpdf_array(self, x: np.ndarray) -> np.ndarray:
+        """:meth:`logpdf` of a float array, without the floating-point warning guard (the
+        caller sets ``np.errstate``); for loops that evaluate many priors per call."""
+        a = self.args
+        if self.kind == "uniform":
+            out = np.full(x.shape, -math.log(a[1] - a[0]))
+        elif self.kind == "loguniform":
+            out = -np.log(x) - math.log(math.log(a[1] / a[0]))
+        elif self.kind == "normal":
+            z = (x - a[0]) / a[1]
+            out = -0.5 * z * z - math.log(a[1]) - _LOG_2PI_HALF
+        elif self.kind == "halfnormal":
+            z = x / a[0]
+            out = -0.5 * z * z - math.log(a[0]) + 0.5 * math.log(2.0 / math.pi)
+        elif self.kind == "lognormal":
+            lx = np.log(x)
+            z = (lx - a[0]) / a[1]
+            out = -0.5 * z * z - lx - math.log(a[1]) - _LOG_2PI_HALF
+        else:
+            out = np.zeros(x.shape)
+        lo, hi = self.support
+        return np.where((x >= lo) & (x <= hi), out - self._log_mass, -np.inf)
 
     def pdf(self, x):
         """Density, see :meth:`logpdf`."""

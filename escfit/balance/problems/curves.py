@@ -204,33 +204,55 @@ class FitProblem(FreeParameters, BalanceProblem):
         n_sets = vecs.shape[0]
         vals = self.values_many(vecs)
         columns = {k: (v[:, None] if isinstance(v, np.ndarray) else v) for k, v in vals.items()}
-        total = np.zeros(n_sets)
         scalar = np.zeros(n_sets, bool)  # sets handed to the one-at-a-time path (refusals, failures)
+        total = np.zeros(n_sets)
         try:
             turns, n_done, failed = self._solve_all_curves(vals, n_sets)
         except (EscfitError, ValueError, ArithmeticError):
             turns, scalar[:] = None, True
         if turns is not None:
-            theta0 = turns[:, :, 0]
-            for j, curve in enumerate(self.curves):
-                scalar |= failed[j]
-                readings = _at_recorded_swings_many(curve, theta0[j], turns[j, :, 1:], n_done[j])
-                side = self.sides(curve)
-                pred = readings if side is None else side * readings  # as _nominal
-                with np.errstate(all="ignore"):
-                    ll = self.observation.loglike_pointwise(pred, curve.y, columns, side, curve.time)
-                total = total + np.sum(np.broadcast_to(ll, pred.shape), axis=1)
-        ll = np.empty(n_sets)
-        for i in range(n_sets):
-            if scalar[i]:
-                # the one-at-a-time path records the same failure reason as log_prob would
-                ll[i] = self.log_likelihood(self.values(vecs[i]))
-            elif not math.isfinite(total[i]):
-                self.failures["non-finite likelihood"] += 1
-                ll[i] = -math.inf
-            else:
-                ll[i] = total[i]
+            lay = self._layout()
+            scalar |= failed.any(axis=0)
+            # every reading of every curve at once: (sets, readings), curve after curve
+            inside = lay["swing"][:, None] <= n_done[lay["curve"], :]
+            # C order, so each row is summed exactly as log_likelihood sums a curve
+            readings = np.ascontiguousarray(np.where(inside, turns[lay["curve"], :, lay["swing"]], 0.0).T)
+            pred = readings if lay["side"] is None else lay["side"] * readings  # as _nominal
+            with np.errstate(all="ignore"):
+                ll = self.observation.loglike_pointwise(pred, lay["y"], columns, lay["side"], lay["time"])
+            ll = np.broadcast_to(ll, pred.shape)
+            for a, b in lay["slices"]:  # summed curve by curve, as log_likelihood does
+                total = total + np.sum(ll[:, a:b], axis=1)
+        bad = ~np.isfinite(total) & ~scalar
+        if bad.any():
+            self.failures["non-finite likelihood"] += int(bad.sum())
+        ll = np.where(bad, -math.inf, total)
+        for i in np.flatnonzero(scalar):
+            # the one-at-a-time path records the same failure reason as log_prob would
+            ll[i] = self.log_likelihood(self.values(vecs[i]))
         return ll
+
+    def _layout(self) -> dict:
+        """Where each reading comes from, for the whole-array path (computed once).
+
+        ``curve`` and ``swing`` index the turning points of :meth:`_solve_all_curves` (swing 0
+        is the release); ``y``, ``side`` and ``time`` are the readings, their nominal sides and
+        times, concatenated curve after curve; ``slices`` delimit the curves.
+        """
+        lay = self.__dict__.get("_layout_cache")
+        if lay is None:
+            sizes = [c.y.size for c in self.curves]
+            ends = np.cumsum(sizes)
+            sides = [self.sides(c) for c in self.curves]
+            times = [c.time for c in self.curves]
+            lay = {"curve": np.repeat(np.arange(len(self.curves)), sizes),
+                   "swing": np.concatenate([c.swing for c in self.curves]).astype(np.int64),
+                   "y": np.concatenate([c.y for c in self.curves]),
+                   "side": None if sides[0] is None else np.concatenate(sides),
+                   "time": None if any(t is None for t in times) else np.concatenate(times),
+                   "slices": [(int(e - n), int(e)) for e, n in zip(ends, sizes)]}
+            self.__dict__["_layout_cache"] = lay
+        return lay
 
     def _solve_all_curves(self, vals: Mapping, n_sets: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Turning points of every set at every curve's load, in one batch call.
@@ -252,10 +274,14 @@ class FitProblem(FreeParameters, BalanceProblem):
 
         n_curves = len(self.curves)
         per_curve = [self.load_rule.apply(vals, c.load) for c in self.curves]
-        merged = {k: (np.concatenate([_column(cv[k], n_sets) for cv in per_curve])
-                      if any(isinstance(cv[k], np.ndarray) or cv[k] != per_curve[0][k] for cv in per_curve)
-                      else per_curve[0][k])
-                  for k in per_curve[0]}
+        keys = self.__dict__.get("_merge_keys")
+        if keys is None:  # the values that are arrays or differ between loads: fixed by the fit's structure
+            keys = [k for k in per_curve[0]
+                    if any(isinstance(cv[k], np.ndarray) or cv[k] != per_curve[0][k] for cv in per_curve)]
+            self.__dict__["_merge_keys"] = keys
+        merged = dict(per_curve[0])
+        for k in keys:
+            merged[k] = np.concatenate([_column(cv[k], n_sets) for cv in per_curve])
         stack = stack_from_values(self.scene, merged, n_sets * n_curves)
         n = max(int(c.swing.max()) for c in self.curves)
         turns = np.full((n_sets * n_curves, 1 + n), np.nan)
