@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import json
+import os
 import sys
 
 import numpy as np
 import pytest
+import xarray as xr
 from click.testing import CliRunner
 
 from escfit.cli.main import cli
@@ -98,13 +100,54 @@ def test_results_of_another_scene_or_method_are_not_taken_as_done(split_files, t
         fit_many(split_files / "u03.csv", DATASETS / "fleet" / "scenes" / "phase.toml", tmp_path, workers=0)
 
 
+def _kernel_threads() -> tuple[int, int, str]:
+    """A worker's numba threads (configured, in use) and OMP_NUM_THREADS."""
+    import numba
+
+    return numba.config.NUMBA_NUM_THREADS, numba.get_num_threads(), os.environ.get("OMP_NUM_THREADS", "")
+
+
 def test_local_cluster_matches_in_process(split_files, tmp_path):
-    """The default path: a LocalCluster of worker processes; results equal the in-process ones."""
+    """The default path: a LocalCluster of worker processes; results equal the in-process ones.
+    Its two workers share the cores out instead of each starting a kernel thread per core."""
     pytest.importorskip("distributed")
+    from escfit.study.cluster import worker_threads
+
     a = fit_many(split_files / "pair.csv", SCENE, tmp_path / "a", workers=0, n_starts=2)
-    b = fit_many(split_files / "pair.csv", SCENE, tmp_path / "b", workers=2, n_starts=2)
+    lazy = LazyClient(workers=2)
+    try:
+        b = fit_many(split_files / "pair.csv", SCENE, tmp_path / "b", scheduler=lazy, n_starts=2)
+        threads = lazy().run(_kernel_threads)
+    finally:
+        lazy.close()
     assert b.ok and "LocalCluster(2 processes" in b.summary.attrs["runner"]
     np.testing.assert_allclose(a.summary["median"].values, b.summary["median"].values, rtol=1e-10)
+    n = worker_threads(2)
+    assert len(threads) == 2 and all(t == (n, n, str(n)) for t in threads.values())
+    assert n == 1 or 2 * n <= len(os.sched_getaffinity(0))
+
+
+def test_summary_from_memory_equals_the_one_read_back(tmp_path, monkeypatch):
+    """fit-many builds summary.nc from the rows its tasks return, reading no results file back;
+    the summary built by reading every unit's file instead is the same, value for value."""
+    from escfit.study import batch
+
+    units = ["u01", "u02", "u03", "u04", "u05"]
+    reads = []
+    load = batch._load_for_summary
+    monkeypatch.setattr(batch, "_load_for_summary", lambda p: reads.append(load(p)) or reads[-1])
+    res = fit_many(FLEET / "recordings.csv", SCENE, tmp_path, workers=0, n_starts=2, units=units)
+    assert res.fitted == units and all(r is None for r in reads)  # only the resume check: no file yet
+    monkeypatch.undo()
+
+    s = res.summary
+    tasks = [t for t in discover_units([FLEET / "recordings.csv"], tmp_path) if t.unit in units]
+    status = {u: {"status": str(s["status"].values[i]), "error": str(s["error"].values[i]),
+                  "seconds": float(s["seconds"].values[i])} for i, u in enumerate(units)}
+    reread = batch.summarize(tasks, status, attrs=dict(s.attrs))  # no rows: every results file is read
+    xr.testing.assert_identical(reread, s)
+    reread.to_netcdf(tmp_path / "reread.nc", engine="h5netcdf")
+    xr.testing.assert_identical(load_summary(tmp_path / "reread.nc"), load_summary(tmp_path))
 
 
 def test_refusals(split_files, tmp_path):

@@ -1,8 +1,10 @@
 """Where batch fits run: a dask.distributed local cluster, a running scheduler, or this process.
 
 :func:`escfit.study.fit_many` hands its tasks to a :class:`Runner`; :class:`LazyClient` shares
-one client between batches and starts it only when some unit is left to fit.  dask is the
-``study`` extra: :func:`require_distributed` names it when it is missing.
+one client between batches and starts it only when some unit is left to fit.  A local
+cluster's workers share the cores out (:func:`worker_threads`) instead of each starting a
+compiled-kernel thread per core.  dask is the ``study`` extra: :func:`require_distributed`
+names it when it is missing.
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ from typing import Callable
 
 from ..core.errors import FitError, MissingDependency
 
-__all__ = ["Runner", "LazyClient", "local_cluster", "require_distributed"]
+__all__ = ["Runner", "LazyClient", "local_cluster", "worker_threads", "worker_environment", "require_distributed"]
 
 
 class Runner:
@@ -78,15 +80,39 @@ class Runner:
             self._cluster.close()
 
 
+def worker_threads(n_workers: int) -> int:
+    """Compiled-kernel threads each of ``n_workers`` local worker processes may use.
+
+    The CPUs available shared out between the workers, at least one: two workers on two
+    cores get one thread each (a fit's parallel kernels would otherwise start a thread per
+    core in every worker, and the workers would fight over the cores), a single worker keeps
+    them all.
+    """
+    return max(1, _cpu_count() // max(1, n_workers))
+
+
+def worker_environment(n_workers: int) -> dict[str, str]:
+    """Environment variables of each local worker process: ``NUMBA_NUM_THREADS`` and
+    ``OMP_NUM_THREADS`` set to :func:`worker_threads`.
+
+    The nanny sets them in the worker process before the worker starts, so before escfit
+    (and numba, which reads them once, when it is imported) is imported there; the driver's
+    own environment is left alone.
+    """
+    threads = str(worker_threads(n_workers))
+    return {"NUMBA_NUM_THREADS": threads, "OMP_NUM_THREADS": threads}
+
+
 def local_cluster(n_workers: int):
-    """A LocalCluster of ``n_workers`` single-threaded processes, as batches use it."""
+    """A LocalCluster of ``n_workers`` processes, as batches use it: one task at a time per
+    process, compiled kernels limited to :func:`worker_threads` threads."""
     import dask
     from distributed import LocalCluster
 
     # the statistical profiler samples every task's stack every 10 ms: pure overhead here
     with dask.config.set({"distributed.worker.profile.enabled": False}):
         return LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                            silence_logs=40)
+                            silence_logs=40, env=worker_environment(n_workers))
 
 
 class LazyClient:
