@@ -18,6 +18,10 @@ from escfit.study import (MODELS, POPULATION_PARAMS, UnitDraws, chapter5_contras
 
 from .conftest import DATASETS
 
+# emcee fleets, population posteriors and PSIS-LOO over many units: minutes of sampling, so they run in
+# the second, bounded step of CI (`python -m pytest -m slow`) rather than in the default suite
+pytestmark = pytest.mark.slow
+
 FLEETS = DATASETS / "fleet"
 WALKERS, STEPS = 12, 400  # the settings the notebooks' smoke run uses too
 CROSS_UNITS = 3  # units per fleet in the cross fits of the model comparison

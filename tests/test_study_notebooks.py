@@ -48,6 +48,7 @@ def test_notebooks_are_percent_scripts():
         assert sum(c.cell_type == "code" for c in nb.cells) >= 4
 
 
+@pytest.mark.slow  # runs every notebook end to end on small fleets (about a minute): CI's slow step
 def test_notebooks_smoke(tmp_path, tmp_path_factory, monkeypatch):
     from .test_study_fits import CHAPTER5_UNITS, CROSS_UNITS, STEPS, WALKERS, study_dir
 
