@@ -280,8 +280,15 @@ class FitProblem(FreeParameters, BalanceProblem):
                     if any(isinstance(cv[k], np.ndarray) or cv[k] != per_curve[0][k] for cv in per_curve)]
             self.__dict__["_merge_keys"] = keys
         merged = dict(per_curve[0])
+        fixed = self.__dict__.setdefault("_merged_fixed", {})  # load-dependent constants, per ensemble size
         for k in keys:
-            merged[k] = np.concatenate([_column(cv[k], n_sets) for cv in per_curve])
+            parts = [cv[k] for cv in per_curve]
+            if not any(isinstance(p, np.ndarray) for p in parts):  # no free parameter in it: the same every call
+                if (k, n_sets) not in fixed:
+                    fixed[(k, n_sets)] = np.repeat(np.asarray(parts, float), n_sets)
+                merged[k] = fixed[(k, n_sets)]
+            else:
+                merged[k] = np.concatenate([_column(p, n_sets) for p in parts])
         stack = stack_from_values(self.scene, merged, n_sets * n_curves)
         n = max(int(c.swing.max()) for c in self.curves)
         turns = np.full((n_sets * n_curves, 1 + n), np.nan)
