@@ -136,7 +136,8 @@ def test_balance_emcee_run_interrupted_and_resumed_from_the_command_line(tmp_pat
     monkeypatch.setattr(FitProblem, "log_prob_many", dying)
     cut = CliRunner().invoke(cli, ["fit", *map(str, args), "--out", str(out)])
     monkeypatch.setattr(FitProblem, "log_prob_many", original)
-    assert cut.exit_code != 0 and not out.exists() and Path(f"{out}.emcee").exists()
+    assert cut.exit_code == 130 and not out.exists() and Path(f"{out}.emcee").exists()
+    assert "25 sampler steps are saved" in cut.output and "--resume" in cut.output  # every completed step
     refused = run("fit", *args, "--out", out)
     assert refused.exit_code == 2 and "--resume" in refused.output
     assert run("fit", *args, "--out", out, "--resume").exit_code == 0

@@ -300,11 +300,13 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoi
         if used:
             raise SceneError(f"{', '.join(used)} appl{'ies' if len(used) == 1 else 'y'} to balance recordings; "
                              f"this scene's model is {scene.model!r}", scene_path)
-    result = run_fit(scene, data, method=method, out=out, force=force, seed=pick(seed, "seed", 0),
-                     walkers=pick(walkers, "walkers", None), steps=pick(steps, "steps", None),
-                     max_steps=pick(max_steps, "max_steps", None), checkpoint_every=checkpoint_every,
-                     burn=pick(burn, "burn", None), resume=resume, progress=not quiet and sys.stderr.isatty(),
-                     moves=pick(moves, "moves", None), **options)
+    result = _run_fit_interruptible(run_fit, scene, data, method=method, out=out, force=force,
+                                    seed=pick(seed, "seed", 0),
+                                    walkers=pick(walkers, "walkers", None), steps=pick(steps, "steps", None),
+                                    max_steps=pick(max_steps, "max_steps", None),
+                                    checkpoint_every=checkpoint_every, burn=pick(burn, "burn", None),
+                                    resume=resume, progress=not quiet and sys.stderr.isatty(),
+                                    moves=pick(moves, "moves", None), **options)
     click.echo(f"wrote {out}")
     _print_summary(result)
     if report_path:
@@ -317,6 +319,27 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoi
 def _column(text: str | None):
     """A column option: a 1-based position when it is a whole number, else a name."""
     return int(text) if text is not None and text.strip().isdigit() else text
+
+
+def _run_fit_interruptible(run_fit, *args, **kwargs):
+    """Run the fit; on Ctrl-C (or SIGTERM while sampling) say what was kept and how to go on (exit 130)."""
+    try:
+        return run_fit(*args, **kwargs)
+    except KeyboardInterrupt:
+        checkpoint = Path(f"{kwargs['out']}.emcee")
+        if kwargs.get("method") == "emcee" and checkpoint.exists():
+            import h5py
+
+            try:
+                with h5py.File(checkpoint, "r") as f:
+                    done = int(f["chain"].shape[0])
+            except (OSError, KeyError):
+                done = 0
+            click.echo(f"escfit: interrupted; {done} sampler steps are saved in {checkpoint}: run the same command "
+                       "with --resume to continue (or --force to start again)", err=True)
+        else:
+            click.echo("escfit: interrupted; nothing was written", err=True)
+        sys.exit(130)
 
 
 def _print_summary(result) -> None:

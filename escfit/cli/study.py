@@ -12,6 +12,8 @@ import sys
 
 import click
 
+from .main import StepsType
+
 __all__ = ["fit_many"]
 
 EXIT_SOME_FAILED = 3
@@ -30,7 +32,8 @@ EXIT_SOME_FAILED = 3
               help="Worker processes of the local cluster (default: CPUs available; 0: in this process).")
 @click.option("--seed", type=int, default=0, show_default=True, help="Batch seed (each unit's seed derives from it).")
 @click.option("--walkers", type=click.IntRange(2), default=None, help="emcee walkers (default: the family's).")
-@click.option("--steps", type=click.IntRange(10), default=None, help="emcee steps (default: the family's).")
+@click.option("--steps", type=StepsType(), default=None,
+              help="emcee steps or 'auto' (until converged; default: the family's).")
 @click.option("--burn", type=click.IntRange(0), default=None, help="Default: half the steps.")
 @click.option("--n-starts", type=click.IntRange(1), default=None,
               help="Least-squares start points (default: the family's).")
