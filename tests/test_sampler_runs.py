@@ -66,6 +66,29 @@ def test_interrupted_run_saves_its_completed_steps_and_resumes_to_identical_draw
     np.testing.assert_allclose(again.acceptance, whole.acceptance)
 
 
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
+def test_a_signal_during_a_step_finishes_the_step_saves_and_resumes_exactly(tmp_path, sig):
+    import os
+    import signal
+
+    class Signalling(Gaussian2D):
+        def log_prob_many(self, x):
+            out = super().log_prob_many(x)
+            if self.calls == 1 + 2 * 50 + 1:  # in the first half of step 51
+                os.kill(os.getpid(), getattr(signal, sig))
+            return out
+
+    whole = run_emcee(Gaussian2D(), walkers=8, steps=120, seed=6)
+    ck = tmp_path / "s.emcee"
+    before = signal.getsignal(signal.SIGTERM)
+    with pytest.raises(KeyboardInterrupt):
+        run_emcee(Signalling(), walkers=8, steps=120, seed=6, checkpoint=ck, checkpoint_every=1e9)
+    assert signal.getsignal(signal.SIGTERM) is before  # handlers put back
+    assert load_checkpoint(ck, 8, ["a", "b"]).steps == 51  # the step under way was finished, then saved
+    again = run_emcee(Gaussian2D(), walkers=8, steps=120, seed=6, checkpoint=ck, resume=True)
+    np.testing.assert_array_equal(again.chain, whole.chain)
+
+
 def test_checkpoint_is_saved_in_chunks_not_every_step(tmp_path, monkeypatch):
     import escfit.inference.mcmc as mcmc
 
@@ -73,15 +96,16 @@ def test_checkpoint_is_saved_in_chunks_not_every_step(tmp_path, monkeypatch):
     original = mcmc.save_checkpoint
     monkeypatch.setattr(mcmc, "save_checkpoint", lambda path, ck: (saves.append(ck.steps), original(path, ck)))
     run_emcee(Gaussian2D(), walkers=8, steps=200, seed=1, checkpoint=tmp_path / "c.emcee", checkpoint_every=1e9)
-    assert saves == []  # a run that finishes between saves writes none (the results file follows)
+    assert saves == [200]  # none on the way, one when sampling ends (before diagnostics and writing)
+    saves.clear()
     res = run_emcee(Gaussian2D(), walkers=8, steps=3000, seed=1, checkpoint=tmp_path / "d.emcee",
                     checkpoint_every=0.0)
     # asked to save all the time, it saves at most a twentieth of the time (the interval grows)
-    assert 1 <= len(saves) < 3000 and saves == sorted(set(saves))
+    assert 2 <= len(saves) < 3000 and saves == sorted(set(saves)) and saves[-1] == 3000
     t = res.timings
     assert t["checkpoint_saves"] == len(saves)
-    assert t["checkpoint_s"] <= 0.05 * t["sampling_s"] + t["checkpoint_s"] / len(saves) + 0.05
-    assert load_checkpoint(tmp_path / "d.emcee", 8, ["a", "b"]).steps == saves[-1]
+    assert t["checkpoint_s"] <= 0.05 * t["sampling_s"] + 2 * t["checkpoint_s"] / len(saves) + 0.05
+    assert load_checkpoint(tmp_path / "d.emcee", 8, ["a", "b"]).steps == 3000
 
 
 def test_damaged_foreign_and_mismatched_checkpoints_are_refused(tmp_path):
@@ -154,6 +178,33 @@ def test_auto_run_stopped_by_its_cap_says_so():
     res = run_emcee(Gaussian2D(), walkers=8, steps="auto", seed=3, max_steps=60)
     assert res.steps == 60 and res.auto and res.converged is False
     assert "after 60 steps" in res.verdict
+
+
+def test_an_interrupted_auto_run_resumes_to_the_same_length_and_draws(tmp_path):
+    """Convergence is looked at on one fixed sequence of run lengths, so a resumed automatic run
+    stops where the uninterrupted one does (interrupted off and on a look point)."""
+    whole = run_emcee(Gaussian2D(), walkers=8, steps="auto", seed=1, moves="de")
+    assert whole.converged and whole.steps > 700
+    for cut in (697, 781):  # 781 is a look point (400, 500, 625, 781, ...)
+        ck = tmp_path / f"a{cut}.emcee"
+        with pytest.raises(KeyboardInterrupt):
+            run_emcee(Gaussian2D(die_after=1 + 2 * cut + 1), walkers=8, steps="auto", seed=1, moves="de",
+                      checkpoint=ck, checkpoint_every=1e9)
+        assert load_checkpoint(ck, 8, ["a", "b"]).steps == cut
+        again = run_emcee(Gaussian2D(), walkers=8, steps="auto", seed=1, moves="de", checkpoint=ck, resume=True)
+        assert again.steps == whole.steps
+        np.testing.assert_array_equal(again.chain, whole.chain)
+
+
+def test_resume_refuses_other_moves_and_a_shorter_fixed_length(tmp_path):
+    ck = tmp_path / "c.emcee"
+    run_emcee(Gaussian2D(), walkers=8, steps=100, seed=0, checkpoint=ck, moves="de")  # saved when sampling ends
+    with pytest.raises(ResultsError, match="moves 'de'"):
+        run_emcee(Gaussian2D(), walkers=8, steps=200, seed=0, checkpoint=ck, resume=True, moves="stretch")
+    with pytest.raises(ResultsError, match="already holds 100 steps"):
+        run_emcee(Gaussian2D(), walkers=8, steps=50, seed=0, checkpoint=ck, resume=True, moves="de")
+    done = run_emcee(Gaussian2D(), walkers=8, steps=100, seed=9, checkpoint=ck, resume=True, moves="de")
+    assert done.steps == 100 and done.seed == 0  # the random state, hence the seed, is the checkpoint's
 
 
 def test_bad_run_lengths_are_refused():

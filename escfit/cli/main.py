@@ -219,11 +219,12 @@ def _read_recipe(path: Path) -> dict:
 @click.option("--seed", type=int, default=None)
 @click.option("--walkers", type=click.IntRange(2), default=None)
 @click.option("--steps", type=StepsType(), default=None,
-              help="emcee steps, or 'auto' (default): sample until split R-hat <= 1.01, bulk and tail ESS >= 400 "
-                   "and 50 autocorrelation times, up to --max-steps.")
+              help="emcee steps, or 'auto': sample until split R-hat <= 1.01, bulk and tail ESS >= 400 and 50 "
+                   "autocorrelation times, up to --max-steps (default: the model family's; auto for balance).")
 @click.option("--max-steps", type=click.IntRange(10), default=None, help="Cap of an automatic run (default 20000).")
 @click.option("--checkpoint-every", type=click.FloatRange(0.0), default=10.0, show_default=True,
-              help="Seconds between saves of the sampler's checkpoint (<out>.emcee); a kill loses at most these.")
+              help="Seconds between saves of the sampler's checkpoint (<out>.emcee); longer when a save would take "
+                   "over a twentieth of the run.  A kill loses the steps since the last save.")
 @click.option("--burn", type=click.IntRange(0), default=None)
 @click.option("--unit", "unit_id", default=None, help="Fit only this unit of a multi-unit file.")
 @click.option("--material", default=None, help="friction_rig: fit only this material of a rig readings file.")

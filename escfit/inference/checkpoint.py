@@ -74,6 +74,9 @@ def save_checkpoint(path: str | Path, ck: Checkpoint) -> None:
     target = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent)
     os.close(fd)
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)  # as the results file: mkstemp makes 0600
     try:
         with h5py.File(tmp, "w") as f:
             kw = {"fletcher32": True} if ck.chain.size else {}
@@ -122,7 +125,8 @@ def load_checkpoint(path: str | Path, walkers: int, names: list[str]) -> Checkpo
         raise ResultsError(f"cannot resume from this checkpoint ({type(exc).__name__}: {exc}); pass --force to "
                            "start again", where) from None
     shape = ck.chain.shape
-    if len(shape) != 3 or ck.log_prob.shape != shape[:2] or ck.accepted.shape != (shape[1],):
+    if (len(shape) != 3 or shape[0] < 1 or ck.log_prob.shape != shape[:2] or ck.accepted.shape != (shape[1],)
+            or ck.random_state[1].shape != (624,) or not 0 <= ck.random_state[2] <= 624):
         raise ResultsError(f"damaged checkpoint (chain {shape}, log_prob {ck.log_prob.shape}); pass --force to "
                            "start again", where)
     if shape[1:] != (walkers, len(names)):

@@ -97,6 +97,8 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
     problem = fam.problem(sc, data, **options)
     if out is not None:
         _remove_stale_temporaries(out, checkpoint)
+    if method == "emcee" and checkpoint is not None and force and not resume:
+        Path(checkpoint).unlink(missing_ok=True)  # a forced fresh run must not leave the old run resumable
     return fit_problem(problem, method=method, out=out, force=force, seed=seed, walkers=pick(walkers, "walkers"),
                        steps=pick(steps, "steps"), burn=pick(burn, "burn"), n_starts=pick(n_starts, "n_starts"),
                        n_refine=defaults["n_refine"], resume=resume, progress=progress, checkpoint=checkpoint,

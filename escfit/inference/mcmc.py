@@ -23,7 +23,7 @@ from pathlib import Path
 import emcee
 import numpy as np
 
-from ..core.errors import FitError
+from ..core.errors import FitError, ResultsError
 from ..likelihood.problem import Problem
 from .checkpoint import Checkpoint, load_checkpoint, save_checkpoint
 from .convergence import Assessment, assess, autocorr_time
@@ -171,10 +171,19 @@ def run_emcee(problem: Problem, lsq: LeastSquaresResult | None = None, *, walker
     if target < 10:
         raise FitError(f"{'max_steps' if auto else 'steps'} must be at least 10, got {target}")
     if burn is not None and not 0 <= int(burn) < target:
-        raise FitError(f"burn must lie in [0, steps), got {burn}")
+        raise FitError(f"burn must lie in [0, {'max_steps' if auto else 'steps'}), got {burn}")
     if moves not in MOVES:
         raise FitError(f"moves must be one of {sorted(MOVES)}, got {moves!r}")
     previous = load_checkpoint(checkpoint, walkers, list(problem.names)) if resume and checkpoint else None
+    if previous is not None:
+        if previous.moves != moves:
+            raise ResultsError(f"the checkpoint's run used moves {previous.moves!r}, this one asks for {moves!r}; "
+                               "resume with the same moves, or pass --force to start again", str(checkpoint))
+        if not auto and previous.steps > target:
+            raise ResultsError(f"the checkpoint already holds {previous.steps} steps, more than the {target} asked "
+                               f"for; resume with --steps {previous.steps} or more, or pass --force to start again",
+                               str(checkpoint))
+        seed = previous.seed  # the random state comes from the checkpoint
     if vectorize is None:
         vectorize = bool(getattr(problem, "vectorized", False))
     fn = problem.log_prob_many if vectorize else problem.log_prob
@@ -231,41 +240,51 @@ class _Run:
         self.state = emcee.State(coords, log_prob=lp, random_state=self.sampler.random_state)
 
     def advance(self, target: int, auto: bool, progress: bool, burn: int | None) -> Assessment | None:
-        """Sample to ``target`` steps in all (or, with ``auto``, until converged); save on the way."""
+        """Sample to ``target`` steps in all (or, with ``auto``, until converged); save on the way.
+
+        Convergence is looked at on one fixed sequence of run lengths (:func:`look_points`), so
+        a resumed run stops where the uninterrupted one would.  Ctrl-C and SIGTERM only raise a
+        flag while sampling; the step under way is finished, the steps done are saved and then
+        :class:`KeyboardInterrupt` is raised (a second Ctrl-C interrupts at once).
+        """
         assessment = None
-        look = max(AUTO_MIN_STEPS, self.steps)
-        if auto and self.steps >= AUTO_MIN_STEPS:
+        if auto and self.steps in look_points(self.steps):
             assessment = assess(self.chain(), burn)
             if assessment.converged:
                 return assessment
-            look = max(self.steps + 1, int(self.steps * AUTO_GROWTH))
-        bar = _bar(progress, self.steps, target)
+        look = next_look(self.steps)
+        bar = _bar(progress, self.steps, None if auto else target)
         buf, lp_buf = [], []
         last_save = time.monotonic()
-        restore = _sigterm_as_interrupt()
+        stop = _Interrupts()
         t0, saving0 = time.perf_counter(), self.timings["checkpoint_s"]
         try:
-            gen = self.sampler.sample(self.state, iterations=None, store=False, skip_initial_state_check=True)
-            while self.steps + len(buf) < target:
-                state = next(gen)
-                self.accepted += np.any(state.coords != self.state.coords, axis=1)
-                self.state = emcee.State(state.coords.copy(), log_prob=state.log_prob.copy(),
-                                         random_state=state.random_state)
-                buf.append(self.state.coords)
-                lp_buf.append(self.state.log_prob)
-                if bar is not None:
-                    bar.update(1)
-                done = self.steps + len(buf)
-                if auto and done >= look:
-                    self._flush(buf, lp_buf)
-                    assessment = assess(self.chain(), burn)
-                    if assessment.converged:
-                        break
-                    look = max(done + 1, int(done * AUTO_GROWTH))
-                if self.path is not None and time.monotonic() - last_save >= self.every:
-                    self._flush(buf, lp_buf)
-                    self.save()
-                    last_save = time.monotonic()
+            with stop:
+                gen = self.sampler.sample(self.state, iterations=None, store=False, skip_initial_state_check=True)
+                while self.steps + len(buf) < target:
+                    state = next(gen)
+                    # one step, recorded in full before anything else can happen
+                    coords, lp = state.coords.copy(), state.log_prob.copy()
+                    moved = np.any(coords != self.state.coords, axis=1)
+                    self.state = emcee.State(coords, log_prob=lp, random_state=state.random_state)
+                    self.accepted += moved
+                    buf.append(coords)
+                    lp_buf.append(lp)
+                    if bar is not None:
+                        bar.update(1)
+                    done = self.steps + len(buf)
+                    if auto and done >= look:
+                        self._flush(buf, lp_buf)
+                        assessment = assess(self.chain(), burn)
+                        if assessment.converged:
+                            break
+                        look = next_look(done)
+                    if stop.raised:
+                        raise KeyboardInterrupt
+                    if self.path is not None and time.monotonic() - last_save >= self.every:
+                        self._flush(buf, lp_buf)
+                        self.save()
+                        last_save = time.monotonic()
         except KeyboardInterrupt:
             self._flush(buf, lp_buf)  # the steps completed before the interrupt
             if self.path is not None and self.steps > self.saved_steps:
@@ -273,10 +292,11 @@ class _Run:
             raise
         finally:
             self.timings["sampling_s"] += time.perf_counter() - t0 - (self.timings["checkpoint_s"] - saving0)
-            restore()
             if bar is not None:
                 bar.close()
         self._flush(buf, lp_buf)
+        if self.path is not None and self.steps > self.saved_steps:
+            self.save()  # an interrupt during the diagnostics or the writing keeps every draw
         if auto and (assessment is None or assessment.steps != self.steps):
             assessment = assess(self.chain(), burn)
         return assessment
@@ -299,7 +319,25 @@ class _Run:
         self.every = max(self.every, 20.0 * spent)  # saving costs at most a twentieth of the run
 
 
-def _bar(progress: bool, done: int, total: int):
+def look_points(upto: int) -> list[int]:
+    """Run lengths at which an ``"auto"`` run looks at convergence, up to ``upto``: 400, then each
+    a quarter longer than the one before (400, 500, 625, 781, ...)."""
+    out, n = [], AUTO_MIN_STEPS
+    while n <= upto:
+        out.append(n)
+        n = max(n + 1, int(n * AUTO_GROWTH))
+    return out
+
+
+def next_look(done: int) -> int:
+    """The first look point after ``done`` steps."""
+    n = AUTO_MIN_STEPS
+    while n <= done:
+        n = max(n + 1, int(n * AUTO_GROWTH))
+    return n
+
+
+def _bar(progress: bool, done: int, total: int | None):
     if not progress:
         return None
     from tqdm import tqdm
@@ -307,17 +345,33 @@ def _bar(progress: bool, done: int, total: int):
     return tqdm(total=total, initial=done, unit="step", desc="emcee")
 
 
-def _sigterm_as_interrupt():
-    """Treat SIGTERM like Ctrl-C while sampling (so the steps done are saved).
+class _Interrupts:
+    """While active (main thread only), Ctrl-C and SIGTERM set :attr:`raised` instead of raising
+    in the middle of a step; a second Ctrl-C raises :class:`KeyboardInterrupt` at once."""
 
-    Returns a function that puts the previous handler back.  Outside the main thread (a
-    worker of a batch) signals are left alone.
-    """
-    def handler(signum, frame):  # noqa: ARG001
-        raise KeyboardInterrupt
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
-    try:
-        old = signal.signal(signal.SIGTERM, handler)
-    except ValueError:
-        return lambda: None
-    return lambda: signal.signal(signal.SIGTERM, old)
+    def __init__(self) -> None:
+        self.raised = False
+        self._old: dict = {}
+
+    def _handler(self, signum, frame):  # noqa: ARG002
+        if self.raised and signum == signal.SIGINT:
+            raise KeyboardInterrupt
+        self.raised = True
+
+    def __enter__(self) -> "_Interrupts":
+        try:
+            for sig in self.SIGNALS:
+                self._old[sig] = signal.signal(sig, self._handler)
+        except ValueError:  # not the main thread (a worker of a batch): leave signals alone
+            self._restore()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._restore()
+
+    def _restore(self) -> None:
+        for sig, old in self._old.items():
+            signal.signal(sig, old if old is not None else signal.SIG_DFL)
+        self._old.clear()

@@ -63,14 +63,14 @@ def distribution(kind: str, args: tuple[float, ...]) -> Distribution:
     if kind == "loguniform":
         a, b = args
         span = math.log(b / a)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            def cdf(x):
-                x = _f(x)
-                return np.where(x <= a, 0.0, np.where(x >= b, 1.0, np.log(np.maximum(x, a) / a) / span))
 
-            def sf(x):
-                x = _f(x)
-                return np.where(x <= a, 1.0, np.where(x >= b, 0.0, np.log(b / np.maximum(x, a)) / span))
+        def cdf(x):
+            x = np.clip(_f(x), a, b)
+            return np.log(x / a) / span
+
+        def sf(x):
+            x = np.clip(_f(x), a, b)
+            return np.log(b / x) / span
         return Distribution(cdf, sf, lambda u: a * np.exp(_f(u) * span), lambda u: b * np.exp(-_f(u) * span))
     if kind == "normal":
         mu, sd = args

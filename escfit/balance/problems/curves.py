@@ -298,6 +298,12 @@ class FitProblem(FreeParameters, BalanceProblem):
                                 max_segments=self.solver_options.get("max_segments"))
             turns[:, 1:] = batch.theta_turn
             n_done, failed = batch.n_done, (batch.status == "failed") | (batch.status == "max_segments")
+            if self.solver_options.get("max_segments") is None:
+                # the one-set default budget grows with the swings asked for (64 n + 1000): a set that
+                # used more segments than the shortest curve's budget goes the one-at-a-time way,
+                # where a curve that runs out of segments is a failure
+                shortest = min(int(c.swing.max()) for c in self.curves)
+                failed |= batch.n_segments > 64 * shortest + 1000
         else:
             n_done, failed = np.zeros(n_sets * n_curves, int), np.zeros(n_sets * n_curves, bool)
         shape = (n_curves, n_sets)
