@@ -43,15 +43,6 @@ def _at_recorded_swings(curve: "Curve", theta0: float, theta_turn: np.ndarray) -
     return theta
 
 
-def _at_recorded_swings_many(curve: "Curve", theta0: np.ndarray, theta_turn: np.ndarray,
-                             n_done: np.ndarray) -> np.ndarray:
-    """:func:`_at_recorded_swings` for many sets: rows of ``theta_turn`` hold ``n_done`` turns."""
-    turns = np.concatenate([theta0[:, None], theta_turn], axis=1)
-    k = curve.swing
-    inside = k[None, :] <= n_done[:, None]
-    return np.where(inside, turns[:, np.minimum(k, turns.shape[1] - 1)], 0.0)
-
-
 @dataclass(frozen=True)
 class Curve:
     """One decay curve of the recording (a unit at one load)."""
