@@ -37,6 +37,7 @@ from ..core.errors import SolverError
 from ..core.kernels import kernel
 from .effects.base import SystemBuilder
 from .exact import region_tables
+from .segment import CREEP_OVERSHOOT, creep_horizon
 from .solvers import OVER_THE_TOP, STEP_BUDGET, STEP_UNDERFLOW, _check_system, static_args, status_of
 from .trajectory import Trajectory
 
@@ -286,7 +287,8 @@ def run_dop853(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, b
         if h < 0.0:
             h = _initial_step(x, v, a, c, w2, xc, pend, rtol, atol_x, atol_v)
         # no turning point within many time constants: creeping to rest (overdamped)
-        horizon = 64.0 * (math.pi / math.sqrt(w2) + c / w2)
+        horizon = creep_horizon(c, w2)
+        x_seg, v_seg = x, v
         t_seg = 0.0
         while event < 0:
             while k < n_samp and sample_t[k] <= t:
@@ -341,6 +343,13 @@ def run_dop853(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, b
             t_seg += h_try
             t_swing += h_try
         if status != 0 or (n_samp > 0 and k >= n_samp):
+            break
+        if event == 1 and abs(_acc(xe, 0.0, c, w2, xc, pend)) <= CREEP_OVERSHOOT * math.sqrt(
+                _acc(x_seg, 0.0, c, w2, xc, pend) ** 2 + w2 * v_seg * v_seg):
+            # the "turn" lies on the rest position to within rounding: a creep to rest, as the
+            # exact solver decides it (segment.CREEP_OVERSHOOT), not a swing
+            x = xe
+            status = _STOPPED
             break
         t += tau
         t_swing += tau

@@ -41,7 +41,7 @@ import numpy as np
 from numba import prange
 
 from ..core.kernels import kernel
-from .segment import cross_time, propagate, turn_time
+from .segment import CREEP_OVERSHOOT, cross_time, propagate, turn_time
 
 __all__ = ["run_angle", "run_phase", "run_angle_many", "run_phase_many", "STATUS_NAMES"]
 
@@ -289,21 +289,25 @@ def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
             x_turn = xc
             # the turning point itself is only needed when it may end the half swing
             crosses = _surely_crosses(y0, v, h, w2, tau_turn, xc, xb)
+            creep = not math.isfinite(tau_turn)
             if not crosses:
                 if math.isfinite(tau_turn):
                     y_turn, _ = propagate(y0, v, tau_turn, h, w2)
                     x_turn = xc + y_turn
+                    # a turn that overshoots the rest position by a rounding-level amount is a creep
+                    creep = abs(y_turn) <= CREEP_OVERSHOOT * math.sqrt(y0 * y0 + v * v / w2)
                 crosses = x_turn > xb
             if crosses:
                 tau, v_new = cross_time(y0, v, h, w2, xb - xc, tau_turn)
                 x = xb
                 v = max(v_new, 0.0)
-            elif math.isfinite(tau_turn):
+            elif not creep:
                 tau = tau_turn
                 x = x_turn
                 v = 0.0
             else:
-                # creeps towards the centre without turning or reaching another edge
+                # creeps towards the centre without turning (or overshooting it visibly) or reaching
+                # another edge
                 if record:
                     log[n_seg, 1] = math.inf
                 n_seg += 1

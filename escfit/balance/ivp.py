@@ -21,6 +21,7 @@ from scipy.special import ellipk
 from ..core.errors import SolverError
 from .effects.base import SystemBuilder
 from .exact import _region, _swing_edges
+from .segment import CREEP_OVERSHOOT
 from .solvers import OVER_THE_TOP, _check_system, static_args, status_of
 from .trajectory import Trajectory
 
@@ -120,6 +121,9 @@ def solve_ivp_events(sys: SystemBuilder, n_swings: int, switching: str, *, metho
                 continue
         else:
             x, v, is_bank = float(ye[0]), 0.0, False
+            if abs(spring(x) - xc) <= CREEP_OVERSHOOT * math.hypot(spring(y0[0]) - xc, y0[1] / math.sqrt(w2)):
+                status = "stopped"  # a turn on the rest position to within rounding: a creep to rest
+                break
         amp.append(abs(x))
         tturn.append(s * x)
         hp.append(t - t_last)

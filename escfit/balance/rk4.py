@@ -24,6 +24,7 @@ from ..core.errors import SolverError
 from ..core.kernels import kernel
 from .effects.base import SystemBuilder
 from .exact import _applies, _region, _swing_edges
+from .segment import CREEP_OVERSHOOT, creep_horizon
 from .solvers import OVER_THE_TOP, static_args, status_of
 from .trajectory import Trajectory
 
@@ -121,9 +122,14 @@ def _run_located(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
         t0 = t
         k = 0
         event = -1
+        x_seg, v_seg = x, v
+        horizon = creep_horizon(c, w2)
         while True:
             if steps >= max_steps:
                 status = 3
+                break
+            if k * h > horizon:
+                status = 1  # no event within many time constants: creeping to rest
                 break
             xn, vn = _step(x, v, h, c, w2, xc, pend)
             steps += 1
@@ -150,6 +156,10 @@ def _run_located(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
             k += 1
             t = t0 + k * h
         if status != 0:
+            break
+        if event == 1 and abs(_acc(x, 0.0, c, w2, xc, pend)) <= CREEP_OVERSHOOT * math.sqrt(
+                _acc(x_seg, 0.0, c, w2, xc, pend) ** 2 + w2 * v_seg * v_seg):
+            status = 1  # a turn on the rest position to within rounding: a creep to rest
             break
         at_start = False
         is_bank = event == 0 and j == n_edges - 1 and math.isfinite(bank)
@@ -198,9 +208,13 @@ def _run_naive(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, b
     n_done = 0
     status = 0
     k = 0
+    horizon = creep_horizon(c, sp_w2.max())
     while n_done < n_swings:
         if k >= max_steps:
             status = 3
+            break
+        if k * h - t_last > horizon:
+            status = 1  # no turning point within many time constants: creeping to rest
             break
         sv = s_prev
         a1 = _accel(th, om, sv if om == 0.0 else math.copysign(1.0, om),

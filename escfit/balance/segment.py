@@ -24,7 +24,24 @@ import math
 
 from ..core.kernels import kernel
 
-__all__ = ["propagate", "turn_time", "cross_time"]
+__all__ = ["propagate", "turn_time", "cross_time", "CREEP_OVERSHOOT", "creep_horizon"]
+
+#: A turning point whose overshoot past the segment's rest position is below this fraction of the
+#: motion's size there, ``sqrt(y0**2 + v0**2 / w2)``, is not a swing: the balance has crept to rest
+#: (a damping ratio above about 0.989; the next swing would be a billionth of this one, and near
+#: critical damping the "turn" comes thousands of seconds later, after the offset has decayed below
+#: rounding).  Every solver applies the same rule and reports status ``stopped``.
+CREEP_OVERSHOOT = 1e-9
+
+
+@kernel(inline="always")
+def creep_horizon(c, w2):
+    """Time (s) after which a segment without an event is a creep to rest.
+
+    64 undamped half periods plus 64 viscous time constants ``c/w2``: any turning point later
+    than this overshoots its rest position by less than :data:`CREEP_OVERSHOOT` of the motion.
+    """
+    return 64.0 * (math.pi / math.sqrt(w2) + c / w2)
 
 
 @kernel(inline="always")
