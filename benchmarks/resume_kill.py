@@ -2,9 +2,17 @@
 
 For each trial the CLI fit ``escfit fit fits/monday_unit4.toml`` (fixed length, frequent
 checkpoint saves so that kills land between saves, during saves and during the least-squares
-start) is started, killed with ``kill -9`` after a uniformly random delay within the length of
-an uninterrupted run, then continued with ``--resume`` (or started again when it died before
-its first save) until it finishes.  Checked per trial:
+start) is started and killed with ``kill -9``, then continued with ``--resume`` (or started
+again when it died before its first save) until it finishes.  The trials take turns between
+three kinds of kill moment (``--mode mixed``; or one kind for all):
+
+* ``random``: a uniformly random delay within the length of an uninterrupted run;
+* ``checkpoint``: while a checkpoint save is under way (its temporary ``.fit.h5.emcee.*.part``
+  exists: inside the HDF5 write or before its rename), after a random number of earlier saves;
+* ``final``: while the results file is being written (its temporary ``.fit.h5.*.part`` exists:
+  inside the write or before the final rename).
+
+The last two are found by polling the output folder every 0.2 ms.  Checked per trial:
 
 * the draw count of the results file is exactly the requested one;
 * every posterior draw is bit-identical to the uninterrupted run with the same seed;
@@ -12,7 +20,7 @@ its first save) until it finishes.  Checked per trial:
 
 Usage (from the repository root)::
 
-    python benchmarks/resume_kill.py [--trials 10] [--steps 1500] [--seed 0] [--json out.json]
+    python benchmarks/resume_kill.py [--trials 21] [--mode mixed] [--steps 1500] [--seed 0] [--json out.json]
 """
 
 from __future__ import annotations
@@ -57,9 +65,35 @@ def _saved_steps(ck: Path) -> int:
         return -1
 
 
+def _kill_during(proc: subprocess.Popen, folder: Path, kind: str, skip: int, limit: float) -> tuple[bool, float, str]:
+    """Kill ``proc`` while a temporary file of ``kind`` ("checkpoint" or "final") is present.
+
+    ``skip`` saves are let through first.  Returns whether it was killed inside such a write,
+    the time of the kill (s after the start) and the temporary file seen.
+    """
+    t0 = time.perf_counter()
+    seen: set[str] = set()
+    while proc.poll() is None and time.perf_counter() - t0 < limit:
+        for name in os.listdir(folder):
+            if not name.endswith(".part"):
+                continue
+            is_ck = name.startswith(".fit.h5.emcee.")
+            if (kind == "checkpoint") != is_ck or (kind == "final" and not name.startswith(".fit.h5.")):
+                continue
+            if name in seen:
+                continue
+            seen.add(name)
+            if len(seen) > skip:
+                os.kill(proc.pid, signal.SIGKILL)
+                return True, time.perf_counter() - t0, name
+        time.sleep(0.0002)
+    return False, time.perf_counter() - t0, ""
+
+
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--trials", type=int, default=10)
+    ap.add_argument("--trials", type=int, default=21)
+    ap.add_argument("--mode", choices=["mixed", "random", "checkpoint", "final"], default="mixed")
     ap.add_argument("--steps", type=int, default=1500)
     ap.add_argument("--every", type=float, default=0.5, help="checkpoint interval, s")
     ap.add_argument("--seed", type=int, default=0, help="seeds the kill times")
@@ -86,13 +120,19 @@ def main(argv: list[str] | None = None) -> dict:
             folder = tmp / f"trial{trial}"
             folder.mkdir()
             out, ck = folder / "fit.h5", folder / "fit.h5.emcee"
-            delay = rng.uniform(0.5, t_ref)
+            mode = args.mode if args.mode != "mixed" else ("random", "checkpoint", "final")[trial % 3]
             proc = subprocess.Popen(_cmd(out, args.steps, args.every), stdout=subprocess.DEVNULL,
                                     stderr=subprocess.DEVNULL)
-            time.sleep(delay)
-            killed = proc.poll() is None
-            if killed:
-                os.kill(proc.pid, signal.SIGKILL)
+            seen = ""
+            if mode == "random":
+                delay = rng.uniform(0.5, t_ref)
+                time.sleep(delay)
+                killed = proc.poll() is None
+                if killed:
+                    os.kill(proc.pid, signal.SIGKILL)
+            else:
+                skip = rng.randrange(0, 8) if mode == "checkpoint" else 0
+                killed, delay, seen = _kill_during(proc, folder, mode, skip, 3 * t_ref + 30)
             proc.wait()
             saved = _saved_steps(ck) if ck.exists() else 0
             runs = 0
@@ -108,12 +148,19 @@ def main(argv: list[str] | None = None) -> dict:
             same = bool(got) and all(np.array_equal(got[n], reference[n]) for n in reference)
             count = int(next(iter(got.values())).shape[1]) if got else 0
             stray = sorted(p.name for p in folder.iterdir() if p.name != "fit.h5")
-            rows.append({"trial": trial, "kill_after_s": round(delay, 2), "killed": killed, "steps_saved": saved,
+            rows.append({"trial": trial, "mode": mode, "inside": seen, "kill_after_s": round(delay, 2), "killed": killed,
+                         "steps_saved": saved,
                          "draws_per_walker": count, "identical": same, "stray_files": stray})
-            print(f"trial {trial:2d}: kill after {delay:5.1f} s ({'killed' if killed else 'had finished'}), "
+            print(f"trial {trial:2d} ({mode}{': inside ' + seen if seen else ''}): kill after {delay:5.2f} s "
+                  f"({'killed' if killed else 'had finished'}), "
                   f"checkpoint held {saved:5d} steps; resumed -> {count} draws per walker, "
                   f"identical to the uninterrupted run: {same}, stray files: {stray or 'none'}")
     ok = all(r["identical"] and not r["stray_files"] for r in rows)
+    for mode in ("random", "checkpoint", "final"):
+        sub = [r for r in rows if r["mode"] == mode]
+        if sub:
+            print(f"  {mode}: {len(sub)} trials, {sum(r['killed'] for r in sub)} killed, "
+                  f"{sum(r['identical'] for r in sub)} identical, {sum(not r['stray_files'] for r in sub)} clean")
     print(f"{sum(r['identical'] for r in rows)}/{len(rows)} identical, "
           f"{sum(not r['stray_files'] for r in rows)}/{len(rows)} clean; all good: {ok}")
     record = {"steps": args.steps, "reference_s": t_ref, "trials": rows, "all_ok": ok}

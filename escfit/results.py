@@ -5,7 +5,8 @@ Groups
 ``posterior`` (chain, draw), ``sample_stats`` (lp), ``observed_data`` (the readings),
 ``posterior_predictive`` (noise-free expected readings for a thinned set of draws),
 ``log_likelihood`` (pointwise, on the same thinned draws, for PSIS-LOO),
-``least_squares`` (values, standard errors, correlation), ``diagnostics`` (autocorrelation
+``least_squares`` (values, standard errors, correlation, bounds ``min``/``max``, the
+``at_bound`` flag and bounded intervals ``lo68``/``hi68``/``lo95``/``hi95``), ``diagnostics`` (autocorrelation
 time, split R-hat and ESS per parameter, acceptance per walker).  Root attributes carry the
 provenance: scene text, data file and its SHA-256, seed, solver and options, versions of
 escfit and its dependencies, timestamps and :data:`SCHEMA_VERSION`.
@@ -25,7 +26,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from .core.atomic import atomic_path
+from .core.h5write import write_netcdf
 from .core.errors import ResultsError
 
 __all__ = ["SCHEMA_VERSION", "FitResult", "load_fit", "write_fit"]
@@ -77,32 +78,74 @@ class FitResult:
         return json.loads(self.tree.attrs.get("derived", "[]") or "[]")
 
     def summary(self) -> dict[str, dict[str, Any]]:
-        """Per parameter: median, 68 % and 95 % intervals, unit, R-hat, ESS (posterior),
-        or the least-squares value with +-1 and +-1.96 standard errors when there is none."""
+        """One row per parameter (and derived quantity) for tables and reports.
+
+        Every row holds ``unit``, ``estimate`` (the value to show), ``estimate_kind``
+        (``"median"`` for a posterior row, ``"best fit"`` for a least-squares row),
+        ``at_bound`` (``None``, ``"min"`` or ``"max"``: the least-squares estimate sits on that
+        bound of the scene's range, so its interval is one-sided) and the 68 % and 95 %
+        intervals ``lo68``, ``hi68``, ``lo95``, ``hi95``, inside the bounds.
+
+        Posterior rows (emcee fits) add ``median`` (= ``estimate``; the intervals are
+        posterior quantiles), ``mean``, ``sd`` and, for sampled parameters, ``rhat``,
+        ``ess_bulk``, ``ess_tail`` and ``tau``.  Least-squares rows (no posterior) add
+        ``best_fit`` (= ``estimate``) and ``stderr`` and have no ``median``: a best fit is not
+        a median.  Their intervals are the ones stored with the fit (see
+        :func:`escfit.inference.lsq.bounded_interval`); files written before those were
+        stored get ``best_fit +- 1`` and ``+- 1.96`` standard errors, clipped to the bounds
+        when the file holds them.
+        """
         post = self.group("posterior")
         lsq = self.group("least_squares")
         diag = self.group("diagnostics")
         units = json.loads(self.tree.attrs.get("units", "{}"))
+        lsq_names = list(map(str, lsq["parameter"].values)) if lsq is not None else []
         out: dict[str, dict[str, Any]] = {}
         for name in self.parameter_names + [n for n in self.derived_names if n not in self.parameter_names]:
             row: dict[str, Any] = {"unit": units.get(name, "")}
+            at_bound = _at_bound(lsq, name) if name in lsq_names else None
             if post is not None and name in post:
                 x = post[name].values.ravel()
                 q = np.quantile(x, [0.025, 0.16, 0.5, 0.84, 0.975])
-                row.update(median=float(q[2]), lo68=float(q[1]), hi68=float(q[3]), lo95=float(q[0]), hi95=float(q[4]),
+                row.update(estimate=float(q[2]), estimate_kind="median", at_bound=at_bound, median=float(q[2]),
+                           lo68=float(q[1]), hi68=float(q[3]), lo95=float(q[0]), hi95=float(q[4]),
                            mean=float(x.mean()), sd=float(x.std(ddof=1)))
                 if diag is not None and "rhat" in diag and name in list(diag["parameter"].values):
                     sel = diag.sel(parameter=name)
                     row.update(rhat=float(sel["rhat"]), ess_bulk=float(sel["ess_bulk"]), ess_tail=float(sel["ess_tail"]),
                                tau=float(sel["tau"]))
-            elif lsq is not None and name in list(lsq["parameter"].values):
+            elif name in lsq_names:
                 sel = lsq.sel(parameter=name)
                 v, se = float(sel["value"]), float(sel["stderr"])
-                row.update(median=v, lo68=v - se, hi68=v + se, lo95=v - 1.96 * se, hi95=v + 1.96 * se, stderr=se)
+                row.update(estimate=v, estimate_kind="best fit", at_bound=at_bound, best_fit=v, stderr=se,
+                           **_lsq_intervals(sel, v, se))
             else:
                 continue
             out[name] = row
         return out
+
+
+def _at_bound(lsq: xr.Dataset, name: str) -> str | None:
+    """``"min"``/``"max"`` from the stored least-squares flag (``None`` in files without it)."""
+    if "at_bound" not in lsq:
+        return None
+    flag = int(lsq["at_bound"].sel(parameter=name))
+    return "min" if flag < 0 else ("max" if flag > 0 else None)
+
+
+def _lsq_intervals(sel: xr.Dataset, value: float, stderr: float) -> dict[str, float]:
+    """The stored bounded intervals, or (older files) the symmetric ones clipped to any stored bounds."""
+    keys = ("lo68", "hi68", "lo95", "hi95")
+    if all(k in sel for k in keys):
+        return {k: float(sel[k]) for k in keys}
+    lower = float(sel["min"]) if "min" in sel else -math.inf
+    upper = float(sel["max"]) if "max" in sel else math.inf
+    out = {}
+    for level, z in (("68", 1.0), ("95", 1.96)):
+        lo, hi = value - z * stderr, value + z * stderr
+        out[f"lo{level}"] = float(min(max(lo, lower), upper)) if math.isfinite(lo) else lo
+        out[f"hi{level}"] = float(max(min(hi, upper), lower)) if math.isfinite(hi) else hi
+    return out
 
 
 def load_fit(path: str | Path) -> FitResult:
@@ -128,9 +171,13 @@ def load_fit(path: str | Path) -> FitResult:
 
 
 def write_fit(result: FitResult, path: str | Path, *, force: bool = False) -> None:
-    """Write atomically; an existing file is replaced only with ``force``."""
-    with atomic_path(path, force=force) as tmp:
-        result.tree.to_netcdf(tmp, engine="h5netcdf")
+    """Write atomically; an existing file is replaced only with ``force``.
+
+    Data variables carry HDF5 Fletcher-32 checksums, so a damaged file is refused on reading
+    (:func:`load_fit`) instead of giving changed numbers; the file is built in memory first, so
+    a full disk is one clear error and leaves nothing behind (:mod:`escfit.core.h5write`).
+    """
+    write_netcdf(result.tree, path, force=force)
     result.path = str(path)
 
 

@@ -45,8 +45,8 @@ def test_linear_friction_rule():
     _, r_true = _truth(1)
     loads = sorted(r_true)
     slope = np.polyfit(loads, [r_true[x] for x in loads], 1)[0]
-    assert s["fit.kappa"]["median"] == pytest.approx(slope, rel=0.02)
-    assert s["coulomb.R"]["median"] == pytest.approx(r_true[loads[0]], rel=0.01)
+    assert s["fit.kappa"]["best_fit"] == pytest.approx(slope, rel=0.02)
+    assert s["coulomb.R"]["best_fit"] == pytest.approx(r_true[loads[0]], rel=0.01)
 
 
 def test_several_loads_need_a_rule():

@@ -40,7 +40,7 @@ def _row_fit(row, method="leastsq", **kw):
 @pytest.mark.parametrize("row", ROWS, ids=[f"unit{r['unit']}-{r['load_g']}g" for r in ROWS])
 def test_printed_r_is_one_to_four_percent_low(row):
     res = _row_fit(row)
-    r_fit = res.summary()["coulomb.R"]["median"]
+    r_fit = res.summary()["coulomb.R"]["best_fit"]
     excess = r_fit / float(row["R_rad_s2"]) - 1
     assert 0.011 < excess < 0.045, excess
 

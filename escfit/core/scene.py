@@ -91,6 +91,6 @@ def load_scene(source: str | Path, *, text: str | None = None) -> "Scene":
     model = doc.get("model")
     if model is None:
         raise SceneError(f"missing key 'model' (one of {sorted(MODELS)})", where)
-    if model not in MODELS:
+    if not isinstance(model, str) or model not in MODELS:
         raise SceneError(f"unknown model {model!r}; known models: {sorted(MODELS)}", f"{where} [model]")
     return model_module(model).parse(doc, where=where, text=text)

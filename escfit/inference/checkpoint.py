@@ -21,8 +21,6 @@ Layout (format ``escfit-emcee-checkpoint``, version 1)::
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -68,32 +66,33 @@ class Checkpoint:
 
 
 def save_checkpoint(path: str | Path, ck: Checkpoint) -> None:
-    """Write ``ck`` to ``path`` atomically (temporary file beside it, then rename)."""
+    """Write ``ck`` to ``path`` atomically (temporary file beside it, then rename).
+
+    The HDF5 image is built in memory and written in one piece
+    (:func:`escfit.core.h5write.write_bytes`), so a full disk is one clear error and never
+    leaves a partial file or damages the previous checkpoint.
+    """
+    import io
+
     import h5py
 
+    from ..core.h5write import write_bytes
+
     target = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent)
-    os.close(fd)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)  # as the results file: mkstemp makes 0600
-    try:
-        with h5py.File(tmp, "w") as f:
-            kw = {"fletcher32": True} if ck.chain.size else {}
-            f.create_dataset("chain", data=ck.chain, **kw)
-            f.create_dataset("log_prob", data=ck.log_prob, **kw)
-            f.create_dataset("accepted", data=np.asarray(ck.accepted, np.int64))
-            name, keys, pos, has_gauss, gauss = ck.random_state
-            if name != "MT19937":
-                raise ResultsError(f"cannot checkpoint a random generator of kind {name!r}", str(target))
-            f.create_dataset("mt_keys", data=np.asarray(keys, np.uint32), fletcher32=True)
-            f.attrs.update({"format": FORMAT, "version": VERSION, "names": json.dumps(list(ck.names)),
-                            "seed": int(ck.seed), "moves": str(ck.moves), "mt_pos": int(pos),
-                            "mt_has_gauss": int(has_gauss), "mt_gauss": float(gauss)})
-        os.replace(tmp, target)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    name, keys, pos, has_gauss, gauss = ck.random_state
+    if name != "MT19937":
+        raise ResultsError(f"cannot checkpoint a random generator of kind {name!r}", str(target))
+    buf = io.BytesIO()
+    with h5py.File(buf, "w") as f:
+        kw = {"fletcher32": True} if ck.chain.size else {}
+        f.create_dataset("chain", data=ck.chain, **kw)
+        f.create_dataset("log_prob", data=ck.log_prob, **kw)
+        f.create_dataset("accepted", data=np.asarray(ck.accepted, np.int64))
+        f.create_dataset("mt_keys", data=np.asarray(keys, np.uint32), fletcher32=True)
+        f.attrs.update({"format": FORMAT, "version": VERSION, "names": json.dumps(list(ck.names)),
+                        "seed": int(ck.seed), "moves": str(ck.moves), "mt_pos": int(pos),
+                        "mt_has_gauss": int(has_gauss), "mt_gauss": float(gauss)})
+    write_bytes(buf.getvalue(), target, force=True)
 
 
 def load_checkpoint(path: str | Path, walkers: int, names: list[str]) -> Checkpoint:

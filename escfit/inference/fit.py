@@ -166,15 +166,26 @@ def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None,
     groups: dict[str, xr.Dataset] = {}
     groups["observed_data"] = xr.Dataset({"reading": ("obs", problem.observed, {"units": reading_units})},
                                          coords=obs_coords)
+    bounded = {key: ("parameter", np.asarray(lsq.intervals[key], float),
+                     {"long_name": f"{key[2:]} % interval inside the bounds ({'lower' if key[:2] == 'lo' else 'upper'} "
+                                   "end), delta method in log/logit coordinates"})
+               for key in ("lo68", "hi68", "lo95", "hi95")}
     groups["least_squares"] = xr.Dataset(
         {"value": ("parameter", lsq.value), "stderr": ("parameter", lsq.stderr),
          "correlation": (("parameter", "parameter_b"), lsq.correlation),
+         **bounded,
+         "min": ("parameter", np.asarray(lsq.lower, float), {"long_name": "lower bound of the scene's range"}),
+         "max": ("parameter", np.asarray(lsq.upper, float), {"long_name": "upper bound of the scene's range"}),
+         "at_bound": ("parameter", np.asarray(lsq.at_bound, np.int8),
+                      {"long_name": "estimate on its lower (-1) or upper (+1) bound, else 0"}),
          "expected": ("obs", problem.expected(lsq.values),
                       {"units": reading_units, "long_name": "expected reading at the optimum"})},
         coords={"parameter": lsq.names, "parameter_b": lsq.names, **obs_coords},
         attrs=clean_attrs({"chisqr": lsq.chisqr, "redchi": lsq.redchi, "sigma_hat": lsq.sigma_hat,
                            "n_data": lsq.n_data, "aic": lsq.aic(), "bic": lsq.bic(), "success": lsq.success,
-                           "message": lsq.message, "n_starts": lsq.n_starts, "noise_profiled": lsq.profiled}))
+                           "message": lsq.message, "n_starts": lsq.n_starts, "noise_profiled": lsq.profiled,
+                           "interval_method": "delta method in log(x - min), -log(max - x) or logit coordinates "
+                                              "(identity when unbounded); one-sided on a bound"}))
     misfit, misfit_warnings = _misfit(problem, lsq, obs_coords)
     family_figures, family_warnings = problem.checks_at_best_fit(lsq.values)
     misfit.update(family_figures)
@@ -182,8 +193,9 @@ def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None,
     if not lsq.success:
         misfit_warnings.append(f"least squares did not converge: {lsq.message}")
     warnings = correlation_warnings(lsq.names, lsq.correlation) + ridge_warnings(lsq.names, lsq.correlation)
+    warnings += list(lsq.warnings)
     undefined = [n for n, e in zip(lsq.names, lsq.stderr) if not np.isfinite(e)]
-    if undefined:
+    if undefined and not lsq.warnings:
         warnings.append(f"least-squares standard errors undefined for {undefined} (singular or indefinite "
                         "covariance): the data do not fix them locally; use --method emcee")
     if mc is not None:

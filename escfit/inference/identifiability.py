@@ -68,21 +68,29 @@ def ridge_warnings(names: list[str], corr: np.ndarray, ratio: float = 30.0, what
             "parameters)"]
 
 
-def bound_warnings(problem: Problem, lsq: LeastSquaresResult) -> list[str]:
-    """Parameters whose best fit sits on a bound of the scene's range."""
-    lo, hi = problem.bounds
+def bound_warnings(problem: Problem | None, lsq: LeastSquaresResult) -> list[str]:
+    """One warning per parameter whose best fit sits on a bound of the scene's range.
+
+    Reads the flags least squares stored (:attr:`LeastSquaresResult.at_bound`, see
+    :func:`~escfit.inference.lsq.bound_flags`), so the warnings, the stored ``at_bound``
+    variable and the one-sided intervals always agree.  ``problem`` is not needed (kept for
+    callers that pass it).
+    """
     out = []
-    for i, name in enumerate(problem.names):
-        if name not in lsq.names:
+    for i, name in enumerate(lsq.names):
+        flag = int(lsq.at_bound[i])
+        if flag == 0:
             continue
-        v = float(lsq.value[lsq.names.index(name)])
-        span = hi[i] - lo[i] if np.isfinite(hi[i] - lo[i]) else max(abs(v), 1.0)
-        for edge, which in ((lo[i], "lower"), (hi[i], "upper")):
-            if np.isfinite(edge) and abs(v - edge) <= 1e-6 * span:
-                zero = which == "lower" and edge == 0.0
-                out.append(f"{name} ends on its {which} bound {edge:g}" + (
-                    ": the data find no evidence for it (an upper limit is what they give)" if zero else
-                    ": the data want it beyond the scene's range; widen the range or check the units"))
+        edge = float(lsq.lower[i] if flag < 0 else lsq.upper[i])
+        which = "lower" if flag < 0 else "upper"
+        lo95, hi95 = float(lsq.intervals["lo95"][i]), float(lsq.intervals["hi95"][i])
+        side = f"[{edge:g}, {hi95:.4g}]" if flag < 0 else f"[{lo95:.4g}, {edge:g}]"
+        one_sided = f"; its interval is one-sided, 95 % {side}"
+        if flag < 0 and edge == 0.0:
+            why = ": the data find no evidence for it (an upper limit is what they give)"
+        else:
+            why = ": the data want it beyond the scene's range; widen the range or check the units"
+        out.append(f"{name} ends on its {which} bound {edge:g}{why}{one_sided}")
     return out
 
 

@@ -13,12 +13,21 @@ posterior where a prior pins what the data alone cannot.  Noise parameters
 * when none is free the scene's noise is known and the covariance is not rescaled.
 
 ``sigma_hat`` reports the profiled reading scatter.
+
+Uncertainties come from the curvature ``J^T J`` of the stacked residuals at the optimum, in
+the parameters' own units.  A singular curvature (a direction the readings do not fix) leaves
+the standard errors of the parameters it involves undefined (nan) instead of lmfit's
+round-off numbers, and correlations outside [-1, 1] are never reported.  Intervals respect
+the scene's bounds (:func:`bounded_interval`); a parameter on a bound is flagged
+(:attr:`LeastSquaresResult.at_bound`) and given a one-sided interval.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import warnings
+from contextlib import contextmanager
+from dataclasses import dataclass, field
 
 import lmfit
 import numpy as np
@@ -27,9 +36,18 @@ from scipy.stats import qmc
 from ..core.errors import FitError
 from ..likelihood.problem import FAIL_RESIDUAL, Problem, gaussian_prior_residuals
 
-__all__ = ["LeastSquaresResult", "least_squares"]
+__all__ = ["LeastSquaresResult", "least_squares", "bounded_interval", "bound_flags", "INTERVAL_Z"]
 
 _GAUSSIAN = ("normal", "halfnormal", "lognormal")
+
+#: standard-normal quantiles of the stored two-sided intervals, by level in percent
+INTERVAL_Z = {68: 1.0, 95: 1.959963984540054}
+
+#: a parameter within this fraction of its range (or of max(|value|, 1) for an open range) of a bound is on it
+BOUND_RTOL = 1e-6
+
+#: eigenvalues of the standardised curvature below this fraction of the largest count as zero (no information)
+SINGULAR_RTOL = 1e-10
 
 
 @dataclass
@@ -57,6 +75,16 @@ class LeastSquaresResult:
         All parameter values at the optimum (by name, ties resolved, noise profiled).
     profiled : bool
         Whether the noise scale was profiled from the residuals.
+    lower, upper : ndarray
+        The scene's bounds of each fitted parameter (-inf/inf when open).
+    at_bound : ndarray of int
+        -1 when the estimate sits on its lower bound, +1 on its upper bound, else 0
+        (see :func:`bound_flags`).
+    intervals : dict
+        ``lo68``, ``hi68``, ``lo95``, ``hi95``: approximate 68 % and 95 % intervals inside the
+        bounds (see :func:`bounded_interval`), in the parameters' units.
+    warnings : list[str]
+        What makes the covariance unusable (a singular curvature), in words.
     """
 
     names: list[str]
@@ -72,6 +100,22 @@ class LeastSquaresResult:
     message: str
     values: dict
     profiled: bool = True
+    lower: np.ndarray | None = None
+    upper: np.ndarray | None = None
+    at_bound: np.ndarray | None = None
+    intervals: dict = field(default_factory=dict)
+    warnings: list = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        k = len(self.names)
+        if self.lower is None:
+            self.lower = np.full(k, -np.inf)
+        if self.upper is None:
+            self.upper = np.full(k, np.inf)
+        if self.at_bound is None:
+            self.at_bound = bound_flags(self.value, self.lower, self.upper)
+        if not self.intervals:
+            self.intervals = interval_table(self.value, self.stderr, self.lower, self.upper, self.at_bound)
 
     def loglike_gaussian(self) -> float:
         """Gaussian log-likelihood at the optimum with sigma profiled out (for AIC/BIC)."""
@@ -111,11 +155,10 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
     Raises
     ------
     FitError
-        Nothing left to fit, fewer readings than fitted parameters, or no start converging.
+        Nothing left to fit, fewer readings than fitted parameters (refused before any
+        evaluation; Gaussian priors' residual rows are not readings), or no start converging.
     """
     noise = tuple(getattr(problem, "noise_names", ()))
-    if "observation.rho" in problem.names and "observation.rho" not in (fixed or {}):
-        return _two_stage_ar1(problem, n_starts=n_starts, n_refine=n_refine, seed=seed, fixed=fixed, start=start)
     fixed = dict(fixed or {})
     for n in fixed:
         if n not in problem.names:
@@ -123,6 +166,9 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
     names = [n for n in problem.names if n not in noise and n not in fixed]
     if not names:
         raise FitError("no structural parameter left to fit by least squares")
+    refuse_underdetermined(problem, names)
+    if "observation.rho" in problem.names and "observation.rho" not in fixed:
+        return _two_stage_ar1(problem, n_starts=n_starts, n_refine=n_refine, seed=seed, fixed=fixed, start=start)
     idx = [problem.names.index(n) for n in names]
     priors = [problem.priors[i] for i in idx]
     lo, hi = (np.asarray(b, float)[idx] for b in problem.bounds)
@@ -130,9 +176,6 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
     if start:
         x0 = np.array([start.get(n, v) for n, v in zip(names, x0)])
     pinned = sum(p.kind in _GAUSSIAN for p in priors)
-    if problem.n_data + pinned < len(names):
-        raise FitError(f"{problem.n_data} reading(s) cannot determine {len(names)} free parameters {names}: fix some "
-                       "in the scene or give them informative priors")
     # the reading scatter is profiled when its scale observation.sigma is free; readings of several
     # kinds (timegrapher amplitudes and beat times) share the one covariance rescale instead
     profile_noise = "observation.sigma" in problem.names and "observation.sigma" in noise
@@ -165,8 +208,9 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
     best = None
     for x in starts:
         try:
-            res = lmfit.minimize(residual, params_at(x), method="least_squares", scale_covar=not iterate_scale
-                                 and profile_noise, **options)
+            with _quiet():
+                res = lmfit.minimize(residual, params_at(x), method="least_squares", scale_covar=not iterate_scale
+                                     and profile_noise, **options)
         except (ValueError, FloatingPointError) as exc:  # lmfit refusing a start
             problem.failures[f"least squares start failed: {exc}"[:120]] += 1
             continue
@@ -186,19 +230,19 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
             scale[0] = new
             if done:
                 break
-            best = lmfit.minimize(residual, best.params, method="least_squares", scale_covar=False, **options)
+            with _quiet():
+                best = lmfit.minimize(residual, best.params, method="least_squares", scale_covar=False, **options)
             free_dof = _data_dof(best, priors, n, len(names) - pinned)
     value = vector(best.params)
-    stderr = np.array([np.nan if best.params[k].stderr is None else best.params[k].stderr for k in keys], float)
-    corr = np.full((len(names), len(names)), np.nan)
-    if best.covar is not None and best.covar.shape == (len(names), len(names)):
-        diag = np.diag(best.covar)
-        good = diag > 0  # an indefinite covariance (a flat or curved-away direction) has no standard error
-        stderr[~good] = np.nan
-        d = np.sqrt(np.where(good, diag, np.nan))
-        with np.errstate(invalid="ignore"):
-            corr = best.covar / np.outer(d, d)
-        corr[np.abs(corr) > 1.0 + 1e-9] = np.nan  # not a covariance: no correlation to report
+    covar_scale = float(best.redchi) if (profile_noise and not iterate_scale) else 1.0
+    cov, undetermined = _covariance(best, len(names), covar_scale)
+    stderr, corr = _errors_and_correlations(cov)
+    cov_warnings = []
+    if undetermined.any():
+        which = [nm for nm, u in zip(names, undetermined) if u]
+        cov_warnings.append(f"the least-squares curvature is singular: the readings do not fix {which} locally "
+                            "(standard errors undefined, no interval); fix some of them in the scene, give them "
+                            "informative priors or use --method emcee")
     vals = problem.values({**fixed, **dict(zip(names, value))})
     r = best.residual[:n] * scale[0]
     chisqr = float(r @ r)
@@ -211,7 +255,184 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
     else:
         sigma_hat = sigma
     return LeastSquaresResult(names, value, stderr, corr, chisqr, float(redchi), float(sigma_hat), int(n),
-                              len(starts), bool(best.success), str(best.message), vals, profile_noise)
+                              len(starts), bool(best.success), str(best.message), vals, profile_noise,
+                              lower=lo.copy(), upper=hi.copy(), warnings=cov_warnings)
+
+
+def refuse_underdetermined(problem: Problem, names: list[str]) -> None:
+    """Refuse a fit with fewer readings than structural parameters, before any evaluation.
+
+    Readings are counted as the problem counts them (:attr:`Problem.n_data`); the residual rows
+    Gaussian priors add are not readings, so a prior does not make an underdetermined fit
+    determined (the least-squares optimum would then only restate the priors).
+
+    Raises
+    ------
+    FitError
+        Naming both counts, the parameters and the data file when the problem knows it.
+    """
+    n = int(problem.n_data)
+    if n >= len(names):
+        return
+    where = None
+    try:
+        where = problem.provenance().get("data_file") or None
+    except Exception:  # noqa: BLE001 - provenance is only used to name the file
+        where = None
+    raise FitError(f"{n} reading(s) cannot determine {len(names)} free parameters {names}: record more readings, "
+                   "or fix some parameters in the scene", None if where is None else str(where))
+
+
+@contextmanager
+def _quiet():
+    """Keep lmfit's and uncertainties' arithmetic warnings (``sqrt`` of a negative variance of a
+    singular curvature) off the console: :func:`_covariance` turns that case into our own warning."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        yield
+
+
+def _covariance(best, k: int, scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """Covariance of the fitted parameters and which of them the readings leave undetermined.
+
+    The curvature ``H = J^T J`` (the Jacobian of the stacked residuals, in the parameters'
+    units) is standardised by its diagonal; eigenvalues below :data:`SINGULAR_RTOL` times the
+    largest are directions the readings do not fix.  Parameters with a weight in such a
+    direction get a nan variance and covariance; the others take the pseudo-inverse on the
+    determined subspace.  A regular curvature keeps lmfit's covariance (the same numbers).
+    """
+    cov = np.full((k, k), np.nan)
+    undetermined = np.ones(k, bool)
+    jac = getattr(best, "jac", None)
+    jac = None if jac is None else np.asarray(jac, float)
+    if jac is None or jac.ndim != 2 or jac.shape[1] != k or not np.all(np.isfinite(jac)):
+        return cov, undetermined
+    h = jac.T @ jac
+    d = np.sqrt(np.diag(h))
+    live = d > 0
+    if live.any():
+        hs = h[np.ix_(live, live)] / np.outer(d[live], d[live])
+        w, v = np.linalg.eigh(0.5 * (hs + hs.T))
+        null = w <= SINGULAR_RTOL * max(float(w[-1]), 0.0)
+        sub = np.zeros(int(live.sum()), bool)
+        if null.any():
+            sub = np.max(np.abs(v[:, null]), axis=1) > 1e-6
+        undetermined[np.flatnonzero(live)] = sub
+        keep = ~null
+        inv = (v[:, keep] / w[keep]) @ v[:, keep].T / np.outer(d[live], d[live])
+        full = np.full((k, k), np.nan)
+        full[np.ix_(live, live)] = inv
+        cov = full * scale
+    covar = getattr(best, "covar", None)
+    if not undetermined.any() and covar is not None and np.shape(covar) == (k, k) and np.all(np.diag(covar) > 0):
+        cov = np.array(covar, float)  # lmfit's own (already scaled) covariance: identical numbers
+    cov[undetermined, :] = np.nan
+    cov[:, undetermined] = np.nan
+    return cov, undetermined
+
+
+def _errors_and_correlations(cov: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Standard errors and correlations of a covariance; nan where undefined, never |r| > 1."""
+    diag = np.diag(cov)
+    good = np.isfinite(diag) & (diag > 0)
+    stderr = np.where(good, np.sqrt(np.where(good, diag, 1.0)), np.nan)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.outer(stderr, stderr)
+    corr[~np.isfinite(corr) | (np.abs(corr) > 1.0 + 1e-9)] = np.nan  # not a covariance: no correlation to report
+    corr = np.clip(corr, -1.0, 1.0)
+    idx = np.flatnonzero(good)
+    corr[idx, idx] = 1.0
+    return stderr, corr
+
+
+def bound_flags(value: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """-1 for an estimate on its lower bound, +1 on its upper bound, 0 inside.
+
+    On a bound means within :data:`BOUND_RTOL` of the range ``upper - lower`` (of
+    ``max(|value|, 1)`` in the parameter's unit when the range is open).
+    """
+    value, lower, upper = (np.asarray(a, float) for a in (value, lower, upper))
+    span = np.where(np.isfinite(upper - lower), upper - lower, np.maximum(np.abs(value), 1.0))
+    tol = BOUND_RTOL * span
+    flags = np.zeros(value.shape, int)
+    flags[np.isfinite(lower) & (np.abs(value - lower) <= tol)] = -1
+    flags[np.isfinite(upper) & (np.abs(value - upper) <= tol) & (flags == 0)] = 1
+    return flags
+
+
+def bounded_interval(value: float, stderr: float, lower: float, upper: float, z: float,
+                     at_bound: int = 0) -> tuple[float, float]:
+    """Approximate interval of one parameter that never leaves its bounds.
+
+    The delta method is applied in a coordinate in which the bounds are at infinity,
+    ``u = log(x - lower)`` (lower bound only), ``u = -log(upper - x)`` (upper bound only),
+    ``u = logit((x - lower)/(upper - lower))`` (both) or ``u = x`` (none):
+    ``u +- z * |du/dx| * stderr`` is mapped back to ``x``.  This costs no further fit (a
+    profile likelihood costs two root searches of refits per parameter, minutes for a
+    balance fit), keeps the interval inside the bounds by construction, reduces to
+    ``x +- z * stderr`` where the bounds are many standard errors away, and is exact when the
+    readings depend linearly on ``u`` (e.g. on ``log R``), the usual case for positive scale
+    parameters.  Near a bound the interval is asymmetric, longer away from the bound.
+
+    A parameter on a bound (``at_bound`` -1 or +1) has no two-sided interval: it gets the
+    one-sided ``[lower, lower + z * stderr]`` (or ``[upper - z * stderr, upper]``), clipped to
+    the other bound.  ``stderr`` there is the curvature's, and the cost rising through the
+    bound only shortens the profile interval, so this is conservative.
+
+    Parameters
+    ----------
+    value, stderr
+        Estimate and standard error, in the parameter's unit.
+    lower, upper
+        Bounds (``-inf``/``inf`` when open).
+    z
+        Standard-normal quantile of the two-sided level (1 for 68 %, 1.96 for 95 %).
+    at_bound
+        -1, 0 or +1 (see :func:`bound_flags`).
+
+    Returns
+    -------
+    (lo, hi) : tuple of float
+        In the parameter's unit; nan where the standard error is undefined.
+    """
+    x, se, a, b = float(value), float(stderr), float(lower), float(upper)
+    if at_bound < 0 and math.isfinite(a):
+        return a, (min(b, a + z * se) if math.isfinite(se) else math.nan)
+    if at_bound > 0 and math.isfinite(b):
+        return (max(a, b - z * se) if math.isfinite(se) else math.nan), b
+    if not (math.isfinite(se) and math.isfinite(x)):
+        return math.nan, math.nan
+    lo_open, hi_open = not math.isfinite(a), not math.isfinite(b)
+    if lo_open and hi_open:
+        return x - z * se, x + z * se
+    if hi_open:
+        d = max(x - a, 1e-300)
+        s = z * se / d
+        return a + d * math.exp(-min(s, 700.0)), a + d * math.exp(min(s, 700.0))
+    if lo_open:
+        d = max(b - x, 1e-300)
+        s = z * se / d
+        return b - d * math.exp(min(s, 700.0)), b - d * math.exp(-min(s, 700.0))
+    w = b - a
+    p = min(max((x - a) / w, 1e-300), 1.0 - 1e-16)
+    u = math.log(p) - math.log1p(-p)
+    s = z * se / (w * p * (1.0 - p))
+    return a + w * _expit(u - s), a + w * _expit(u + s)
+
+
+def _expit(u: float) -> float:
+    return 1.0 / (1.0 + math.exp(-u)) if u >= 0 else math.exp(u) / (1.0 + math.exp(u))
+
+
+def interval_table(value, stderr, lower, upper, at_bound) -> dict[str, np.ndarray]:
+    """``lo68``, ``hi68``, ``lo95``, ``hi95`` of every parameter (:func:`bounded_interval`)."""
+    out = {}
+    for level, z in INTERVAL_Z.items():
+        pairs = [bounded_interval(v, e, a, b, z, int(f))
+                 for v, e, a, b, f in zip(value, stderr, lower, upper, at_bound)]
+        out[f"lo{level}"] = np.array([p[0] for p in pairs], float)
+        out[f"hi{level}"] = np.array([p[1] for p in pairs], float)
+    return out
 
 
 def _data_dof(best, priors, n: int, unpinned: int) -> float:

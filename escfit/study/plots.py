@@ -51,7 +51,8 @@ def _label(name: str) -> str:
 
 def plot_unit_estimates(summary, *, truth: Mapping[str, Mapping[str, float]] | None = None,
                         population=None, params: Sequence[str] = POPULATION_PARAMS, title: str = ""):
-    """Each unit's median and 95 % interval per parameter, with the truth and the population.
+    """Each unit's estimate (posterior median or best fit) and 95 % interval per parameter, with the
+    truth and the population.
 
     Parameters
     ----------
@@ -71,9 +72,11 @@ def plot_unit_estimates(summary, *, truth: Mapping[str, Mapping[str, float]] | N
     pop = population.summary() if population is not None else {}
     for ax, name in zip(axes, params):
         sel = summary.sel(parameter=name)
-        med, lo, hi = (sel[k].values.astype(float) for k in ("median", "lo95", "hi95"))
+        # posterior median or least-squares best fit; summaries written before "estimate" hold "median"
+        which = "estimate" if "estimate" in sel else "median"
+        med, lo, hi = (sel[k].values.astype(float) for k in (which, "lo95", "hi95"))
         ax.errorbar(med, y, xerr=[med - lo, hi - med], fmt="o", ms=3, color="0.2", ecolor="0.5", lw=1,
-                    label="unit: median, 95 %")
+                    label="unit: estimate, 95 %")
         if truth:
             ax.plot([truth[u][name] for u in units], y, "x", color="tab:red", ms=6, label="truth")
         if name in pop:

@@ -317,6 +317,88 @@ class FitProblem(FreeParameters, BalanceProblem):
         return np.concatenate([self.observation.loglike_pointwise(p, c.y, vals, self.sides(c), c.time)
                                for p, c in zip(self.predict(vals), self.curves)])
 
+    # -- what Monday's phase convention leaves determined at several loads ---------------
+    def checks_at_best_fit(self, best: Mapping[str, float]) -> tuple[dict, list[str]]:
+        figures, warnings = super().checks_at_best_fit(best)
+        return figures, self.phase_loads_warning() + warnings
+
+    def checks_of_posterior(self, chain: np.ndarray) -> list[str]:
+        return self.phase_loads_warning() + super().checks_of_posterior(chain)
+
+    def phase_loads_warning(self) -> list[str]:
+        """The phase convention's non-identifiability in a joint fit of several loads.
+
+        With phase switching every unit curve is exactly geometric: it fixes ``C/omega0`` and
+        Monday's combined ``K`` at its load, and ``K`` is linear in the forcing magnitudes
+        (Coulomb ``R``, the escapement ``X``, the load rule's ``fit.kappa``/``fit.mu``).  The
+        loads therefore determine at most as many forcing combinations as the rank of
+        ``dK(load)/d(forcing)``; when that rank is below the number of free forcing
+        parameters, they trade off exactly along ``K(load) = const`` (correlations of +-1,
+        unbounded least-squares intervals).  The rank is computed at the scene's values (a
+        structural property: it does not depend on them).
+        """
+        cached = self.__dict__.get("_phase_loads_warning")
+        if cached is None:
+            cached = self.__dict__["_phase_loads_warning"] = self._phase_loads_check()
+        return list(cached)
+
+    def _phase_loads_check(self) -> list[str]:
+        if self.scene.switching != "phase" or len(self.curves) < 2:
+            return []
+        forcing = [n for n in self.names if n == "coulomb.R" or n.startswith("coulomb.R[load=")
+                   or (n.startswith("escapement[") and n.endswith(".X")) or n in ("fit.kappa", "fit.mu")]
+        if not forcing:
+            return []
+        from .checks import monday_k
+
+        base = self.values(self.initial)
+        loads = sorted({c.load for c in self.curves})
+        try:
+            k0 = np.array([monday_k(self, self.load_rule.apply(base, ld)) for ld in loads])
+            cols = []
+            for name in forcing:
+                step = 1e-3 * max(abs(float(base[name])), 1.0)  # K is linear in the magnitudes: any step
+                moved = {**base, name: float(base[name]) + step}
+                k1 = np.array([monday_k(self, self.load_rule.apply(moved, ld)) for ld in loads])
+                cols.append((k1 - k0) / step)
+        except (EscfitError, ValueError, ArithmeticError):  # K undefined here (overdamped): no statement
+            return []
+        m = np.array(cols).T
+        norms = np.linalg.norm(m, axis=0)
+        s = np.linalg.svd(m / np.where(norms > 0, norms, 1.0), compute_uv=False) if m.size else np.zeros(0)
+        rank = int(np.sum(s > 1e-8 * max(float(s.max()) if s.size else 0.0, 1e-300))) if np.any(norms > 0) else 0
+        if rank >= len(forcing):
+            return []
+        return [f"phase switching at {len(loads)} loads: each unit curve is exactly geometric and determines only "
+                f"C/omega0 and Monday's combined K at its load, so the loads fix {rank} combination(s) of the "
+                f"{len(forcing)} free forcing parameters {', '.join(forcing)}; these trade off exactly along "
+                "K(load) = const (correlations of +-1, unbounded intervals; see the K per load): fix some of them "
+                "(e.g. the escapement magnitudes from the fixture gains) or record with angle switching"]
+
+    def derived(self, values: Mapping[str, float]) -> dict[str, float]:
+        """Monday's combined K: at each load when the phase convention leaves only those determined."""
+        if not self.phase_loads_warning():
+            return super().derived(values)
+        from .checks import monday_k
+
+        return {f"K[load={ld:g}]": monday_k(self, self.load_rule.apply(values, ld))
+                for ld in sorted({c.load for c in self.curves})}
+
+    @property
+    def units(self) -> dict[str, str]:
+        out = dict(super().units)
+        if self.phase_loads_warning():
+            out.update({f"K[load={c.load:g}]": "" for c in self.curves})
+        return out
+
+    @property
+    def meanings(self) -> dict[str, str]:
+        out = dict(super().meanings)
+        if self.phase_loads_warning():
+            out.update({f"K[load={c.load:g}]": f"Monday's combined K at load {c.load:g} (derived)"
+                        for c in self.curves})
+        return out
+
     def expected(self, vals: Mapping[str, float]) -> np.ndarray:
         """Noise-free expected readings (rad) of all data points, concatenated."""
         return np.concatenate([self.observation.expected(p, vals, self.sides(c), c.time)
