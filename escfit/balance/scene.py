@@ -9,7 +9,7 @@ from typing import Any, Mapping
 from ..core.errors import SceneError
 from ..core.params import Param, ParamSet, read_param
 from ..core.scene import check_keys
-from ..core.units import to_canonical
+from ..core.units import BARE_ANGLE_LIMIT, to_canonical
 from .effects import EFFECTS
 from .effects.base import ReadContext, SystemBuilder
 
@@ -115,7 +115,7 @@ def parse(doc: Mapping[str, Any], *, where: str, text: str) -> BalanceScene:
     if not has_spring:
         params.add(_read_omega0(osc, inertia, ow))
     if "theta0" in osc:
-        params.add(read_param(osc["theta0"], name="oscillator.theta0", kind="angle",
+        params.add(read_param(osc["theta0"], name="oscillator.theta0", kind="angle", bare_limit=BARE_ANGLE_LIMIT,
                               meaning="release angle (rad); released at rest", where=f"{ow}.theta0"))
     else:  # nan: taken from the recording's reference turning point when fitting
         params.add(Param("oscillator.theta0", math.nan, "rad",

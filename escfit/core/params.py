@@ -93,6 +93,7 @@ def read_param(
     lower_open: bool = False,
     convert: Callable[[float], float] | None = None,
     unit: str | None = None,
+    bare_limit: float | None = None,
 ) -> Param:
     """Read a fixed or free scene value into a :class:`Param`.
 
@@ -118,14 +119,24 @@ def read_param(
     unit
         Unit of the converted value when ``convert`` changes it (default: the canonical
         unit of ``kind``).
+    bare_limit
+        Largest magnitude a bare number (no unit) may have in the canonical unit of ``kind``,
+        for the value and the table's ``min``, ``max`` and ``sd``; ``None`` accepts any.
+        Balance readers pass :data:`escfit.core.units.BARE_ANGLE_LIMIT` for angles.
 
     Raises
     ------
     SceneError
         Unknown table keys, non-numeric entries, ``min > max``, value outside bounds or
         outside the physical range.
+    UnitError
+        A bare number beyond ``bare_limit`` (a subclass of :class:`SceneError`).
     """
     conv = convert or (lambda v: v)
+
+    def canonical(v: Any, at: str) -> float:
+        return conv(to_canonical(v, kind, at, bare_limit=bare_limit))
+
     out_unit = CANONICAL[kind] if unit is None else unit
     if isinstance(raw, Mapping):
         unknown = set(raw) - _TABLE_KEYS
@@ -136,16 +147,16 @@ def read_param(
             )
         if "value" not in raw:
             raise SceneError("parameter table needs a 'value'", where)
-        value = conv(to_canonical(raw["value"], kind, f"{where}.value"))
+        value = canonical(raw["value"], f"{where}.value")
         vary = raw.get("vary", False)
         if not isinstance(vary, bool):
             raise SceneError(f"'vary' must be true or false, got {vary!r}", f"{where}.vary")
-        pmin = conv(to_canonical(raw["min"], kind, f"{where}.min")) if "min" in raw else lower
-        pmax = conv(to_canonical(raw["max"], kind, f"{where}.max")) if "max" in raw else upper
+        pmin = canonical(raw["min"], f"{where}.min") if "min" in raw else lower
+        pmax = canonical(raw["max"], f"{where}.max") if "max" in raw else upper
         prior = raw.get("prior")
         if prior is not None and not isinstance(prior, str):
             raise SceneError(f"'prior' must be a string such as 'normal(0, 1)', got {prior!r}", f"{where}.prior")
-        sd = conv(to_canonical(raw["sd"], kind, f"{where}.sd")) if "sd" in raw else None
+        sd = canonical(raw["sd"], f"{where}.sd") if "sd" in raw else None
         if sd is not None and not sd > 0:
             raise SceneError(f"'sd' must be positive, got {raw['sd']!r}", f"{where}.sd")
         if pmin > pmax:
@@ -154,7 +165,7 @@ def read_param(
         if not (pmin <= value <= pmax):
             raise SceneError(f"value {raw['value']!r} lies outside [{pmin:g}, {pmax:g}] ({out_unit or 'dimensionless'})", where)
     else:
-        value = conv(to_canonical(raw, kind, where))
+        value = canonical(raw, where)
         vary, pmin, pmax, prior, sd = False, lower, upper, None, None
     bad_low = value <= lower if lower_open else value < lower
     if bad_low or value > upper:

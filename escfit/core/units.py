@@ -3,6 +3,11 @@
 Scene files may give any number either as a bare value in the canonical unit or as a
 string with a unit, e.g. ``"300 deg"`` or ``"2.73e-7 N*m"``.  Angles are dimensionless in
 pint (rad), so an angle given as a length is refused by dimensional analysis.
+
+A bare angle is read as radians.  Readers of balance-wheel and pendulum angles pass
+``bare_limit=BARE_ANGLE_LIMIT`` so that a bare number no such oscillator can reach (more than
+two turns, most likely degrees written without their unit) is refused instead of simulated;
+a value written with its unit is always taken as written.
 """
 
 from __future__ import annotations
@@ -16,7 +21,8 @@ import pint
 
 from .errors import UnitError
 
-__all__ = ["ureg", "to_canonical", "CANONICAL", "safe_unit_text", "quantity", "MAX_UNIT_TEXT"]
+__all__ = ["ureg", "to_canonical", "CANONICAL", "safe_unit_text", "quantity", "MAX_UNIT_TEXT", "BARE_ANGLE_LIMIT",
+           "check_bare_angle"]
 
 ureg = pint.UnitRegistry()
 ureg.define("gf = gram * g_0 = gram_force")  # gram-force, as in Monday's fixture data
@@ -50,7 +56,35 @@ def _unit(kind: str) -> pint.Unit:
     return ureg.Unit(CANONICAL[kind])
 
 
-def to_canonical(value: Any, kind: str, where: str) -> float:
+# Largest bare angle (rad) a balance wheel or pendulum reading accepts: two turns.  Balance
+# amplitudes stay below one turn (banking near 330 deg), so a larger bare number is almost
+# certainly degrees written without their unit.
+BARE_ANGLE_LIMIT = 4 * math.pi
+
+
+def check_bare_angle(value: Any, where: str, limit: float = BARE_ANGLE_LIMIT) -> None:
+    """Refuse a bare number (read as radians) whose magnitude exceeds ``limit`` rad.
+
+    Strings with a unit pass unchecked: ``"300 deg"`` and even ``"300 rad"`` are taken as
+    written.
+
+    Raises
+    ------
+    UnitError
+        ``value`` is a bare int or float with ``|value| > limit``; the message gives the
+        value in turns and suggests writing the unit.
+    """
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return
+    if not math.isfinite(value) or abs(value) <= limit:  # (non-finite values are refused by to_canonical)
+        return
+    text = f"{value:g}" if isinstance(value, float) else str(value)
+    turns = abs(value) / (2 * math.pi)
+    raise UnitError(f'bare number {text} is read as radians ({turns:.1f} turns); did you mean "{text} deg"? '
+                    f'write the unit to be explicit (or "{text} rad")', where)
+
+
+def to_canonical(value: Any, kind: str, where: str, *, bare_limit: float | None = None) -> float:
     """Convert a scene value to a float in the canonical unit of ``kind``.
 
     Parameters
@@ -61,6 +95,9 @@ def to_canonical(value: Any, kind: str, where: str) -> float:
         Key of :data:`CANONICAL` naming the expected dimension.
     where
         ``"file [key]"`` used in error messages.
+    bare_limit
+        Largest magnitude a *bare* number may have (in the canonical unit); ``None`` (the
+        default) accepts any.  Balance readers pass :data:`BARE_ANGLE_LIMIT` for angles.
 
     Returns
     -------
@@ -70,8 +107,11 @@ def to_canonical(value: Any, kind: str, where: str) -> float:
     Raises
     ------
     UnitError
-        Unknown unit, wrong dimension, non-finite number or a non-numeric value.
+        Unknown unit, wrong dimension, non-finite number, a non-numeric value or a bare
+        number beyond ``bare_limit``.
     """
+    if bare_limit is not None:
+        check_bare_angle(value, where, bare_limit)
     if isinstance(value, bool):
         raise UnitError(f"expected a number, got the boolean {value!r}", where)
     if isinstance(value, (int, float)):

@@ -13,7 +13,7 @@ from typing import Mapping
 from ...core.errors import SceneError
 from ...core.params import Param, read_param
 from ...core.scene import check_keys
-from ...core.units import to_canonical
+from ...core.units import BARE_ANGLE_LIMIT, to_canonical
 from .base import ReadContext, SystemBuilder
 
 __all__ = ["Banking"]
@@ -32,7 +32,7 @@ class Banking:
         check_keys(table, {"angle", "restitution"}, where, {"angle"})
         if ctx.switching == "phase":
             raise SceneError("banking needs switching = 'angle' (phase switching has no turning points)", where)
-        angle = to_canonical(table["angle"], "angle", f"{where}.angle")
+        angle = to_canonical(table["angle"], "angle", f"{where}.angle", bare_limit=BARE_ANGLE_LIMIT)
         if not angle > 0:
             raise SceneError(f"banking angle must be positive, got {table['angle']!r}", f"{where}.angle")
         e = read_param(table.get("restitution", 0.0), name="banking.e", kind="dimensionless", lower=0.0, upper=1.0,

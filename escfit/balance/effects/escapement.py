@@ -21,7 +21,7 @@ from typing import Mapping, Sequence
 from ...core.errors import SceneError
 from ...core.params import Param, read_param
 from ...core.scene import check_keys
-from ...core.units import to_canonical
+from ...core.units import BARE_ANGLE_LIMIT, to_canonical
 from .base import ReadContext, SystemBuilder, read_either
 
 __all__ = ["Window", "Escapement"]
@@ -67,8 +67,8 @@ class Escapement:
             kind = table["kind"]
             if kind not in ("unlock", "impulse"):
                 raise SceneError(f"kind must be 'unlock' or 'impulse', got {kind!r}", f"{where}.kind")
-            lo = to_canonical(table["from"], "angle", f"{where}.from")
-            hi = to_canonical(table["to"], "angle", f"{where}.to")
+            lo = to_canonical(table["from"], "angle", f"{where}.from", bare_limit=BARE_ANGLE_LIMIT)
+            hi = to_canonical(table["to"], "angle", f"{where}.to", bare_limit=BARE_ANGLE_LIMIT)
             if not lo < hi:
                 raise SceneError(f"'from' ({table['from']!r}) must be below 'to' ({table['to']!r})", where)
             if ctx.switching == "phase" and (abs(lo) > math.pi / 2 + 1e-12 or abs(hi) > math.pi / 2 + 1e-12):

@@ -14,7 +14,7 @@ from typing import Mapping
 from ...core.errors import SceneError
 from ...core.params import Param, read_param
 from ...core.scene import check_keys
-from ...core.units import to_canonical
+from ...core.units import BARE_ANGLE_LIMIT, to_canonical
 from .base import ReadContext, SystemBuilder
 
 __all__ = ["Hairspring"]
@@ -36,7 +36,8 @@ class Hairspring:
         angles, omegas = table["angles"], table["omega0"]
         if not isinstance(angles, list) or not isinstance(omegas, list) or len(omegas) != len(angles) + 1 or not angles:
             raise SceneError("'angles' must be a non-empty list and 'omega0' a list one entry longer", where)
-        ang = tuple(to_canonical(a, "angle", f"{where}.angles[{i}]") for i, a in enumerate(angles, 1))
+        ang = tuple(to_canonical(a, "angle", f"{where}.angles[{i}]", bare_limit=BARE_ANGLE_LIMIT)
+                    for i, a in enumerate(angles, 1))
         if any(b <= a for a, b in zip(ang, ang[1:])):
             raise SceneError(f"'angles' must increase strictly, got {angles!r}", f"{where}.angles")
         params = [

@@ -32,6 +32,7 @@ from scipy import special
 
 from ...core.errors import SceneError
 from ...core.params import Param, read_param
+from ...core.units import BARE_ANGLE_LIMIT
 
 __all__ = ["AmplitudeObservation", "noise_params", "expected_reading"]
 
@@ -52,9 +53,9 @@ def noise_params(table: Mapping, where: str, default_sigma: float) -> list[Param
     """The sigma and offset parameters shared by the amplitude-like models."""
     sigma = read_param(table.get("sigma", {"value": default_sigma, "vary": True, "min": 1e-6, "max": 10.0,
                                            "prior": "loguniform(1e-6, 10)"}),
-                       name="observation.sigma", kind="angle", lower=0.0, lower_open=True,
+                       name="observation.sigma", kind="angle", lower=0.0, lower_open=True, bare_limit=BARE_ANGLE_LIMIT,
                        meaning="reading noise scale (rad)", where=f"{where}.sigma")
-    offset = read_param(table.get("offset", 0.0), name="observation.offset", kind="angle",
+    offset = read_param(table.get("offset", 0.0), name="observation.offset", kind="angle", bare_limit=BARE_ANGLE_LIMIT,
                         meaning="zero offset of the scale (rad); readings on alternate sides differ by twice it",
                         where=f"{where}.offset")
     return [sigma, offset]

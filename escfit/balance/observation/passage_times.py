@@ -42,6 +42,7 @@ import numpy as np
 from ...core.errors import SceneError
 from ...core.kernels import kernel
 from ...core.params import Param, read_param
+from ...core.units import BARE_ANGLE_LIMIT
 from ..dense import row_state
 from ..segment import cross_time
 
@@ -184,7 +185,7 @@ class PassageTimeObservation:
         t0 = read_param(table.get("t0", release_s), name="observation.t0", kind="time",
                         meaning="release instant on the recording's clock (s); model times are added to it",
                         where=f"{where}.t0")
-        offset = read_param(table.get("offset", 0.0), name="observation.offset", kind="angle",
+        offset = read_param(table.get("offset", 0.0), name="observation.offset", kind="angle", bare_limit=BARE_ANGLE_LIMIT,
                             meaning="zero offset of the notch scale (rad): notch j sits at theta = j*notch + offset",
                             where=f"{where}.offset")
         return cls((sigma, t0, offset))

@@ -43,6 +43,7 @@ from scipy import special
 
 from ...core.errors import SceneError
 from ...core.params import Param, read_param
+from ...core.units import BARE_ANGLE_LIMIT
 from .notches import log_interval_mass
 from .passage_times import level_times, swing_starts
 
@@ -151,13 +152,13 @@ class TimegrapherObservation:
             raise SceneError(f"beats must be true or false, got {beats!r}", f"{where}.beats")
         sigma = read_param(table.get("sigma", {"value": math.radians(1.0), "vary": True, "min": 1e-5, "max": 1.0,
                                                "prior": "loguniform(1e-5, 1)"}),
-                           name="observation.sigma", kind="angle", lower=0.0, lower_open=True,
+                           name="observation.sigma", kind="angle", lower=0.0, lower_open=True, bare_limit=BARE_ANGLE_LIMIT,
                            meaning="noise of an amplitude reading before rounding (rad)", where=f"{where}.sigma")
         d = math.radians(15.0)
         lift = read_param(table.get("lift_angle", {"value": lift_set, "vary": True, "min": lift_set - d,
                                                    "max": lift_set + d,
                                                    "prior": f"normal({lift_set!r}, {math.radians(2.0)!r})"}),
-                          name="observation.lift_angle", kind="angle", lower=0.0, lower_open=True,
+                          name="observation.lift_angle", kind="angle", lower=0.0, lower_open=True, bare_limit=BARE_ANGLE_LIMIT,
                           meaning="true lift angle of the escapement (rad); the instrument assumes the set one",
                           where=f"{where}.lift_angle")
         sigma_t = read_param(table.get("sigma_t", 1e-4), name="observation.sigma_t", kind="time", lower=0.0,

@@ -34,7 +34,7 @@ import numpy as np
 
 from ...core.errors import SceneError
 from ...core.params import Param, read_param
-from ...core.units import to_canonical
+from ...core.units import BARE_ANGLE_LIMIT, to_canonical
 from .amplitude import drift_param, noise_params
 from .notches import log_interval_mass
 
@@ -86,7 +86,7 @@ class WaveformObservation:
         unknown = sorted(set(table) - cls.KEYS)
         if unknown:
             raise SceneError(f"unknown key(s) {unknown}; known: {sorted(cls.KEYS)}", where)
-        quantum = to_canonical(table.get("quantum", 0.0), "angle", f"{where}.quantum")
+        quantum = to_canonical(table.get("quantum", 0.0), "angle", f"{where}.quantum", bare_limit=BARE_ANGLE_LIMIT)
         if not (math.isfinite(quantum) and quantum >= 0.0):
             raise SceneError(f"quantum must be a step angle >= 0, got {table.get('quantum')!r}", f"{where}.quantum")
         noise = table.get("noise", "white")

@@ -320,7 +320,31 @@ class FitProblem(FreeParameters, BalanceProblem):
     # -- what Monday's phase convention leaves determined at several loads ---------------
     def checks_at_best_fit(self, best: Mapping[str, float]) -> tuple[dict, list[str]]:
         figures, warnings = super().checks_at_best_fit(best)
-        return figures, self.phase_loads_warning() + warnings
+        notch_figures, notch_warnings = self._notch_convention_check(best)
+        return {**figures, **notch_figures}, self.phase_loads_warning() + warnings + notch_warnings
+
+    def _notch_convention_check(self, best: Mapping[str, float]) -> tuple[dict, list[str]]:
+        """Notch counts: do the readings look like the other reading convention?
+
+        See :func:`escfit.balance.observation.notch_convention.notch_reading_report`; the
+        release readings are anchors when the release angle is not fitted.
+        """
+        from ..observation.notch_convention import notch_reading_report
+        from ..observation.notches import NotchObservation
+
+        obs = self.observation
+        sigma = best.get("observation.sigma")
+        if not isinstance(obs, NotchObservation) or not sigma or not np.isfinite(sigma):
+            return {}, []
+        try:
+            position = obs.interval_position(self.expected(best), self.observed)
+        except (EscfitError, ValueError, ArithmeticError):
+            return {}, []
+        swing = np.concatenate([c.swing for c in self.curves])
+        curve = np.concatenate([np.full(c.y.size, k) for k, c in enumerate(self.curves)])
+        anchor = swing == 0 if "oscillator.theta0" not in self.names else None
+        return notch_reading_report(position, reading=obs.reading, jitter=float(sigma) / obs.notch, anchor=anchor,
+                                    curve=curve)
 
     def checks_of_posterior(self, chain: np.ndarray) -> list[str]:
         return self.phase_loads_warning() + super().checks_of_posterior(chain)

@@ -251,7 +251,9 @@ def record(scene: BalanceScene, recorder: str, out: str | Path, *, noise: float 
     comments
         Extra comment lines (the file always says which scene, recorder and seed made it).
     **options
-        Passed to the recorder (e.g. ``fmt="csv"`` for the timegrapher, ``notch_deg=6``).
+        Passed to the recorder (e.g. ``fmt="csv"`` for the timegrapher; ``notch_deg=6`` and
+        ``notch_reading="nearest"`` for notch readings of a unit curve, see
+        :func:`escfit.balance.synthetic.unit_curves.record_unit_curve`).
     """
     out = Path(out)
     call = ", ".join([f"{Path(scene.where).name!r}", f"{recorder!r}", f"noise={noise!r}", f"seed={seed}"]

@@ -12,6 +12,7 @@ import numpy as np
 from .. import BalanceScene, solve
 from ...core.errors import SceneError
 from ..observation import AmplitudeObservation, NotchObservation
+from ..observation.notches import NOTCH_READINGS, notch_count
 from ...core.params import Param
 from ..recordings import UnitCurve
 
@@ -21,7 +22,7 @@ __all__ = ["record_unit_curve"]
 def record_unit_curve(scene: BalanceScene, *, every: int = 4, duration: float | None = None,
                       swings: int | None = None, notch_deg: float | None = None, sigma: float = 0.0,
                       offset: float = 0.0, seed: int = 0, include_release: bool = True,
-                      solver: str = "exact") -> UnitCurve:
+                      solver: str = "exact", notch_reading: str = "counted") -> UnitCurve:
     """Simulate amplitude readings of a unit curve.
 
     Parameters
@@ -43,9 +44,18 @@ def record_unit_curve(scene: BalanceScene, *, every: int = 4, duration: float | 
         Seed of the noise generator.
     include_release
         Also record the release amplitude as swing 0.
+    solver
+        Solver giving the true turning points.
+    notch_reading
+        How notch readings are taken (with ``notch_deg``): ``"counted"``, the marks passed,
+        ``floor(A/notch)``, or ``"nearest"``, the mark nearest the turning point,
+        ``floor(A/notch + 1/2)``; see :mod:`escfit.balance.observation.notches`.  Recorded in
+        the curve's metadata.
     """
     if every < 1:
         raise SceneError(f"every must be >= 1, got {every}")
+    if notch_reading not in NOTCH_READINGS:
+        raise SceneError(f"notch_reading must be one of {', '.join(map(repr, NOTCH_READINGS))}, got {notch_reading!r}")
     n = swings or scene.swings
     tr = solve(scene, solver, swings=n)
     k = np.arange(every, tr.amplitude.size + 1, every)
@@ -59,8 +69,9 @@ def record_unit_curve(scene: BalanceScene, *, every: int = 4, duration: float | 
     values = {"observation.sigma": max(sigma, 1e-300), "observation.offset": offset}
     dummy = (Param("observation.sigma", sigma), Param("observation.offset", offset))
     if notch_deg is not None:
-        obs = NotchObservation(math.radians(notch_deg), dummy)
-        y = obs.sample(theta, values, rng) if sigma > 0 else np.floor(obs.expected(theta, values) / obs.notch)
+        obs = NotchObservation(math.radians(notch_deg), dummy, notch_reading)
+        y = obs.sample(theta, values, rng) if sigma > 0 else notch_count(obs.expected(theta, values), obs.notch,
+                                                                         notch_reading)
         notch, kind = obs.notch, "notches"
     else:
         obs = AmplitudeObservation("gaussian", dummy)
@@ -68,5 +79,7 @@ def record_unit_curve(scene: BalanceScene, *, every: int = 4, duration: float | 
         notch, kind = math.nan, "amplitude"
     meta = {"generated_by": "escfit.balance.synthetic.unit_curves.record_unit_curve", "scene": scene.where, "seed": str(seed),
             "every": str(every), "sigma_rad": repr(sigma), "offset_rad": repr(offset)}
+    if notch_deg is not None:
+        meta["notch_reading"] = notch_reading
     return UnitCurve(k.astype(np.int64), y, kind, notch, unit=np.full(k.size, "", dtype=str), time=None,
                      source=f"<synthetic from {scene.where}>", meta=meta)
