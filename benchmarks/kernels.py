@@ -228,7 +228,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--baseline", default="2e7e582", help="git revision of the previous exact.py")
     parser.add_argument("--min-time", type=float, default=0.3, help="seconds per repetition (default 0.3)")
     parser.add_argument("--sets", type=int, default=2048, help="parameter sets of the batch case (default 2048)")
+    parser.add_argument("--force", action="store_true", help="replace existing output files")
     args = parser.parse_args(argv)
+    for out in (args.json,):  # refused before the run, not after it
+        if out and Path(out).exists() and not args.force:
+            parser.error(f"{out} exists; pass --force to replace it")
     if args.repeat < 1 or not math.isfinite(args.min_time) or args.min_time <= 0:
         parser.error("--repeat must be >= 1 and --min-time > 0")
     before = os.getloadavg()

@@ -134,7 +134,11 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--baseline", default="2e7e582", help="earlier revision to compare with (git)")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--json", default=None, help="write the figures to this file")
+    ap.add_argument("--force", action="store_true", help="replace existing output files")
     args = ap.parse_args(argv)
+    for out in (args.json,):  # refused before the run, not after it
+        if out and Path(out).exists() and not args.force:
+            ap.error(f"{out} exists; pass --force to replace it")
     before = _load()
     records: dict = {"baseline": args.baseline, "load_before": before, "runs": {}}
     with tempfile.TemporaryDirectory(prefix="escfit-quickstart-") as tmp:

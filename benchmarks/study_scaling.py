@@ -182,7 +182,11 @@ def main() -> None:
     ap.add_argument("--scheduler", default=None, help="also run on this existing dask scheduler")
     ap.add_argument("--json", dest="json_out", default=None, help="write the results as JSON")
     ap.add_argument("--png", default=None, help="write a bar chart (matplotlib)")
+    ap.add_argument("--force", action="store_true", help="replace existing output files")
     args = ap.parse_args()
+    for out in (args.json_out, args.png):  # refused before the run, not after it
+        if out and Path(out).exists() and not args.force:
+            ap.error(f"{out} exists; pass --force to replace it")
     load_start, capacity_start = _load(), parallel_capacity()
     result = run(args.units, args.workers, args.repeat, args.scheduler)
     result["load_start"], result["load_end"] = load_start, _load()

@@ -396,7 +396,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--plot", default=None, help="write the work-precision plot to this PNG file")
     ap.add_argument("--from-json", default=None, help="render records saved by --json (or escfit bench --json-out)")
     ap.add_argument("--markdown", action="store_true", help="print the docs tables")
+    ap.add_argument("--force", action="store_true", help="replace existing output files")
     args = ap.parse_args(argv)
+    for out in (args.plot,):  # refused before the run, not after it
+        if out and Path(out).exists() and not args.force:
+            ap.error(f"{out} exists; pass --force to replace it")
     if args.from_json:
         records = [Record(**r) for r in json.loads(Path(args.from_json).read_text())]
     else:

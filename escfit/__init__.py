@@ -3,22 +3,50 @@
 The public API is small:
 
 - :func:`load_scene` reads a TOML scene (``model = "balance" | "geneva" | "verge" | "friction_rig"``);
-- :func:`simulate` runs it and returns an :class:`xarray.Dataset`.
+- :func:`simulate` runs it and returns an :class:`xarray.Dataset`;
+- :func:`fit` fits a scene's free parameters to a recording (:func:`escfit.inference.fit`);
+- :func:`load_fit` reads a results file back.
+
+Everything but the version and the error classes is imported on first use, so that
+``import escfit`` (and the command line's ``--help``) stays quick.
 """
 
 from __future__ import annotations
 
+import importlib
 from typing import Any
 
+from .core.errors import DataError, EscfitError, FitError, ResultsError, SceneError, SolverError, UnitError
 from .core.version import __version__
 
-from .core.errors import DataError, EscfitError, FitError, ResultsError, SceneError, SolverError, UnitError
-from .core.scene import load_scene
-
 __all__ = [
-    "__version__", "load_scene", "simulate", "load_fit",
+    "__version__", "load_scene", "simulate", "fit", "load_fit",
     "EscfitError", "SceneError", "UnitError", "DataError", "SolverError", "FitError", "ResultsError",
 ]
+
+# Public names defined in submodules, imported when first read: name -> (module, attribute)
+_LAZY = {
+    "load_scene": ("escfit.core.scene", "load_scene"),
+    "fit": ("escfit.inference", "fit"),
+}
+# Subpackages reachable as attributes (``escfit.inference.fit(...)`` after ``import escfit``)
+_SUBPACKAGES = frozenset({"balance", "core", "fitting", "friction", "geneva", "inference", "likelihood",
+                          "observation", "recordings", "report", "results", "study", "verge", "cli"})
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        module, attr = _LAZY[name]
+        value = getattr(importlib.import_module(module), attr)
+        globals()[name] = value
+        return value
+    if name in _SUBPACKAGES:
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_LAZY, *_SUBPACKAGES})
 
 
 def simulate(scene, solver: str | None = None, **options: Any):
@@ -40,7 +68,7 @@ def simulate(scene, solver: str | None = None, **options: Any):
         Per-swing (balance) or time-history (other models) results with the run's
         ``status`` in ``attrs``.
     """
-    from .core.scene import model_module
+    from .core.scene import load_scene, model_module
 
     if not hasattr(scene, "model"):
         scene = load_scene(scene)
@@ -51,7 +79,18 @@ def simulate(scene, solver: str | None = None, **options: Any):
 
 
 def load_fit(path):
-    """Read a results file written by ``escfit fit`` (see :func:`escfit.results.load_fit`)."""
+    """Read a results file written by ``escfit fit`` or :func:`fit`.
+
+    Parameters
+    ----------
+    path
+        The results file (HDF5).
+
+    Returns
+    -------
+    escfit.results.FitResult
+        See :func:`escfit.results.load_fit`.
+    """
     from .results import load_fit as _load
 
     return _load(path)

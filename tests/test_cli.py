@@ -59,7 +59,12 @@ def test_fit_recipe_summary_and_reports(tmp_path, monkeypatch):
     assert r.exit_code == 0, r.output
     assert (tmp_path / "monday_unit4.h5").exists() and (tmp_path / "u4.html").exists()
     html = (tmp_path / "u4.html").read_text()
-    assert "data:image/png;base64," in html and "coulomb.R[load=165.33]" in html and "R-hat" in html
+    assert "data:image/png;base64," in html and "coulomb.R[load=165.33 g]" in html and "R-hat" in html
+    import html as html_module
+    import tomllib
+
+    title = tomllib.loads((ROOT / "fits" / "monday_unit4.toml").read_text())["title"]
+    assert f"<h1>{html_module.escape(title)}</h1>" in html  # the recipe's title, kept with the fit
     s = json.loads(run("summary", "monday_unit4.h5", "--json").output)
     assert s["parameters"]["viscous.C"]["unit"] == "1/s"
     assert set(s["parameters"]["viscous.C"]) >= {"median", "lo95", "hi95", "unit"}
@@ -74,7 +79,7 @@ def test_fit_leastsq_on_data_with_scene(tmp_path):
     r = run("fit", DATASETS / "monday1965" / "synthetic" / "unit1.csv", "--scene",
             DATASETS / "monday1965" / "unit1_fit.toml", "--out", out)
     assert r.exit_code == 0, r.output
-    assert "coulomb.R[load=330.66]" in r.output
+    assert "coulomb.R[load=330.66 g]" in r.output
 
 
 def test_fit_rig_and_summary(tmp_path):
@@ -146,3 +151,22 @@ def test_balance_emcee_run_interrupted_and_resumed_from_the_command_line(tmp_pat
     for name in a.parameter_names:
         np.testing.assert_array_equal(a.group("posterior")[name].values, b.group("posterior")[name].values)
     assert not Path(f"{out}.emcee").exists()
+
+
+def test_simulate_records_nearest_mark_notch_readings(tmp_path):
+    # 6-degree notches read at the nearest mark against marks counted: every reading n differs by
+    # floor(A/d + 1/2) - floor(A/d), 0 or 1, and the two recordings of one seed share their amplitudes
+    scene = DATASETS / "scenes" / "monday_sample_angle.toml"
+    outs = {}
+    for reading in ("counted", "nearest"):
+        out = tmp_path / f"{reading}.csv"
+        r = run("simulate", scene, "--recorder", "unit-curve", "--notch-deg", "6", "--notch-reading", reading,
+                "--noise", "0", "--out", out)
+        assert r.exit_code == 0, r.output
+        rows = [line.split(",") for line in out.read_text().splitlines() if line and not line.startswith("#")]
+        col = rows[0].index("notches")
+        outs[reading] = np.array([float(row[col]) for row in rows[1:]])
+    diff = outs["nearest"] - outs["counted"]
+    assert set(np.unique(diff)) <= {0.0, 1.0} and 0 < diff.sum() < diff.size
+    bad = run("simulate", scene, "--recorder", "unit-curve", "--notch-reading", "nearest", "--out", tmp_path / "x.csv")
+    assert bad.exit_code == 2 and "--notch-deg" in bad.output and not (tmp_path / "x.csv").exists()

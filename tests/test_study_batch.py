@@ -64,10 +64,10 @@ def test_failed_unit_is_reported_and_the_others_are_fitted(split_files, tmp_path
     assert list(s["status"].values) == ["ok", "ok", "ok", "failed"]
     assert "load column" in str(s["error"].sel(unit="noload").values)
     assert set(s["parameter"].values) >= {"viscous.C", "coulomb.R", "escapement[2].X", "fit.kappa"}
-    assert np.isnan(s["median"].sel(unit="noload")).all()
+    assert np.isnan(s["estimate"].sel(unit="noload")).all()
     truth = load_fleet(FLEET).truth
     for u in ("u01", "u02", "u03"):
-        c = float(s["median"].sel(unit=u, parameter="viscous.C"))
+        c = float(s["estimate"].sel(unit=u, parameter="viscous.C"))
         assert c == pytest.approx(truth[u]["viscous.C"], rel=0.5)
         res = load_fit(out / f"{u}.h5")
         assert res.attrs["seed"] == unit_seed(0, u)
@@ -89,7 +89,7 @@ def test_failed_unit_is_reported_and_the_others_are_fitted(split_files, tmp_path
     third = fit_many(split_files / "pair.csv", SCENE, out, scheduler=lazy)
     assert third.skipped == ["u01", "u02"] and not third.fitted and not lazy.started
     assert list(third.summary["status"].values) == ["skipped", "skipped"]
-    np.testing.assert_array_equal(third.summary["median"].values, again.summary["median"].values[:2])
+    np.testing.assert_array_equal(third.summary["estimate"].values, again.summary["estimate"].values[:2])
 
 
 def test_results_of_another_scene_or_method_are_not_taken_as_done(split_files, tmp_path):
@@ -121,7 +121,7 @@ def test_local_cluster_matches_in_process(split_files, tmp_path):
     finally:
         lazy.close()
     assert b.ok and "LocalCluster(2 processes" in b.summary.attrs["runner"]
-    np.testing.assert_allclose(a.summary["median"].values, b.summary["median"].values, rtol=1e-10)
+    np.testing.assert_allclose(a.summary["estimate"].values, b.summary["estimate"].values, rtol=1e-10)
     n = worker_threads(2)
     assert len(threads) == 2 and all(t == (n, n, str(n)) for t in threads.values())
     assert n == 1 or 2 * n <= len(os.sched_getaffinity(0))
@@ -183,7 +183,7 @@ def test_summary_records_settings_and_versions(split_files, tmp_path):
     assert s.attrs["schema_version"] == "escfit-fleet-summary/1" and s.attrs["seed"] == 7
     assert json.loads(s.attrs["settings"])["n_starts"] == 2
     assert "escfit" in json.loads(s.attrs["versions"])
-    assert s["median"].dims == ("unit", "parameter") and s.sizes["unit"] == 1
+    assert s["estimate"].dims == ("unit", "parameter") and s.sizes["unit"] == 1
 
 
 # --- any model family: a folder of recording files, each read by the family on the worker -------
@@ -252,7 +252,7 @@ def test_fit_many_over_a_folder_equals_single_fits(case, request, tmp_path):
         row = ref.summary()
         names = list(row)
         assert list(s["parameter"].values) == names
-        for stat in ("median", "lo95", "hi95"):
+        for stat in ("estimate", "lo95", "hi95"):
             np.testing.assert_allclose(s[stat].sel(unit=u).values, [row[n][stat] for n in names], rtol=1e-10)
         assert int(s["n_data"].sel(unit=u)) == ref.group("least_squares").attrs["n_data"]
         # provenance names the client's file (not the worker's temporary copy), with its hash
@@ -264,7 +264,7 @@ def test_fit_many_over_a_folder_equals_single_fits(case, request, tmp_path):
     # a rerun skips both (reading only their results files) and rebuilds the same summary
     again = fit_many(folder, scene, out, workers=0, method="leastsq")
     assert again.skipped == units and not again.fitted
-    np.testing.assert_array_equal(again.summary["median"].values, s["median"].values)
+    np.testing.assert_array_equal(again.summary["estimate"].values, s["estimate"].values)
 
 
 def test_a_folder_of_unit_curve_files_keeps_the_unit_column(split_files, tmp_path):

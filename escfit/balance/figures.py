@@ -1,128 +1,218 @@
 """Report figures of balance fits, drawn from a saved results file (amplitudes, notches, waveforms, times).
 
 Each function takes a saved fit (anything with ``group(name)`` and ``attrs``, e.g.
-:class:`escfit.results.FitResult`) and returns PNG bytes; the report builder calls
-:func:`figures` through the balance family's registry entry.
+:class:`escfit.results.FitResult`) and returns captioned PNG bytes; the report builder calls
+:func:`figures` through the balance family's registry entry.  Angles are drawn in degrees,
+times of beats as residuals in milliseconds; one colour per curve (load) in every panel.
 """
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
 
-from ..core.figures import png, pyplot
+from ..core.display import RAD_TO_DEG, curve_label, load_unit
+from ..core.figures import LEGEND_PT, fit_figure, png, pyplot
 
 __all__ = ["figures"]
 
 
 def figures(res) -> dict[str, bytes]:
-    """The data-versus-model figure of a balance fit, by the kind of its readings."""
+    """The data-versus-model figure(s) of a balance fit, by the kind of its readings."""
     if "expected" not in res.group("least_squares"):
         return {}
     plt = pyplot()
     kind = res.attrs.get("data_kind", "amplitude")
     if kind == "timeseries":
-        return {"data and fit": _waveform_figure(res, plt)}
-    draw = _data_figure if kind in ("amplitude", "notches") else _residual_figure
-    return {"data and fit": draw(res, plt)}
+        out = {"data and fit": _waveform_figure(res, plt)}
+        envelope = _envelope_figure(res, plt)
+        if envelope is not None:
+            out["amplitude per swing"] = envelope
+        return out
+    if kind in ("amplitude", "notches"):
+        return {"data and fit": _amplitude_figure(res, plt)}
+    if kind == "timegrapher":
+        out = {}
+        curves = res.group("observed_data")["curve"].values.astype(str)
+        if "amplitude" in curves:
+            out["data and fit"] = _timegrapher_amplitudes(res, plt)
+        if (curves != "amplitude").any():
+            out["beat times"] = _residual_figure(res, plt, only=[c for c in dict.fromkeys(curves) if c != "amplitude"])
+        return out
+    return {"data and fit": _residual_figure(res, plt)}
 
 
-def _data_figure(res, plt) -> bytes:
-    obs = res.group("observed_data")
-    lsq = res.group("least_squares")
+def _band(res, n: int):
+    """The 95 % posterior band of the expected readings, or None without a posterior."""
     pp = res.group("posterior_predictive")
-    kind = res.attrs.get("data_kind", "amplitude")
+    if pp is None:
+        return None
+    e = pp["expected"].values.reshape(-1, n)
+    e = e[np.all(np.isfinite(e), axis=1)]
+    if not e.size:
+        return None
+    return np.quantile(e, [0.025, 0.975], axis=0)
+
+
+def _names(res, curves) -> dict[str, str]:
+    loads_in = load_unit(json.loads(res.attrs.get("meanings", "{}") or "{}"))
+    return {c: curve_label(c, loads_in) for c in dict.fromkeys(curves)}
+
+
+def _amplitude_figure(res, plt) -> bytes:
+    """Amplitude (or notch) readings per half swing against the model, in degrees."""
+    obs = res.group("observed_data")
+    model = res.group("least_squares")["expected"].values.astype(float)
     y = obs["reading"].values.astype(float)
-    swing = obs["swing"].values
-    curves = obs["curve"].values
-    fig, (ax, axr) = plt.subplots(2, 1, figsize=(8, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1]})
-    for label in dict.fromkeys(curves):
-        m = curves == label
-        if pp is not None:
-            e = pp["expected"].values.reshape(-1, y.size)[:, m]
-            e = e[np.all(np.isfinite(e), axis=1)]
-            if e.size:
-                lo, med, hi = np.quantile(e, [0.025, 0.5, 0.975], axis=0)
-                ax.fill_between(swing[m], lo, hi, alpha=0.3, label=f"95% posterior band {label}")
-                ax.plot(swing[m], med, "-", lw=1)
-        ax.plot(swing[m], lsq["expected"].values[m], "--", lw=1, label=f"least squares {label}")
-        yy = y[m] if kind == "amplitude" else None
-        if yy is not None:
-            ax.plot(swing[m], yy, "o", ms=4, label=f"data {label}")
-            axr.plot(swing[m], yy - lsq["expected"].values[m], "o", ms=4)
-    if kind == "notches":
-        scene_notch = _notch_from_scene(res)
-        for label in dict.fromkeys(curves):
-            m = curves == label
-            ax.errorbar(swing[m], (y[m] + 0.5) * scene_notch, yerr=0.5 * scene_notch, fmt="o", ms=4,
-                        label=f"notch readings {label}")
-            axr.plot(swing[m], (y[m] + 0.5) * scene_notch - lsq["expected"].values[m], "o", ms=4)
-    ax.set_ylabel("amplitude reading (rad)")
-    ax.legend(fontsize=7)
-    axr.axhline(0, color="k", lw=0.5)
-    axr.set_xlabel("half swing")
-    axr.set_ylabel("residual (rad)")
-    return png(fig)
+    curves = obs["curve"].values.astype(str)
+    band = _band(res, y.size)
+    k = RAD_TO_DEG
+    if res.attrs.get("data_kind") == "notches":
+        notch = _notch_from_scene(res)
+        shown, yerr = (y + 0.5) * notch * k, 0.5 * notch * k
+        caption = (f"Notch readings: a count n says the amplitude lay between n and n+1 notches of "
+                   f"{notch * k:.3g} deg (the notch interval); the marker sits at its middle and the error bar "
+                   "spans it. Lines: the model's amplitude at the least-squares best fit")
+        key, err = "notch readings", f"notch interval, {notch * k:.3g} deg"
+    else:
+        shown, yerr = y * k, None
+        caption = "Amplitude readings against the model's amplitude at the least-squares best fit"
+        key, err = "amplitude readings", ""
+    caption += ("; shaded: 95 % band of the model over the posterior draws" if band is not None else "") + \
+        ". Lower panel: reading minus best fit. One colour per curve (load) in both panels."
+    fig = fit_figure(plt, x=obs["swing"].values, y=shown, model=model * k, curves=curves,
+                     band=None if band is None else (band[0] * k, band[1] * k), yerr=yerr,
+                     names=_names(res, curves), xlabel="half swing (count from release)",
+                     ylabel="amplitude (deg)", reading_key=key, error_key=err)
+    return png(fig, caption=caption)
+
+
+def _timegrapher_amplitudes(res, plt) -> bytes:
+    """The timegrapher's amplitude readings (already in degrees) against the model."""
+    obs = res.group("observed_data")
+    m = obs["curve"].values.astype(str) == "amplitude"
+    y = obs["reading"].values.astype(float)
+    model = res.group("least_squares")["expected"].values.astype(float)
+    band = _band(res, y.size)
+    lift = _lift_angle_deg(res)
+    fig = fit_figure(plt, x=obs["swing"].values[m], y=y[m], model=model[m], curves=obs["curve"].values[m],
+                     band=None if band is None else (band[0][m], band[1][m]), names={"amplitude": "amplitude"},
+                     xlabel="half swing (count from release)", ylabel="amplitude shown by the timegrapher (deg)",
+                     reading_key="timegrapher amplitude readings", figsize=(9.0, 5.2))
+    caption = ("Amplitudes the timegrapher displayed, computed by the instrument from the beat's duration and its "
+               "lift-angle setting" + (f" ({lift})" if lift else "") + "; line: the model's displayed amplitude at "
+               "the least-squares best fit" + ("; shaded: 95 % posterior band" if band is not None else "")
+               + ". Lower panel: reading minus best fit.")
+    return png(fig, caption=caption)
+
+
+def _lift_angle_deg(res) -> str:
+    lsq = res.group("least_squares")
+    if "observation.lift_angle" in list(lsq["parameter"].values):
+        return f"fitted true lift angle {float(lsq['value'].sel(parameter='observation.lift_angle')) * RAD_TO_DEG:.4g} deg"
+    return ""
 
 
 def _waveform_figure(res, plt) -> bytes:
     """Every sample against time with the model's theta(t), and the residuals below (deg)."""
     obs = res.group("observed_data")
     lsq_exp = res.group("least_squares")["expected"].values
-    pp = res.group("posterior_predictive")
     t = obs["time"].values
-    k = 180.0 / np.pi
+    k = RAD_TO_DEG
     y = obs["reading"].values.astype(float)
-    fig, (ax, axr) = plt.subplots(2, 1, figsize=(9, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
-    ms = 3 if y.size < 500 else 1.2
-    ax.plot(t, k * y, "o", ms=ms, color="0.45", label="recording (every sample fitted)")
-    ax.plot(t, k * lsq_exp, "-", lw=1, color="C3", label="model at the least-squares fit")
-    if pp is not None:
-        e = pp["expected"].values.reshape(-1, y.size)
-        e = e[np.all(np.isfinite(e), axis=1)]
-        if e.size:
-            lo, hi = np.quantile(e - lsq_exp, [0.025, 0.975], axis=0)
-            axr.fill_between(t, k * lo, k * hi, alpha=0.3, color="C3", label="95 % posterior band of the model")
-    axr.plot(t, k * (y - lsq_exp), "o", ms=ms, color="C0", label="recording - model")
-    axr.axhline(0, color="k", lw=0.5)
-    ax.set_ylabel("angle reading (deg)")
-    axr.set_ylabel("residual (deg)")
+    band = _band(res, y.size)
+    fig, (ax, axr) = plt.subplots(2, 1, figsize=(9, 6), sharex=True, layout="constrained",
+                                  gridspec_kw={"height_ratios": [3, 1.3]})
+    ms = 3 if y.size < 500 else 1.5
+    ax.plot(t, k * y, "o", ms=ms, color="C0", mfc="none", label="recorded angle (every sample fitted)")
+    ax.plot(t, k * lsq_exp, "-", lw=0.9, color="C3", label="model theta(t), best fit")
+    if band is not None:
+        axr.fill_between(t, k * (band[0] - lsq_exp), k * (band[1] - lsq_exp), alpha=0.3, color="C3",
+                         label="95 % posterior band of the model")
+    axr.plot(t, k * (y - lsq_exp), "o", ms=ms, color="C0", mfc="none", label="recording - best fit")
+    axr.axhline(0, color="k", lw=0.6)
+    ax.set_ylabel("angle from the centre (deg)")
+    axr.set_ylabel("reading - best fit (deg)")
     axr.set_xlabel("time on the recording's clock (s)")
-    ax.legend(fontsize=8, loc="upper right")
-    axr.legend(fontsize=8, loc="upper right")
-    return png(fig)
+    for a in (ax, axr):
+        a.tick_params(labelsize=LEGEND_PT)
+        a.grid(alpha=0.25)
+    ax.legend(fontsize=LEGEND_PT, loc="upper right")
+    if band is not None:
+        axr.legend(fontsize=LEGEND_PT, loc="upper right")
+    caption = ("The recorded angle of every sample (blue circles) and the model's theta(t) at the least-squares best "
+               "fit (red line), in degrees from the fitted centre. Lower panel: recording minus model; a pattern "
+               "that repeats each swing points at a missing effect, a slow trend at the centre's drift.")
+    return png(fig, caption=caption)
 
 
-def _residual_figure(res, plt) -> bytes:
-    """Recordings whose readings are times or instrument values: residuals per reading series.
+def _envelope_figure(res, plt):
+    """Amplitude of every half swing of a sampled waveform, recording and model, in degrees.
+
+    The half swings are cut where the model changes sign; in each, the largest distance of the
+    samples and of the model from the sensor's zero is the amplitude (alternate half swings
+    differ by twice the centre's offset).
+    """
+    obs = res.group("observed_data")
+    model = res.group("least_squares")["expected"].values.astype(float)
+    y = obs["reading"].values.astype(float)
+    t = obs["time"].values.astype(float)
+    cuts = np.flatnonzero(np.signbit(model[1:]) != np.signbit(model[:-1])) + 1
+    if cuts.size < 3:
+        return None
+    pieces = [(a, b) for a, b in zip(cuts[:-1], cuts[1:]) if b - a >= 3]
+    times = np.array([t[np.argmax(np.abs(model[a:b])) + a] for a, b in pieces])
+    amp_y = RAD_TO_DEG * np.array([np.max(np.abs(y[a:b])) for a, b in pieces])
+    amp_m = RAD_TO_DEG * np.array([np.max(np.abs(model[a:b])) for a, b in pieces])
+    fig = fit_figure(plt, x=times, y=amp_y, model=amp_m, curves=np.full(times.size, "amplitude"),
+                     xlabel="time on the recording's clock (s)", ylabel="amplitude of the half swing (deg)",
+                     reading_key="largest recorded angle in the half swing", figsize=(9.0, 5.0))
+    caption = ("Amplitude of every half swing: the largest recorded angle (circles) and the model's (line, "
+               "least-squares best fit), in degrees from the sensor's zero, so alternate half swings differ by twice "
+               "the centre's offset. The decay's shape tells the "
+               "damping: exponential for viscous drag, a straight line for dry (Coulomb) friction. Samples are "
+               "discrete, so a recorded peak may fall a little short of the true turning point.")
+    return png(fig, caption=caption)
+
+
+def _residual_figure(res, plt, only=None) -> bytes:
+    """Readings that are times or instrument values: residuals per reading series.
 
     Passage times and beat times grow through the run, so the informative picture is the data
     minus the least-squares prediction, with the posterior band of the prediction around it.
+    Times are shown in milliseconds.
     """
     obs = res.group("observed_data")
     lsq_exp = res.group("least_squares")["expected"].values
-    pp = res.group("posterior_predictive")
     y = obs["reading"].values.astype(float)
-    swing, curves = obs["swing"].values, obs["curve"].values
+    swing, curves = obs["swing"].values, obs["curve"].values.astype(str)
     units = obs["reading"].attrs.get("units", "")
-    labels = list(dict.fromkeys(curves))
-    fig, axes = plt.subplots(len(labels), 1, figsize=(8, 2.8 * len(labels) + 0.8), squeeze=False)
+    band = _band(res, y.size)
+    labels = only or list(dict.fromkeys(curves))
+    colours = {lab: f"C{k % 10}" for k, lab in enumerate(dict.fromkeys(curves))}
+    fig, axes = plt.subplots(len(labels), 1, figsize=(9, 2.6 * len(labels) + 0.9), squeeze=False, layout="constrained")
+    timed = units.strip() == "s" or "s (" in units or units.endswith("s (beats)")
     for ax, label in zip(axes[:, 0], labels):
         m = curves == label
-        if pp is not None:
-            e = pp["expected"].values.reshape(-1, y.size)[:, m]
-            e = e[np.all(np.isfinite(e), axis=1)]
-            if e.size:
-                lo, hi = np.quantile(e - lsq_exp[m], [0.025, 0.975], axis=0)
-                ax.fill_between(swing[m], lo, hi, alpha=0.3, step="mid", label="95% posterior band of the prediction")
-        ax.plot(swing[m], y[m] - lsq_exp[m], ".", ms=3, label="data")
-        ax.axhline(0, color="k", lw=0.5)
-        ax.set_ylabel(f"{label}: data - fit")
-        ax.legend(fontsize=7)
-    axes[-1, 0].set_xlabel("half swing")
-    fig.suptitle(f"residuals against the least-squares prediction (readings in {units})", fontsize=9)
-    return png(fig)
+        scale, unit = (1e3, "ms") if (timed and label != "amplitude") else (1.0, units)
+        if band is not None:
+            ax.fill_between(swing[m], scale * (band[0][m] - lsq_exp[m]), scale * (band[1][m] - lsq_exp[m]), alpha=0.3,
+                            step="mid", color=colours[label], label="95 % posterior band of the prediction")
+        ax.plot(swing[m], scale * (y[m] - lsq_exp[m]), "o", ms=3.5, mfc="white", color=colours[label],
+                label=f"{label}: reading - best fit")
+        ax.axhline(0, color="k", lw=0.6)
+        ax.set_ylabel(f"{label} - best fit ({unit})", fontsize=LEGEND_PT)
+        ax.tick_params(labelsize=LEGEND_PT)
+        ax.grid(alpha=0.25)
+        ax.legend(fontsize=LEGEND_PT, loc="upper right")
+    axes[-1, 0].set_xlabel("half swing (count from release)")
+    caption = ("Times and instrument readings grow through the run, so each series is drawn as the reading minus "
+               "the model's prediction at the least-squares best fit" + (" with the 95 % posterior band of the "
+               "prediction" if band is not None else "") + "; times in milliseconds. A drift means a missing "
+               "effect or a wrong rate; scatter of a fraction of a millisecond is the instrument's resolution.")
+    return png(fig, caption=caption)
 
 
 def _notch_from_scene(res) -> float:
@@ -131,5 +221,3 @@ def _notch_from_scene(res) -> float:
     doc = tomllib.loads(res.attrs["scene"])
     nd = doc.get("observation", {}).get("notch_deg", 6.0)
     return math.radians(float(nd))
-
-

@@ -11,7 +11,7 @@ from ..core.params import Param, ParamSet, read_param
 from ..core.scene import check_keys
 from ..core.units import BARE_ANGLE_LIMIT, to_canonical
 from .effects import EFFECTS
-from .effects.base import ReadContext, SystemBuilder
+from .effects.base import OMEGA0_RANGE, ReadContext, SystemBuilder
 
 __all__ = ["BalanceScene", "parse", "TOP_KEYS"]
 
@@ -173,8 +173,8 @@ def _read_omega0(osc: Mapping, inertia: float | None, where: str) -> Param:
     if "omega0" in osc:
         if "stiffness" in osc:
             raise SceneError("give 'omega0' or 'stiffness' (with inertia), not both", where)
-        return read_param(osc["omega0"], name="oscillator.omega0", kind="rate_per_s", lower=0.0, lower_open=True,
-                          meaning=meaning, where=f"{where}.omega0")
+        return read_param(osc["omega0"], name="oscillator.omega0", kind="rate_per_s", lower=OMEGA0_RANGE[0],
+                          upper=OMEGA0_RANGE[1], meaning=meaning, where=f"{where}.omega0")
     if "stiffness" not in osc:
         raise SceneError("give 'omega0' (rad/s) or 'stiffness' with 'inertia'", where)
     if inertia is None:

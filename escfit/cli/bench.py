@@ -6,6 +6,11 @@ versus CPU time per half swing, for the exact solver, RK4 with and without event
 and scipy's solve_ivp), the throughput of the batch path, and the time of a 4-parameter
 posterior (``benchmarks/posterior_speed.py``).  Prints a table and the three speed ratios
 that docs/performance.md quotes, or with ``--json`` one record per method and setting.
+
+The records and the plot go to a new folder ``bench-YYYYmmdd-HHMMSS/`` of the current
+directory (``work_precision.json``, ``work_precision.png``), or where ``--out-dir``,
+``--plot`` or ``--json-out`` say; existing files are replaced only with ``--force``, so a
+run never overwrites the results kept in ``benchmarks/results/`` unless told to.
 """
 
 from __future__ import annotations
@@ -16,6 +21,7 @@ import os
 import sys
 import time
 from dataclasses import asdict
+from datetime import datetime
 from pathlib import Path
 
 import click
@@ -23,6 +29,33 @@ import click
 __all__ = ["bench"]
 
 BENCHMARKS = Path(__file__).resolve().parents[2] / "benchmarks"
+JSON_NAME, PLOT_NAME = "work_precision.json", "work_precision.png"
+
+
+def new_run_folder(parent: str | Path = ".", *, now: datetime | None = None) -> Path:
+    """A folder ``bench-YYYYmmdd-HHMMSS`` under ``parent`` that did not exist (``-2``, ``-3``, ...
+    appended when one of that second does); not created."""
+    stamp = (now or datetime.now()).strftime("%Y%m%d-%H%M%S")
+    base = Path(parent) / f"bench-{stamp}"
+    folder, k = base, 1
+    while folder.exists():
+        k += 1
+        folder = base.with_name(f"{base.name}-{k}")
+    return folder
+
+
+def output_paths(out_dir: str | None, plot_path: str | None, json_path: str | None, *,
+                 plot: bool = True) -> tuple[Path | None, Path | None, Path | None]:
+    """Where ``escfit bench`` writes: ``(folder to create, plot file, JSON file)``.
+
+    Explicit ``--plot`` / ``--json-out`` files are used as given (and nothing else is
+    written); otherwise both go to ``out_dir``, by default a new :func:`new_run_folder`.
+    ``plot`` false (no matplotlib) leaves the default plot out.
+    """
+    if plot_path or json_path:
+        return None, Path(plot_path) if plot_path else None, Path(json_path) if json_path else None
+    folder = Path(out_dir) if out_dir else new_run_folder()
+    return folder, folder / PLOT_NAME if plot else None, folder / JSON_NAME
 
 
 def _load(name: str):
@@ -43,16 +76,30 @@ def _load(name: str):
               help="Write the work-precision plot (log-log T/2 error vs time per swing) to FILE.png.")
 @click.option("--json-out", "json_path", type=click.Path(dir_okay=False), default=None,
               help="Also write the JSON records to FILE (the table is still printed).")
-@click.option("--force", is_flag=True, help="Replace existing --plot and --json-out files.")
+@click.option("--out-dir", type=click.Path(file_okay=False), default=None, metavar="DIR",
+              help=f"Write {JSON_NAME} and {PLOT_NAME} into DIR (default: a new bench-YYYYmmdd-HHMMSS/ here; "
+                   "not used with --plot or --json-out).")
+@click.option("--force", is_flag=True, help="Replace existing output files.")
 @click.option("--posterior/--no-posterior", default=True, show_default=True,
               help="Also time the 4-parameter posterior (32 walkers x 5000 steps, 120 swings; cold numba cache).")
-def bench(quick, as_json, plot_path, json_path, force, posterior):
-    """Work-precision benchmark of the balance solvers and the speed targets."""
+def bench(quick, as_json, plot_path, json_path, out_dir, force, posterior):
+    """Work-precision benchmark of the balance solvers and the speed targets.
+
+    Results go to a new folder bench-YYYYmmdd-HHMMSS/ of the current directory unless
+    --out-dir, --plot or --json-out name another place; files are never replaced without
+    --force.
+    """
     from ..core.atomic import atomic_path, refuse_existing
 
+    has_matplotlib = importlib.util.find_spec("matplotlib") is not None
+    folder, plot_path, json_path = output_paths(out_dir, plot_path, json_path, plot=has_matplotlib)
     for path in (plot_path, json_path):
         if path:
             refuse_existing(path, force)
+            if folder is None and not path.parent.is_dir():  # refused now, not after the run
+                from ..core.errors import ResultsError
+
+                raise ResultsError("output directory does not exist", str(path.parent))
     try:
         import mpmath  # noqa: F401  (the 40-digit reference of the work-precision study)
     except ModuleNotFoundError:
@@ -76,6 +123,8 @@ def bench(quick, as_json, plot_path, json_path, force, posterior):
         records.append(wp.Record("posterior", "emcee, vectorised exact", f"{post['walkers']} walkers x {post['steps']} "
                                  f"steps, {post['swings']} swings", None, None, post["us_per_swing"], "wall", "ok",
                                  post["swings"], note))
+    if folder is not None:
+        folder.mkdir(parents=True, exist_ok=True)
     if plot_path:
         with atomic_path(plot_path, force=force) as tmp:
             wp.plot([r for r in records if r.case in ("horology", "monday120") and r.error_half_period_s is not None],
@@ -84,6 +133,9 @@ def bench(quick, as_json, plot_path, json_path, force, posterior):
     if json_path:
         with atomic_path(json_path, force=force) as tmp:
             Path(tmp).write_text(text + "\n")
+    for path in (json_path, plot_path):
+        if path:
+            click.echo(f"wrote {path}", err=True)
     if as_json:
         click.echo(text)
         return

@@ -1,15 +1,24 @@
 """The ``escfit`` command line.
 
 Exit status: 0 on success, 2 on bad input or usage (one line naming the file, key or value),
-1 on an internal error.  Output files are written atomically and never replaced without
-``--force``.
+1 on an internal error, 130 when interrupted (Ctrl-C) and 141 (128 + SIGPIPE, as the shell
+tools give) when the reader of the output went away, as ``head`` does: that exit is quiet.
+Output files are written atomically, readable as the umask allows, and never replaced
+without ``--force``.
+
+Third-party libraries' warnings (lmfit, numpy inside lmfit, arviz, xarray, dask, ...) are kept
+off the console unless ``--debug`` is given or ``PYTHONWARNINGS`` / ``-W`` asks for them;
+escfit's own warnings are shown.  Only click and escfit's errors and version are imported
+before a command runs, so that ``escfit -h`` answers at once.
 """
 
 from __future__ import annotations
 
 import json
+import os
 import sys
 import traceback
+import warnings
 from pathlib import Path
 
 import click
@@ -24,7 +33,56 @@ __all__ = ["main", "cli"]
 LAZY_COMMANDS = {
     "bench": "escfit.cli.bench:bench",
     "fit-many": "escfit.cli.study:fit_many",
+    "examples": "escfit.cli.examples:examples",
 }
+
+EXIT_INTERRUPTED = 130
+EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE: what a shell reports for `yes | head -1`
+
+# Modules whose warnings are kept off the console (see :func:`quiet_third_party_warnings`)
+THIRD_PARTY = ("lmfit", "numpy", "scipy", "arviz", "xarray", "dask", "distributed", "h5netcdf", "h5py", "emcee",
+               "numba", "pint", "matplotlib", "pandas", "tqdm", "jinja2", "asteval", "uncertainties")
+
+CONTEXT_SETTINGS = {"help_option_names": ["-h", "--help"]}
+
+
+def quiet_third_party_warnings(argv: list[str] | None = None) -> bool:
+    """Ignore warnings raised from third-party modules, unless asked for them.
+
+    Parameters
+    ----------
+    argv
+        The command line (default ``sys.argv[1:]``): ``--debug`` keeps every warning.
+
+    Returns
+    -------
+    bool
+        Whether filters were installed (not when ``--debug``, ``-W`` or ``PYTHONWARNINGS``
+        chose otherwise).
+    """
+    argv = sys.argv[1:] if argv is None else argv
+    if "--debug" in argv or sys.warnoptions or os.environ.get("PYTHONWARNINGS"):
+        return False
+    for module in THIRD_PARTY:
+        # a warning is attributed to the module of the frame it points at: numpy's
+        # RuntimeWarning in lmfit's code counts as lmfit's, one in escfit's code stays shown
+        warnings.filterwarnings("ignore", module=rf"{module}(\.|$)")
+    warnings.filterwarnings("ignore", category=FutureWarning, message=r"(?i).*arviz")
+    return True
+
+
+def _quiet_broken_pipe() -> None:
+    """The reader of stdout has gone (``escfit summary X.h5 | head``): leave quietly.
+
+    stdout is pointed at the null device so that the interpreter's last flush cannot fail
+    again, then the command exits with :data:`EXIT_BROKEN_PIPE`.
+    """
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):  # no file descriptor behind stdout (tests): nothing to protect
+        pass
+    raise click.exceptions.Exit(EXIT_BROKEN_PIPE)
 
 
 class _Group(click.Group):
@@ -54,6 +112,12 @@ class _Group(click.Group):
                 raise click.UsageError(f"command {name!r} is not available ({exc})") from None
         return cmd
 
+    def make_context(self, info_name, args, parent=None, **extra):
+        try:  # --help and --version print while the arguments are parsed
+            return super().make_context(info_name, args, parent=parent, **extra)
+        except BrokenPipeError:
+            _quiet_broken_pipe()
+
     def invoke(self, ctx):
         try:
             return super().invoke(ctx)
@@ -62,6 +126,11 @@ class _Group(click.Group):
             ctx.exit(2)
         except (click.exceptions.Exit, click.ClickException, click.exceptions.Abort):
             raise
+        except BrokenPipeError:
+            _quiet_broken_pipe()
+        except KeyboardInterrupt:  # commands with something to resume say so themselves
+            click.echo("escfit: interrupted", err=True)
+            ctx.exit(EXIT_INTERRUPTED)
         except Exception as exc:  # noqa: BLE001 - the last line of defence of a CLI
             click.echo(f"escfit: internal error: {type(exc).__name__}: {exc}", err=True)
             if "--debug" in sys.argv:
@@ -69,10 +138,15 @@ class _Group(click.Group):
             ctx.exit(1)
 
 
-@click.group(cls=_Group)
+@click.group(cls=_Group, context_settings=CONTEXT_SETTINGS)
 @click.version_option(__version__, prog_name="escfit")
-def cli() -> None:
-    """Identify the physical parameters of mechanical timekeeping oscillators."""
+@click.option("--debug", is_flag=True, help="Print the traceback of an internal error; show third-party warnings.")
+def cli(debug) -> None:
+    """Identify the physical parameters of mechanical timekeeping oscillators.
+
+    New here?  `escfit examples DIR` copies example recordings, scenes and fit recipes
+    into DIR and prints what to run next.
+    """
 
 
 @cli.command()
@@ -94,7 +168,10 @@ def cli() -> None:
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the recorder's noise.")
 @click.option("--notch-deg", type=click.FloatRange(0.0, min_open=True), default=None,
               help="unit-curve recorder: count notches of this angle (deg) instead of amplitudes.")
-def simulate(scene, solver, swings, step, as_json, out, force, recorder, noise, seed, notch_deg):
+@click.option("--notch-reading", type=click.Choice(["counted", "nearest"]), default=None,
+              help="unit-curve recorder with --notch-deg: marks passed (counted, the default) or the mark "
+                   "nearest the turning point.")
+def simulate(scene, solver, swings, step, as_json, out, force, recorder, noise, seed, notch_deg, notch_reading):
     """Simulate SCENE (a TOML scene file), or record it with a synthetic recorder."""
     from ..core.atomic import atomic_path, refuse_existing
     from ..core.scene import load_scene, model_module
@@ -103,7 +180,8 @@ def simulate(scene, solver, swings, step, as_json, out, force, recorder, noise, 
         refuse_existing(out, force)
     sc = load_scene(scene)
     if recorder is not None:
-        _record(sc, recorder, out, force=force, noise=noise, seed=seed, swings=swings, notch_deg=notch_deg)
+        _record(sc, recorder, out, force=force, noise=noise, seed=seed, swings=swings, notch_deg=notch_deg,
+                notch_reading=notch_reading)
         return
     module = model_module(sc.model)
     options = {}
@@ -121,7 +199,8 @@ def simulate(scene, solver, swings, step, as_json, out, force, recorder, noise, 
         click.echo(_describe(ds, sc))
 
 
-def _record(sc, recorder: str, out: str | None, *, force: bool, noise, seed: int, swings, notch_deg) -> None:
+def _record(sc, recorder: str, out: str | None, *, force: bool, noise, seed: int, swings, notch_deg,
+            notch_reading=None) -> None:
     """``simulate --recorder``: one synthetic recording, written atomically."""
     from ..core.atomic import atomic_path
     from ..core.errors import SceneError
@@ -136,6 +215,10 @@ def _record(sc, recorder: str, out: str | None, *, force: bool, noise, seed: int
         if recorder != "unit-curve":
             raise SceneError("--notch-deg applies to the unit-curve recorder only", sc.where)
         options["notch_deg"] = notch_deg
+    if notch_reading is not None:
+        if notch_deg is None:
+            raise SceneError("--notch-reading applies to notch counts: give --notch-deg too", sc.where)
+        options["notch_reading"] = notch_reading
     if recorder == "timegrapher":
         options["fmt"] = "csv" if str(out).lower().endswith(".csv") else "json"
     with atomic_path(out, force=force) as tmp:
@@ -307,7 +390,7 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoi
                                     max_steps=pick(max_steps, "max_steps", None),
                                     checkpoint_every=checkpoint_every, burn=pick(burn, "burn", None),
                                     resume=resume, progress=not quiet and sys.stderr.isatty(),
-                                    moves=pick(moves, "moves", None), **options)
+                                    moves=pick(moves, "moves", None), title=recipe.get("title"), **options)
     click.echo(f"wrote {out}")
     _print_summary(result)
     if report_path:
@@ -340,7 +423,7 @@ def _run_fit_interruptible(run_fit, *args, **kwargs):
                        "with --resume to continue (or --force to start again)", err=True)
         else:
             click.echo("escfit: interrupted; nothing was written", err=True)
-        sys.exit(130)
+        sys.exit(EXIT_INTERRUPTED)
 
 
 def _print_summary(result) -> None:
@@ -365,10 +448,28 @@ def _print_summary(result) -> None:
 
 
 @cli.command()
-@click.argument("results", type=click.Path(dir_okay=False))
+@click.argument("results", type=click.Path())
 @click.option("--json", "as_json", is_flag=True, help="Print the parameter table as JSON.")
-def summary(results, as_json):
-    """Print the parameter table of a saved fit."""
+@click.option("--csv", "as_csv", is_flag=True,
+              help="Print the table as CSV on stdout (redirect it to a file: escfit summary FIT.h5 --csv > fit.csv).")
+def summary(results, as_json, as_csv):
+    """Print the parameter table of a saved fit, or the per-unit table of a fleet.
+
+    RESULTS is a results file of `escfit fit`, or the summary.nc (or the results directory)
+    of `escfit fit-many`: one row per unit with its status and each parameter's estimate
+    and 95 % interval.
+
+    CSV columns of a fit: parameter, unit, estimate, estimate_kind (median or best fit),
+    lo68, hi68, lo95, hi95, rhat, ess_bulk (empty when absent).  Of a fleet: unit, status,
+    then <parameter>, <parameter>_lo95, <parameter>_hi95 per parameter, and error.
+    """
+    if as_json and as_csv:
+        raise click.UsageError("--json and --csv are alternatives: give one")
+    from ..study.fleet_table import is_fleet_summary
+
+    if is_fleet_summary(results):
+        _fleet_summary(results, as_json, as_csv)
+        return
     from ..results import load_fit
 
     res = load_fit(results)
@@ -379,8 +480,73 @@ def summary(results, as_json):
                                "model": a.get("model", "balance"), "method": a.get("method"),
                                "data_file": a.get("data_file"),
                                "schema_version": a.get("schema_version")})))
+    elif as_csv:
+        _echo_csv(*_fit_csv(res.summary()))
     else:
         _print_summary(res)
+
+
+FIT_CSV_COLUMNS = ("unit", "estimate", "estimate_kind", "lo68", "hi68", "lo95", "hi95", "rhat", "ess_bulk")
+
+
+def _fit_csv(rows: dict[str, dict]) -> tuple[list[str], list[list[str]]]:
+    """A fit's parameter table for CSV; rows without ``estimate`` (older files) give their median."""
+    head = ["parameter", *FIT_CSV_COLUMNS]
+    out = []
+    for name, r in rows.items():
+        r = dict(r)
+        if r.get("estimate") is None:
+            r["estimate"] = r.get("median", r.get("best_fit"))
+            r.setdefault("estimate_kind", "median" if "median" in r else "best fit")
+        out.append([name, *(_csv_cell(r.get(k)) for k in FIT_CSV_COLUMNS)])
+    return head, out
+
+
+def _csv_cell(value) -> str:
+    """Numbers at full precision, nothing for a missing or non-finite value."""
+    import math as _math
+
+    if value is None or (isinstance(value, float) and not _math.isfinite(value)):
+        return ""
+    return repr(float(value)) if isinstance(value, float) else str(value)
+
+
+def _echo_csv(head: list[str], rows: list[list[str]]) -> None:
+    import csv
+    import io
+
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(head)
+    writer.writerows(rows)
+    click.echo(buf.getvalue(), nl=False)
+
+
+def _fleet_summary(path: str, as_json: bool, as_csv: bool) -> None:
+    """``escfit summary`` of a fleet summary: the per-unit table."""
+    from ..study.fleet_table import fleet_csv, fleet_table, read_fleet_summary
+
+    ds = read_fleet_summary(path)
+    if as_csv:
+        _echo_csv(*fleet_csv(ds))
+        return
+    if as_json:
+        head, rows = fleet_csv(ds)
+        units = [dict(zip(head, r)) for r in rows]
+        for u in units:
+            for k, v in u.items():
+                if k not in ("unit", "status", "error"):
+                    u[k] = float(v) if v != "" else None
+        click.echo(json.dumps(_json_safe({"units": units, "schema_version": ds.attrs.get("schema_version"),
+                                          "model": ds.attrs.get("model"), "method": ds.attrs.get("method")})))
+        return
+    head, rows = fleet_table(ds)
+    widths = [max(len(h), *(len(r[i]) for r in rows)) if rows else len(h) for i, h in enumerate(head)]
+    click.echo("  ".join(h.ljust(w) for h, w in zip(head, widths)).rstrip())
+    for r in rows:
+        click.echo("  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip())
+    n_failed = int(ds.attrs.get("n_failed", 0))
+    click.echo(f"{int(ds.sizes['unit'])} unit(s), {n_failed} failed; estimate [95 % interval] per parameter")
 
 
 def _json_safe(obj):
@@ -427,6 +593,7 @@ def _describe(ds, sc) -> str:
 
 def main() -> None:
     """Console-script entry point."""
+    quiet_third_party_warnings()
     cli(prog_name="escfit")
 
 

@@ -2,17 +2,17 @@
 
 Exit status: 0 when every unit is fitted (or was done before), 3 when some units failed (the
 others are fitted and summarised; each failure is printed on stderr), 2 on bad input or when
-dask.distributed (the ``study`` extra) is missing.
+dask.distributed (the ``study`` extra) is missing, 130 when interrupted (Ctrl-C): the units
+fitted by then are kept, and the same command fits the rest.
 """
 
 from __future__ import annotations
 
-import math
 import sys
 
 import click
 
-from .main import StepsType
+from .main import EXIT_INTERRUPTED, StepsType
 
 __all__ = ["fit_many"]
 
@@ -53,9 +53,14 @@ def fit_many(ctx, data, scene_path, out_dir, method, scheduler, workers, seed, w
     """
     from ..study.batch import fit_many as run
 
-    res = run(list(data), scene_path, out_dir, method=method, scheduler=scheduler, workers=workers, seed=seed,
-              walkers=walkers, steps=steps, burn=burn, n_starts=n_starts, units=list(units) or None,
-              notch_deg=notch_deg, progress=not quiet)
+    try:
+        res = run(list(data), scene_path, out_dir, method=method, scheduler=scheduler, workers=workers, seed=seed,
+                  walkers=walkers, steps=steps, burn=burn, n_starts=n_starts, units=list(units) or None,
+                  notch_deg=notch_deg, progress=not quiet)
+    except KeyboardInterrupt:
+        click.echo(f"escfit fit-many: interrupted; the units fitted so far are saved in {out_dir}: run the same "
+                   "command again to fit the others (units with a results file are skipped)", err=True)
+        sys.exit(EXIT_INTERRUPTED)
     click.echo(format_summary(res.summary))
     click.echo(f"{len(res.fitted)} fitted, {len(res.skipped)} done before, {len(res.failed)} failed "
                f"in {res.elapsed:.1f} s; summary: {res.out_dir / 'summary.nc'}")
@@ -65,22 +70,17 @@ def fit_many(ctx, data, scene_path, out_dir, method, scheduler, workers, seed, w
 
 
 def format_summary(ds, *, max_params: int = 4) -> str:
-    """A fixed-width table: unit, status and median [95 % interval] of the first parameters."""
-    params = [str(p) for p in ds["parameter"].values][:max_params]
-    head = ["unit", "status", *params]
-    rows = []
-    for i, unit in enumerate(ds["unit"].values):
-        row = [str(unit), str(ds["status"].values[i])]
-        for j in range(len(params)):
-            m, lo, hi = (float(ds[k].values[i, j]) for k in ("median", "lo95", "hi95"))
-            row.append("-" if math.isnan(m) else f"{m:.4g} [{lo:.4g}, {hi:.4g}]")
-        rows.append(row)
+    """A fixed-width table: unit, status and estimate [95 % interval] of the first parameters."""
+    from ..study.fleet_table import fleet_table
+
+    head, rows = fleet_table(ds, max_params=max_params)
     widths = [max(len(h), *(len(r[k]) for r in rows)) if rows else len(h) for k, h in enumerate(head)]
     lines = ["  ".join(h.ljust(w) for h, w in zip(head, widths))]
     lines += ["  ".join(c.ljust(w) for c, w in zip(r, widths)) for r in rows]
-    more = len(ds["parameter"]) - len(params)
+    more = len(ds["parameter"]) - (len(head) - 2)
     if more > 0:
-        lines.append(f"(+{more} more parameter(s) in summary.nc: {', '.join(map(str, ds['parameter'].values[len(params):]))})")
+        lines.append(f"(+{more} more parameter(s) in summary.nc: {', '.join(map(str, ds['parameter'].values[len(head) - 2:]))};"
+                     " escfit summary shows them all)")
     return "\n".join(lines)
 
 

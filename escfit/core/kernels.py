@@ -24,6 +24,12 @@ numba picks for the function (``__pycache__``, ``NUMBA_CACHE_DIR`` or the user-w
 directory, unchanged) is wrapped so that its source stamp includes the fingerprint.
 ``tests/test_kernel_cache.py`` checks that an edit of a helper module recompiles a kernel
 of another module that calls it, and that plain ``numba.njit(cache=True)`` does not.
+
+Compiling the larger kernels takes minutes on a first run (a fresh install, an upgrade, a
+new machine or ``NUMBA_CACHE_DIR``), so the first time in a process that a cached kernel
+finds no usable cache entry one line says so on stderr when that is a terminal
+(:func:`notice_compilation`); warm runs print nothing, and neither do runs whose stderr is
+captured (scripts, logs, tests).  ``ESCFIT_QUIET_COMPILE=1`` silences it.
 """
 
 from __future__ import annotations
@@ -33,6 +39,7 @@ import functools
 import hashlib
 import inspect
 import os
+import sys
 import weakref
 from pathlib import Path
 from typing import Any, Callable, Iterable
@@ -40,7 +47,7 @@ from typing import Any, Callable, Iterable
 import numba
 from numba.core import caching
 
-__all__ = ["kernel", "kernel_sources"]
+__all__ = ["kernel", "kernel_sources", "notice_compilation"]
 
 # py_func -> (files hashed, fingerprint); read by the cache implementation when numba builds it
 _SOURCES: "weakref.WeakKeyDictionary[Callable, tuple[tuple[Path, ...], str]]" = weakref.WeakKeyDictionary()
@@ -179,10 +186,65 @@ class _KernelCacheImpl(caching.CompileResultCacheImpl):
         self._locator = _FingerprintLocator(self._locator, _SOURCES[py_func][1])
 
 
+# Whether this process has said that it compiles kernels (said once per process)
+_NOTICE_GIVEN = False
+
+# The families whose kernels take long to compile, by top-level subpackage
+_WHAT = {"verge": "the verge integrator", "geneva": "the Geneva drive integrator",
+         "balance": "the balance-wheel solvers", "friction": "the friction-rig model"}
+
+
+def notice_compilation(py_func: Callable, *, stream=None) -> bool:
+    """Say once per process, on stderr, that kernels are being compiled for this machine.
+
+    Called when a cached kernel has no usable cache entry for a signature, that is when
+    numba is about to compile it; later calls in the same process say nothing.
+
+    Parameters
+    ----------
+    py_func
+        The Python function of the kernel about to be compiled (names the family).
+    stream
+        Where to write.  Default ``sys.stderr``, and only when it is a terminal: the line is
+        for someone waiting, and must not end up in output a program reads.
+
+    Returns
+    -------
+    bool
+        Whether the line was written.
+    """
+    global _NOTICE_GIVEN
+    if _NOTICE_GIVEN or os.environ.get("ESCFIT_QUIET_COMPILE", "") not in ("", "0"):
+        return False
+    if stream is None:
+        stream = sys.stderr
+        try:
+            if stream is None or not stream.isatty():
+                return False
+        except (AttributeError, ValueError):  # replaced or closed stderr
+            return False
+    _NOTICE_GIVEN = True
+    parts = str(getattr(py_func, "__module__", "") or "").split(".")
+    what = _WHAT.get(parts[1] if len(parts) > 1 else "", "numerical kernels")
+    try:
+        stream.write(f"escfit: compiling {what} for this machine (first run only, up to a few minutes)\n")
+        stream.flush()
+    except (OSError, ValueError):  # no usable stderr (closed, or a pipe whose reader left)
+        pass
+    return True
+
+
 class _KernelCache(caching.FunctionCache):
     """numba's per-function cache (compile results) stamped with the kernel's fingerprint."""
 
     _impl_class = _KernelCacheImpl
+
+    def load_overload(self, sig, target_context):
+        """numba's cache lookup; a miss means numba compiles next, which is announced."""
+        data = super().load_overload(sig, target_context)
+        if data is None:
+            notice_compilation(self._py_func)
+        return data
 
 
 def kernel(func: Callable | None = None, /, *, sources=(), cache: bool = True, **options: Any):

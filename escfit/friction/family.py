@@ -99,8 +99,10 @@ class RigFamily:
         return RigProblem(sc, data, sha256=sha, material=material)
 
     def figures(self, result) -> dict[str, bytes]:
-        """None of its own: the generic report draws dw against the load with the model."""
-        return {}
+        """The readings dw against the load per sliding speed, with the model (:mod:`escfit.friction.figures`)."""
+        from .figures import figures
+
+        return figures(result)
 
 
 FAMILY = RigFamily()

@@ -37,7 +37,8 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
         walkers: int | None = None, steps: int | str | None = None, burn: int | None = None,
         n_starts: int | None = None, resume: bool = False, progress: bool = False,
         checkpoint: str | Path | None = None, predictive_draws: int | None = None, moves: str | None = None,
-        max_steps: int | None = None, checkpoint_every: float = 10.0, **options) -> FitResult:
+        max_steps: int | None = None, checkpoint_every: float = 10.0, title: str | None = None,
+        **options) -> FitResult:
     """Fit a scene of any model family to a recording.
 
     Parameters
@@ -67,6 +68,8 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
     moves
         emcee's proposal: ``"stretch"`` or ``"de"`` (see :func:`~escfit.inference.mcmc.run_emcee`);
         ``None`` takes the family's default.
+    title
+        A title for reports (a fit recipe's ``title``), kept in the results' attributes.
     **options
         The family's problem options, refused when unknown: balance ``solver``,
         ``solver_options``, ``unit``, ``fmt``, ``notch_deg``, ``recording``; friction rig
@@ -103,14 +106,15 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
                        steps=pick(steps, "steps"), burn=pick(burn, "burn"), n_starts=pick(n_starts, "n_starts"),
                        n_refine=defaults["n_refine"], resume=resume, progress=progress, checkpoint=checkpoint,
                        predictive_draws=pick(predictive_draws, "predictive_draws"), moves=pick(moves, "moves"),
-                       max_steps=pick(max_steps, "max_steps"), checkpoint_every=checkpoint_every)
+                       max_steps=pick(max_steps, "max_steps"), checkpoint_every=checkpoint_every, title=title)
 
 
 def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | None = None, force: bool = False,
                 seed: int = 0, walkers: int = 32, steps: int | str = "auto", burn: int | None = None,
                 n_starts: int = 8, n_refine: int | None = None, resume: bool = False, progress: bool = False,
                 checkpoint: str | Path | None = None, predictive_draws: int = 400,
-                moves: str = "stretch", max_steps: int = 20000, checkpoint_every: float = 10.0) -> FitResult:
+                moves: str = "stretch", max_steps: int = 20000, checkpoint_every: float = 10.0,
+                title: str | None = None) -> FitResult:
     """:func:`fit` of a prepared problem (any family).
 
     The result's ``timings`` attribute holds the seconds spent in each phase (least squares,
@@ -132,6 +136,8 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
     tree = build_tree(problem, lsq, mc, method=method, seed=seed, started=started, predictive_draws=predictive_draws)
     timings["diagnostics_s"] = time.perf_counter() - clock
     tree.attrs.update(clean_attrs({"timings": {k: round(float(v), 4) for k, v in timings.items()}}))
+    if title:
+        tree.attrs["title"] = str(title)
     result = FitResult(tree)
     if out is not None:
         clock = time.perf_counter()

@@ -53,7 +53,7 @@ __all__ = ["UnitTask", "RecordingFile", "BatchResult", "discover_units", "record
 
 SUMMARY_SCHEMA = "escfit-fleet-summary/1"
 SUMMARY_FILE = "summary.nc"
-STATS = ("median", "lo68", "hi68", "lo95", "hi95", "mean", "sd", "rhat", "ess_bulk")
+STATS = ("estimate", "median", "lo68", "hi68", "lo95", "hi95", "mean", "sd", "rhat", "ess_bulk")
 
 # Files of a DATA folder that are not recordings: scenes and recipes, notes, results, figures.
 NOT_RECORDINGS = frozenset({".toml", ".md", ".rst", ".html", ".htm", ".png", ".svg", ".pdf", ".jpg", ".jpeg",
@@ -477,7 +477,8 @@ def summarize(tasks: Sequence[UnitTask], status: dict[str, dict] | None = None, 
               attrs: dict | None = None) -> xr.Dataset:
     """The combined summary of a batch (dimension ``unit``).
 
-    Variables: ``<stat>`` (unit, parameter) for the statistics in :data:`STATS`;
+    Variables: ``<stat>`` (unit, parameter) for the statistics in :data:`STATS` (``estimate``:
+    the posterior median of an emcee fit, the best fit of a least-squares one);
     ``status``, ``error``, ``seconds``, ``results_file``, ``data_file``, ``n_data`` (readings;
     -1 when a unit failed before they were read), ``sigma_hat`` (least-squares reading scatter,
     in ``reading_units``), ``reading_units``, ``warnings`` (JSON list) per unit.
@@ -526,6 +527,8 @@ def summarize(tasks: Sequence[UnitTask], status: dict[str, dict] | None = None, 
             for j, p in enumerate(params):
                 if p in s and stat in s[p]:
                     arr[i, j] = s[p][stat]
+                elif p in s and stat == "estimate" and "median" in s[p]:  # rows of files before "estimate"
+                    arr[i, j] = s[p]["median"]
         data[stat] = (("unit", "parameter"), arr)
     for k, v in per_unit.items():
         data[k] = ("unit", np.array(v, dtype=object if isinstance(v[0] if v else "", str) else None))

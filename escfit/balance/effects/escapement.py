@@ -78,7 +78,7 @@ class Escapement:
                     where,
                 )
             swings = table.get("swings", "both")
-            if swings not in _SWINGS:
+            if not isinstance(swings, str) or swings not in _SWINGS:
                 raise SceneError(f"swings must be one of {sorted(_SWINGS)}, got {swings!r}", f"{where}.swings")
             w = Window(i, kind, lo, hi, swings)
             windows.append(w)

@@ -15,7 +15,7 @@ from ...core.errors import SceneError
 from ...core.params import Param, read_param
 from ...core.scene import check_keys
 from ...core.units import BARE_ANGLE_LIMIT, to_canonical
-from .base import ReadContext, SystemBuilder
+from .base import OMEGA0_RANGE, ReadContext, SystemBuilder
 
 __all__ = ["Hairspring"]
 
@@ -41,7 +41,7 @@ class Hairspring:
         if any(b <= a for a, b in zip(ang, ang[1:])):
             raise SceneError(f"'angles' must increase strictly, got {angles!r}", f"{where}.angles")
         params = [
-            read_param(w, name=f"hairspring.omega0[{i}]", kind="rate_per_s", lower=0.0, lower_open=True,
+            read_param(w, name=f"hairspring.omega0[{i}]", kind="rate_per_s", lower=OMEGA0_RANGE[0], upper=OMEGA0_RANGE[1],
                        meaning=f"natural frequency of hairspring piece {i} (rad/s)", where=f"{where}.omega0[{i}]")
             for i, w in enumerate(omegas, 1)
         ]

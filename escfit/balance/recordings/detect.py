@@ -10,7 +10,7 @@ from pathlib import Path
 
 from ...core.errors import DataError
 from .pulses import read_pulses
-from .sniff import file_kind, refuse_unless_csv
+from .sniff import did_you_mean, file_kind, match_header, refuse_unless_csv
 from .tg_applog import read_tg_applog, sniff_tg_applog
 from .timegrapher import TimegrapherRecording, read_tg_json, read_timegrapher_csv
 from .timeseries import read_timeseries
@@ -24,10 +24,13 @@ FORMATS = ("unit-curve", "pulses", "timegrapher", "timeseries", "tg-applog")
 def detect_format(path: str | Path) -> str:
     """Which of :data:`FORMATS` a recording file holds, from its content.
 
+    Column names are matched without regard to case and surrounding spaces.
+
     Raises
     ------
     DataError
-        Binary or empty files, and headers matching no format.
+        Binary or empty files, and headers matching no format (naming the columns close to
+        a known one).
     """
     kind = file_kind(path)
     where = str(path)
@@ -42,7 +45,7 @@ def detect_format(path: str | Path) -> str:
         if s and not s.startswith("#"):
             header = [h.strip() for h in s.split(",")]
             break
-    cols = set(header)
+    cols = set(match_header(header))  # Swing, NOTCHES, ' time_s ' are swing, notches, time_s
     if "kind" in cols and any(c.startswith("time_") for c in cols):
         return "pulses"
     if cols & {"swing", "cycle"}:
@@ -53,8 +56,8 @@ def detect_format(path: str | Path) -> str:
         return "timeseries"
     if sniff_tg_applog(path):  # a timegrapher app's log: settings lines first, one row per display update
         return "tg-applog"
-    raise DataError(f"cannot tell the recording format from the header {header}; give the format explicitly "
-                    f"(one of {', '.join(FORMATS)})", where)
+    raise DataError(f"cannot tell the recording format from the header {header}{did_you_mean(header)}; give "
+                    f"the format explicitly (one of {', '.join(FORMATS)})", where)
 
 
 def read_timegrapher(path: str | Path) -> TimegrapherRecording:

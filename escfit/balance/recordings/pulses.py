@@ -30,7 +30,7 @@ import numpy as np
 from ...core.errors import DataError
 from ...core.units import ureg
 from ...core.csvtable import read_table
-from .sniff import refuse_unless_csv
+from .sniff import canonical_header, did_you_mean, refuse_unless_csv
 from .unit_curve import UnitCurve
 
 __all__ = ["PulseTrain", "PulseAssignment", "read_pulses", "write_pulses", "assign_pulses", "pulses_to_unit_curve"]
@@ -151,14 +151,16 @@ def read_pulses(path: str | Path, *, notches: int | None = None) -> PulseTrain:
         non-finite times, times that decrease, unknown pulse kinds, bad notch metadata.
     """
     refuse_unless_csv(path, "a pulse train")
-    t = read_table(path)
+    t = canonical_header(read_table(path))
     where = t.path
     tcols = [c for c in t.header if c.startswith("time_")]
     if len(tcols) != 1 or "kind" not in t.header:
-        raise DataError(f"need columns time_s (or time_<unit>) and kind, header has {t.header}", where)
+        raise DataError(f"need columns time_s (or time_<unit>) and kind, header has {t.header}"
+                        f"{did_you_mean(t.header)}", where)
     unknown = [c for c in t.header if c not in (tcols[0], "kind")]
     if unknown:
-        raise DataError(f"unknown column(s) {unknown}; a pulse train has time_s, kind", where)
+        raise DataError(f"unknown column(s) {unknown}{did_you_mean(unknown)}; a pulse train has time_s, kind",
+                        where)
     unit = tcols[0][len("time_"):]
     try:
         factor = float(ureg.Quantity(1.0, unit).to("s").magnitude)

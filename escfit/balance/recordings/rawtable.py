@@ -80,7 +80,7 @@ def _decode(raw: bytes, where: str, notes: list[str]) -> str:
     if text.lstrip()[:1] in ("{", "["):
         try:
             json.loads(text)
-        except ValueError:
+        except (ValueError, RecursionError):
             return text
         raise DataError("a JSON file, not a table of samples", where)
     return text

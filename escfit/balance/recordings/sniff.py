@@ -8,11 +8,75 @@ Shared by the readers (:mod:`~escfit.balance.recordings.timegrapher`,
 
 from __future__ import annotations
 
+import difflib
 from pathlib import Path
+from typing import Iterable
 
 from ...core.errors import DataError
 
-__all__ = ["file_kind", "refuse_unless_csv"]
+__all__ = ["file_kind", "refuse_unless_csv", "match_header", "canonical_header", "did_you_mean",
+           "KNOWN_COLUMNS", "KNOWN_PREFIXES"]
+
+# Column names of the escfit CSV formats (unit curve, pulse train, timegrapher beats, time series)
+KNOWN_COLUMNS = ("swing", "cycle", "amplitude_rad", "amplitude_deg", "notches", "time_s", "unit", "kind",
+                 "rate_s_per_day", "beat_error_ms", "theta_rad", "theta_deg")
+# Column families whose suffix is a unit (``load_mN``, ``time_ms``, ``theta_deg``)
+KNOWN_PREFIXES = ("load_", "time_", "theta_")
+
+
+def match_header(header: Iterable[str], known: Iterable[str] = KNOWN_COLUMNS,
+                 prefixes: Iterable[str] = KNOWN_PREFIXES) -> list[str]:
+    """Header names as the readers know them: spaces stripped, known names in lower case.
+
+    ``Swing``, `` NOTCHES `` and ``Time_s`` are ``swing``, ``notches`` and ``time_s``.  For a
+    column family (``load_``, ``time_``, ``theta_``) only the prefix is put in lower case: its
+    suffix is a unit, where case matters (``mN`` is not ``MN``).  Other names are only stripped.
+    """
+    known = {k.lower() for k in known}
+    prefixes = tuple(prefixes)
+    out = []
+    for name in header:
+        stripped = name.strip().lstrip("\ufeff").strip()
+        low = stripped.lower()
+        if low in known:
+            out.append(low)
+            continue
+        prefix = next((p for p in prefixes if low.startswith(p)), None)
+        out.append(prefix + stripped[len(prefix):] if prefix else stripped)
+    return out
+
+
+def canonical_header(table, known: Iterable[str] = KNOWN_COLUMNS, prefixes: Iterable[str] = KNOWN_PREFIXES):
+    """``table`` (a :class:`escfit.core.csvtable.Table`) with its header put through :func:`match_header`.
+
+    Raises
+    ------
+    DataError
+        Two columns of the file differ only in case or spaces (``swing`` and ``Swing``).
+    """
+    header = match_header(table.header, known, prefixes)
+    seen: dict[str, str] = {}
+    for raw, name in zip(table.header, header):
+        if name in seen:
+            raise DataError(f"columns {seen[name]!r} and {raw!r} are the same column {name!r} (names are matched "
+                            "without regard to case and spaces)", table.path)
+        seen[name] = raw
+    table.header = header
+    return table
+
+
+def did_you_mean(columns: Iterable[str], known: Iterable[str] = KNOWN_COLUMNS) -> str:
+    """``"; column 'notchez' is not known (did you mean 'notches'?)"`` for the columns close to a
+    known name, or ``""`` when none is."""
+    known = list(known)
+    hints = []
+    for c in columns:
+        if c.lower() in known:
+            continue
+        close = difflib.get_close_matches(c.lower(), known, n=1, cutoff=0.7)
+        if close:
+            hints.append(f"column {c!r} is not known (did you mean {close[0]!r}?)")
+    return "; " + "; ".join(hints) if hints else ""
 
 
 def file_kind(path: str | Path) -> str:

@@ -114,7 +114,7 @@ def sniff_tg_applog(path: str | Path) -> bool:
     if file_kind(path) != "text":
         return False
     found = _find_header(Path(path).read_text(encoding="utf-8", errors="replace").splitlines(), 200)
-    return found is not None and not set(found[2]) <= set(CSV_COLUMNS)
+    return found is not None and not {f.strip().lower() for f in found[2]} <= set(CSV_COLUMNS)
 
 
 def _number(text: str, comma: bool, where: str, what: str) -> float:

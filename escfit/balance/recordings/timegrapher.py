@@ -48,7 +48,7 @@ import numpy as np
 
 from ...core.errors import DataError
 from ...core.csvtable import read_table
-from .sniff import file_kind, refuse_unless_csv
+from .sniff import canonical_header, did_you_mean, file_kind, refuse_unless_csv
 
 __all__ = ["TimegrapherRecording", "read_tg_json", "read_timegrapher_csv", "write_tg_json", "write_timegrapher_csv",
            "beat_swings", "CSV_COLUMNS", "TG_RANGE_DEG", "TG_WINDOW_S"]
@@ -164,6 +164,8 @@ def read_tg_json(path: str | Path) -> TimegrapherRecording:
     except json.JSONDecodeError as exc:
         hint = " (the file is truncated)" if exc.pos >= len(text.rstrip()) else ""
         raise DataError(f"invalid JSON: {exc.msg} at column {exc.colno}{hint}", f"{where}:{exc.lineno}") from None
+    except RecursionError:
+        raise DataError("JSON nested too deeply to be a timegrapher dump", where) from None
     if not isinstance(doc, dict):
         raise DataError(f"expected a JSON object at the top, got {type(doc).__name__}", where)
 
@@ -266,14 +268,15 @@ def read_timegrapher_csv(path: str | Path) -> TimegrapherRecording:
         non-finite numbers, negative amplitudes or beat errors, times that do not increase.
     """
     refuse_unless_csv(path, "timegrapher beats")
-    t = read_table(path)
+    t = canonical_header(read_table(path))
     where = t.path
     missing = [c for c in ("time_s", "amplitude_deg") if c not in t.header]
     if missing:
-        raise DataError(f"missing column(s) {missing}; a timegrapher CSV has {list(CSV_COLUMNS)}", where)
+        raise DataError(f"missing column(s) {missing}{did_you_mean(t.header)}; a timegrapher CSV has "
+                        f"{list(CSV_COLUMNS)}", where)
     unknown = [c for c in t.header if c not in CSV_COLUMNS]
     if unknown:
-        raise DataError(f"unknown column(s) {unknown}; known: {list(CSV_COLUMNS)}", where)
+        raise DataError(f"unknown column(s) {unknown}{did_you_mean(unknown)}; known: {list(CSV_COLUMNS)}", where)
     time = np.array(t.floats("time_s"))
     bad = np.flatnonzero(np.diff(time) <= 0)
     if bad.size:

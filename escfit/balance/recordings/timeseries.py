@@ -27,7 +27,7 @@ import numpy as np
 from ...core.errors import DataError
 from ...core.units import ureg
 from ...core.csvtable import read_table
-from .sniff import refuse_unless_csv
+from .sniff import canonical_header, did_you_mean, refuse_unless_csv
 from .turning_points import TurningPoints, reduce_series, turning_points
 from .unit_curve import UnitCurve
 
@@ -71,15 +71,16 @@ def read_timeseries(path: str | Path) -> TimeSeries:
         units, text or non-finite numbers, times that do not increase.
     """
     refuse_unless_csv(path, "a time series")
-    t = read_table(path)
+    t = canonical_header(read_table(path))
     where = t.path
     angle = [c for c in t.header if c.startswith("theta_")]
     if "time_s" not in t.header or len(angle) != 1:
-        raise DataError(f"need columns time_s and one angle column theta_rad or theta_deg, header has {t.header}",
-                        where)
+        raise DataError(f"need columns time_s and one angle column theta_rad or theta_deg, header has {t.header}"
+                        f"{did_you_mean(t.header)}", where)
     unknown = [c for c in t.header if c not in ("time_s", angle[0])]
     if unknown:
-        raise DataError(f"unknown column(s) {unknown}; a time series has time_s and theta_rad|theta_deg", where)
+        raise DataError(f"unknown column(s) {unknown}{did_you_mean(unknown)}; a time series has time_s and "
+                        "theta_rad|theta_deg", where)
     unit = angle[0][len("theta_"):]
     try:
         q = ureg.Quantity(1.0, unit)

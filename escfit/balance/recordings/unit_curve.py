@@ -30,6 +30,7 @@ import numpy as np
 from ...core.errors import DataError
 from ...core.units import ureg
 from ...core.csvtable import read_table
+from .sniff import canonical_header, did_you_mean
 
 __all__ = ["UnitCurve", "read_unit_curve", "write_unit_curve"]
 
@@ -107,20 +108,22 @@ def read_unit_curve(path: str | Path, *, notch_deg: float | None = None) -> Unit
         amplitudes, swing indices that are not whole, positive and strictly increasing
         within a curve, unknown load units, or notches without a notch angle.
     """
-    t = read_table(path)
+    t = canonical_header(read_table(path))
     where = t.path
     idx = [c for c in ("swing", "cycle") if c in t.header]
     if len(idx) != 1:
-        raise DataError(f"need exactly one index column 'swing' or 'cycle', header has {t.header}", where)
+        raise DataError(f"need exactly one index column 'swing' or 'cycle', header has {t.header}"
+                        f"{did_you_mean(t.header)}", where)
     amp = [c for c in AMPLITUDE_COLUMNS if c in t.header]
     if len(amp) != 1:
-        raise DataError(f"need exactly one amplitude column of {list(AMPLITUDE_COLUMNS)}, header has {t.header}", where)
+        raise DataError(f"need exactly one amplitude column of {list(AMPLITUDE_COLUMNS)}, header has {t.header}"
+                        f"{did_you_mean(t.header)}", where)
     loads = [c for c in t.header if c.startswith("load_")]
     known = {"swing", "cycle", *AMPLITUDE_COLUMNS, "time_s", "unit", *loads}
     unknown = [c for c in t.header if c not in known]
     if unknown:
-        raise DataError(f"unknown column(s) {unknown}; known: swing|cycle, {'|'.join(AMPLITUDE_COLUMNS)}, "
-                        "time_s, load_<unit>, unit", where)
+        raise DataError(f"unknown column(s) {unknown}{did_you_mean(unknown)}; known: swing|cycle, "
+                        f"{'|'.join(AMPLITUDE_COLUMNS)}, time_s, load_<unit>, unit", where)
     index = t.floats(idx[0], nonneg=True)
     for line, v in zip(t.lines, index):
         if v != int(v):
