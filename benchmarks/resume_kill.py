@@ -97,8 +97,11 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--steps", type=int, default=1500)
     ap.add_argument("--every", type=float, default=0.5, help="checkpoint interval, s")
     ap.add_argument("--seed", type=int, default=0, help="seeds the kill times")
-    ap.add_argument("--json", default=None)
+    ap.add_argument("--json", default=None, help="write the trials as JSON here (refused if it exists, unless --force)")
+    ap.add_argument("--force", action="store_true")
     args = ap.parse_args(argv)
+    if args.json and Path(args.json).exists() and not args.force:
+        ap.error(f"{args.json} exists; pass --force to replace it")
     rng = random.Random(args.seed)
     rows = []
     with tempfile.TemporaryDirectory(prefix="escfit-kill-") as tmp:

@@ -13,7 +13,7 @@ def test_bench_quick_json_and_plot(tmp_path):
     plot = tmp_path / "wp.png"
     result = CliRunner().invoke(cli, ["bench", "--quick", "--json", "--plot", str(plot)])
     assert result.exit_code == 0, result.output
-    records = json.loads(result.output)
+    records = json.loads(result.stdout)  # "wrote ..." goes to stderr
     for r in records:
         assert {"method", "setting", "error_half_period_s", "us_per_swing"} <= set(r)
         assert r["us_per_swing"] > 0

@@ -156,7 +156,7 @@ def test_balance_emcee_run_interrupted_and_resumed_from_the_command_line(tmp_pat
 def test_simulate_records_nearest_mark_notch_readings(tmp_path):
     # 6-degree notches read at the nearest mark against marks counted: every reading n differs by
     # floor(A/d + 1/2) - floor(A/d), 0 or 1, and the two recordings of one seed share their amplitudes
-    scene = DATASETS / "scenes" / "monday_sample_angle.toml"
+    scene = DATASETS / "monday1965" / "synthetic" / "unit3_load330.66g.toml"
     outs = {}
     for reading in ("counted", "nearest"):
         out = tmp_path / f"{reading}.csv"

@@ -141,7 +141,7 @@ def test_summary_csv_of_a_fleet_and_of_a_fit(fleet):
 
 
 def test_fit_csv_falls_back_to_the_median_of_older_rows():
-    from escfit.cli.main import _fit_csv
+    from escfit.cli.summary import _fit_csv
 
     head, rows = _fit_csv({"a": {"unit": "1/s", "median": 1.5, "lo95": 1.0, "hi95": 2.0, "rhat": 1.001}})
     row = dict(zip(head, rows[0]))

@@ -24,7 +24,7 @@ POHL = SHARED / "realdata" / "pohl_heilaut" / "derived" / "decay_amplitude_halfp
 SCENE = """model = "balance"
 [oscillator]
 omega0 = 4.394          # pi / (0.715 s half period)
-theta0 = { value = 12.0, vary = true, min = 5, max = 20 }
+theta0 = { value = 12.0, vary = true, min = 5, max = "20 rad" }
 [run]
 swings = 21
 [effects.viscous]

@@ -36,6 +36,10 @@ __all__ = ["UnitCurve", "read_unit_curve", "write_unit_curve"]
 
 AMPLITUDE_COLUMNS = ("amplitude_rad", "amplitude_deg", "notches")
 
+#: Largest swing index a unit curve may name: a balance beating at 10 Hz makes 10^6 half swings in
+#: 14 hours; the model is solved up to the last recorded swing, so the index bounds the work.
+MAX_SWING = 1_000_000
+
 
 @dataclass
 class UnitCurve:
@@ -128,6 +132,10 @@ def read_unit_curve(path: str | Path, *, notch_deg: float | None = None) -> Unit
     for line, v in zip(t.lines, index):
         if v != int(v):
             raise DataError(f"{idx[0]} index must be a whole number >= 0, got {v!r}", f"{where}:{line} [{idx[0]}]")
+        if v > MAX_SWING:
+            # the model is run to the last recorded swing: an index this large would take hours and gigabytes
+            raise DataError(f"{idx[0]} index {v:.17g} is beyond {MAX_SWING:,} half swings (a unit curve is a decay "
+                            "of minutes); check the column", f"{where}:{line} [{idx[0]}]")
     swing = np.array(index, dtype=np.int64) * (2 if idx[0] == "cycle" else 1)
     value = np.array(t.floats(amp[0], nonneg=True))
     kind, notch = "amplitude", math.nan
