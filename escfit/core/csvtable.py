@@ -14,7 +14,28 @@ from pathlib import Path
 
 from .errors import DataError
 
-__all__ = ["Table", "read_table"]
+__all__ = ["refuses_unreadable", "Table", "read_table"]
+
+
+def refuses_unreadable(reader):
+    """Decorate a reader ``reader(path, ...)``: failures of the text machinery become one DataError.
+
+    A CSV field beyond the csv module's limit (131072 characters) or JSON nested beyond the
+    interpreter's recursion limit are properties of the file, not of escfit: they are reported
+    as one line naming the file, like any other malformed input.
+    """
+    import functools
+
+    @functools.wraps(reader)
+    def wrapped(path, *args, **kwargs):
+        try:
+            return reader(path, *args, **kwargs)
+        except csv.Error as exc:
+            raise DataError(f"cannot read as a table ({exc})", str(path)) from None
+        except RecursionError:
+            raise DataError("nested too deeply to read", str(path)) from None
+
+    return wrapped
 
 
 @dataclass

@@ -16,6 +16,7 @@ import io
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..core.csvtable import refuses_unreadable
 from ..core.errors import DataError
 from ..core.units import ureg
 from .readers import Readings, write_readings
@@ -101,6 +102,7 @@ class MuRow:
     line: int
 
 
+@refuses_unreadable
 def read_mu_table(path: str | Path) -> list[MuRow]:
     """Read ``monday1965_mu.csv`` (``#`` lines are comments).
 

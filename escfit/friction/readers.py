@@ -38,6 +38,7 @@ from typing import Sequence
 import numpy as np
 import pint
 
+from ..core.csvtable import refuses_unreadable
 from ..core.errors import DataError
 from ..core.units import ureg
 
@@ -107,6 +108,7 @@ class Readings:
         )
 
 
+@refuses_unreadable
 def read_readings(path: str | Path) -> Readings:
     """Read a rig readings CSV file.
 

@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 import pint
 
+from ..core.csvtable import refuses_unreadable
 from ..core.atomic import atomic_path
 from ..core.csvtable import Table, read_table
 from ..core.errors import DataError
@@ -271,6 +272,7 @@ def read_terminal_speeds(path: str | Path) -> TerminalSpeeds:
 FORMATS = {"speed-trace": read_speed_trace, "terminal-speeds": read_terminal_speeds}
 
 
+@refuses_unreadable
 def detect_format(path: str | Path) -> str:
     """``"speed-trace"`` or ``"terminal-speeds"``, from the file's header columns.
 
@@ -290,6 +292,7 @@ def detect_format(path: str | Path) -> str:
                     f"{table.path}:{_header_line(Path(table.path))}")
 
 
+@refuses_unreadable
 def read_data(path: str | Path, fmt: str | None = None) -> SpeedTrace | TerminalSpeeds:
     """Read a Geneva recording of format ``fmt`` (detected from the header when ``None``)."""
     fmt = fmt or detect_format(path)

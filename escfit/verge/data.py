@@ -23,6 +23,7 @@ from typing import Sequence
 
 import numpy as np
 
+from ..core.csvtable import refuses_unreadable
 from ..core.errors import DataError
 
 __all__ = ["TurnsData", "read_turns_csv", "detect_turns", "FORMAT", "REQUIRED_COLUMNS"]
@@ -132,6 +133,7 @@ def detect_turns(path: str | Path) -> str:
                     "and optionally sd)", f"{path}:{lines[0][0]}")
 
 
+@refuses_unreadable
 def read_turns_csv(path: str | Path) -> TurnsData:
     """Read a turns-to-arm table (columns ``label, spin_rpm, turns`` and optionally ``sd``).
 

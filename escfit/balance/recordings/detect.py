@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ...core.csvtable import refuses_unreadable
 from ...core.errors import DataError
 from .pulses import read_pulses
 from .sniff import did_you_mean, file_kind, match_header, refuse_unless_csv
@@ -21,6 +22,7 @@ __all__ = ["FORMATS", "detect_format", "read_recording", "read_timegrapher"]
 FORMATS = ("unit-curve", "pulses", "timegrapher", "timeseries", "tg-applog")
 
 
+@refuses_unreadable
 def detect_format(path: str | Path) -> str:
     """Which of :data:`FORMATS` a recording file holds, from its content.
 
@@ -67,6 +69,7 @@ def read_timegrapher(path: str | Path) -> TimegrapherRecording:
     return read_tg_applog(path) if sniff_tg_applog(path) else read_timegrapher_csv(path)
 
 
+@refuses_unreadable
 def read_recording(path: str | Path, fmt: str | None = None, **options):
     """Read any recording format (detected unless ``fmt`` is given).
 

@@ -59,6 +59,22 @@ CSV_COLUMNS = ("time_s", "rate_s_per_day", "amplitude_deg", "beat_error_ms")
 _BLANK = ("", "---", "-")
 
 
+class _OutOfRange(Exception):
+    """A JSON number a float cannot hold (its text, shortened, is the message)."""
+
+
+def _finite_number(text: str) -> int | float:
+    """A JSON number as int (up to 15 digits) or float; 1e400 or a 5000-digit integer is refused."""
+    if len(text) > 40:
+        raise _OutOfRange(text[:20] + "...")
+    if text.lstrip("-").isdigit() and len(text.lstrip("-")) <= 15:
+        return int(text)
+    value = float(text)
+    if not math.isfinite(value):
+        raise _OutOfRange(text)
+    return value
+
+
 @dataclass
 class TimegrapherRecording:
     """Beats and amplitude readings of a timegrapher.
@@ -160,10 +176,12 @@ def read_tg_json(path: str | Path) -> TimegrapherRecording:
         raise DataError(f"{bad_const.group(1)} is not a number JSON allows",
                         f"{where}:{_json_error_line(text, bad_const.start())}")
     try:
-        doc = json.loads(text)
+        doc = json.loads(text, parse_float=_finite_number, parse_int=_finite_number)
     except json.JSONDecodeError as exc:
         hint = " (the file is truncated)" if exc.pos >= len(text.rstrip()) else ""
         raise DataError(f"invalid JSON: {exc.msg} at column {exc.colno}{hint}", f"{where}:{exc.lineno}") from None
+    except _OutOfRange as exc:
+        raise DataError(f"number {exc} is out of range", where) from None
     except RecursionError:
         raise DataError("JSON nested too deeply to be a timegrapher dump", where) from None
     if not isinstance(doc, dict):
