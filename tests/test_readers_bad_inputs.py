@@ -104,6 +104,19 @@ BINARY = bytes(range(256)) * 4
 TRUNCATED = json.dumps(_tg_doc(), indent=1)[:-40]
 
 # id, reader, file name, content, message pattern, location pattern (after the file name)
+def _unit_curve_release_mismatch(tmp):
+    from escfit.balance.problems.curves import FitProblem
+    from escfit.balance.recordings import read_unit_curve
+
+    scene = escfit.load_scene("s.toml", text=(DATASETS / "monday1965" / "unit1_fit.toml").read_text()
+                              .replace("theta0 = 6.28", "theta0 = 0.1"))
+    FitProblem(scene, read_unit_curve(DATASETS / "monday1965" / "synthetic" / "unit1.csv"))
+
+
+UNIT_NOTCH = "swing,notches\n0,59\n4,41\n"
+LATIN1 = "# op\u00e9rateur: Andr\u00e9\ntime_s,kind\n0.1,zero\n".encode("latin-1")
+BOM = b"\xef\xbb\xbf"
+
 CASES = [
     # pulse trains
     ("pulses-empty", read_pulses, "p.csv", "", r"empty file", r"^$"),
@@ -194,6 +207,32 @@ CASES = [
     ("unit-curve-negative", lambda p: read_recording(p, "unit-curve"), "u.csv", "swing,amplitude_rad\n0,6\n1,-5\n",
      r"'-5' must not be negative", r":3 \[amplitude_rad\]"),
     ("missing-file", read_pulses, None, None, r"data file not found", None),
+    # values no recording can hold, encodings, sizes
+    ("unit-curve-notch-inf", lambda p: read_recording(p, "unit-curve"), "u.csv", "# notch_deg: inf\n" + UNIT_NOTCH,
+     r"notch_deg must be a positive number of degrees up to 180, got 'inf'", r"^$"),
+    ("unit-curve-huge-swing", lambda p: read_recording(p, "unit-curve"), "u.csv",
+     "swing,amplitude_rad\n0,6\n1000000000,5\n", r"swing index 1000000000 is beyond 1,000,000 half swings",
+     r":3 \[swing\]"),
+    ("unit-curve-release-mismatch", _unit_curve_release_mismatch, None, None,
+     r"releases the balance at 5.73 deg .* release reading \(swing 0\) .* is 354 deg", None),
+    ("tg-json-1e400", read_tg_json, "t.json", json.dumps(_tg_doc()).replace('"sample_rate": 48000', '"sample_rate": 1e400'),
+     r"number 1e400 is out of range", r"^$"),
+    ("tg-json-deep", read_tg_json, "t.json", "[" * 100_000 + "]" * 100_000, r"nested too deeply", r"^$"),
+    ("tg-csv-range-reversed", read_timegrapher_csv, "b.csv",
+     "# amplitude_range_deg: 360, 135\n" + TG_CSV_HEAD + "0.1,0,250,0.1\n0.3,0,250,0.1\n",
+     r"0 <= low < high, got '360, 135'", r" \[amplitude_range_deg\]"),
+    ("tg-csv-range-nan", read_timegrapher_csv, "b.csv",
+     "# amplitude_range_deg: nan, 360\n" + TG_CSV_HEAD + "0.1,0,250,0.1\n0.3,0,250,0.1\n",
+     r"0 <= low < high", r" \[amplitude_range_deg\]"),
+    ("ts-release-nan", read_timeseries, "s.csv", "# release_s: nan\n" + _ts_rows(), r"release_s must be a finite time",
+     r" \[release_s\]"),
+    ("csv-field-over-limit", read_recording, "u.csv", "swing,amplitude_rad\n0," + "9" * 200_000 + "\n",
+     r"cannot read as a table \(field larger than field limit", r"^$"),
+    ("csv-header-power", read_recording, "u.csv", "swing,amplitude_rad,load_g**9**9**9\n0,6,3\n1,5,3\n",
+     r"unknown load unit 'g\*\*9\*\*9\*\*9'", r"^$"),
+    ("csv-latin1", read_pulses, "p.csv", LATIN1,
+     r"not UTF-8 text: byte 0xe9 on line 1 \(in Latin-1 / Windows-1252 that is 'é'\); save the file as UTF-8",
+     r"^:1$"),
 ]
 
 
@@ -221,3 +260,16 @@ def test_table_in_docs_matches_cases():
     doc = (DATASETS.parent / "docs" / "recordings.md").read_text()
     missing = [c[0] for c in CASES if f"`{c[0]}`" not in doc]
     assert not missing, missing
+
+
+@pytest.mark.parametrize("name, reader", [("monday_pulses.csv", read_pulses), ("monday_timeseries.csv", read_timeseries),
+                                          ("monday_timegrapher_beats.csv", read_timegrapher_csv)])
+def test_a_utf8_byte_order_mark_is_read_as_without(name, reader, tmp_path):
+    # spreadsheets save UTF-8 with a byte-order mark; it is not part of the first line
+    plain = DATASETS / "recordings" / name
+    marked = tmp_path / name
+    marked.write_bytes(BOM + plain.read_bytes())
+    a, b = reader(plain), reader(marked)
+    for field in ("time", "kind", "theta", "amplitude"):
+        if hasattr(a, field) and getattr(a, field) is not None:
+            assert list(getattr(a, field)) == list(getattr(b, field)), field

@@ -37,6 +37,14 @@ IMPULSE = '[[effects.escapement]]\nkind = "impulse"\nfrom = {lo}\nto = {hi}\nX =
     (balance_toml(effects='[[effects.escapement]]\nkind = "unlock"\nfrom = -1\nto = -0.5\neps = 0.3\n'),
      ["eps", "exactly one impulse window"]),
     (balance_toml(effects="[effects.viscous_drift]\nthresholds = [0.1]\nrates = [0.01, 0]\n"), ["viscous_drift", "needs"]),
+    # text pint would evaluate as arithmetic (a hang), numbers the solvers cannot hold, values of the wrong type
+    (balance_toml(theta0="9**9**9 rad"), ["theta0", "'9**9**9 rad'", "not a number and a unit"]),
+    (balance_toml(effects='[effects.coulomb]\nR = "1 rad/s**999999"\n'), ["[effects.coulomb].R", "not a number and a unit"]),
+    (balance_toml(omega0=1e-300), ["omega0", "1e-300", "physical range"]),
+    (balance_toml(omega0=1e155), ["omega0", "1e+155", "physical range"]),
+    (balance_toml(effects='[[effects.escapement]]\nkind = "impulse"\nfrom = -0.3\nto = 0.3\nX = 10\nswings = [1, 2]\n'),
+     ["escapement 1].swings", "[1, 2]"]),
+    ('model = [1, 2]\n', ["unknown model", "[1, 2]"]),
 ])
 def test_bad_scene_is_refused_with_a_clear_message(text, fragments):
     with pytest.raises(SceneError) as info:
@@ -82,3 +90,15 @@ def test_a_scene_without_theta0_simulates_nothing_and_fits_only_sampled_recordin
     with pytest.raises(FitError, match="leaves theta0 out"):
         make_problem(scene, curve)
 
+
+
+def test_a_byte_order_mark_is_dropped_and_latin1_is_named(tmp_path):
+    marked = tmp_path / "marked.toml"
+    marked.write_bytes(b"\xef\xbb\xbf" + balance_toml(theta0="300 deg").encode())
+    assert load_scene(marked).params["oscillator.theta0"].value == pytest.approx(np.radians(300))
+    latin = tmp_path / "latin.toml"
+    latin.write_bytes(('title = "Andr\u00e9"\n' + balance_toml()).encode("latin-1"))
+    with pytest.raises(SceneError) as info:
+        load_scene(latin)
+    assert str(info.value) == (f"{latin}:1: not UTF-8 text: byte 0xe9 on line 1 (in Latin-1 / Windows-1252 that is "
+                               "'é'); save the file as UTF-8")

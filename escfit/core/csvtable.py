@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .errors import DataError
+from .textfile import decode_text
 
 __all__ = ["refuses_unreadable", "Table", "read_table"]
 
@@ -79,10 +80,7 @@ def read_table(path: str | Path) -> Table:
     if not p.is_file():
         raise DataError("data file not found", where)
     raw = p.read_bytes()
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError:
-        raise DataError("not a text file (cannot decode as UTF-8)", where) from None
+    text = decode_text(raw, where, what="a CSV table")
     meta: dict[str, str] = {}
     body: list[tuple[int, str]] = []
     for n, line in enumerate(text.splitlines(), start=1):

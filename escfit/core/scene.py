@@ -81,9 +81,18 @@ def load_scene(source: str | Path, *, text: str | None = None) -> "Scene":
         if not path.is_file():
             raise SceneError("scene file not found", where)
         try:
-            text = path.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as exc:
-            raise SceneError(f"cannot read scene file ({exc})", where) from None
+            raw = path.read_bytes()
+        except OSError as exc:
+            raise SceneError(f"cannot read scene file ({exc.strerror or exc})", where) from None
+        from .errors import DataError
+        from .textfile import decode_text
+
+        try:
+            text = decode_text(raw, where, what="a TOML scene")
+        except DataError as exc:
+            raise SceneError(exc.message, exc.where) from None
+    elif text.startswith("\ufeff"):
+        text = text[1:]
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

@@ -21,10 +21,46 @@ import pint
 
 from .errors import UnitError
 
-__all__ = ["ureg", "to_canonical", "CANONICAL", "safe_unit_text", "quantity", "MAX_UNIT_TEXT", "BARE_ANGLE_LIMIT",
+__all__ = ["ureg", "UnsafeUnitText", "to_canonical", "CANONICAL", "safe_unit_text", "quantity", "MAX_UNIT_TEXT", "BARE_ANGLE_LIMIT",
            "check_bare_angle"]
 
-ureg = pint.UnitRegistry()
+class UnsafeUnitText(pint.errors.PintError, ValueError):
+    """Text pint was asked to parse that is not a number and a unit of :func:`safe_unit_text`'s grammar."""
+
+
+class _GuardedRegistry(pint.UnitRegistry):
+    """pint's registry, refusing to evaluate text outside a bounded grammar once it is built.
+
+    pint parses a unit string as arithmetic, so ``"9**9**9 rad"`` (in a scene) or a column
+    header ``load_g**9**9**9`` would compute a number with hundreds of millions of digits: the
+    process hangs in one C call that no signal interrupts.  Every parse of text (``Quantity(str)``,
+    ``Unit(str)``, ``parse_units``, ``parse_expression``) comes through these two methods, so
+    after construction they accept only an optional number followed by a unit of names,
+    ``* / ( )`` and small integer powers (:func:`safe_unit_text`), and raise
+    :class:`UnsafeUnitText` otherwise (callers already report pint's errors as one line).
+    """
+
+    _guarded = False
+
+    def _check(self, text):
+        if not self._guarded or not isinstance(text, str):
+            return
+        m = _NUMBER.match(text)
+        rest = text[m.end():].strip() if m else text.strip()
+        if (rest and not safe_unit_text(rest)) or (m and not math.isfinite(float(m.group(1)))):
+            raise UnsafeUnitText(f"{text[:60]!r} is not a number and a unit (names, * / ( ) and powers up to "
+                                 "two digits)")
+
+    def parse_expression(self, input_string, *args, **kwargs):
+        self._check(input_string)
+        return super().parse_expression(input_string, *args, **kwargs)
+
+    def parse_units(self, input_string, *args, **kwargs):
+        self._check(input_string)
+        return super().parse_units(input_string, *args, **kwargs)
+
+
+ureg = _GuardedRegistry()
 ureg.define("gf = gram * g_0 = gram_force")  # gram-force, as in Monday's fixture data
 
 # Canonical unit of each kind of quantity escfit reads.  Per-inertia quantities
@@ -197,3 +233,6 @@ def quantity(text: str, where: str) -> "pint.Quantity":
         return ureg.Quantity(float(m.group(1)), ureg.parse_units(units))
     except Exception:  # pint raises several types for unknown names
         raise UnitError(f"unknown unit {rest!r} in {text!r}", where) from None
+
+
+ureg._guarded = True  # after the module's own definitions (see _GuardedRegistry)

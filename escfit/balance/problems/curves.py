@@ -106,11 +106,37 @@ class FitProblem(FreeParameters, BalanceProblem):
         if (drift.vary or drift.value != 0.0) and times is None:
             raise FitError("observation.offset_rate (a drifting centre) needs the time of every reading; the "
                            "recording has no time column", self.data.source)
+        self._check_release(params)
         self.load_rule = LoadRule.read(fit_table.get("loads"), self.scene, self.data, self.curves, params)
         self._set_free(params, self.scene.where)
         self.failures: Counter = Counter()
         # the exact solver runs a whole ensemble in one parallel call (log_prob_many)
         self.vectorized = self.solver == "exact"
+
+    def _check_release(self, params: ParamSet) -> None:
+        """Refuse a fixed release angle that the recording's release reading contradicts.
+
+        Swing 0 is the release: its reading is the release amplitude itself.  When the scene
+        fixes ``theta0`` and that reading differs from it by more than a quarter (and more than
+        two notches of a notch recording), scene and data describe different runs (a release at
+        0 rad against readings at 6.28 rad, a bare 300 meant as degrees), and no fit of C, R or X
+        can mean anything.
+        """
+        theta0 = params["oscillator.theta0"]
+        if theta0.vary:
+            return
+        a0 = abs(theta0.value)
+        notches = self.data.kind == "notches"
+        for c in self.curves:
+            k = np.flatnonzero(c.swing == 0)
+            if not k.size:
+                continue
+            reading = float(c.y[k[0]]) * (self.data.notch if notches else 1.0)
+            tol = max(0.25 * max(a0, abs(reading)), 2.0 * self.data.notch if notches else 0.0)
+            if abs(a0 - abs(reading)) > tol:
+                raise FitError(f"the scene releases the balance at {math.degrees(a0):.4g} deg ({a0:.4g} rad) but the "
+                               f"release reading (swing 0) of {c.label} is {math.degrees(abs(reading)):.4g} deg: scene "
+                               "and recording describe different runs (fix theta0, or let it vary)", self.data.source)
 
     # -- forward model -----------------------------------------------------------------
     def predict(self, vals: Mapping[str, float]) -> list[np.ndarray]:

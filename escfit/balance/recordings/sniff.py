@@ -97,7 +97,8 @@ def file_kind(path: str | Path) -> str:
         text = head.decode("utf-8")
     except UnicodeDecodeError as exc:
         if exc.start < len(head) - 4:  # not just a multi-byte character cut at the boundary
-            return "binary"
+            # text in another encoding (Latin-1 from an old logger) is text: its reader names the encoding
+            return "binary" if b"\x00" in head else "text"
         text = head[:exc.start].decode("utf-8")
     text = text.lstrip("\ufeff \t\r\n")
     if not text:

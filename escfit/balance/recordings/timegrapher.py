@@ -341,6 +341,9 @@ def read_timegrapher_csv(path: str | Path) -> TimegrapherRecording:
         except ValueError:
             raise DataError(f"amplitude_range_deg must be 'low, high', got {t.meta['amplitude_range_deg']!r}",
                             f"{where} [amplitude_range_deg]") from None
+        if not (0.0 <= lo < hi and math.isfinite(lo) and not math.isnan(hi)):
+            raise DataError(f"amplitude_range_deg must be 'low, high' with 0 <= low < high, got "
+                            f"{t.meta['amplitude_range_deg']!r}", f"{where} [amplitude_range_deg]")
     tictoc = np.arange(time.size) % 2 == 0
     return TimegrapherRecording(time, tictoc, time.copy(), amp, math.radians(la), int(bph), window, "end", resolution,
                                 (lo, hi), True, release, rate, be, math.nan, "csv", where, t.sha256, dict(t.meta))

@@ -103,6 +103,8 @@ def read_timeseries(path: str | Path) -> TimeSeries:
         except ValueError:
             raise DataError(f"release_s must be a number, got {t.meta['release_s']!r}",
                             f"{where} [release_s]") from None
+        if not math.isfinite(release):
+            raise DataError(f"release_s must be a finite time, got {t.meta['release_s']!r}", f"{where} [release_s]")
     if time.size < 20:
         raise DataError(f"only {time.size} samples; a decay needs many samples per period", where)
     return TimeSeries(time, theta, release, where, t.sha256, dict(t.meta))

@@ -150,8 +150,8 @@ def read_unit_curve(path: str | Path, *, notch_deg: float | None = None) -> Unit
             notch = math.radians(float(nd))
         except ValueError:
             raise DataError(f"notch_deg must be a number, got {nd!r}", where) from None
-        if not notch > 0:
-            raise DataError(f"notch_deg must be positive, got {nd!r}", where)
+        if not (notch > 0 and math.isfinite(notch)) or notch > math.pi:
+            raise DataError(f"notch_deg must be a positive number of degrees up to 180, got {nd!r}", where)
         for line, v in zip(t.lines, value):
             if v != int(v):
                 raise DataError(f"notch counts must be whole numbers, got {v!r}", f"{where}:{line} [notches]")
