@@ -16,7 +16,7 @@ import escfit
 from escfit.core.errors import DataError, EscfitError, FitError
 from escfit.balance.recordings.pulses import assign_pulses, read_pulses
 from escfit.balance.recordings.detect import detect_format, read_recording
-from escfit.balance.recordings.timegrapher import read_tg_json, read_timegrapher_csv
+from escfit.balance.recordings.timegrapher import beat_swings, read_tg_json, read_timegrapher_csv
 from escfit.balance.recordings.timeseries import read_timeseries, timeseries_to_unit_curve
 
 from .conftest import DATASETS
@@ -218,6 +218,10 @@ CASES = [
     ("tg-json-1e400", read_tg_json, "t.json", json.dumps(_tg_doc()).replace('"sample_rate": 48000', '"sample_rate": 1e400'),
      r"number 1e400 is out of range", r"^$"),
     ("tg-json-deep", read_tg_json, "t.json", "[" * 100_000 + "]" * 100_000, r"nested too deeply", r"^$"),
+    ("tg-json-release-far", lambda p: beat_swings(read_tg_json(p)), "t.json", json.dumps({**_tg_doc(), "escfit": {"release_sample": -1e12}}),
+     r"lies .* beats before the first beat: more than 1,440,000 half swings", r"^$"),
+    ("tg-json-amplitude-far", read_tg_json, "t.json", json.dumps(_tg_doc(amplitude__times=[10**14])),
+     r"amplitude reading at sample 100000000000000 lies far outside the beats", r" \[amplitude.times\[0\]\]"),
     ("tg-csv-range-reversed", read_timegrapher_csv, "b.csv",
      "# amplitude_range_deg: 360, 135\n" + TG_CSV_HEAD + "0.1,0,250,0.1\n0.3,0,250,0.1\n",
      r"0 <= low < high, got '360, 135'", r" \[amplitude_range_deg\]"),

@@ -53,6 +53,9 @@ from .sniff import canonical_header, did_you_mean, file_kind, refuse_unless_csv
 __all__ = ["TimegrapherRecording", "read_tg_json", "read_timegrapher_csv", "write_tg_json", "write_timegrapher_csv",
            "beat_swings", "CSV_COLUMNS", "TG_RANGE_DEG", "TG_WINDOW_S"]
 
+#: Half swings a timegrapher record may span from the release: 40 hours at 36,000 beats per hour.
+#: The model is solved up to the last beat, so the count bounds the work and the memory.
+MAX_HALF_SWINGS = 1_440_000
 TG_RANGE_DEG = (135.0, 360.0)  # tg shows no amplitude outside this range (src/computer.c)
 TG_WINDOW_S = 2.0  # tg's shortest processing buffer, 2**FIRST_STEP s (src/tg.h)
 CSV_COLUMNS = ("time_s", "rate_s_per_day", "amplitude_deg", "beat_error_ms")
@@ -244,6 +247,12 @@ def read_tg_json(path: str | Path) -> TimegrapherRecording:
                         f"{where} [amplitude.values[{int(zero[0])}]]")
     if beats.size < 2:
         raise DataError(f"need at least 2 beats, got {beats.size}", f"{where} [beats.times]")
+    span = beats[-1] - beats[0]
+    outside = np.flatnonzero((amp_t < beats[0] - span) | (amp_t > beats[-1] + span))
+    if outside.size:  # a reading is an average over the beats around it: it cannot lie far beyond them
+        i = int(outside[0])
+        raise DataError(f"amplitude reading at sample {amp_t[i]:.17g} lies far outside the beats (samples "
+                        f"{beats[0]:.17g} to {beats[-1]:.17g})", f"{where} [amplitude.times[{i}]]")
     extra = doc.get("escfit", {})
     if not isinstance(extra, dict):
         raise DataError("expected an object", f"{where} [escfit]")
@@ -370,10 +379,19 @@ def beat_swings(rec: TimegrapherRecording) -> np.ndarray:
     d = np.diff(t)
     typical = float(np.median(d[: min(d.size, 20)])) if d.size else 1.0
     out = np.empty(t.size, dtype=np.int64)
-    out[0] = max(1, int(round((t[0] - rec.release_s) / typical + 0.5)))
+    first = (t[0] - rec.release_s) / typical + 0.5
+    if not first <= MAX_HALF_SWINGS:
+        raise DataError(f"the release at {rec.release_s:.6g} s lies {first:.3g} beats before the first beat: more than "
+                        f"{MAX_HALF_SWINGS:,} half swings would have to be simulated; check release_s / release_sample",
+                        rec.source)
+    out[0] = max(1, int(round(first)))
     recent = [typical]  # the beat interval drifts with the amplitude: follow it over the last ten beats
     for i, di in enumerate(d):
-        k = max(1, int(round(di / float(np.median(recent[-10:])))))
+        k = di / float(np.median(recent[-10:]))
+        if not out[i] + k <= MAX_HALF_SWINGS:
+            raise DataError(f"beat {i + 2} at {t[i + 1]:.6g} s lies beyond {MAX_HALF_SWINGS:,} half swings after the "
+                            "release; check the beat times", rec.source)
+        k = max(1, int(round(k)))
         out[i + 1] = out[i] + k
         recent.append(di / k)
     return out
