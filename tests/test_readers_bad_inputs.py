@@ -113,6 +113,16 @@ def _unit_curve_release_mismatch(tmp):
     FitProblem(scene, read_unit_curve(DATASETS / "monday1965" / "synthetic" / "unit1.csv"))
 
 
+def _pulse_stray_tail(tmp):
+    from escfit.balance.problems.pulses import PulseFitProblem
+
+    lines = (DATASETS / "recordings" / "monday_pulses.csv").read_text().splitlines()
+    lines.append("1000000000,notch")
+    p = tmp / "p.csv"
+    p.write_text("\n".join(lines) + "\n")
+    PulseFitProblem(escfit.load_scene(DATASETS / "recordings" / "pulses_scene.toml"), read_pulses(p))
+
+
 UNIT_NOTCH = "swing,notches\n0,59\n4,41\n"
 LATIN1 = "# op\u00e9rateur: Andr\u00e9\ntime_s,kind\n0.1,zero\n".encode("latin-1")
 BOM = b"\xef\xbb\xbf"
@@ -218,6 +228,8 @@ CASES = [
     ("tg-json-1e400", read_tg_json, "t.json", json.dumps(_tg_doc()).replace('"sample_rate": 48000', '"sample_rate": 1e400'),
      r"number 1e400 is out of range", r"^$"),
     ("tg-json-deep", read_tg_json, "t.json", "[" * 100_000 + "]" * 100_000, r"nested too deeply", r"^$"),
+    ("pulses-stray-tail", _pulse_stray_tail, None, None,
+     r"pulse at 1e\+09 s comes 1e\+09 s after the last zero pulse, longer than the whole fitted record", None),
     ("tg-json-release-far", lambda p: beat_swings(read_tg_json(p)), "t.json", json.dumps({**_tg_doc(), "escfit": {"release_sample": -1e12}}),
      r"lies .* beats before the first beat: more than 1,440,000 half swings", r"^$"),
     ("tg-json-amplitude-far", read_tg_json, "t.json", json.dumps(_tg_doc(amplitude__times=[10**14])),

@@ -189,10 +189,30 @@ class PulseFitProblem(RecordingProblem):
         self._setup_params()
         self.assignment = a = assign_pulses(data)
         self._check_release(a.counts[0])
+        self.notes = self._unused_tail(data, a)
         self.notch = data.notch
         self.curves = [Curve("pulses", math.nan, a.swing, data.time[a.index])]
         self._x = a.tooth * data.notch
         self.n_swings = int(a.swing.max())
+
+    @staticmethod
+    def _unused_tail(data: PulseTrain, a) -> list[str]:
+        """Say which pulses after the last zero pulse (an unfinished half swing) are not fitted.
+
+        Refuses a tail that reaches far beyond the fitted pulses (more than the whole fitted
+        record again): a stray time stamp, not the end of a swing.
+        """
+        last = int(a.index.max())
+        tail = data.time[last + 1:]
+        if not tail.size:
+            return []
+        used = data.time[last] - data.time[0]
+        if tail[-1] - data.time[last] > max(used, 1e-9):
+            raise FitError(f"pulse at {tail[-1]:.6g} s comes {tail[-1] - data.time[last]:.3g} s after the last zero "
+                           f"pulse, longer than the whole fitted record ({used:.3g} s): a stray time stamp? "
+                           "check the file's last rows", data.where(last + tail.size))
+        return [f"{tail.size} notch pulse(s) after the last zero pulse (an unfinished half swing, up to "
+                f"{tail[-1]:.6g} s) are not fitted"]
 
     def _check_release(self, n0: int) -> None:
         p = self.params["oscillator.theta0"]
