@@ -137,6 +137,13 @@ def display_name(name: str, loads_in: str = "") -> str:
     return f"{found.group('base')}[load={found.group('load')} {loads_in}]"
 
 
+def display_text(text: str, loads_in: str = "") -> str:
+    """Parameter names inside a sentence (a warning) with the load's unit, as :func:`display_name`."""
+    if not loads_in:
+        return text
+    return re.sub(r"\[load=([-+0-9.eE]+)\]", lambda m: f"[load={m.group(1)} {loads_in}]", text)
+
+
 def curve_label(label: str, loads_in: str = "") -> str:
     """A curve's legend label: ``unit3 load 330.66`` -> ``unit3, 330.66 g``; others unchanged."""
     found = _LOAD_CURVE.match(str(label))

@@ -13,11 +13,13 @@ from __future__ import annotations
 
 import base64
 import html
+import json
 import re
 import tomllib
 from pathlib import Path
 
 from ..core.atomic import atomic_path, refuse_existing
+from ..core.display import display_text, load_unit
 from ..core.errors import MissingDependency
 from ..results import FitResult, load_fit
 from .tables import fit_statistics, parameter_table, provenance_rows, sampler_rows
@@ -114,7 +116,8 @@ def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: 
         "title": report_title(res, title),
         "data_name": Path(a.get("data_file", "") or "").name,
         "fit_stats": fit_statistics(res),
-        "warnings": res.warnings,
+        "warnings": [display_text(w, load_unit(json.loads(res.attrs.get("meanings", "{}") or "{}")))
+                     for w in res.warnings],
         "notes": res.notes,
         "provenance": provenance_rows(res, path),
         "scene": a.get("scene", ""),

@@ -73,7 +73,7 @@ def parameter_table(res) -> tuple[list[str], list[list[str]]]:
         row = [display_name(name, loads_in), unit, format_value(value),
                f"[{format_value(ends[0])}, {format_value(ends[1])}]", f"[{format_value(ends[2])}, {format_value(ends[3])}]"]
         if posterior:
-            row += [format_value(r.get("rhat"), 4), format_value(r.get("ess_bulk"), 4)]
+            row += [format_value(r.get("rhat"), 4), _count(r.get("ess_bulk"))]
         note = []
         if column == "estimate":
             note.append(estimate_kind(r))
@@ -191,7 +191,7 @@ def sampler_rows(res) -> tuple[str, list[str], list[list[str]]]:
     for name in map(str, diag["parameter"].values):
         sel = diag.sel(parameter=name)
         rows.append([display_name(name, loads_in), format_value(float(sel["rhat"]), 4),
-                     format_value(float(sel["ess_bulk"]), 4), format_value(float(sel["ess_tail"]), 4),
+                     _count(float(sel["ess_bulk"])), _count(float(sel["ess_tail"])),
                      format_value(float(sel["tau"]), 3) if "tau" in sel else "-"])
     return sentence, head, rows
 
@@ -207,3 +207,14 @@ def provenance_rows(res, path) -> list[tuple[str, str]]:
             ("started / finished", f"{a.get('started')} / {a.get('finished')}"), ("schema", a.get("schema_version")),
             ("versions", a.get("versions")), ("failed evaluations", a.get("failures"))]
     return [(k, str(v)) for k, v in rows if v not in (None, "", "None None", "None / None")]
+
+
+def _count(value) -> str:
+    """An effective sample size: a whole number of draws (``-`` when undefined)."""
+    import math
+
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return "-"
+    return f"{v:.0f}" if math.isfinite(v) else "-"
