@@ -69,7 +69,7 @@ def make_problem(scene, data, *, solver: str | None = None, solver_options: dict
     solver = solver or default_solver(sc)
     spec = _recording_spec(sc, recording)
     if isinstance(data, (str, Path)):
-        data = _read_data(data, spec, fmt, notch_deg)
+        data = _read_data(data, spec, fmt, notch_deg, _scene_notch_deg(sc))
     options = dict(solver_options or {})
     if unit is not None and not isinstance(data, UnitCurve):
         raise FitError("--unit selects a unit of a unit-curve file; this recording holds one unit",
@@ -129,7 +129,17 @@ def _override_notes(scene, overrides: dict | None) -> list[str]:
     return notes
 
 
-def _read_data(path, spec, fmt: str | None, notch_deg: float | None):
+def _scene_notch_deg(sc) -> float | None:
+    """The scene's ``[observation] notch_deg`` in degrees, if it gives one (a default for the data file)."""
+    obs = sc.extra.get("observation")
+    if not isinstance(obs, dict) or "notch_deg" not in obs:
+        return None
+    from .observation.notches import _notch_angle
+
+    return math.degrees(_notch_angle(obs["notch_deg"], f"{sc.where} [observation].notch_deg"))
+
+
+def _read_data(path, spec, fmt: str | None, notch_deg: float | None, default_notch_deg: float | None = None):
     """Read a recording file: a known escfit format, else a raw table or MATLAB file."""
     from .recordings.rawseries import read_raw_series
     from .recordings.detect import detect_format, read_recording
@@ -147,7 +157,9 @@ def _read_data(path, spec, fmt: str | None, notch_deg: float | None):
                 if "binary" in exc.message or "empty" in exc.message:
                     raise exc from None
                 raise raw_exc from None
-    options = {"notch_deg": notch_deg} if notch_deg is not None and detected == "unit-curve" else {}
+    options = {}
+    if detected == "unit-curve":
+        options = {"notch_deg": notch_deg, "default_notch_deg": default_notch_deg}
     return read_recording(path, detected, **options)
 
 

@@ -2,13 +2,17 @@
 
 Exit status: 0 when every unit is fitted (or was done before), 3 when some units failed (the
 others are fitted and summarised; each failure is printed on stderr), 2 on bad input or when
-dask.distributed (the ``study`` extra) is missing, 130 when interrupted (Ctrl-C): the units
-fitted by then are kept, and the same command fits the rest.
+dask.distributed (the ``study`` extra) is missing or another fit-many is writing into the same
+--out folder, 130 when interrupted (Ctrl-C or SIGTERM): the units fitted by then are kept, the
+folder's lock is released, and the same command fits the rest.
 """
 
 from __future__ import annotations
 
+import contextlib
+import signal
 import sys
+import threading
 
 import click
 
@@ -54,9 +58,10 @@ def fit_many(ctx, data, scene_path, out_dir, method, scheduler, workers, seed, w
     from ..study.batch import fit_many as run
 
     try:
-        res = run(list(data), scene_path, out_dir, method=method, scheduler=scheduler, workers=workers, seed=seed,
-                  walkers=walkers, steps=steps, burn=burn, n_starts=n_starts, units=list(units) or None,
-                  notch_deg=notch_deg, progress=not quiet)
+        with _sigterm_interrupts():
+            res = run(list(data), scene_path, out_dir, method=method, scheduler=scheduler, workers=workers, seed=seed,
+                      walkers=walkers, steps=steps, burn=burn, n_starts=n_starts, units=list(units) or None,
+                      notch_deg=notch_deg, progress=not quiet)
     except KeyboardInterrupt:
         click.echo(f"escfit fit-many: interrupted; the units fitted so far are saved in {out_dir}: run the same "
                    "command again to fit the others (units with a results file are skipped)", err=True)
@@ -67,6 +72,24 @@ def fit_many(ctx, data, scene_path, out_dir, method, scheduler, workers, seed, w
     if res.failed:  # each failure was printed on stderr as it came back
         click.echo(f"escfit fit-many: {len(res.failed)} unit(s) failed: {', '.join(res.failed)}", err=True)
         ctx.exit(EXIT_SOME_FAILED)
+
+
+@contextlib.contextmanager
+def _sigterm_interrupts():
+    """While active, SIGTERM interrupts like Ctrl-C: the local cluster is shut down, the folder's
+    lock released and the way on printed, instead of the process ending mid-write."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def format_summary(ds, *, max_params: int = 4) -> str:

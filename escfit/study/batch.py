@@ -14,7 +14,16 @@ which the client writes to ``<out>/<unit>.h5`` atomically, and the unit's summar
 that fails returns its error message instead; the others go on.  Units whose results file
 exists and loads are skipped, so an interrupted batch is finished by running it again.  On
 the local machine an interrupted emcee run also resumes from its checkpoint
-(``<unit>.h5.emcee``).
+(``<unit>.h5.emcee``; one that cannot be resumed, damaged for instance, is deleted and the unit
+started afresh, which its progress line and its summary warnings say).  The worker's side is
+:mod:`escfit.study.task`.
+
+One batch at a time writes into a results directory: it holds the directory's lock
+(:mod:`escfit.study.lock`) from before the finished units are looked at until ``summary.nc`` is
+written, so a second batch is refused before it writes anything; so is a batch whose scene or
+method differs from that of the directory's finished units.  Holding the lock, a batch first
+deletes the hidden temporaries (``.<file>.<random>.part``) of its own files that a killed run
+left behind.
 
 The combined summary ``<out>/summary.nc`` (xarray, h5netcdf) has a ``unit`` dimension: the
 posterior (or least-squares) median and 68 %/95 % intervals of every parameter, R-hat and
@@ -24,28 +33,29 @@ built from the rows the tasks return; only the results files of skipped units ar
 
 from __future__ import annotations
 
-import contextlib
 import datetime as _dt
 import json
 import math
 import re
 import sys
-import tempfile
 import time
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterable, Iterator, Sequence
+from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
 import xarray as xr
 
 from ..core.atomic import atomic_path
-from ..core.errors import DataError, EscfitError, FitError, ResultsError
+from ..core.errors import DataError, FitError, ResultsError
+from ..core.h5write import write_bytes
 from ..balance.recordings import UnitCurve, read_unit_curve
 from ..core.provenance import dependency_versions
 from ..results import SCHEMA_VERSION, FitResult, clean_attrs
 from .cluster import LazyClient, Runner, local_cluster, require_distributed
+from .lock import folder_lock, remove_stale_temporaries
+from .task import RecordingFile, fit_task, results_image, summary_row
 
 __all__ = ["UnitTask", "RecordingFile", "BatchResult", "discover_units", "recording_files", "fit_many",
            "fit_fleet", "summarize", "summary_row", "load_summary", "SUMMARY_SCHEMA", "unit_seed", "LazyClient",
@@ -58,24 +68,6 @@ STATS = ("estimate", "median", "lo68", "hi68", "lo95", "hi95", "mean", "sd", "rh
 # Files of a DATA folder that are not recordings: scenes and recipes, notes, results, figures.
 NOT_RECORDINGS = frozenset({".toml", ".md", ".rst", ".html", ".htm", ".png", ".svg", ".pdf", ".jpg", ".jpeg",
                             ".py", ".ipynb", ".h5", ".nc", ".emcee", ".part", ".yaml", ".yml"})
-
-
-@dataclass(frozen=True)
-class RecordingFile:
-    """A recording file as a task carries it: the file's name (no directory) and its bytes."""
-
-    name: str
-    content: bytes = field(repr=False)
-
-    @classmethod
-    def read(cls, path: str | Path) -> "RecordingFile":
-        p = Path(path)
-        try:
-            return cls(p.name, p.read_bytes())
-        except FileNotFoundError:
-            raise DataError("recording file not found", str(path)) from None
-        except OSError as exc:
-            raise DataError(f"cannot read the recording file ({exc.strerror or exc})", str(path)) from None
 
 
 @dataclass(frozen=True)
@@ -252,74 +244,6 @@ def _load_for_summary(path: Path) -> FitResult | None:
     return FitResult(tree, str(path))
 
 
-def summary_row(res: FitResult) -> dict[str, Any]:
-    """One unit's row of the fleet summary, from a fit in memory (or read back with the groups
-    :data:`SUMMARY_GROUPS`): per-parameter statistics, reading scatter and its unit, number of
-    readings, warnings."""
-    lsq = res.group("least_squares")
-    attrs = lsq.attrs if lsq is not None else {}
-    units = lsq["expected"].attrs.get("units", "") if lsq is not None and "expected" in lsq else ""
-    return {"parameters": res.summary(), "sigma_hat": float(attrs.get("sigma_hat", math.nan)),
-            "n_data": int(attrs.get("n_data", -1)), "reading_units": str(units), "warnings": res.warnings}
-
-
-@contextlib.contextmanager
-def _readable(data: UnitCurve | RecordingFile | str | Path) -> Iterator[UnitCurve | Path | str]:
-    """What :func:`escfit.inference.fit` reads: a unit curve as it is, a recording file's bytes
-    written under its own name to a temporary directory (removed afterwards)."""
-    if not isinstance(data, RecordingFile):
-        yield data
-        return
-    with tempfile.TemporaryDirectory(prefix="escfit-unit-") as d:
-        path = Path(d) / (Path(data.name).name or "recording")
-        path.write_bytes(data.content)
-        yield path
-
-
-def _fit_task(scene_text: str, scene_where: str, data: UnitCurve | RecordingFile, options: dict) -> dict[str, Any]:
-    """Worker side: fit one unit; never raises (a failure comes back as a message).
-
-    Returns the results file's bytes (``payload``) and the unit's summary row (``row``)."""
-    started = time.perf_counter()
-    try:
-        from ..inference import fit
-        from ..core.scene import load_scene
-
-        scene = load_scene(scene_where, text=scene_text)
-        opts = dict(options)
-        checkpoint = opts.pop("checkpoint", None)
-        source = opts.pop("source", None)
-        with _readable(data) as readable:
-            if checkpoint is not None and Path(checkpoint).exists() and opts.get("method") == "emcee":
-                try:
-                    res = fit(scene, readable, checkpoint=checkpoint, resume=True, **opts)
-                except ResultsError:  # an unusable checkpoint: start afresh
-                    Path(checkpoint).unlink(missing_ok=True)
-                    res = fit(scene, readable, checkpoint=checkpoint, **opts)
-            else:
-                res = fit(scene, readable, checkpoint=checkpoint, force=True, **opts)
-        if isinstance(data, RecordingFile) and source and "data_file" in res.tree.attrs:
-            res.tree.attrs["data_file"] = source  # the client's file, not the worker's temporary copy
-        payload = _to_bytes(res)
-        return {"status": "ok", "payload": payload, "row": summary_row(res),
-                "seconds": time.perf_counter() - started}
-    except Exception as exc:  # noqa: BLE001 - one unit's failure must not stop the batch
-        msg = str(exc) if isinstance(exc, EscfitError) else f"{type(exc).__name__}: {exc}"
-        return {"status": "failed", "error": msg or type(exc).__name__, "seconds": time.perf_counter() - started}
-
-
-def _to_bytes(res: FitResult) -> bytes:
-    """The results file's bytes, written in memory."""
-    try:
-        import dask
-    except ImportError:  # pragma: no cover - in-process runs without dask
-        return bytes(res.tree.to_netcdf(engine="h5netcdf"))
-    # inside a dask worker xarray would take a cluster-wide lock named after the buffer, which the
-    # scheduler does not know; the write is local, so no lock is needed
-    with dask.config.set(scheduler="synchronous"):
-        return bytes(res.tree.to_netcdf(engine="h5netcdf"))
-
-
 def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], scene: str | Path, out_dir: str | Path,
              *, method: str = "leastsq", scheduler: Any = None, workers: int | None = None, seed: int = 0,
              walkers: int | None = None, steps: int | None = None, burn: int | None = None,
@@ -372,6 +296,10 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
     ------
     MissingDependency
         dask.distributed is needed (a local cluster or a scheduler address) and not installed.
+    FolderBusy
+        Another batch is writing into ``out_dir`` (:mod:`escfit.study.lock`); nothing was written.
+    ResultsError
+        Finished units of ``out_dir`` were fitted with another scene or method; nothing was written.
     """
     from ..core.scene import load_scene
     from ..inference.registry import family
@@ -398,22 +326,87 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
     items = [data] if isinstance(data, (str, Path, UnitCurve)) else list(data)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    tasks = discover_units(items, out, notch_deg=notch_deg, scene=sc)
-    if units is not None:
-        known = {t.unit for t in tasks}
-        missing = [u for u in units if u not in known]
-        if missing:
-            raise DataError(f"no readings of unit(s) {missing}; units in the data: {sorted(known)}")
-        tasks = [t for t in tasks if t.unit in set(units)]
-    say = progress if callable(progress) else ((lambda s: print(s, file=sys.stderr)) if progress else (lambda s: None))
-    started = time.perf_counter()
-    status: dict[str, dict] = {}
-    rows: dict[str, dict] = {}
-    todo = []
-    other: list[str] = []
+    with folder_lock(out):  # one batch at a time in a results folder
+        tasks = discover_units(items, out, notch_deg=notch_deg, scene=sc)
+        if units is not None:
+            known = {t.unit for t in tasks}
+            missing = [u for u in units if u not in known]
+            if missing:
+                raise DataError(f"no readings of unit(s) {missing}; units in the data: {sorted(known)}")
+            tasks = [t for t in tasks if t.unit in set(units)]
+        say = progress if callable(progress) else \
+            ((lambda s: print(s, file=sys.stderr)) if progress else (lambda s: None))
+        started = time.perf_counter()
+        status: dict[str, dict] = {}
+        rows: dict[str, dict] = {}
+        todo = _finished_units(tasks, out, sc.text, method, rows, status, say)
+        removed = remove_stale_temporaries(out, {SUMMARY_FILE, *(t.results_file.name for t in tasks),
+                                                 *(t.results_file.name + ".emcee" for t in tasks)})
+        if removed:
+            say(f"removed {len(removed)} temporary file(s) an interrupted run left: {', '.join(removed)}")
+        options = {"method": method, "walkers": walkers, "steps": steps, "burn": burn, "n_starts": n_starts,
+                   "predictive_draws": predictive_draws, **family_options}
+        runner = Runner(scheduler, workers) if todo else Runner(None, 0)  # no cluster when nothing is left
+        where = runner.description if todo else "nothing to fit"
+        jobs = []
+        for t in todo:
+            opts = {**options, "seed": unit_seed(seed, t.unit), "source": t.data_file}
+            if runner.local_fs and method == "emcee":
+                opts["checkpoint"] = str(t.results_file) + ".emcee"
+            jobs.append((sc.text, str(scene), t.data, opts))
+
+        def done(i: int, res: dict) -> None:
+            t = todo[i]
+            if res["status"] == "ok":
+                try:
+                    write_bytes(res.pop("payload"), t.results_file, force=True)
+                    Path(str(t.results_file) + ".emcee").unlink(missing_ok=True)
+                    rows[t.unit] = res.pop("row")
+                    if res.get("note"):  # in the summary's warnings too
+                        rows[t.unit]["warnings"] = [*rows[t.unit]["warnings"], res["note"]]
+                        say(f"{t.unit}: {res['note']}")
+                    say(f"{t.unit}: fitted in {res['seconds']:.1f} s -> {t.results_file.name}")
+                except (ResultsError, OSError) as exc:
+                    res = {"status": "failed", "error": f"cannot write the results file ({exc})",
+                           "seconds": res["seconds"]}
+            if res["status"] == "failed":
+                print(f"escfit fit-many: unit {t.unit} failed: {res['error']}", file=sys.stderr)
+            status[t.unit] = res
+
+        try:
+            if jobs:
+                say(f"fitting {len(jobs)} unit(s) ({method}) on {where}; {len(tasks) - len(jobs)} done before")
+                runner.run(fit_task, jobs, done)
+        finally:
+            runner.close()
+        elapsed = time.perf_counter() - started
+        # from the rows the tasks returned: no results file of this run is read back
+        summary = summarize(tasks, status, rows=rows, attrs={
+            "method": method, "seed": seed, "model": sc.model, "scene": sc.text, "scene_file": str(scene),
+            "runner": where, "elapsed_s": elapsed, "settings": {k: v for k, v in options.items() if v is not None}})
+        write_bytes(results_image(summary), out / SUMMARY_FILE, force=True)
+        return BatchResult(summary, out, [u for u, s in status.items() if s["status"] == "ok"],
+                           [u for u, s in status.items() if s["status"] == "skipped"],
+                           {u: s["error"] for u, s in status.items() if s["status"] == "failed"}, elapsed,
+                           time.perf_counter() - started - elapsed)
+
+
+def _finished_units(tasks: Sequence[UnitTask], out: Path, scene_text: str, method: str, rows: dict[str, dict],
+                    status: dict[str, dict], say: Callable[[str], None]) -> list[UnitTask]:
+    """The tasks left to fit; the finished ones get their row and status ``skipped``.
+
+    Raises
+    ------
+    ResultsError
+        Finished units of the folder were fitted with another scene or method: the units of
+        this batch (read from their results files), or others that the folder's summary lists
+        as finished by a batch of another scene or method and whose results files are still
+        there.  Nothing has been written.
+    """
+    todo, other = [], []
     for t in tasks:
         done_before = _load_for_summary(t.results_file)
-        if done_before is not None and (done_before.attrs.get("scene") != sc.text
+        if done_before is not None and (done_before.attrs.get("scene") != scene_text
                                         or done_before.attrs.get("method") != method):
             other.append(t.unit)
         elif done_before is not None:
@@ -422,54 +415,31 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
             say(f"{t.unit}: done before ({t.results_file.name}), skipped")
         else:
             todo.append(t)
+    if not other:
+        other = _foreign_units_of_summary(out, {t.unit for t in tasks}, scene_text, method)
     if other:
         raise ResultsError(f"units {other} were fitted here with another scene or method; use another output "
                            "directory or remove their results files", str(out))
-    options = {"method": method, "walkers": walkers, "steps": steps, "burn": burn, "n_starts": n_starts,
-               "predictive_draws": predictive_draws, **family_options}
-    runner = Runner(scheduler, workers) if todo else Runner(None, 0)  # no cluster when nothing is left
-    where = runner.description if todo else "nothing to fit"
-    jobs = []
-    for t in todo:
-        opts = {**options, "seed": unit_seed(seed, t.unit), "source": t.data_file}
-        if runner.local_fs and method == "emcee":
-            opts["checkpoint"] = str(t.results_file) + ".emcee"
-        jobs.append((sc.text, str(scene), t.data, opts))
+    return todo
 
-    def done(i: int, res: dict) -> None:
-        t = todo[i]
-        if res["status"] == "ok":
-            try:
-                with atomic_path(t.results_file, force=True) as tmp:
-                    tmp.write_bytes(res.pop("payload"))
-                ck = Path(str(t.results_file) + ".emcee")
-                if ck.exists():
-                    ck.unlink()
-                rows[t.unit] = res.pop("row")
-                say(f"{t.unit}: fitted in {res['seconds']:.1f} s -> {t.results_file.name}")
-            except OSError as exc:
-                res = {"status": "failed", "error": f"cannot write the results file ({exc})", "seconds": res["seconds"]}
-        if res["status"] == "failed":
-            print(f"escfit fit-many: unit {t.unit} failed: {res['error']}", file=sys.stderr)
-        status[t.unit] = res
 
+def _foreign_units_of_summary(out: Path, ours: set[str], scene_text: str, method: str) -> list[str]:
+    """Units outside this batch that the folder's summary lists as finished by a batch of another
+    scene or method, and whose results files are still in the folder."""
+    path = out / SUMMARY_FILE
+    if not path.is_file():
+        return []
     try:
-        if jobs:
-            say(f"fitting {len(jobs)} unit(s) ({method}) on {where}; {len(tasks) - len(jobs)} done before")
-            runner.run(_fit_task, jobs, done)
-    finally:
-        runner.close()
-    elapsed = time.perf_counter() - started
-    # from the rows the tasks returned: no results file of this run is read back
-    summary = summarize(tasks, status, rows=rows, attrs={
-        "method": method, "seed": seed, "model": sc.model, "scene": sc.text, "scene_file": str(scene),
-        "runner": where, "elapsed_s": elapsed, "settings": {k: v for k, v in options.items() if v is not None}})
-    with atomic_path(out / SUMMARY_FILE, force=True) as tmp:
-        summary.to_netcdf(tmp, engine="h5netcdf")
-    return BatchResult(summary, out, [u for u, s in status.items() if s["status"] == "ok"],
-                       [u for u, s in status.items() if s["status"] == "skipped"],
-                       {u: s["error"] for u, s in status.items() if s["status"] == "failed"}, elapsed,
-                       time.perf_counter() - started - elapsed)
+        with xr.open_dataset(path, engine="h5netcdf") as ds:
+            if ds.attrs.get("schema_version") != SUMMARY_SCHEMA:
+                return []
+            if ds.attrs.get("scene") == scene_text and ds.attrs.get("method") == method:
+                return []
+            listed = zip(map(str, ds["unit"].values), map(str, ds["status"].values),
+                         map(str, ds["results_file"].values))
+            return [u for u, st, f in listed if u not in ours and st in ("ok", "skipped") and (out / f).is_file()]
+    except Exception:  # noqa: BLE001 - an unreadable summary is rebuilt, not a reason to refuse
+        return []
 
 
 def summarize(tasks: Sequence[UnitTask], status: dict[str, dict] | None = None, *,
@@ -581,9 +551,11 @@ def fit_fleet(fleet, model: str, out_dir: str | Path, *, units: Sequence[str] | 
     out.mkdir(parents=True, exist_ok=True)
     scene = out / "scene.toml"
     text = fit_scene(fl.spec.rig, model)
-    if not scene.is_file() or scene.read_text() != text:
-        with atomic_path(scene, force=True) as tmp:
-            tmp.write_text(text)
-    return fit_many(fl.recordings, scene, out, method=method, walkers=walkers, steps=steps, seed=seed,
-                    scheduler=scheduler, workers=workers, units=units, progress=progress,
-                    predictive_draws=predictive_draws)
+    with folder_lock(out):  # the scene and the fits under one lock (it is re-entrant in this thread)
+        remove_stale_temporaries(out, {scene.name})
+        if not scene.is_file() or scene.read_text() != text:
+            with atomic_path(scene, force=True) as tmp:
+                tmp.write_text(text)
+        return fit_many(fl.recordings, scene, out, method=method, walkers=walkers, steps=steps, seed=seed,
+                        scheduler=scheduler, workers=workers, units=units, progress=progress,
+                        predictive_draws=predictive_draws)

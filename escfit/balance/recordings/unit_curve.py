@@ -102,8 +102,12 @@ class UnitCurve:
         return self.value * self.notch if self.kind == "notches" else self.value
 
 
-def read_unit_curve(path: str | Path, *, notch_deg: float | None = None) -> UnitCurve:
+def read_unit_curve(path: str | Path, *, notch_deg: float | None = None,
+                    default_notch_deg: float | None = None) -> UnitCurve:
     """Read a unit-curve CSV (see the module docstring for the format).
+
+    ``notch_deg`` (deg) overrides the file's ``# notch_deg:`` line; ``default_notch_deg`` (the
+    scene's ``[observation] notch_deg``) is used only when the file has none.
 
     Raises
     ------
@@ -143,9 +147,10 @@ def read_unit_curve(path: str | Path, *, notch_deg: float | None = None) -> Unit
         value = np.radians(value)
     elif amp[0] == "notches":
         kind = "notches"
-        nd = notch_deg if notch_deg is not None else t.meta.get("notch_deg")
+        nd = notch_deg if notch_deg is not None else t.meta.get("notch_deg", default_notch_deg)
         if nd is None:
-            raise DataError("notch counts need the notch angle: a '# notch_deg: 6' line or --notch-deg", where)
+            raise DataError("notch counts need the notch angle: a '# notch_deg: 6' line, --notch-deg or the scene's "
+                            "[observation] notch_deg", where)
         try:
             notch = math.radians(float(nd))
         except ValueError:
