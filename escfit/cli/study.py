@@ -34,7 +34,7 @@ EXIT_SOME_FAILED = 3
               help="Address of a running dask scheduler (e.g. tcp://10.0.0.5:8786); default: a local cluster.")
 @click.option("--workers", type=click.IntRange(0), default=None,
               help="Worker processes of the local cluster (default: CPUs available; 0: in this process).")
-@click.option("--seed", type=int, default=0, show_default=True, help="Batch seed (each unit's seed derives from it).")
+@click.option("--seed", type=click.IntRange(0, 2**32 - 1), default=0, show_default=True, help="Batch seed (each unit's seed derives from it).")
 @click.option("--walkers", type=click.IntRange(2), default=None, help="emcee walkers (default: the family's).")
 @click.option("--steps", type=StepsType(), default=None,
               help="emcee steps or 'auto' (until converged; default: the family's).")
