@@ -4,7 +4,9 @@ Exit status: 0 on success, 2 on bad input or usage (one line naming the file, ke
 1 on an internal error, 130 when interrupted (Ctrl-C) and 141 (128 + SIGPIPE, as the shell
 tools give) when the reader of the output went away, as ``head`` does: that exit is quiet.
 Output files are written atomically, readable as the umask allows, and never replaced
-without ``--force``.
+without ``--force``.  Before any work, every output path is checked: one that is an input
+(data, scene, recipe, results) or another output of the same command is refused, ``--force``
+or not, as is one whose folder is missing, not a folder or not writable.
 
 Third-party libraries' warnings (lmfit, numpy inside lmfit, arviz, xarray, dask, ...) are kept
 off the console unless ``--debug`` is given or ``PYTHONWARNINGS`` / ``-W`` asks for them;
@@ -39,6 +41,7 @@ LAZY_COMMANDS = {
 
 EXIT_INTERRUPTED = 130
 EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE: what a shell reports for `yes | head -1`
+SEED_MAX = 2**32 - 1  # numpy's RandomState takes seeds in [0, 2**32)
 
 # Modules whose warnings are kept off the console (see :func:`quiet_third_party_warnings`)
 THIRD_PARTY = ("lmfit", "numpy", "scipy", "arviz", "xarray", "dask", "distributed", "h5netcdf", "h5py", "emcee",
@@ -125,6 +128,10 @@ class _Group(click.Group):
         except EscfitError as exc:
             click.echo(f"escfit: error: {exc}", err=True)
             ctx.exit(2)
+        except click.UsageError as exc:  # one line, as every other refusal
+            where = exc.ctx.command_path if exc.ctx is not None else "escfit"
+            click.echo(f"escfit: error: {exc.format_message()} (see '{where} -h')", err=True)
+            ctx.exit(exc.exit_code)
         except (click.exceptions.Exit, click.ClickException, click.exceptions.Abort):
             raise
         except BrokenPipeError:
@@ -166,7 +173,8 @@ def cli(debug) -> None:
 @click.option("--noise", type=click.FloatRange(0.0), default=None,
               help="The recorder's noise sd: reading (rad), pulse timing (s), timegrapher amplitude (deg) "
                    "or sample (rad); each recorder's default if omitted.")
-@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the recorder's noise.")
+@click.option("--seed", type=click.IntRange(0, SEED_MAX), default=0, show_default=True,
+              help="Seed of the recorder's noise.")
 @click.option("--notch-deg", type=click.FloatRange(0.0, min_open=True), default=None,
               help="unit-curve recorder: count notches of this angle (deg) instead of amplitudes.")
 @click.option("--notch-reading", type=click.Choice(["counted", "nearest"]), default=None,
@@ -174,10 +182,12 @@ def cli(debug) -> None:
                    "nearest the turning point.")
 def simulate(scene, solver, swings, step, as_json, out, force, recorder, noise, seed, notch_deg, notch_reading):
     """Simulate SCENE (a TOML scene file), or record it with a synthetic recorder."""
-    from ..core.atomic import atomic_path, refuse_existing
+    from ..core.atomic import refuse_existing
+    from ..core.h5write import write_netcdf
     from ..core.scene import load_scene, model_module
 
     if out:
+        _check_outputs({"--out": out}, {"scene": scene})
         refuse_existing(out, force)
     sc = load_scene(scene)
     if recorder is not None:
@@ -192,8 +202,7 @@ def simulate(scene, solver, swings, step, as_json, out, force, recorder, noise, 
         options["h"] = step
     ds = module.simulate(sc, solver, **options) if solver else module.simulate(sc, **options)
     if out:
-        with atomic_path(out, force=force) as tmp:
-            ds.to_netcdf(tmp, engine="h5netcdf")
+        write_netcdf(ds, out, force=force)  # built in memory: a full disk is one error line, no partial file
     if as_json:
         from .summary import json_safe
 
@@ -247,6 +256,16 @@ def charts(out_dir, c0, no_png, force):
     click.echo(f"graph factor K/K_R at C/omega0 = {c0:g}: {graph_factor(c0):.4f}")
 
 
+def _check_outputs(outputs: dict, inputs: dict) -> None:
+    """Refuse, before any work, outputs that are inputs or each other, or whose folder cannot take them."""
+    from ..core.atomic import check_output_folder, refuse_clobbering_inputs
+
+    refuse_clobbering_inputs(outputs, inputs)
+    for role, path in outputs.items():
+        if path is not None:
+            check_output_folder(path, role)
+
+
 RECIPE_KEYS = {"data", "scene", "method", "out", "seed", "walkers", "steps", "max_steps", "burn", "unit", "material",
                "format", "notch_deg", "report", "title", "solver", "moves"}
 
@@ -281,6 +300,37 @@ def _recipe_steps(recipe: dict, key: str, where: str):
     return value
 
 
+# The kind of value each recipe key takes (steps and max_steps: see _recipe_steps)
+RECIPE_TEXT = ("data", "scene", "out", "report", "title", "solver", "format", "material")
+RECIPE_CHOICES = {"method": ("leastsq", "emcee"), "moves": ("stretch", "de")}
+RECIPE_WHOLE = {"seed": (0, SEED_MAX), "walkers": (2, None), "burn": (0, None)}
+
+
+def _check_recipe_values(doc: dict, where: str) -> None:
+    """Refuse a recipe value of the wrong kind, naming the file and the key."""
+    from ..core.errors import SceneError
+
+    def refuse(key, what):
+        raise SceneError(f"{key} must be {what}, got {doc[key]!r}", f"{where}.{key}")
+
+    for key in RECIPE_TEXT:
+        if key in doc and (not isinstance(doc[key], str) or not doc[key].strip()):
+            refuse(key, "a non-empty text")
+    for key, choices in RECIPE_CHOICES.items():
+        if key in doc and doc[key] not in choices:
+            refuse(key, " or ".join(repr(c) for c in choices))
+    for key, (low, high) in RECIPE_WHOLE.items():
+        value = doc.get(key)
+        if key in doc and (isinstance(value, bool) or not isinstance(value, int) or value < low
+                           or (high is not None and value > high)):
+            refuse(key, f"a whole number >= {low}" if high is None else f"a whole number in [{low}, {high}]")
+    if "unit" in doc and (isinstance(doc["unit"], bool) or not isinstance(doc["unit"], (str, int))):
+        refuse("unit", "a unit's name or number")
+    if "notch_deg" in doc and (isinstance(doc["notch_deg"], bool) or not isinstance(doc["notch_deg"], (int, float))
+                               or not 0 < doc["notch_deg"] < float("inf")):
+        refuse("notch_deg", "a positive number of degrees")
+
+
 def _read_recipe(path: Path) -> dict:
     import tomllib
 
@@ -292,6 +342,7 @@ def _read_recipe(path: Path) -> dict:
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
         raise SceneError(f"cannot read fit recipe ({exc})", str(path)) from None
     check_keys(doc, RECIPE_KEYS, f"{path} (recipe)", {"data", "scene"})
+    _check_recipe_values(doc, f"{path} (recipe)")
     for key in ("data", "scene"):
         doc[key] = str((path.parent / doc[key]).resolve())
     return doc
@@ -302,7 +353,7 @@ def _read_recipe(path: Path) -> dict:
 @click.option("--scene", "scene_path", type=click.Path(dir_okay=False), default=None, help="Scene TOML with free parameters.")
 @click.option("--method", type=click.Choice(["leastsq", "emcee"]), default=None, help="Default leastsq (recipe may set it).")
 @click.option("--out", type=click.Path(dir_okay=False), default=None, help="Results file (HDF5).")
-@click.option("--seed", type=int, default=None)
+@click.option("--seed", type=click.IntRange(0, SEED_MAX), default=None, help="Seed of the fit's random numbers.")
 @click.option("--walkers", type=click.IntRange(2), default=None)
 @click.option("--steps", type=StepsType(), default=None,
               help="emcee steps, or 'auto': sample until split R-hat <= 1.01, bulk and tail ESS >= 400 and 50 "
@@ -343,8 +394,9 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoi
     from ..inference import fit as run_fit
 
     recipe: dict = {}
+    recipe_path = None
     if data.endswith(".toml") and scene_path is None:
-        where = data
+        where = recipe_path = data
         recipe = _read_recipe(Path(data))
         data, scene_path = recipe["data"], recipe["scene"]
         for key in ("steps", "max_steps"):
@@ -354,14 +406,19 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoi
     pick = lambda cli_value, key, default: cli_value if cli_value is not None else recipe.get(key, default)  # noqa: E731
     method = pick(method, "method", "leastsq")
     out = pick(out, "out", None) or f"{Path(data).stem}_fit.h5"
-    from ..core.scene import load_scene
-
-    scene = load_scene(scene_path)
     report_path = report_path or recipe.get("report")
-    if report_path:  # refused before the fit, not after it
+    outputs = {"--out": out, "--report": report_path}
+    if method == "emcee":
+        outputs["the checkpoint (--out + .emcee)"] = f"{out}.emcee"
+    # refused before any work, --force or not: an output must not replace an input or another output
+    _check_outputs(outputs, {"data": data, "scene": scene_path, "recipe": recipe_path})
+    if report_path:
         from ..core.atomic import refuse_existing
 
         refuse_existing(report_path, force)
+    from ..core.scene import load_scene
+
+    scene = load_scene(scene_path)
     options = {}
     if scene.model == "balance":
         options = {"fmt": pick(fmt, "format", None), "notch_deg": pick(notch_deg, "notch_deg", None),
@@ -448,6 +505,7 @@ def report(results, out, fmt, force, title):
     from ..report import make_report
 
     out = out or str(Path(results).with_suffix(".html" if fmt == "html" else ".md"))
+    _check_outputs({"--out": out}, {"results": results})
     click.echo(f"wrote {make_report(results, out, fmt=fmt, force=force, title=title)}")
 
 

@@ -1,7 +1,9 @@
 """Atomic file output: write to a temporary file beside the target, then rename.
 
 A failed run therefore never leaves a partial file, and an existing file is replaced only
-when the caller says so (``force=True``).  The file gets the permissions an ordinary
+when the caller says so (``force=True``).  Commands check their outputs before any work with
+:func:`refuse_clobbering_inputs` (an output is never an input, nor another output) and
+:func:`check_output_folder`.  The file gets the permissions an ordinary
 ``open(path, "w")`` would give (0644 under the usual umask 022), not the 0600 of
 :func:`tempfile.mkstemp`: results are for colleagues and web servers too.
 """
@@ -16,7 +18,8 @@ from typing import Iterator
 
 from .errors import ResultsError
 
-__all__ = ["atomic_path", "refuse_existing", "current_umask", "new_file_mode"]
+__all__ = ["atomic_path", "refuse_existing", "refuse_clobbering_inputs", "check_output_folder", "current_umask",
+           "new_file_mode"]
 
 
 def current_umask() -> int:
@@ -46,6 +49,65 @@ def refuse_existing(path: str | Path, force: bool) -> None:
     """Raise :class:`ResultsError` if ``path`` exists and ``force`` is false."""
     if Path(path).exists() and not force:
         raise ResultsError("output file exists; pass --force (force=True in Python) to replace it", str(path))
+
+
+def same_file(a: str | Path, b: str | Path) -> bool:
+    """Whether ``a`` and ``b`` name one file: equal resolved paths (symlinks, ``./x`` and ``x``),
+    or, when both exist, one inode (hard links)."""
+    if Path(a).resolve() == Path(b).resolve():
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # either is missing or unreadable: not the same existing file
+        return False
+
+
+def refuse_clobbering_inputs(outputs: dict[str, str | Path | None], inputs: dict[str, str | Path | None]) -> None:
+    """Refuse an output that is one of the command's inputs or another of its outputs.
+
+    Checked before any work, so that ``--force`` can never replace the data, the scene or a
+    file the same command writes twice.
+
+    Parameters
+    ----------
+    outputs
+        Output role (as the user names it, e.g. ``"--out"``) to path; ``None`` paths are skipped.
+    inputs
+        Input role (e.g. ``"data"``, ``"scene"``) to path; ``None`` paths are skipped.
+
+    Raises
+    ------
+    ResultsError
+        Naming the output and both roles, e.g. ``results.h5: --out is the data file``.
+    """
+    seen = [(role, path) for role, path in inputs.items() if path is not None]
+    for role, path in outputs.items():
+        if path is None:
+            continue
+        for other_role, other in seen:
+            if same_file(path, other):
+                raise ResultsError(f"{role} is the {other_role} file; choose another output name", str(path))
+        seen.append((role, path))
+
+
+def check_output_folder(path: str | Path, role: str = "output") -> None:
+    """Refuse, before any work, an output whose folder is missing, not a folder or not writable.
+
+    Raises
+    ------
+    ResultsError
+        Naming the output, its role and the folder.
+    """
+    target = Path(path)
+    folder = target.parent
+    if target.is_dir():
+        raise ResultsError(f"{role} is a folder; give a file name", str(target))
+    if not folder.exists():
+        raise ResultsError(f"the folder of {role} does not exist ({folder}); create it first", str(target))
+    if not folder.is_dir():
+        raise ResultsError(f"the folder of {role} is not a folder ({folder} is a file)", str(target))
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise ResultsError(f"the folder of {role} is not writable ({folder})", str(target))
 
 
 @contextmanager

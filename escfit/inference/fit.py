@@ -51,9 +51,11 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
     method
         ``"leastsq"`` (lmfit, multistart) or ``"emcee"`` (least squares, then MCMC).
     out
-        Results file (HDF5); written atomically, never replacing a file without ``force``.
+        Results file (HDF5); written atomically and never replacing a file without ``force``.
+        Refused before any work when it or its checkpoint is the data or scene file, or when
+        its folder is missing or not writable.
     seed, walkers, steps, burn, n_starts, progress
-        Sampler and optimiser settings; ``None`` takes the family's default
+        Sampler and optimiser settings (``seed`` in [0, 2**32 - 1]); ``None`` takes the family's default
         (``fit_defaults``; ``burn`` defaults to half the steps).  ``steps = "auto"`` samples
         until converged (see :func:`~escfit.inference.mcmc.run_emcee`), at most ``max_steps``.
     resume
@@ -80,23 +82,26 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
     FitResult
         Also written to ``out`` when given.
     """
-    from ..core.atomic import refuse_existing
+    from ..core.atomic import check_output_folder, refuse_clobbering_inputs, refuse_existing
 
     if method not in ("leastsq", "emcee"):
         raise FitError(f"method must be 'leastsq' or 'emcee', got {method!r}")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2**32:
+        raise FitError(f"seed must be a whole number in [0, 2**32 - 1], got {seed!r}")
+    if checkpoint is None and out is not None and method == "emcee":
+        checkpoint = str(out) + ".emcee"
     if out is not None:
+        paths = lambda x: x if isinstance(x, (str, Path)) else None  # noqa: E731 - objects are not files
+        refuse_clobbering_inputs({"out": out, "checkpoint": checkpoint if method == "emcee" else None},
+                                 {"data": paths(data), "scene": paths(scene)})
         refuse_existing(out, force)
-        if not Path(out).parent.exists():
-            raise FitError("output directory does not exist", str(Path(out).parent))
+        check_output_folder(out, "out")
+    if method == "emcee" and checkpoint is not None:
+        _check_checkpoint(checkpoint, resume=resume, force=force)
     sc = load_scene(scene) if not hasattr(scene, "model") else scene
     fam = family(sc.model)
     defaults = {**GENERIC_DEFAULTS, **dict(getattr(fam, "fit_defaults", {}))}
     pick = lambda value, key: defaults[key] if value is None else value  # noqa: E731
-    if checkpoint is None and out is not None and method == "emcee":
-        checkpoint = str(out) + ".emcee"
-    if method == "emcee" and checkpoint is not None and Path(checkpoint).exists() and not resume and not force:
-        raise FitError("an interrupted run's checkpoint exists; pass --resume to continue it or --force to restart",
-                       str(checkpoint))
     problem = fam.problem(sc, data, **options)
     if out is not None:
         _remove_stale_temporaries(out, checkpoint)
@@ -147,6 +152,37 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
         timings["write_s"] = time.perf_counter() - clock
     result.timings = timings
     return result
+
+
+def _check_checkpoint(checkpoint: str | Path, *, resume: bool, force: bool) -> None:
+    """Before any work: a fresh run refuses a checkpoint it would lose (unless ``force``), and
+    ``resume`` refuses a missing or unreadable one, naming ``--force`` as the way to start again.
+
+    A run refused before sampling never writes a checkpoint (the sampler saves its first one
+    after its first steps), so a refusal cannot leave one behind to block the next run.
+    """
+    from ..core.errors import ResultsError
+    from .checkpoint import FORMAT
+
+    path = Path(checkpoint)
+    if not resume:
+        if path.exists() and not force:
+            raise FitError("an interrupted run's checkpoint exists; pass --resume to continue it or --force to "
+                           "restart", str(checkpoint))
+        return
+    if not path.exists():
+        raise ResultsError("nothing to resume: checkpoint file not found; run without --resume", str(checkpoint))
+    import h5py
+
+    try:
+        with h5py.File(path, "r") as f:
+            kind = f.attrs.get("format")
+    except (OSError, ValueError) as exc:  # garbage, truncated or unreadable
+        raise ResultsError(f"cannot resume from this checkpoint ({type(exc).__name__}: {exc}); pass --force to "
+                           "start again", str(checkpoint)) from None
+    if kind != FORMAT:
+        raise ResultsError("not an escfit sampler checkpoint (written by another program or an older version); "
+                           "pass --force to start again", str(checkpoint))
 
 
 def _remove_stale_temporaries(out: str | Path, checkpoint: str | Path | None) -> None:

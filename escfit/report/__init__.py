@@ -18,7 +18,7 @@ import re
 import tomllib
 from pathlib import Path
 
-from ..core.atomic import atomic_path, refuse_existing
+from ..core.atomic import atomic_path, check_output_folder, refuse_clobbering_inputs, refuse_existing
 from ..core.display import display_text, load_unit
 from ..core.errors import MissingDependency
 from ..results import FitResult, load_fit
@@ -62,7 +62,7 @@ def _units_note(units: list[str]) -> str:
         said.append("torques per inertia (R, X) in rad/s^2")
     if not said:
         return ""
-    return "Display units: " + ", ".join(said) + "; the results file and its JSON summary keep radians and 1/s^2."
+    return "Display units: " + ", ".join(said) + "; the results file and its JSON and CSV summaries keep angles in radians."
 
 
 def _md_text(text) -> str:
@@ -109,7 +109,9 @@ def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: 
     if fmt not in ("html", "md"):
         raise ValueError(f"report format must be 'html' or 'md', got {fmt!r}")
     out = Path(out)
+    refuse_clobbering_inputs({"the report": out}, {"results": path})
     refuse_existing(out, force)
+    check_output_folder(out, "the report")
     res = load_fit(path)
     a = res.attrs
     page = {

@@ -70,6 +70,9 @@ def parameter_table(res) -> tuple[list[str], list[list[str]]]:
     for name, r in summary.items():
         value, unit = to_display(_estimate(r), r.get("unit"), name)
         ends = [to_display(r.get(k), r.get("unit"), name)[0] for k in ("lo68", "hi68", "lo95", "hi95")]
+        bound = {"min": ends[2], "max": ends[3]}.get(r.get("at_bound"))
+        if bound is not None and value is not None and abs(value - bound) <= 1e-9 * max(abs(ends[3] - ends[2]), 1e-300):
+            value = bound  # on the bound to rounding (5.8e-17 against 0): show the bound
         row = [display_name(name, loads_in), unit, format_value(value),
                f"[{format_value(ends[0])}, {format_value(ends[1])}]", f"[{format_value(ends[2])}, {format_value(ends[3])}]"]
         if posterior:
@@ -81,6 +84,9 @@ def parameter_table(res) -> tuple[list[str], list[list[str]]]:
             note.append(_BOUND_FLAG[r["at_bound"]])
         if name == "observation.sigma" and estimate_kind(r) == "median":
             note.append("reading noise, posterior")
+        rhat = r.get("rhat")
+        if rhat is not None and rhat > 1.01:
+            note.append("not converged (R-hat above 1.01)")
         notes.append(note)
         rows.append(row)
     head = ["parameter", "unit", column, "68% interval", "95% interval"]
@@ -110,8 +116,15 @@ def fit_statistics(res) -> str:
     sigma_unit = "rad" if units == "notches" else units  # notch counts: the jitter is an angle
     method = {"emcee": "posterior sampled with emcee, started from a least-squares fit",
               "leastsq": "least squares (lmfit)"}.get(str(a.get("method")), str(a.get("method", "")))
-    head = (f"Model {a.get('model', 'balance')} fitted to {n} reading(s) ({a.get('data_kind', 'readings')}), "
-            f"{npar} free parameter(s); {method}")
+    noise = [name for name in res.parameter_names if name.startswith("observation.sigma")]
+    profiled = [name for name in noise if lsq is None or name not in list(map(str, lsq["parameter"].values))]
+    plural = lambda k, word: f"{k} {word}{'' if k == 1 else 's'}"  # noqa: E731
+    fitted = plural(npar, "parameter") + (" fitted by least squares and the reading noise profiled from the "
+                                          "residuals" if profiled else "")
+    model = {"balance": "Balance wheel or pendulum", "friction_rig": "Friction rig", "geneva": "Geneva escapement",
+             "verge": "Verge escapement"}.get(str(a.get("model", "balance")), str(a.get("model")))
+    head = (f"{model} model fitted to {plural(n, 'reading')} ({a.get('data_kind', 'readings')}): {fitted}; "
+            f"{method}")
     if "redchi" not in la:
         return head + "."
     if n <= npar:
