@@ -163,7 +163,12 @@ def load_fit(path: str | Path) -> FitResult:
         with xr.open_datatree(p, engine="h5netcdf") as opened:  # read into memory, then let go of the file
             tree = opened.load()
     except Exception as exc:
-        raise ResultsError(f"cannot read as an HDF5 results file ({type(exc).__name__}: {exc})", str(path)) from None
+        import h5py
+
+        if not h5py.is_hdf5(p):
+            raise ResultsError("not an HDF5 file: give a results file written by escfit fit", str(path)) from None
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ResultsError(f"damaged or unreadable results file ({first[:160]})", str(path)) from None
     schema = tree.attrs.get("schema_version")
     if schema != SCHEMA_VERSION:
         raise ResultsError(f"not an escfit fit file of schema {SCHEMA_VERSION!r} (found {schema!r})", str(path))

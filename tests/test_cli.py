@@ -99,7 +99,7 @@ def test_fit_rig_and_summary(tmp_path):
     (["fit", "nope.csv", "--scene", DATASETS / "scenes" / "monday_unit_angle_fit.toml"], "data file not found"),
     (["fit", DATASETS / "monday1965" / "synthetic" / "unit1.csv"], "--scene"),
     (["summary", "missing.h5"], "results file not found"),
-    (["report", DATASETS / "scenes" / "horology_rk4_case.toml"], "cannot read"),
+    (["report", DATASETS / "scenes" / "horology_rk4_case.toml"], "not an HDF5 file"),
     (["fit", ROOT / "fits" / "monday_unit3.toml", "--steps", "many"], "neither 'auto' nor a whole number"),
     (["fit", ROOT / "fits" / "monday_unit3.toml", "--steps", "5"], "neither 'auto' nor a whole number"),
 ])

@@ -32,7 +32,7 @@ BAD = [
     ("fields.csv", "swing,amplitude_rad\n1,1.0,7\n", "fields.csv:2: expected 2 fields"),
     ("notches.csv", "swing,notches\n1,40\n", "notch angle"),
     ("notch_frac.csv", "# notch_deg: 6\nswing,notches\n1,40.5\n", "whole numbers"),
-    ("binary.csv", b"\x89PNG\r\n\x1a\n\x00\x00", "not a text file"),
+    ("binary.csv", b"\x89PNG\r\n\x1a\n\x00\x00", "a binary file, not a CSV table"),
     ("two_amp.csv", "swing,amplitude_rad,amplitude_deg\n1,1,57\n", "exactly one amplitude column"),
 ]
 

@@ -29,10 +29,13 @@ def print_summary(result) -> None:
     click.echo("  ".join(h.ljust(w) for h, w in zip(head, widths)))
     for r in rows:
         click.echo("  ".join(c.ljust(w) for c, w in zip(r, widths)))
+    from ..core.display import display_text, load_unit
+
+    loads_in = load_unit(json.loads(a.get("meanings", "{}") or "{}"))
     for n in result.notes:
         click.echo(f"note: {n}")
     for w in result.warnings:
-        click.echo(f"warning: {w}")
+        click.echo(f"warning: {display_text(w, loads_in)}")
 
 
 @click.command()

@@ -48,7 +48,7 @@ def new_file_mode() -> int:
 def refuse_existing(path: str | Path, force: bool) -> None:
     """Raise :class:`ResultsError` if ``path`` exists and ``force`` is false."""
     if Path(path).exists() and not force:
-        raise ResultsError("output file exists; pass --force (force=True in Python) to replace it", str(path))
+        raise ResultsError("output file exists; pass --force to replace it", str(path))
 
 
 def same_file(a: str | Path, b: str | Path) -> bool:

@@ -253,15 +253,17 @@ def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None,
                                                                              predictive_draws)
         flat = mc.chain.reshape(-1, len(names))
         pc = np.corrcoef(flat.T) if len(names) > 1 else np.ones((1, 1))
-        warnings = correlation_warnings(names, pc) + sloppy_directions(names, flat)
+        convergence = []  # first: an unconverged run makes every other statement provisional
         bad = [n for n in names if float(groups["diagnostics"]["rhat"].sel(parameter=n)) > 1.05]
         if bad:
-            warnings.append(f"split R-hat above 1.05 for {bad}: the walkers have not converged; run longer")
+            convergence.append(f"split R-hat above 1.05 for {', '.join(bad)}: the walkers have not converged; "
+                               "run longer")
         if mc.auto and not mc.converged:
-            warnings.append(f"the run stopped at its cap of {mc.steps} steps before the convergence criteria were "
-                            f"met ({mc.verdict}); run longer (--max-steps) or fix the model")
+            convergence.append(f"the run stopped at its cap of {mc.steps} steps before the convergence criteria were "
+                               f"met ({mc.verdict}); run longer (--max-steps) or fix the model")
         elif not mc.tau_reliable:
-            warnings.append("the run is shorter than 50 autocorrelation times: intervals are approximate")
+            convergence.append("the run is shorter than 50 autocorrelation times: intervals are approximate")
+        warnings = convergence + correlation_warnings(names, pc) + sloppy_directions(names, flat)
         warnings += [w for w in problem.checks_of_posterior(mc.chain) if w not in family_warnings]
     warnings = _unique(warnings + misfit_warnings + list(getattr(problem, "data_warnings", [])))
     attrs = {

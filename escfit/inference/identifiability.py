@@ -18,15 +18,23 @@ __all__ = ["correlation_warnings", "sloppy_directions", "ridge_warnings", "bound
 
 
 def correlation_warnings(names: list[str], corr: np.ndarray, threshold: float = 0.95) -> list[str]:
-    """Messages for parameter pairs whose |correlation| exceeds ``threshold``."""
-    out = []
+    """Messages for parameter pairs whose |correlation| exceeds ``threshold``.
+
+    One message per pair for up to two pairs; beyond that one message listing them all (the
+    corner plot shows them; six near-identical sentences hide the other warnings).
+    """
+    pairs = []
     for i in range(len(names)):
         for j in range(i + 1, len(names)):
             r = corr[i, j]
             if np.isfinite(r) and abs(r) > threshold:
-                out.append(f"{names[i]} and {names[j]} are correlated (r = {r:+.3f}): the data determine a combination "
-                           "of them better than either alone")
-    return out
+                pairs.append((names[i], names[j], float(r)))
+    if len(pairs) <= 2:
+        return [f"{a} and {b} are correlated (r = {r:+.3f}): the data determine a combination of them better than "
+                "either alone" for a, b, r in pairs]
+    listed = ", ".join(f"{a} with {b} ({r:+.3f})" for a, b, r in pairs)
+    return [f"{len(pairs)} parameter pairs are correlated beyond |r| = {threshold:g}: {listed}; the data determine "
+            "combinations of them better than the parameters alone"]
 
 
 def sloppy_directions(names: list[str], samples: np.ndarray, ratio: float = 30.0) -> list[str]:

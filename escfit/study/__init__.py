@@ -16,12 +16,32 @@
 Plotting lives in :mod:`escfit.study.plots` (matplotlib, imported there only).
 """
 
-from .batch import BatchResult, LazyClient, discover_units, fit_fleet, fit_many, load_summary, unit_seed
-from .compare import ModelComparison, chapter5_contrast, compare_models, decay_residuals
-from .fleet import Fleet, FleetSpec, LogNormal, generate_fleet, load_fleet, preset, record_unit
-from .population import PopulationResult, UnitDraws, collect_draws, fit_population, load_population
-from .runs import StudySettings, cross_fit, results_dir
-from .scenes import MODELS, POPULATION_PARAMS, Rig, fit_scene, generating_scene
+import importlib
+
+# Names load their module on first use, so that reading a fleet summary (escfit summary) does not
+# import dask, the population model and the fleet generator.
+_HOME = {
+    "batch": ("BatchResult", "LazyClient", "discover_units", "fit_fleet", "fit_many", "load_summary", "unit_seed"),
+    "compare": ("ModelComparison", "chapter5_contrast", "compare_models", "decay_residuals"),
+    "fleet": ("Fleet", "FleetSpec", "LogNormal", "generate_fleet", "load_fleet", "preset", "record_unit"),
+    "population": ("PopulationResult", "UnitDraws", "collect_draws", "fit_population", "load_population"),
+    "runs": ("StudySettings", "cross_fit", "results_dir"),
+    "scenes": ("MODELS", "POPULATION_PARAMS", "Rig", "fit_scene", "generating_scene"),
+}
+_WHERE = {name: module for module, names in _HOME.items() for name in names}
+
+
+def __getattr__(name: str):
+    if name in _WHERE:
+        value = getattr(importlib.import_module(f".{_WHERE[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_WHERE))
+
 
 __all__ = [
     "fit_many", "fit_fleet", "BatchResult", "LazyClient", "discover_units", "load_summary", "unit_seed",

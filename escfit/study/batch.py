@@ -61,8 +61,7 @@ __all__ = ["UnitTask", "RecordingFile", "BatchResult", "discover_units", "record
            "fit_fleet", "summarize", "summary_row", "load_summary", "SUMMARY_SCHEMA", "unit_seed", "LazyClient",
            "local_cluster"]
 
-SUMMARY_SCHEMA = "escfit-fleet-summary/1"
-SUMMARY_FILE = "summary.nc"
+from .names import SUMMARY_FILE, SUMMARY_SCHEMA  # noqa: E402 (re-exported)
 STATS = ("estimate", "median", "lo68", "hi68", "lo95", "hi95", "mean", "sd", "rhat", "ess_bulk")
 
 # Files of a DATA folder that are not recordings: scenes and recipes, notes, results, figures.

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from .batch import SUMMARY_FILE, SUMMARY_SCHEMA, load_summary
+from .names import SUMMARY_FILE, SUMMARY_SCHEMA
 
 __all__ = ["is_fleet_summary", "fleet_summary_path", "read_fleet_summary", "estimates", "fleet_table", "fleet_csv"]
 
@@ -106,4 +106,6 @@ def _number(x) -> str:
 
 def read_fleet_summary(path: str | Path) -> xr.Dataset:
     """:func:`escfit.study.batch.load_summary` of a file or a ``fit-many`` results directory."""
+    from .batch import load_summary
+
     return load_summary(fleet_summary_path(path))
