@@ -196,6 +196,8 @@ def test_warning_fires_for_the_wrong_convention_only(tmp_path):
             # and the fit itself carries the warning (the check runs at the least-squares optimum)
             res = fit(escfit.load_scene("monday.toml", text=_with_reading(text, other)), data, method="leastsq")
             assert any('favour notch_reading = "nearest" over "counted"' in w for w in res.warnings), res.warnings
+            # the results say how the counts were read, so the report draws their intervals where they are
+            assert res.attrs["notch_reading"] == "counted" and float(res.attrs["notch_deg"]) == pytest.approx(6.0)
 
 
 def test_whole_array_posterior_reads_the_convention_as_the_one_at_a_time_path():

@@ -70,15 +70,20 @@ def _amplitude_figure(res, plt) -> bytes:
     band = _band(res, y.size)
     k = RAD_TO_DEG
     if res.attrs.get("data_kind") == "notches":
-        notch = _notch_from_scene(res)
-        shown, yerr = (y + 0.5) * notch * k, 0.5 * notch * k
-        caption = (f"Notch readings: a count n says the amplitude lay between n and n+1 notches of "
+        notch, reading = _notch_from_results(res)
+        lower = 0.0 if reading == "counted" else -0.5  # where a count's interval starts, in notches
+        shown, yerr = (y + lower + 0.5) * notch * k, 0.5 * notch * k
+        words = ("between n and n+1 notches" if reading == "counted"
+                 else "within half a notch of n notches (read at the nearest mark)")
+        caption = (f"Notch readings: a count n says the amplitude lay {words} of "
                    f"{notch * k:.3g} deg (the notch interval); the marker sits at its middle and the error bar "
-                   "spans it. Lines: the model's amplitude at the least-squares best fit")
+                   "spans it. Lines join the model's amplitude at the recorded half swings (least-squares best "
+                   "fit); between them the model is not drawn")
         key, err = "notch readings", f"notch interval, {notch * k:.3g} deg"
     else:
         shown, yerr = y * k, None
-        caption = "Amplitude readings against the model's amplitude at the least-squares best fit"
+        caption = ("Amplitude readings against the model's amplitude at the least-squares best fit (lines join the "
+                   "recorded half swings)")
         key, err = "amplitude readings", ""
     caption += ("; shaded: 95 % band of the model over the posterior draws" if band is not None else "") + \
         ". Lower panel: reading minus best fit. One colour per curve (load) in both panels."
@@ -215,9 +220,18 @@ def _residual_figure(res, plt, only=None) -> bytes:
     return png(fig, caption=caption)
 
 
-def _notch_from_scene(res) -> float:
+def _notch_from_results(res) -> tuple[float, str]:
+    """Notch angle (rad) and reading convention of a notch fit: stored with the fit, else (older
+    files) the scene's ``[observation]`` table, else 6 deg counted."""
+    a = res.attrs
+    if "notch_deg" in a:
+        return math.radians(float(a["notch_deg"])), str(a.get("notch_reading", "counted"))
     import tomllib
 
-    doc = tomllib.loads(res.attrs["scene"])
-    nd = doc.get("observation", {}).get("notch_deg", 6.0)
-    return math.radians(float(nd))
+    obs = tomllib.loads(a.get("scene", "")).get("observation", {})
+    nd = obs.get("notch_deg", 6.0)
+    try:
+        value = float(nd) if not isinstance(nd, str) else float(nd.split()[0])
+    except (TypeError, ValueError):
+        value = 6.0
+    return math.radians(value), str(obs.get("notch_reading", "counted"))

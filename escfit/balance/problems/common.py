@@ -78,9 +78,13 @@ class BalanceProblem(ProblemBase):
         return coords
 
     def provenance(self) -> dict[str, Any]:
-        return {"scene": self.scene.text, "scene_file": self.scene.where, "switching": self.scene.switching,
-                "data_file": self.data.source, "data_sha256": self.data.sha256, "data_kind": self.data.kind,
-                "solver": self.solver, "solver_options": self.solver_options}
+        out = {"scene": self.scene.text, "scene_file": self.scene.where, "switching": self.scene.switching,
+               "data_file": self.data.source, "data_sha256": self.data.sha256, "data_kind": self.data.kind,
+               "solver": self.solver, "solver_options": self.solver_options}
+        if getattr(self.data, "kind", "") == "notches":  # how the counts read: the report draws their intervals
+            out.update(notch_deg=math.degrees(float(self.data.notch)),
+                       notch_reading=getattr(getattr(self, "observation", None), "reading", "counted"))
+        return out
 
     def derived(self, values: Mapping[str, float]) -> dict[str, float]:
         """Monday's combined K when his phase convention leaves only K determined."""
