@@ -284,3 +284,27 @@ def test_phase_convention_at_several_loads_warns_what_the_data_determine(tmp_pat
     fixed_x = FitProblem(load_scene(DATASETS / "monday1965" / "unit3_fit.toml"), read_unit_curve(data))
     assert fixed_x.phase_loads_warning() == [] and "K[load=330.66]" not in fixed_x.derived(
         fixed_x.values(fixed_x.initial))
+
+
+def test_a_small_estimate_many_standard_errors_from_zero_is_not_on_its_bound():
+    # an inertia-sized parameter (3e-7 in SI) fitted to 2 % is not "at 0": the distance to the bound
+    # is measured in standard errors, not in the parameter's unit; one at 0 to rounding still is
+    from escfit.inference.lsq import bound_flags
+
+    flags = bound_flags([3e-7, 2e-8, 5.8e-17], [0.0] * 3, [np.inf] * 3, [6e-9, 2e-9, 2.6e-4])
+    assert list(flags) == [0, 0, -1]
+    lo, hi = bounded_interval(2e-8, 2e-9, 0.0, np.inf, Z95, 0)
+    assert lo < 2e-8 < hi and lo == pytest.approx(2e-8 * math.exp(-Z95 * 0.1), rel=1e-12)
+
+
+def test_informative_priors_let_a_posterior_run_start_where_least_squares_alone_is_refused():
+    # one reading, two parameters: least squares alone is refused; with a normal prior pinning the
+    # slope, the posterior run's least-squares start counts the prior and goes ahead
+    problem = ToyProblem(lambda x, t: x[0] + x[1] * t, [1.0], [2.0], 0.1, ["a", "b"], [-10.0, -10.0], [10.0, 10.0],
+                         [0.0, 0.0])
+    problem.priors[1] = Prior("normal", (0.5, 0.01), -10.0, 10.0)
+    with pytest.raises(FitError, match="1 reading"):
+        least_squares(problem)
+    start = least_squares(problem, priors_count=True)
+    # the optimum: b at its prior mean, a + b = 2 from the reading
+    assert start.values["b"] == pytest.approx(0.5, abs=1e-3) and start.values["a"] == pytest.approx(1.5, abs=1e-2)

@@ -102,3 +102,27 @@ def test_a_byte_order_mark_is_dropped_and_latin1_is_named(tmp_path):
         load_scene(latin)
     assert str(info.value) == (f"{latin}:1: not UTF-8 text: byte 0xe9 on line 1 (in Latin-1 / Windows-1252 that is "
                                "'é'); save the file as UTF-8")
+
+
+def test_unit_text_is_never_evaluated_as_arithmetic_but_fractions_read():
+    import signal
+
+    from escfit.core.units import UnsafeUnitText, to_canonical, ureg
+
+    def ring(*_):
+        raise TimeoutError("pint evaluated arithmetic")
+
+    old = signal.signal(signal.SIGALRM, ring)
+    signal.alarm(10)
+    try:
+        for text in ("9**9**9 rad", "rad**999999", "2**3 rad"):
+            for parse in (ureg.Quantity, ureg, ureg.parse_units_as_container, ureg.parse_units,
+                          lambda s: ureg.Quantity(1.0, "rad").to(s)):
+                with pytest.raises(UnsafeUnitText):
+                    parse(text)
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, old)
+    assert to_canonical("pi/2 rad", "angle", "w") == pytest.approx(np.pi / 2, rel=1e-15)
+    assert to_canonical("1/4 turn", "angle", "w") == pytest.approx(np.pi / 2, rel=1e-15)
+    assert to_canonical("300 deg", "angle", "w") == pytest.approx(np.radians(300), rel=1e-15)

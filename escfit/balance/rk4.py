@@ -208,7 +208,7 @@ def _run_naive(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, b
     n_done = 0
     status = 0
     k = 0
-    horizon = creep_horizon(c, sp_w2.max())
+    horizon = creep_horizon(c, sp_w2.min())  # the softest piece: the longest horizon, never a stop too early
     while n_done < n_swings:
         if k >= max_steps:
             status = 3

@@ -25,7 +25,7 @@ def print_summary(result) -> None:
                 + str(a.get("convergence", ""))
         click.echo(f"emcee: {a['walkers']} walkers x {a['steps']} steps, first {a['burn']} discarded ({how})")
     head, rows = parameter_table(result)
-    widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(head)]
+    widths = [max([len(h)] + [len(r[i]) for r in rows]) for i, h in enumerate(head)]
     click.echo("  ".join(h.ljust(w) for h, w in zip(head, widths)))
     for r in rows:
         click.echo("  ".join(c.ljust(w) for c, w in zip(r, widths)))

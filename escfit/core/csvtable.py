@@ -95,7 +95,10 @@ def read_table(path: str | Path) -> Table:
         body.append((n, line))
     if not body:
         raise DataError("empty file (no header and no rows)", where)
-    rows = list(csv.reader([b for _, b in body]))
+    try:
+        rows = list(csv.reader([b for _, b in body]))
+    except csv.Error as exc:
+        raise DataError(f"cannot read as a table ({exc})", where) from None
     header = [h.strip() for h in rows[0]]
     if len(set(header)) != len(header):
         raise DataError(f"duplicate column names in header {header}", f"{where}:{body[0][0]}")

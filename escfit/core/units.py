@@ -45,19 +45,27 @@ class _GuardedRegistry(pint.UnitRegistry):
     def _check(self, text):
         if not self._guarded or not isinstance(text, str):
             return
-        m = _NUMBER.match(text)
+        m = _PREFIX.match(text)
         rest = text[m.end():].strip() if m else text.strip()
-        if (rest and not safe_unit_text(rest)) or (m and not math.isfinite(float(m.group(1)))):
-            raise UnsafeUnitText(f"{text[:60]!r} is not a number and a unit (names, * / ( ) and powers up to "
-                                 "two digits)")
+        numbers = _PREFIX_NUMBER.findall(m.group(0)) if m else []
+        if (rest and not safe_unit_text(rest)) or not all(math.isfinite(float(x)) for x in numbers):
+            raise UnsafeUnitText(f"{text[:60]!r} is not a number and a unit (a number or a fraction such as pi/2, "
+                                 "then names, * / ( ) and powers up to two digits)")
 
     def parse_expression(self, input_string, *args, **kwargs):
         self._check(input_string)
         return super().parse_expression(input_string, *args, **kwargs)
 
+    __call__ = parse_expression  # ureg("...") is parse_expression; the base class binds its own
+
     def parse_units(self, input_string, *args, **kwargs):
         self._check(input_string)
         return super().parse_units(input_string, *args, **kwargs)
+
+    def parse_units_as_container(self, input_string, *args, **kwargs):
+        # what Unit(str), Quantity.to(str) and m_as(str) evaluate text with
+        self._check(input_string)
+        return super().parse_units_as_container(input_string, *args, **kwargs)
 
 
 ureg = _GuardedRegistry()
@@ -177,9 +185,14 @@ def to_canonical(value: Any, kind: str, where: str, *, bare_limit: float | None 
 
 
 MAX_UNIT_TEXT = 40
-_UNIT_TOKEN = re.compile(r"(?P<name>[A-Za-z_°µΩ]+(?:_\d{1,2})?(?![\w])|%)|(?P<pow>(?:\*\*|\^)\s*-?\d{1,2})(?![\d.])"
+_UNIT_TOKEN = re.compile(r"(?P<name>[A-Za-z_°µΩ²³]+(?:_\d{1,2})?(?![\w])|%)|(?P<pow>(?:\*\*|\^)\s*-?\d{1,2})(?![\d.])"
                          r"|(?P<op>[*/])|(?P<paren>[()])|(?P<space>\s+)")
 _NUMBER = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)")
+_NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+# A leading number, or a short product or quotient of numbers and pi ("pi/2 rad", "1/4 turn"):
+# at most four factors and no powers, so nothing pint computes from it can grow.
+_PREFIX = re.compile(rf"\s*(?:{_NUM}|pi)(?:\s*[*/]\s*(?:{_NUM}|pi)(?![A-Za-z_])){{0,3}}(?![A-Za-z_\d.])")
+_PREFIX_NUMBER = re.compile(_NUM)
 
 
 def safe_unit_text(text: str) -> bool:

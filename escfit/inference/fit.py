@@ -129,7 +129,7 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
         raise FitError(f"predictive_draws must be at least 1, got {predictive_draws}")
     started = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
     clock = time.perf_counter()
-    lsq = least_squares(problem, n_starts=n_starts, n_refine=n_refine, seed=seed)
+    lsq = least_squares(problem, n_starts=n_starts, n_refine=n_refine, seed=seed, priors_count=method == "emcee")
     timings = {"least_squares_s": time.perf_counter() - clock}
     mc = None
     if method == "emcee":

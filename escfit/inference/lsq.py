@@ -113,7 +113,7 @@ class LeastSquaresResult:
         if self.upper is None:
             self.upper = np.full(k, np.inf)
         if self.at_bound is None:
-            self.at_bound = bound_flags(self.value, self.lower, self.upper)
+            self.at_bound = bound_flags(self.value, self.lower, self.upper, self.stderr)
         if not self.intervals:
             self.intervals = interval_table(self.value, self.stderr, self.lower, self.upper, self.at_bound)
 
@@ -130,7 +130,8 @@ class LeastSquaresResult:
 
 
 def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None = None, seed: int = 0,
-                  fixed: dict[str, float] | None = None, start: dict[str, float] | None = None) -> LeastSquaresResult:
+                  fixed: dict[str, float] | None = None, start: dict[str, float] | None = None,
+                  priors_count: bool = False) -> LeastSquaresResult:
     """Minimise the standardised residuals over the structural free parameters.
 
     Parameters
@@ -149,6 +150,10 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
         Seeds the Latin hypercube.
     fixed
         Parameters held at given values (profiles, the first stage of a correlated-noise fit).
+    priors_count
+        Let Gaussian priors make up for missing readings (the start of a posterior run, where
+        informative priors may pin what the data cannot); a least-squares result alone refuses
+        fewer readings than parameters.
     start
         Starting values by name, replacing the scene's.
 
@@ -166,7 +171,8 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
     names = [n for n in problem.names if n not in noise and n not in fixed]
     if not names:
         raise FitError("no structural parameter left to fit by least squares")
-    refuse_underdetermined(problem, names)
+    pinned_by_priors = sum(problem.priors[problem.names.index(n)].kind in _GAUSSIAN for n in names)
+    refuse_underdetermined(problem, names, pinned_by_priors if priors_count else 0)
     if "observation.rho" in problem.names and "observation.rho" not in fixed:
         return _two_stage_ar1(problem, n_starts=n_starts, n_refine=n_refine, seed=seed, fixed=fixed, start=start)
     idx = [problem.names.index(n) for n in names]
@@ -259,12 +265,13 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
                               lower=lo.copy(), upper=hi.copy(), warnings=cov_warnings)
 
 
-def refuse_underdetermined(problem: Problem, names: list[str]) -> None:
+def refuse_underdetermined(problem: Problem, names: list[str], pinned: int = 0) -> None:
     """Refuse a fit with fewer readings than structural parameters, before any evaluation.
 
     Readings are counted as the problem counts them (:attr:`Problem.n_data`); the residual rows
-    Gaussian priors add are not readings, so a prior does not make an underdetermined fit
-    determined (the least-squares optimum would then only restate the priors).
+    Gaussian priors add are not readings, so for a least-squares result a prior does not make an
+    underdetermined fit determined (the optimum would only restate the priors).  A posterior run
+    passes ``pinned``, the parameters with informative (Gaussian) priors, which then count.
 
     Raises
     ------
@@ -272,7 +279,7 @@ def refuse_underdetermined(problem: Problem, names: list[str]) -> None:
         Naming both counts, the parameters and the data file when the problem knows it.
     """
     n = int(problem.n_data)
-    if n >= len(names):
+    if n + pinned >= len(names):
         return
     where = None
     try:
@@ -280,7 +287,8 @@ def refuse_underdetermined(problem: Problem, names: list[str]) -> None:
     except Exception:  # noqa: BLE001 - provenance is only used to name the file
         where = None
     raise FitError(f"{n} reading(s) cannot determine {len(names)} free parameters {names}: record more readings, "
-                   "or fix some parameters in the scene", None if where is None else str(where))
+                   "fix some parameters in the scene, or give them informative priors and use --method emcee",
+                   None if where is None else str(where))
 
 
 @contextmanager
@@ -345,15 +353,21 @@ def _errors_and_correlations(cov: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return stderr, corr
 
 
-def bound_flags(value: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+def bound_flags(value: np.ndarray, lower: np.ndarray, upper: np.ndarray,
+                stderr: np.ndarray | None = None) -> np.ndarray:
     """-1 for an estimate on its lower bound, +1 on its upper bound, 0 inside.
 
-    On a bound means within :data:`BOUND_RTOL` of the range ``upper - lower`` (of
-    ``max(|value|, 1)`` in the parameter's unit when the range is open).
+    On a bound means within :data:`BOUND_RTOL` of the range ``upper - lower`` when both bounds
+    are finite.  With one bound open there is no scale in the parameter's unit (an inertia of
+    3e-7 kg m^2 is not "near 0"), so the distance is measured in standard errors: within
+    1e-3 of one; without a finite standard error, within 1e-12 of the magnitudes involved.
     """
     value, lower, upper = (np.asarray(a, float) for a in (value, lower, upper))
-    span = np.where(np.isfinite(upper - lower), upper - lower, np.maximum(np.abs(value), 1.0))
-    tol = BOUND_RTOL * span
+    se = np.full(value.shape, np.nan) if stderr is None else np.asarray(stderr, float)
+    closed = np.isfinite(upper - lower)
+    scale = np.where(np.isfinite(se) & (se > 0), 1e-3 * se,
+                     1e-12 * np.maximum(np.abs(value), np.abs(np.where(np.isfinite(lower), lower, 0.0))))
+    tol = np.where(closed, BOUND_RTOL * np.where(closed, upper - lower, 0.0), scale)
     flags = np.zeros(value.shape, int)
     flags[np.isfinite(lower) & (np.abs(value - lower) <= tol)] = -1
     flags[np.isfinite(upper) & (np.abs(value - upper) <= tol) & (flags == 0)] = 1

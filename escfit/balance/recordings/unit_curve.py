@@ -136,7 +136,7 @@ def read_unit_curve(path: str | Path, *, notch_deg: float | None = None,
     for line, v in zip(t.lines, index):
         if v != int(v):
             raise DataError(f"{idx[0]} index must be a whole number >= 0, got {v!r}", f"{where}:{line} [{idx[0]}]")
-        if v > MAX_SWING:
+        if v * (2 if idx[0] == "cycle" else 1) > MAX_SWING:
             # the model is run to the last recorded swing: an index this large would take hours and gigabytes
             raise DataError(f"{idx[0]} index {v:.17g} is beyond {MAX_SWING:,} half swings (a unit curve is a decay "
                             "of minutes); check the column", f"{where}:{line} [{idx[0]}]")
