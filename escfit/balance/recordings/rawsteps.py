@@ -24,7 +24,7 @@ import numpy as np
 
 from ...core.errors import DataError, SceneError
 from .recording_spec import RecordingSpec, parse_option
-from .timeseries import TimeSeries
+from .series import TimeSeries
 
 __all__ = ["build_series", "regular_times", "notes_of", "merge_file_meta", "file_options", "unwrap_angles",
            "FILE_OPTIONS", "MIN_SAMPLES"]

@@ -40,7 +40,7 @@ import numpy as np
 from ...core.errors import DataError
 from .rawsteps import FILE_OPTIONS, build_series, file_options, merge_file_meta
 from .recording_spec import COUNT_WORDS, RecordingSpec, header_role, rad_per_unit, seconds_per_unit
-from .timeseries import TimeSeries
+from .series import TimeSeries
 
 __all__ = ["read_raw_table"]
 
