@@ -102,7 +102,7 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
         raise DataError(f"the angles span {np.ptp(theta):.4g} with no unit given (rad assumed): more than a turn, so "
                         "not radians of a swinging balance; if they are degrees set [recording] angle_unit = \"deg\" "
                         "(or --angle-unit deg)", source)
-    if spec.readings == "samples":
+    if spec.readings == "samples" and spec.quantity == "angle":
         theta = unwrap_angles(theta, notes)
     if spec.start is not None or spec.stop is not None:
         lo = -math.inf if spec.start is None else spec.start
