@@ -108,7 +108,7 @@ class Columns:
 
 def signal_role(name: str, unit: str | None) -> str | None:
     """``"angle"``, ``"angular_velocity"``, ``"displacement"``, ``"time"`` or None for a column name and unit."""
-    role, head_unit = header_role(name)
+    role, head_unit = header_role(name if unit is None else f"{name} ({unit})")
     unit = unit or head_unit
     dim = _dimension(unit)
     if dim == "angular_velocity":
@@ -206,7 +206,7 @@ def _choose(cols: Columns, spec: RecordingSpec, rate: float | None) -> tuple[int
             if len(hits) != 1:
                 what = "no column looks like" if not hits else "several columns could be"
                 other = _hint_other_quantities(cols, roles) if quantity == "angle" and not hits else ""
-                raise DataError(f"{what} the {quantity.replace('_', ' ')} in the header {cols.names}; {hint}{other}",
+                raise DataError(f"{what} the {quantity.replace('_', ' ')} in the header {_shown(cols)}; {hint}{other}",
                                 f"{where}:{cols.header_line}" if cols.header_line else where)
             a = hits[0]
         if t is None and not uniform:
@@ -228,6 +228,12 @@ def _choose(cols: Columns, spec: RecordingSpec, rate: float | None) -> tuple[int
     if cols.kind(a) in _TEXT_KINDS + ("clock", "datetime"):
         raise DataError(f"column {cols.label(a)!r} holds {cols.kind(a)}s, not numbers; {hint}", where)
     return t, a
+
+
+def _shown(cols: Columns) -> list[str]:
+    """The header's names, with the units a unit row or the format gives them."""
+    return [f"{n} ({u})" if cols.units and i < len(cols.units) and cols.units[i] and u not in n else n
+            for i, (n, u) in enumerate(zip(cols.names, cols.units or [None] * len(cols.names)))]
 
 
 def _finest_clock(cols: Columns, hits: list[int]) -> list[int]:

@@ -62,6 +62,7 @@ class _Layout:
     options: dict[str, tuple[str, str]] = field(default_factory=dict)  # key -> (value, where)
     titles: list[str] = field(default_factory=list)
     meta_lines: list[int] = field(default_factory=list)
+    file_meta: dict[str, str] = field(default_factory=dict)
 
 
 def _split(line: str, dialect: Dialect) -> list[str]:
@@ -196,11 +197,15 @@ def _metadata_header(pre: list[tuple[int, str]], data: list[tuple[int, str]], la
     def keys(line: str) -> list[str]:
         return [n.strip().lower() for n in _split_any(line)]
 
-    if keys(pre[-1][1]) and all(n in FILE_OPTIONS for n in keys(pre[-1][1])):
+    def options(line: str) -> bool:  # names of which one at least is an option (others are kept as metadata)
+        names = keys(line)
+        return bool(names) and any(n in FILE_OPTIONS for n in names) and not any(_is_number(n, False) for n in names)
+
+    if options(pre[-1][1]):
         names, (line, text) = keys(pre[-1][1]), data.pop(0)  # values are the first "data" row
         lay.meta_lines = [pre[-1][0], line]
         del pre[-1:]
-    elif len(pre) >= 2 and keys(pre[-2][1]) and all(n in FILE_OPTIONS for n in keys(pre[-2][1])):
+    elif len(pre) >= 2 and options(pre[-2][1]):
         names, (line, text) = keys(pre[-2][1]), pre[-1]
         lay.meta_lines = [pre[-2][0], line]
         del pre[-2:]
@@ -212,6 +217,7 @@ def _metadata_header(pre: list[tuple[int, str]], data: list[tuple[int, str]], la
                         f"{len(values)} values", f"{where}:{line}")
     for key, value in zip(names, values):
         lay.options[key] = (value, f"{where}:{line} [{key}]")
+        lay.file_meta[key] = value
 
 
 def scan_text(text: str, where: str) -> tuple[dict[str, str], dict[str, tuple[str, str]], list[tuple[int, str]]]:
@@ -251,6 +257,7 @@ def table_columns(body: list[tuple[int, str]], where: str, notes: list[str]) -> 
     cols = Columns(where, lay.header, cells, lay.lines, lay.dialect.decimal_comma, lay.header_line, lay.units,
                    describe=_describe(lay), options=dict(lay.options), notes=notes,
                    kinds=list(getattr(lay, "kinds", [])))
+    cols.meta.update(lay.file_meta)
     if lay.titles:
         cols.meta["title"] = " / ".join(lay.titles)
     return cols
@@ -277,10 +284,7 @@ def read_raw_table(path: str | Path, spec: RecordingSpec | None = None) -> TimeS
             raise DataError("a JSON file, not a table of samples", where)
     meta, located, body = scan_text(text, where)
     cols = table_columns(body, where, notes)
-    title = cols.meta.pop("title", None)
-    cols.meta = dict(meta)
-    if title:
-        cols.meta["title"] = title
+    cols.meta = {**meta, **cols.meta}
     cols.options = {**located, **cols.options}
     release = math.nan
     if "release_s" in meta:
