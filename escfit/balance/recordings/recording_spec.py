@@ -20,6 +20,7 @@ the angle, in which units, and which part of the record to keep::
     format = "phyphox"             # the file's format where detection cannot decide (see detect.FORMATS)
     run = 2                        # which run of a file holding several (CASSY, PASCO, Vernier), from 1
     lift_angle = "52 deg"          # timegrapher files that do not say the lift angle set
+    bph = 28800                    # timegrapher files that do not say the beat rate
 
 Every key is optional; what is not given is detected from the file where that is safe.
 The command line overrides the table key by key (:func:`merge_spec`).
@@ -93,6 +94,8 @@ class RecordingSpec:
         Which run (from 1) of a file holding several side by side (CASSY, PASCO, Vernier).
     lift_angle : float or None
         Lift angle set on a timegrapher, rad, for files that do not record it.
+    bph : int or None
+        Beats per hour of the watch, for timegrapher files that do not record it.
     """
 
     time_column: Column | None = None
@@ -111,6 +114,7 @@ class RecordingSpec:
     format: str | None = None
     run: int | None = None
     lift_angle: float | None = None
+    bph: int | None = None
 
     @property
     def quantity(self) -> str:
@@ -386,7 +390,16 @@ _PARSE: dict[str, Callable[[Any, str, bool], Any]] = {
     "format": _format,
     "run": _run,
     "lift_angle": _lift,
+    "bph": lambda v, w, cli: _bph(v, w, cli),
 }
+
+
+def _bph(value: Any, where: str, cli: bool) -> int:
+    if cli and isinstance(value, str) and value.strip().isdigit():
+        value = int(value)
+    if isinstance(value, bool) or not isinstance(value, int) or not 3600 <= value <= 172800:
+        raise SceneError(f"bph is a whole number of beats per hour in 3600-172800, got {value!r}", where)
+    return value
 
 
 def _readings(value: Any, where: str) -> str:
