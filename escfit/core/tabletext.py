@@ -46,8 +46,9 @@ _DELIMITERS = (("tab", "\t"), ("semicolon", ";"), ("comma", ","), ("whitespace",
 _CLOCK = re.compile(r"(\d{1,2}):(\d{2})(?::(\d{2})(?:[.,](\d+))?)?")
 _ISO = re.compile(r"(\d{4})-(\d{2})-(\d{2})(?:[T ](\d{1,2}:\d{2}(?::\d{2}(?:[.,]\d+)?)?)\s*(Z|[+-]\d{2}:?\d{2})?)?")
 _DOTTED_DATE = re.compile(r"(\d{1,2})\.(\d{1,2})\.(\d{4})(?:\s+(\d{1,2}:\d{2}(?::\d{2}(?:[.,]\d+)?)?))?")
-_GROUP_POINT = re.compile(r"[-+]?\d{1,3}(?:[,' \u00a0\u202f]\d{3})+(?:\.\d*)?(?:[eE][-+]?\d+)?")
-_GROUP_COMMA = re.compile(r"[-+]?\d{1,3}(?:[.' \u00a0\u202f]\d{3})+(?:,\d*)?(?:[eE][-+]?\d+)?")
+# one grouping mark throughout a number (1,234,567.8 or 1 234 567,8; never 1 234,567 read as a grouping)
+_GROUP_POINT = re.compile(r"[-+]?\d{1,3}(?P<g>[,' \u00a0\u202f])\d{3}(?:(?P=g)\d{3})*(?:\.\d*)?(?:[eE][-+]?\d+)?")
+_GROUP_COMMA = re.compile(r"[-+]?\d{1,3}(?P<g>[.' \u00a0\u202f])\d{3}(?:(?P=g)\d{3})*(?:,\d*)?(?:[eE][-+]?\d+)?")
 _PLAIN = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 
 
@@ -63,11 +64,14 @@ class Dialect:
         The delimiter character; ``None`` for runs of whitespace (and one column).
     decimal_comma : bool
         Whether numbers use a decimal comma.
+    trailing : bool
+        Whether every line ends with the delimiter (which then closes the row, not opens a cell).
     """
 
     name: str
     delimiter: str | None
     decimal_comma: bool = False
+    trailing: bool = False
 
 
 # -- bytes and lines ------------------------------------------------------------------------------
@@ -109,12 +113,11 @@ def numbered_lines(text: str) -> list[tuple[int, str]]:
 
 # -- fields and cells -----------------------------------------------------------------------------
 def split_fields(line: str, delimiter: str | None) -> list[str]:
-    """The cells of ``line``: quoted fields unquoted, spaces stripped, a trailing delimiter dropped."""
-    s = line.strip()
+    """The cells of ``line``: quoted fields unquoted, spaces stripped.  A delimiter at the end of the
+    line makes an empty last cell (a table whose every row ends so loses that column in its reader)."""
     if delimiter is None:
-        return s.split()
-    if s.endswith(delimiter):
-        s = s[:-1]
+        return line.split()
+    s = line.strip(" \r\n") if delimiter == "\t" else line.strip()
     if '"' not in s:
         return [f.strip() for f in s.split(delimiter)]
     return [f.strip() for f in next(csv.reader([s], delimiter=delimiter, skipinitialspace=True))]

@@ -67,6 +67,8 @@ def candidates(path: str | Path) -> list[str]:
             raise DataError("an Excel workbook (.xlsx): export it as CSV (phyphox: 'CSV (Comma, decimal point)') and "
                             "read that", str(path))
         return ["phyphox"] if any(n.lower().endswith(".csv") for n in names) else []
+    if raw.startswith(b"\xfd7zXZ\x00") and p.suffix.lower() == ".lml":
+        raise DataError("a LabPlot project (.lml, xz-compressed): export its spreadsheet as CSV and read that", str(path))
     if raw.startswith(b"MATLAB") or p.suffix.lower() == ".mat":
         return ["raw"]
     if kind == "binary" and not raw.startswith((b"\xff\xfe", b"\xfe\xff")):
@@ -180,7 +182,7 @@ def read_with_spec(path: str | Path, spec: RecordingSpec | None, fmt: str | None
         try:
             fmt = detect_format(path)
         except DataError as exc:
-            if "several formats" in exc.message:
+            if "cannot tell the recording format" not in exc.message:
                 raise
             fmt = "raw"
         if fmt in ("unit-curve", "pulses", "timeseries"):  # with [recording] options escfit's tables read raw

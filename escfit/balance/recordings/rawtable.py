@@ -31,7 +31,7 @@ import hashlib
 import json
 import math
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from ...core.errors import DataError
@@ -66,7 +66,10 @@ class _Layout:
 
 
 def _split(line: str, dialect: Dialect) -> list[str]:
-    return split_fields(line, dialect.delimiter)
+    fields = split_fields(line, dialect.delimiter)
+    if dialect.trailing and len(fields) > 1 and fields[-1] == "" and line.rstrip(" \r\n").endswith(dialect.delimiter):
+        fields.pop()
+    return fields
 
 
 def _split_any(line: str) -> list[str]:
@@ -143,6 +146,11 @@ def _layout(body: list[tuple[int, str]], where: str) -> _Layout:
     k = max(1, min(40, len(body) // 2))
     sample = [s for _, s in body[-k - 1:-1] if not _SEPARATOR.match(s)] if len(body) > 3 else [s for _, s in body]
     dialect, ncols = detect_dialect(sample or [body[-1][1]], f"{where}:{body[-1][0]}")
+    head = body[0][1].rstrip(" \r\n")
+    if dialect.delimiter is not None and ncols > 1 and sample and \
+            all(s.rstrip(" \r\n").endswith(dialect.delimiter) for s in sample) and \
+            (head.endswith(dialect.delimiter) or len(split_fields(head, dialect.delimiter)) == ncols - 1):
+        dialect, ncols = replace(dialect, trailing=True), ncols - 1  # every row closed by a delimiter
     lay = _Layout(dialect, ncols)
     kinds = _column_kinds([_split(s, dialect) for s in sample], ncols, dialect.decimal_comma) if ncols > 1 else []
 

@@ -184,7 +184,10 @@ def _parse_unit(text: str, where: str):
     try:
         q = ureg.parse_expression(text.strip())
     except Exception:
-        raise DataError(f"unknown unit {text!r}", where) from None
+        try:  # free-text unit labels (LabVIEW's Y_Unit_Label "Deg", "Sec") in another case
+            q = ureg.parse_expression(text.strip().lower())
+        except Exception:
+            raise DataError(f"unknown unit {text!r}", where) from None
     if not hasattr(q, "units"):
         raise DataError(f"{text!r} is a number, not a unit", where)
     return q

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -187,10 +188,9 @@ def read_tracker_table(path: str | Path, spec: RecordingSpec | None = None) -> T
     notes: list[str] = []
     _, _, body = scan_text(decode_lenient(raw, where, notes), where)
     track = None
-    first = body[0][1].strip()
-    if len(body) > 2 and len(split_fields(first, "\t" if "\t" in first else None)) == 1 and \
-            not first.lower().startswith("t"):
-        track, body = first, body[1:]
+    first, second = body[0][1].strip(), body[1][1].strip().lower() if len(body) > 1 else ""
+    if len(body) > 2 and re.match(r"t[\s,;]", second) and not re.match(r"t[\s,;]", first.lower()):
+        track, body = first.split("\t")[0].strip(), body[1:]
     cols = table_columns(body, where, notes)
     if cols.names is None:
         raise DataError("no header (t x y) above the track's rows", where)
