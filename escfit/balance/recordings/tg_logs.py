@@ -232,7 +232,7 @@ def read_tgcli(path: str | Path, spec: RecordingSpec | None = None) -> Timegraph
         if np.any(np.diff(t) <= 0):
             i = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1
             raise DataError(f"beat times must increase: {t[i - 1]} then {t[i]}", f"{where}:{rows[i][0]} [time_s]")
-        rate_bph = bph or 3600.0 / float(np.median(np.diff(t)))
+        rate_bph = bph or _standard_bph(3600.0 / float(np.median(np.diff(t))))
         meta = {"program": "peterhudson/timegrapher", "file": "beats", "notes": "; ".join(
             notes + ["beats only: no amplitude readings to fit"])}
         return TimegrapherRecording(t, index % 2 == 0, np.zeros(0), np.zeros(0), math.radians(52.0),
@@ -276,6 +276,16 @@ def _windowed(raw, where, kind, start, end, amp, rt, rate, spec, bph, notes) -> 
                                 int(round(bph)), float(np.median(end - start)), "centre", 0.1, (0.0, math.inf), False,
                                 math.nan, None, None, math.nan, "tg-applog", where, hashlib.sha256(raw).hexdigest(),
                                 meta)
+
+
+#: the beat rates peterhudson/timegrapher guesses from (its --bph help)
+STANDARD_BPH = (12000, 14400, 17280, 18000, 19800, 21600, 25200, 28800, 36000, 43200, 72000)
+
+
+def _standard_bph(measured: float) -> float:
+    """The standard beat rate within 1 % of a measured one (a watch's rate error is far smaller), else itself."""
+    near = min(STANDARD_BPH, key=lambda b: abs(b - measured))
+    return float(near) if abs(near / measured - 1.0) < 0.01 else measured
 
 
 def _refuse_summary(p: Path, where: str) -> TimegrapherRecording:
