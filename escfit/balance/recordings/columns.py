@@ -381,6 +381,8 @@ def series_from_columns(cols: Columns, spec: RecordingSpec | None, *, sha256: st
         cols.notes.append(f"{gone.size} row(s) without a reading (empty or NaN) dropped"
                           + (" at the end (a shorter column padded)" if tail else
                              f", first at line(s) {', '.join(map(str, lines))}" if lines else ""))
+        if keep.sum() < 2:
+            raise DataError(f"no rows with both a time and a reading in {cols.label(a_col)!r}", cols.where)
         if gone.size > 0.5 * n and not tail:
             raise DataError(f"{gone.size} of {n} rows have no reading in {cols.label(a_col)!r} or the time: not a "
                             "record of samples", cols.where)

@@ -108,14 +108,15 @@ def read_lvm(path: str | Path, spec: RecordingSpec | None = None) -> TimeSeries:
                 names, header_at = segment_names, head_line
                 units = [u or None for u in chan.get("Y_Unit_Label", [])][:len(names)]
                 units += [None] * (len(names) - len(units))
-                x0 = parse_number(chan.get("X0", ["0"])[0], dc)
-                dx = parse_number(chan.get("Delta_X", ["nan"])[0], dc)
+                x0 = parse_number((chan.get("X0") or ["0"])[0], dc)
+                dx = parse_number((chan.get("Delta_X") or ["nan"])[0], dc)
                 if dx is not None and x0 is not None and dx > 0:
                     clock = (x0, dx)
             elif segment_names != names:
                 raise DataError(f"a segment with other channels {segment_names} than the first {names}",
                                 f"{where}:{head_line}")
-            announced += int(parse_number(chan.get("Samples", ["0"])[0]) or 0)
+            samples = parse_number((chan.get("Samples") or ["0"])[0])
+            announced += int(samples) if samples is not None and 0 <= samples < 1e12 else 0
             i += 1
             continue
         if s.strip() and names is not None:

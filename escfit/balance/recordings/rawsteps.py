@@ -96,6 +96,8 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
         bad = np.flatnonzero(~np.isfinite(values))
         if bad.size:
             raise DataError(f"{name} value {float(values[bad[0]])!r} is not a finite number", where_of_row(int(bad[0])))
+    if np.size(time) < 2:
+        raise DataError(f"only {np.size(time)} samples; a decay needs at least {MIN_SAMPLES}", source)
     time = regular_times(np.asarray(time, dtype=float), where_of_row, notes)
     theta = np.asarray(theta, dtype=float)
     if meta.get("angle_unit_assumed") and np.ptp(theta) > 2.0 * math.pi:
