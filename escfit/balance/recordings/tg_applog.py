@@ -262,7 +262,9 @@ def applog_recording(where: str, raw: bytes, h: int, header: list[str], cols: di
     if clock:  # a time of day runs past midnight (a full date needs no help)
         t = t + 86400.0 * np.concatenate([[0], np.cumsum(np.diff(t) < -43200.0)])
     origin, t = t[0], t - t[0]
-    bad = np.flatnonzero((np.diff(t) <= 0) | [r["clock"] != clock for r in parsed[1:]])
+    if len(parsed) < 2:
+        raise DataError(f"need at least 2 rows under the header (line {h + 1}), found {len(parsed)}", where)
+    bad = np.flatnonzero((np.diff(t) <= 0) | np.array([r["clock"] != clock for r in parsed[1:]], dtype=bool))
     if bad.size:
         k = int(bad[0]) + 1
         raise DataError(f"time {rows[k][1][ti]!r} does not come after {rows[k - 1][1][ti]!r}; rows must be in time "

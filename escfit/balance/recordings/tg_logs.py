@@ -177,6 +177,8 @@ def rate_grid(t0: float, t1: float, bph: float, times: np.ndarray, rate: np.ndar
     faster), the rate taken from the nearest logged value (the nominal beat where none is given).
     """
     nominal = 3600.0 / bph
+    if not (math.isfinite(t0) and math.isfinite(t1) and t1 >= t0):
+        raise DataError(f"no beat grid from {t0} to {t1} s")
     n = int((t1 - t0) / nominal * 1.01) + 3
     if n > 3_000_000:
         raise DataError(f"{n} beats between {t0:g} and {t1:g} s: beyond the 40 hours a timegrapher record may span")
@@ -192,6 +194,11 @@ def _table(path: Path, where: str) -> tuple[bytes, list[str], list[tuple[int, li
     raw = path.read_bytes()
     notes: list[str] = []
     lines = [(n, s) for n, s in numbered_lines(decode_lenient(raw, where, notes)) if s.strip()]
+    at = next((i for i, (_, s) in enumerate(lines) if s.strip().startswith(("index,", "kind,", "start_s,"))), None)
+    if at is None:
+        raise DataError("no header line (index,time_s,... / kind,start_s,... / start_s,end_s,...)", where)
+    if at > 0:
+        raise DataError(f"line {lines[0][0]} comes before the header (line {lines[at][0]}): delete it", where)
     header = split_fields(lines[0][1], ",")
     rows = [(n, split_fields(s, ",")) for n, s in lines[1:]]
     if rows and len(rows[-1][1]) < len(header):
@@ -216,6 +223,13 @@ def read_tgcli(path: str | Path, spec: RecordingSpec | None = None) -> Timegraph
         raise DataError("not a peterhudson/timegrapher CSV (beats, windows, slices or amplitude)", where)
     raw, header, rows, notes = _table(p, where)
     c = {name: i for i, name in enumerate(header)}
+    need = {"tgcli-beats": ("index", "time_s"), "tgcli-windows": ("kind", "start_s", "end_s", "rate_s_per_day",
+                                                                  "amplitude_even_deg", "amplitude_odd_deg"),
+            "tgcli-slices": ("start_s", "end_s", "rate_s_per_day", "amplitude_deg"),
+            "tgcli-amplitude": ("start_s", "end_s", "even_deg", "odd_deg")}[kind]
+    missing = [n for n in need if n not in c]
+    if missing:
+        raise DataError(f"the header lacks {missing}", f"{where}:1")
 
     def column(name: str, subset=None) -> np.ndarray:
         out = []
@@ -227,8 +241,10 @@ def read_tgcli(path: str | Path, spec: RecordingSpec | None = None) -> Timegraph
         return np.array(out, dtype=float)
 
     if kind == "tgcli-beats":
-        t = column("time_s")
-        index = column("index").astype(np.int64)
+        t, index = column("time_s"), column("index")
+        if not (np.isfinite(t).all() and np.isfinite(index).all()) or t.size < 2:
+            raise DataError("every beat needs its index and time_s (and there must be two beats)", where)
+        index = index.astype(np.int64)
         if np.any(np.diff(t) <= 0):
             i = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1
             raise DataError(f"beat times must increase: {t[i - 1]} then {t[i]}", f"{where}:{rows[i][0]} [time_s]")
@@ -263,6 +279,11 @@ def _windowed(raw, where, kind, start, end, amp, rt, rate, spec, bph, notes) -> 
     if bph is None:
         raise DataError("the file does not say the beat rate: set [recording] bph (the watch's beats per hour, "
                         "e.g. 28800)", where)
+    bad = np.flatnonzero(~(np.isfinite(start) & np.isfinite(end) & (end > start)))
+    if bad.size:
+        raise DataError(f"window {int(bad[0]) + 1} has no valid start_s < end_s", where)
+    if np.any(np.diff(start) < 0):
+        raise DataError("the windows are not in time order", where)
     ok = np.isfinite(amp)
     if (~ok).any():
         notes.append(f"{int((~ok).sum())} window(s) without an amplitude (the program's null: outside 100-380 deg) "
