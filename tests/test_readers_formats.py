@@ -297,3 +297,41 @@ def test_displacement_in_mm_and_pickup_volts(tmp_path):
     np.testing.assert_allclose(d.theta, x, rtol=1e-12)
     v = read_with_spec(p, RecordingSpec(velocity_column=3, velocity_unit="V", scale=0.02))
     np.testing.assert_allclose(v.theta, x, rtol=1e-12)
+
+
+def _zip_two_sets(tmp_path):
+    p = tmp_path / "run.zip"
+    write_phyphox_zip(p, {"A": {"Time (s)": [0.0, 1.0], "x (rad)": [0.0, 1.0]},
+                          "B": {"Time (s)": [0.0, 1.0], "y (rad)": [0.0, 1.0]}})
+    return p
+
+
+def _tgnet_two_sessions(tmp_path):
+    from escfit.balance.recordings.tg_logs import TGNET_HEADER
+
+    rows = [",".join(TGNET_HEADER)]
+    for s in (1, 2):
+        for i in range(5):
+            rows.append(",".join([str(s), "0", str(i), f"{0.4 * i:.6f}", "18000", "DialUp", "true", "1.000000", "true",
+                                  "250.000000", "true", "0.300000"] + [""] * 14))
+    return write(tmp_path, "m.csv", "lift_angle_deg,52.000000\n" + "\n".join(rows) + "\n")
+
+
+@pytest.mark.parametrize("make, spec, message", [
+    (_zip_two_sets, None, r"run.zip: several data sets in the zip \(A.csv, B.csv\): cannot tell which holds the "
+                          r"recording; extract that set's CSV and read it"),
+    (lambda tmp: write(tmp, "x.cmbl", '<?xml version="1.0"?><!DOCTYPE d [<!ENTITY a "aaaa">]><Document><DataSet>'
+                       '</DataSet></Document>'), RecordingSpec(format="vernier-cmbl"),
+     r"x.cmbl: XML with a document type or entity declaration: not an instrument's data file"),
+    (lambda tmp: write(tmp, "cut.labx", b'\xef\xbb\xbf<?xml version="1.0"?><cassylab><allchannels><channels>'),
+     None, r"cut.labx:1: invalid XML .* the file is cut short or damaged"),
+    (_tgnet_two_sessions, None, r"m.csv: 2 sessions in the log \(session_id 1, 2\); set \[recording\] run"),
+    (lambda tmp: write(tmp, "x.csv", "a,b\n1,2\n"), RecordingSpec(format="lvm"),
+     r"x.csv:1: does not start with 'LabVIEW Measurement': not an .lvm file"),
+    (lambda tmp: write(tmp, "s.txt", "Time: 1 ms, Angle: 2\nTime: 2 ms, Angle: 3\nTime: 3 ms, Angle: 4\n"),
+     RecordingSpec(angle_unit="deg"), r"s.txt: only 3 samples; a decay needs at least 20"),
+])
+def test_bad_instrument_files_get_one_line(tmp_path, make, spec, message):
+    with pytest.raises(DataError, match=message) as info:
+        read_with_spec(make(tmp_path), spec)
+    assert "\n" not in str(info.value)
