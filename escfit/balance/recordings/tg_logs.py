@@ -258,8 +258,7 @@ def read_tgcli(path: str | Path, spec: RecordingSpec | None = None) -> Timegraph
         amp_rows = [(n, r) for n, r in rows if r[c["kind"]] == "amplitude"]
         rate_rows = [(n, r) for n, r in rows if r[c["kind"]] == "rate"]
         start, end = column("start_s", amp_rows), column("end_s", amp_rows)
-        amp = np.nanmean(np.vstack([column("amplitude_even_deg", amp_rows), column("amplitude_odd_deg", amp_rows)]),
-                         axis=0) if amp_rows else np.zeros(0)
+        amp = _sides(column("amplitude_even_deg", amp_rows), column("amplitude_odd_deg", amp_rows))
         rt = (column("start_s", rate_rows) + column("end_s", rate_rows)) / 2
         rate = column("rate_s_per_day", rate_rows)
     else:
@@ -267,9 +266,15 @@ def read_tgcli(path: str | Path, spec: RecordingSpec | None = None) -> Timegraph
         if kind == "tgcli-slices":
             amp, rate, rt = column("amplitude_deg"), column("rate_s_per_day"), (start + end) / 2
         else:
-            amp = np.nanmean(np.vstack([column("even_deg"), column("odd_deg")]), axis=0)
+            amp = _sides(column("even_deg"), column("odd_deg"))
             rate, rt = np.zeros(0), np.zeros(0)
     return _windowed(raw, where, kind, start, end, amp, rt, rate, spec, bph, notes)
+
+
+def _sides(even: np.ndarray, odd: np.ndarray) -> np.ndarray:
+    """The mean of the two pallets' amplitudes, or the one given (nan when neither is)."""
+    both = np.isfinite(even) & np.isfinite(odd)
+    return np.where(both, 0.5 * (even + odd), np.where(np.isfinite(even), even, odd))
 
 
 def _windowed(raw, where, kind, start, end, amp, rt, rate, spec, bph, notes) -> TimegrapherRecording:
