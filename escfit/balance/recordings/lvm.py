@@ -26,7 +26,6 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
-import numpy as np
 
 from ...core.errors import DataError
 from ...core.tabletext import decode_lenient, numbered_lines, parse_number

@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from ...core.errors import DataError
-from ...core.tabletext import decode_lenient, numbered_lines, split_fields
+from ...core.tabletext import decode_lenient, numbered_lines
 from .cassy import parse_xml
 from .columns import Columns, series_from_columns
 from .rawtable import scan_text, table_columns
