@@ -159,8 +159,8 @@ def _observation_signature(res: FitResult) -> dict:
     a = res.attrs
     try:
         obs = tomllib.loads(a.get("scene", "") or "").get("observation", {})
-    except tomllib.TOMLDecodeError:
-        obs = {}
+    except tomllib.TOMLDecodeError as exc:
+        raise ResultsError(f"the scene stored with this fit cannot be read ({exc})", res.path) from None
     return {"family": a.get("model", "balance"), "kind": a.get("data_kind", ""),
             "observation model": obs.get("model", "") if isinstance(obs, dict) else "",
             "notch angle": a.get("notch_deg", ""), "notch reading": a.get("notch_reading", "")}
