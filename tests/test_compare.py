@@ -242,6 +242,17 @@ def test_refuses_other_readings_of_the_same_file_and_other_observation_models(ls
     _one_line_refusal(run(f["v"], other), "older escfit", "older.h5")
 
 
+def test_refuses_failed_draws(posterior_fits, tmp_path):
+    def fail(tree):
+        ll = tree["log_likelihood"].to_dataset()
+        values = ll["reading"].values.copy()
+        values[0, 0, 3] = -np.inf
+        tree["log_likelihood"] = ll.assign(reading=(ll["reading"].dims, values))
+
+    other = _altered_copy(posterior_fits["vc"], tmp_path / "failed.h5", fail)
+    _one_line_refusal(run(posterior_fits["v"], other), "not finite", "failed.h5")
+
+
 def test_library_refusal_is_a_results_error(lsq_fits):
     _, fits = lsq_fits
     with pytest.raises(ResultsError, match="different data"):

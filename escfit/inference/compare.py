@@ -53,6 +53,10 @@ def psis_loo(result: FitResult):
     post, ll = result.group("posterior"), result.group("log_likelihood")
     if post is None or ll is None:
         raise ResultsError("no posterior with pointwise log-likelihood (a least-squares fit?)", result.path or None)
+    bad = sum(int(np.sum(~np.isfinite(ll[v].values))) for v in ll.data_vars)
+    if bad:
+        raise ResultsError(f"{bad} pointwise log-likelihood values are not finite (draws whose model failed): PSIS-LOO "
+                           "needs every draw; refit, or fix what the failures count names", result.path or None)
     idata = az.InferenceData(posterior=post, log_likelihood=ll)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # high Pareto k is reported in words instead
@@ -224,14 +228,26 @@ def _compare_loo(fits: list[FitResult], labels: dict, data: dict) -> FitComparis
                      "dse": float(math.sqrt(d.size * np.var(d))), "n_draws": int(loo.n_samples),
                      "max_pareto_k": float(np.max(k)), "pareto_k_threshold": good_k,
                      "n_pareto_k_high": int(np.sum(k > good_k)), "n_pareto_k_very_high": int(np.sum(k > 1.0)),
+                     "pareto_k_high_readings": [int(i) for i in np.flatnonzero(k > good_k)],
+                     "pareto_k_high_swings": _swings(by_path[p], k > good_k),
+                     "readings_are_samples": by_path[p].attrs.get("data_kind") == "timeseries",
                      "pareto_k_summary": _k_summary(k, good_k)})
-    notes = ["PSIS-LOO: elpd_loo is the expected log predictive density of a new reading set like this one "
-             "(higher is better); elpd_diff is the best fit's elpd minus this fit's, dse its standard error from "
+    notes = ["PSIS-LOO: elpd_loo estimates how well a fit predicts new readings like these (the log predictive "
+             "density summed over the readings, each left out in turn; higher is better); p_loo is the effective "
+             "number of parameters; elpd_diff is the best fit's elpd minus this fit's, dse its standard error from "
              "the readings' pointwise differences. A difference smaller than about 4, or within 2 dse, does not "
              "tell the fits apart: prefer the simpler model."]
     notes += [_k_words(r) for r in rows if r["n_pareto_k_high"]]
     notes.append(_verdict_loo(rows))
     return FitComparison(LOO, rows, data, notes)
+
+
+def _swings(res: FitResult, mask: np.ndarray) -> list[int]:
+    """Half swings (or sample numbers) of the readings ``mask`` selects."""
+    obs = res.group("observed_data")
+    if obs is None or "swing" not in obs.variables:
+        return []
+    return [int(s) for s in np.asarray(obs["swing"].values)[mask]]
 
 
 def _k_summary(k: np.ndarray, good: float) -> str:
@@ -243,7 +259,10 @@ def _k_summary(k: np.ndarray, good: float) -> str:
 
 def _k_words(row: dict) -> str:
     n, very = row["n_pareto_k_high"], row["n_pareto_k_very_high"]
-    return (f"{row['label']}: {n} reading(s) have Pareto k above {row['pareto_k_threshold']:.2f}"
+    where = row["pareto_k_high_swings"]
+    word = "sample" if row["readings_are_samples"] else "half swing"
+    at = (f" ({word} {', '.join(map(str, where[:8]))}{', ...' if len(where) > 8 else ''})" if where else "")
+    return (f"{row['label']}: {n} reading(s){at} have Pareto k above {row['pareto_k_threshold']:.2f}"
             + (f" ({very} above 1)" if very else "") + ": leaving them out changes the posterior so much that "
             "importance sampling cannot predict them reliably; this fit's elpd_loo may be too optimistic. Those "
             "readings are influential (outliers, or a model that fits them poorly): look at them, and for a "
@@ -320,5 +339,5 @@ def _verdict_ic(rows: list[dict]) -> str:
     if len(close) > 1:
         return _undecided([r["label"] for r in close], close, "dAICc below 2")
     d = b["d_aicc"]
-    strength = "strongly" if d > 10.0 else "moderately"
-    return f"verdict: {a['label']} is {strength} preferred (dAICc {d:.2f} to {b['label']})."
+    strength = "strongly preferred" if d > 10.0 else "preferred"
+    return f"verdict: {a['label']} is {strength} (dAICc {d:.2f} to {b['label']})."

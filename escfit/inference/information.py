@@ -12,8 +12,9 @@ at fit time, from the problem's own pointwise log-likelihood:
   maximises the summed pointwise log-likelihood there (a one-dimensional search in log
   sigma; for Gaussian readings this is ``sigma * sqrt(chisqr / n)``), and counts as a
   parameter; a scale fixed by the scene does not count;
-* other noise parameters least squares holds fixed (an AR(1) ``rho``, a Student-t ``nu``) are
-  held at the same values and do not count.
+* a free AR(1) ``rho``, which least squares estimates from the residuals of a first fit with
+  white noise, stays at that estimate and counts; a Student-t ``nu``, which least squares holds
+  at its starting value, stays there and does not.
 
 For Gaussian readings (amplitudes, times, independent or AR(1) samples) the number is the
 maximised likelihood.  For readings whose likelihood is not Gaussian (notch intervals,
@@ -35,6 +36,7 @@ __all__ = ["information_attrs", "aicc", "bic", "akaike_weights", "EXACT_KEY"]
 EXACT_KEY = "loglike_maximised"
 
 SIGMA = "observation.sigma"
+RHO = "observation.rho"
 
 
 def aicc(loglike: float, k: int, n: int) -> float:
@@ -75,14 +77,16 @@ def information_attrs(problem, lsq) -> dict[str, Any]:
         ``loglike`` is nan when the model cannot be evaluated at the optimum.
     """
     values = dict(lsq.values)
-    k = len(lsq.names) + (1 if lsq.profiled else 0)
+    # least squares estimates a free AR(1) rho from a first fit's residuals: a parameter it varied
+    rho_free = RHO in getattr(problem, "names", ())
+    k = len(lsq.names) + (1 if lsq.profiled else 0) + (1 if rho_free else 0)
     try:
         if lsq.profiled and SIGMA in values:
             values[SIGMA] = _best_scale(problem, values)
         loglike = float(np.sum(problem.loglike_pointwise(values)))
     except Exception:  # noqa: BLE001 - a model that fails here leaves the criterion undefined, said by nan
         loglike = math.nan
-    text, exact = noise_model(problem, values, lsq.profiled)
+    text, exact = noise_model(problem, values, lsq.profiled, rho_free)
     return {"loglike": loglike if math.isfinite(loglike) else math.nan, "n_params": k, "noise_model": text,
             EXACT_KEY: int(exact)}
 
@@ -102,7 +106,7 @@ def _best_scale(problem, values: Mapping[str, float]) -> float:
     return math.exp(float(res.x))
 
 
-def noise_model(problem, values: Mapping[str, float], profiled: bool) -> tuple[str, bool]:
+def noise_model(problem, values: Mapping[str, float], profiled: bool, rho_free: bool = False) -> tuple[str, bool]:
     """The likelihood of the readings in words, and whether least squares maximises it exactly."""
     obs = getattr(problem, "observation", None)
     kind = getattr(obs, "kind", "")
@@ -115,7 +119,9 @@ def noise_model(problem, values: Mapping[str, float], profiled: bool) -> tuple[s
     elif noise == "student_t":
         text, exact = f"Student-t readings (nu held at {values.get('observation.nu', math.nan):.3g})", False
     elif noise == "ar1":
-        text = f"Gaussian AR(1) samples (rho held at {values.get('observation.rho', math.nan):.3g})"
+        rho = values.get(RHO, math.nan)
+        text = (f"Gaussian AR(1) samples (rho = {rho:.3g} from the residuals of a white-noise fit, counted)"
+                if rho_free else f"Gaussian AR(1) samples (rho fixed at {rho:.3g} by the scene)")
     elif kind == "waveform":
         text = "Gaussian, independent samples"
     else:
