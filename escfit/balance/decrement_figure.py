@@ -312,6 +312,15 @@ def _values_text(p: DecrementPanel, only: str | None = None) -> list[str]:
     return [text[key] for key in keys]
 
 
+def _stopped(p: DecrementPanel) -> bool:
+    """Whether the model's last decrements fall well below the parts' sum (dry friction stopped it)."""
+    if "coulomb" not in p.parts or not p.model.amplitude.size:
+        return False
+    grid = next(iter(p.parts.values()))[0]
+    total = np.interp(p.model.amplitude, grid, sum(dec for _, dec in p.parts.values()))
+    return bool(np.any(p.model.decrement < 0.9 * total))
+
+
 def _caption(res, panels: list[DecrementPanel], notes: list[str]) -> str:
     if res.attrs.get("data_kind") == "timeseries":
         how = ("Loss of amplitude per half swing against the amplitude, from the turning points of the samples (each "
@@ -343,6 +352,9 @@ def _caption(res, panels: list[DecrementPanel], notes: list[str]) -> str:
     elif c.get("windows"):
         text.append("The escapement feeds energy in: its part is a gain, negative here, falling like 1/A; where it "
                     "balances the losses the amplitude settles. The decomposition is first order in the impulse.")
+    if any(_stopped(p) for p in panels):
+        text.append("Dry friction stops the model at a turning point once the spring can no longer overcome it; "
+                    "its decrements there fall below the parts' sum.")
     if c and not c.get("D"):
         text.append("Quadratic drag is not in this model, so it has no part.")
     text += [n[0].upper() + n[1:] + "." for n in notes]
