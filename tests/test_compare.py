@@ -144,6 +144,7 @@ def posterior_fits(lsq_fits):
             "vc": _fit(tmp, data, FIT_VC + FREE_SIGMA, "mc_vc", **kw)}
 
 
+@pytest.mark.filterwarnings("ignore")  # arviz.compare's own Pareto-k and pandas notices
 def test_loo_ranks_and_differences_agree_with_arviz_compare(posterior_fits):
     import arviz as az
 
