@@ -23,6 +23,7 @@ pendulum's decay differs from the linear one by terms of order ``A**2 / 16``: en
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import SimpleNamespace
@@ -40,6 +41,9 @@ __all__ = ["Survey", "read_with_help", "survey", "decay_estimates", "noise_is_co
 BOUND_FACTOR = 3.0  # upper bounds of C and R: this many times the value that alone explains the decay
 MAX_COLUMNS = 12  # columns tried when the reader cannot tell which one swings
 AR1_EXCESS = 0.3  # lag-1 correlation above white noise's (after smoothing) that calls for AR(1) noise
+
+
+_PAST_LAST = re.compile(r"has (only )?\d+ columns?|out of range|only \d+ columns?")
 
 
 @dataclass
@@ -169,7 +173,7 @@ def _swinging_column(path, table: dict, fmt) -> tuple[int, str] | None:
                 data = read_data(path, recording={**trial, **extra}, fmt=fmt)
                 break
             except DataError as exc:
-                if "out of range" in str(exc) or "no column" in str(exc) or "has only" in str(exc):
+                if _PAST_LAST.search(str(exc)):
                     data = "end"
                     break
         if data == "end":

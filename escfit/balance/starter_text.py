@@ -85,9 +85,7 @@ def starter_scene(path: str | Path, *, restoring: str = "spring", recording: dic
 
 def _record_lines(s: Survey) -> list[str]:
     c = s.counts
-    raw = s.kind == "amplitude" and s.recording.get("readings") == "amplitudes" and "angle_unit" in s.why
-    deg = s.amplitudes if raw else np.degrees(s.amplitudes)
-    unit = "(the file's units)" if raw else "deg"
+    deg, unit = np.degrees(s.amplitudes), "deg"
     out = []
     if s.kind == "waveform":
         out.append(f"{c['samples']} samples over {c['duration']:.4g} s ({c['rate']:.4g} per s); {c['turning points']} "
@@ -180,8 +178,14 @@ def _observation_lines(s: Survey) -> list[str]:
         return out
     if s.kind == "notches":
         return ["model = \"notches\"", f"notch_deg = {toml_number(math.degrees(s.counts['notch']), 4)}"]
-    return ["model = \"amplitude\"    # one amplitude reading per half swing",
-            "# the centre (zero offset) and its drift are fitted with the reading noise"]
+    out = ["model = \"amplitude\"    # one amplitude reading per half swing"]
+    if s.recording.get("readings") == "amplitudes":
+        span = _outward(0.25 * float(np.max(s.amplitudes)), True)
+        out += ["# the scale's zero may sit off the centre: readings on alternate sides then differ by twice the offset",
+                f"offset = {{ value = 0.0, vary = true, min = {toml_number(-span, 2)}, max = {toml_number(span, 2)} }}"]
+    elif s.kind == "amplitude":
+        out.append("# offset = { value = 0.0, vary = true, min = -0.05, max = 0.05 }    # rad: a scale zero off the centre")
+    return out
 
 
 def _timegrapher_body(s: Survey) -> list[str]:
