@@ -85,8 +85,12 @@ def _amplitude_figure(res, plt) -> bytes:
         caption = ("Amplitude readings against the model's amplitude at the least-squares best fit (lines join the "
                    "recorded half swings)")
         key, err = "amplitude readings", ""
+    several = len(set(curves)) > 1
     caption += ("; shaded: 95 % band of the model over the posterior draws" if band is not None else "") + \
-        ". Lower panel: reading minus best fit. One colour per curve (load) in both panels."
+        ". Lower panel: reading minus best fit" + (
+            ", each curve's points moved a little sideways so they do not hide each other"
+            + (" and its band drawn as two lines" if band is not None else "")
+            + ". One colour per curve (load) in both panels." if several else ".")
     fig = fit_figure(plt, x=obs["swing"].values, y=shown, model=model * k, curves=curves,
                      band=None if band is None else (band[0] * k, band[1] * k), yerr=yerr,
                      names=_names(res, curves), xlabel="half swing (count from release)",

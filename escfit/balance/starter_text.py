@@ -194,25 +194,28 @@ def _timegrapher_body(s: Survey) -> list[str]:
     lift = c["lift angle"]
     a0 = float(s.amplitudes[0]) if s.amplitudes.size else math.radians(270)
     a_end = float(s.amplitudes[-1]) if s.amplitudes.size else a0
-    # steady-state energy balance with viscous loss only: impulse work X*lift per half swing equals
-    # pi*C*omega0*A^2/2 at the amplitude shown last; C from a watch-like Q of 250
-    c0 = w / 250.0
-    x0 = math.pi * c0 * w * a_end ** 2 / (2.0 * lift)
+    # losses from the decay of the displayed amplitude as if free (a lower limit: the impulse hides part of
+    # them), then the impulse that balances them at the last amplitude shown: X*lift = pi*C*omega0*A^2/2 + 2*R*A
+    times = s.times - s.times[0] if s.times is not None and s.times.size else None
+    est = decay_estimates(s.amplitudes, w, times)
+    c0, r0 = est["C"], est["R"]
+    x0 = max((math.pi * c0 * w * a_end ** 2 / 2.0 + 2.0 * r0 * a_end) / lift, 1e-3 * w ** 2)
     return ["[oscillator]",
             f"# natural frequency (rad/s) from the measured period {s.period:.6g} s ({c['period from']}), held",
             f"omega0 = {toml_number(w, 6)}",
             f"theta0 = {toml_number(a0, 4)}    # rad: the first amplitude shown ({math.degrees(a0):.4g} deg); the "
             "release if the log starts at it",
             "", "[effects.viscous]",
-            "# viscous damping C = c/I (1/s); start: a quality factor of 250",
-            f"C = {_param(c0, 0.0, _outward(20 * c0, True), 3)}",
-            "", "[effects.coulomb]", "# pivot friction, torque per inertia R (rad/s^2)",
-            f"R = {_param(0.05 * x0, 0.0, _outward(2 * x0, True), 3)}",
+            "# viscous damping C = c/I (1/s); start: the decay of the amplitudes shown, as if free",
+            f"C = {_param(c0, 0.0, _outward(10 * est['C_max'], True), 3)}",
+            "", "[effects.coulomb]", "# pivot friction, torque per inertia R (rad/s^2); start as C",
+            f"R = {_param(r0, 0.0, _outward(10 * est['R_max'], True), 3)}",
             "", "[[effects.escapement]]",
             "# the impulse, spread over the lift angle about the centre (a starting geometry: replace it by your",
             "# escapement's windows, unlock and impulse, if you know them)",
             "kind = \"impulse\"", f"from = {toml_number(-lift / 2, 4)}", f"to = {toml_number(lift / 2, 4)}",
-            f"X = {_param(x0, 0.1 * x0, 10 * x0, 3)}",
+            "# X (rad/s^2): start from the energy balance at the last amplitude shown",
+            f"X = {_param(x0, 0.0, 30 * x0, 3)}",
             "", "[observation]",
             "model = \"timegrapher\"    # amplitudes as the instrument computes them; beat times when the file has them",
             "# a log of a watch running steadily fixes only the balance of C, R and X: hold two of them, or record",
@@ -224,6 +227,10 @@ def _summary(s: Survey) -> list[str]:
             "notches": "notch counts per half swing", "timegrapher": "timegrapher readings"}[s.kind]
     out = [f"read {Path(s.path).name}: {s.format_words}; {s.columns_words}", *_record_lines(s)[:2],
            f"observation: {what}"]
+    if s.kind == "timegrapher":
+        out.append("a timegrapher starter is only a starting geometry (an impulse over the lift angle, the first "
+                   "amplitude shown as the release): give your escapement's windows and the release amplitude if you "
+                   "know them, and read the fit's warnings")
     for key, value in s.recording.items():
         if key in s.why:
             out.append(f"[recording] {key} = {value!r}: {s.why[key]}")
