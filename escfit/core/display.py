@@ -233,9 +233,13 @@ def format_row(value, ends=(), width: float | None = None) -> tuple[str, list[st
             return "-"
         v = float(v)
         if step is None:
-            return f"{v:.6g}"
-        if biggest and not FIXED_RANGE[0] <= biggest < FIXED_RANGE[1]:
-            return f"{v:.{max(0, math.floor(math.log10(biggest)) - step)}e}"
-        return _fixed(v, step)
+            text = f"{v:.6g}"
+        elif v == 0.0:
+            return "0"
+        elif biggest and not FIXED_RANGE[0] <= biggest < FIXED_RANGE[1]:
+            text = f"{v:.{max(0, math.floor(math.log10(biggest)) - step)}e}"
+        else:
+            text = _fixed(v, step)
+        return text[1:] if text.startswith("-") and float(text) == 0.0 else text  # no "-0.00"
 
     return one(value), [one(e) for e in ends]

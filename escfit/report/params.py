@@ -22,10 +22,10 @@ from typing import Any
 from ..core.display import format_row, load_unit, to_display
 from ..core.names import plain_name
 
-__all__ = ["parameter_table", "held_table", "estimate_kind", "held_values"]
+__all__ = ["parameter_table", "held_table", "estimate_kind", "held_values", "centre_row", "CENTRE_BASE"]
 
 _BOUND_FLAG = {"min": "at lower bound", "max": "at upper bound"}
-_CENTRE = {"observation.offset": "centre_removed_rad", "observation.offset_rate": "centre_rate_removed_rad_per_s"}
+CENTRE_BASE = {"observation.offset": "centre_removed_rad", "observation.offset_rate": "centre_rate_removed_rad_per_s"}
 
 
 def estimate_kind(row: dict[str, Any]) -> str:
@@ -72,9 +72,9 @@ def held_values(res) -> dict[str, float]:
             if not p.vary and n not in free and math.isfinite(float(p.value))}
 
 
-def _centre_row(name: str, r: dict, a: dict) -> dict:
+def centre_row(name: str, r: dict, a: dict) -> dict:
     """A zero-offset row turned into the centre of the swing on the sensor's scale (see the module docstring)."""
-    base = float(a.get(_CENTRE[name], 0.0) or 0.0)
+    base = float(a.get(CENTRE_BASE[name], 0.0) or 0.0)
     out = dict(r)
     for key in ("estimate", "median", "best_fit"):
         if out.get(key) is not None:
@@ -116,8 +116,8 @@ def parameter_table(res, plain: bool = False) -> tuple[list[str], list[list[str]
     posterior = any(estimate_kind(r) == "median" for r in summary.values())
     rows, notes, codes = [], [], []
     for name, r in summary.items():
-        if plain and name in _CENTRE:
-            r = _centre_row(name, r, a)
+        if name in CENTRE_BASE:  # the centre of the swing, as the notes and figures give it
+            r = centre_row(name, r, a)
         value, unit = to_display(_estimate(r), r.get("unit"), name)
         ends = [to_display(r.get(k), r.get("unit"), name)[0] for k in ("lo68", "hi68", "lo95", "hi95")]
         bound = {"min": ends[2], "max": ends[3]}.get(r.get("at_bound"))
@@ -167,8 +167,8 @@ def held_table(res) -> tuple[list[str], list[list[str]]]:
         if name in free:
             continue
         shown, unit = to_display(value, units.get(name, ""), name)
-        if name in _CENTRE:
-            shown = float(a.get(_CENTRE[name], 0.0) or 0.0) * (180 / math.pi) - shown
+        if name in CENTRE_BASE:
+            shown = float(a.get(CENTRE_BASE[name], 0.0) or 0.0) * (180 / math.pi) - shown
         rows.append([_label(name, meanings, loads_in, True, a), unit, format_row(shown)[0], name])
     return ["parameter", "unit", "held at", "name in the files"], rows
 
@@ -177,6 +177,9 @@ def _label(name: str, meanings: dict, loads_in: str, plain: bool, a: dict | None
     if not plain:
         from ..core.display import display_name
 
+        if name in CENTRE_BASE:
+            return {"observation.offset": "centre [observation.offset]",
+                    "observation.offset_rate": "centre drift [observation.offset_rate]"}[name]
         return display_name(name, loads_in)
     return plain_name(name, meanings.get(name, ""), loads_in) + _reference(name, a or {})
 

@@ -108,9 +108,9 @@ def _display_draws(res, names: list[str]) -> tuple[dict[str, np.ndarray], dict[s
     for name in names:
         values, unit = to_display(post[name].values, units.get(name, ""), name)
         if name in ("observation.offset", "observation.offset_rate"):  # shown as the centre, as in the table
-            from .params import _CENTRE
+            from .params import CENTRE_BASE
 
-            values = float(res.attrs.get(_CENTRE[name], 0.0) or 0.0) * (180 / np.pi) - values
+            values = float(res.attrs.get(CENTRE_BASE[name], 0.0) or 0.0) * (180 / np.pi) - values
         key = plain_name(name, meanings.get(name, ""), loads_in)
         draws[key] = values
         labels[key] = f"{key}\n({unit})" if unit and unit not in ("1", "dimensionless") else key

@@ -1,0 +1,143 @@
+"""Run every shipped fit recipe and write the table the README and the docs quote.
+
+Run from a checkout:  python benchmarks/recipes.py [--out-dir benchmarks/results] [--only NAME ...]
+
+Each recipe of ``fits/*.toml`` and ``fits/real/*.toml`` is run as a user runs it
+(``escfit fit RECIPE``), one at a time, into a scratch folder; its results file is then read for
+every free parameter's estimate and 95 % interval (in the report's display units), split R-hat,
+bulk and tail ESS, the run length and whether the automatic run length converged, and the time
+taken (wall clock and CPU).  Writes ``recipes.md`` (a Markdown table) and ``recipes.json`` into
+``--out-dir``; prints the table.  The convergence thresholds are the sampler's own
+(:mod:`escfit.inference.convergence`): R-hat <= 1.01, bulk and tail ESS >= 400.  Nothing here
+loosens them: a recipe that ends unconverged is printed as such and makes the exit status 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+import tomllib
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def recipes(only: list[str] | None = None) -> list[Path]:
+    found = sorted((ROOT / "fits").glob("*.toml")) + sorted((ROOT / "fits" / "real").glob("*.toml"))
+    return [p for p in found if not only or p.stem in only]
+
+
+def run_recipe(path: Path, scratch: Path) -> dict:
+    """Run one recipe with the command line; return its timings and the results file."""
+    out = scratch / f"{path.stem}.h5"
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    clock = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-m", "escfit.cli.main", "fit", str(path), "--out", str(out), "--quiet",
+                           "--force"], capture_output=True, text=True, cwd=scratch)
+    wall = time.perf_counter() - clock
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return {"recipe": str(path.relative_to(ROOT)), "returncode": proc.returncode, "wall_s": round(wall, 1),
+            "cpu_s": round(cpu, 1), "out": str(out), "stderr": proc.stderr.strip()[-500:]}
+
+
+def summarise(record: dict) -> dict:
+    """Estimates, intervals and diagnostics of a finished recipe (display units)."""
+    from escfit.core.display import format_row, to_display
+    from escfit.core.names import plain_name
+    from escfit.report.params import CENTRE_BASE, centre_row
+    from escfit.results import load_fit
+
+    res = load_fit(record["out"])
+    a = res.attrs
+    meanings = json.loads(a.get("meanings", "{}") or "{}")
+    rows = []
+    for name, r in res.summary().items():
+        if name not in res.parameter_names:
+            continue
+        if name in CENTRE_BASE:
+            r = centre_row(name, r, a)
+        value, unit = to_display(r["estimate"], r.get("unit"), name)
+        lo, hi = (to_display(r[k], r.get("unit"), name)[0] for k in ("lo95", "hi95"))
+        text, (lo_t, hi_t) = format_row(value, (lo, hi), hi - lo)
+        rows.append({"parameter": name, "plain": plain_name(name, meanings.get(name, "")), "unit": unit,
+                     "estimate": text, "lo95": lo_t, "hi95": hi_t, "kind": r.get("estimate_kind"),
+                     "rhat": r.get("rhat"), "ess_bulk": r.get("ess_bulk"), "ess_tail": r.get("ess_tail")})
+    return {**record, "title": a.get("title", ""), "method": a.get("method"), "walkers": a.get("walkers"),
+            "steps": a.get("steps"), "steps_mode": a.get("steps_mode"),
+            "converged": None if a.get("method") != "emcee" else _converged(rows, a), "parameters": rows,
+            "warnings": res.warnings}
+
+
+def _converged(rows: list[dict], a: dict) -> bool:
+    from escfit.inference.convergence import ESS_MIN, RHAT_MAX
+
+    ok = all(r["rhat"] is not None and r["rhat"] <= RHAT_MAX and r["ess_bulk"] >= ESS_MIN and r["ess_tail"] >= ESS_MIN
+             for r in rows)
+    return ok and (a.get("steps_mode") != "auto" or bool(int(a.get("converged", 0))))
+
+
+def markdown(records: list[dict]) -> str:
+    head = ("| recipe | method, run | parameter | estimate [95 % interval] | R-hat | ESS bulk / tail | converged | "
+            "time (wall / CPU) |")
+    lines = [head, "|---|---|---|---|---:|---:|---|---:|"]
+    for rec in records:
+        if rec.get("returncode"):
+            lines.append(f"| {rec['recipe']} | failed | | {rec['stderr'][-120:]} | | | | |")
+            continue
+        run = (f"emcee, {rec['walkers']} walkers x {rec['steps']} steps" if rec["method"] == "emcee"
+               else "least squares")
+        conv = {True: "yes", False: "**no**", None: "-"}[rec["converged"]]
+        times = f"{rec['wall_s']:.0f} / {rec['cpu_s']:.0f} s"
+        for i, p in enumerate(rec["parameters"]):
+            first = i == 0
+            rhat = f"{p['rhat']:.3f}" if p["rhat"] is not None else "-"
+            ess = f"{p['ess_bulk']:.0f} / {p['ess_tail']:.0f}" if p["ess_bulk"] is not None else "-"
+            unit = f" {p['unit']}" if p["unit"] and p["unit"] != "dimensionless" else ""
+            lines.append(f"| {rec['recipe'] if first else ''} | {run if first else ''} | {p['plain']} | "
+                         f"{p['estimate']} [{p['lo95']}, {p['hi95']}]{unit} | {rhat} | {ess} | "
+                         f"{conv if first else ''} | {times if first else ''} |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out-dir", type=Path, default=ROOT / "benchmarks" / "results")
+    ap.add_argument("--only", nargs="*", help="recipe names (file stems) to run")
+    args = ap.parse_args(argv)
+    records = []
+    with tempfile.TemporaryDirectory(prefix="escfit-recipes-") as tmp:
+        for path in recipes(args.only):
+            print(f"running {path.relative_to(ROOT)} ...", file=sys.stderr, flush=True)
+            rec = run_recipe(path, Path(tmp))
+            records.append(summarise(rec) if rec["returncode"] == 0 else rec)
+    for rec in records:
+        rec.pop("out", None)
+    table = markdown(records)
+    meta = {"python": platform.python_version(), "machine": platform.machine(), "processors": _cpus(),
+            "date": time.strftime("%Y-%m-%d")}
+    args.out_dir.mkdir(parents=True, exist_ok=True)
+    (args.out_dir / "recipes.json").write_text(json.dumps({"meta": meta, "recipes": records}, indent=1, default=str))
+    (args.out_dir / "recipes.md").write_text(f"Shipped recipes, run by `python benchmarks/recipes.py` on {meta['date']} "
+                                              f"({meta['processors']} processors, Python {meta['python']}).\n\n" + table)
+    print(table)
+    bad = [r["recipe"] for r in records if r.get("returncode") or r.get("converged") is False]
+    if bad:
+        print(f"not converged or failed: {', '.join(bad)}", file=sys.stderr)
+    return 1 if bad else 0
+
+
+def _cpus() -> int:
+    import os
+
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
