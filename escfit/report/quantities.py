@@ -34,9 +34,18 @@ import numpy as np
 from ..core.display import RAD_TO_DEG, format_row, load_unit
 from .params import held_values
 
-__all__ = ["derived_rows", "parameter_draws", "inertia_of"]
+__all__ = ["derived_rows", "parameter_draws", "inertia_of", "half_swing_loss"]
 
 N_DRAWS = 4000
+
+
+def half_swing_loss(amplitude, omega0, c, r):
+    """Amplitude lost in one half swing from ``amplitude`` (rad) by a linear oscillator with viscous rate
+    ``c`` (1/s) and Coulomb term ``r`` (rad/s^2): ``A (1 - q) + (1 + q) R / omega0**2``,
+    ``q = exp(-pi C / (2 omega_d))`` (arrays broadcast; see the module docstring)."""
+    wd = np.sqrt(np.maximum(np.asarray(omega0, float) ** 2 - np.asarray(c, float) ** 2 / 4, 1e-300))
+    q = np.exp(-math.pi * np.asarray(c, float) / (2 * wd))
+    return np.asarray(amplitude, float) * (1 - q) + (1 + q) * np.asarray(r, float) / np.asarray(omega0, float) ** 2
 
 
 def inertia_of(res) -> float | None:
@@ -128,11 +137,10 @@ def derived_rows(res) -> tuple[list[str], list[list[str]], str]:
     has_escapement = any(n.startswith("escapement[") for n in draws)
     a0 = draws.get("oscillator.theta0")
     if a0 is not None and not has_escapement:
-        ratio = np.exp(-math.pi * c / (2 * wd))
         amp = np.abs(a0)
         for name, r in (rs or {"": np.zeros_like(w0)}).items():
             at = _at_load(name, loads_in)
-            loss = amp * (1 - ratio) + (1 + ratio) * r / w0 ** 2
+            loss = half_swing_loss(amp, w0, c, r)
             add(f"amplitude lost in the first half swing, from {np.median(amp) * RAD_TO_DEG:.3g} deg{at}{small}",
                 "deg", loss * RAD_TO_DEG, "A (1 − r) + (1 + r) R / ω0², r = exp(−π C / 2ωd)")
     inertia = inertia_of(res)
