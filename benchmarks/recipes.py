@@ -110,13 +110,18 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out-dir", type=Path, default=ROOT / "benchmarks" / "results")
     ap.add_argument("--only", nargs="*", help="recipe names (file stems) to run")
+    ap.add_argument("--keep", type=Path, default=None, help="keep the results files in this folder (reports)")
     args = ap.parse_args(argv)
     records = []
     with tempfile.TemporaryDirectory(prefix="escfit-recipes-") as tmp:
+        scratch = args.keep or Path(tmp)
+        scratch.mkdir(parents=True, exist_ok=True)
         for path in recipes(args.only):
             print(f"running {path.relative_to(ROOT)} ...", file=sys.stderr, flush=True)
-            rec = run_recipe(path, Path(tmp))
+            rec = run_recipe(path, scratch)
             records.append(summarise(rec) if rec["returncode"] == 0 else rec)
+            print(f"  {rec['wall_s']:.0f} s wall, {rec['cpu_s']:.0f} s CPU, converged: {records[-1].get('converged')}",
+                  file=sys.stderr, flush=True)
     for rec in records:
         rec.pop("out", None)
     table = markdown(records)

@@ -133,8 +133,9 @@ def parameter_table(res, plain: bool = False) -> tuple[list[str], list[list[str]
         note = []
         if column == "estimate":
             note.append(estimate_kind(r))
-        if r.get("at_bound") in _BOUND_FLAG:
-            note.append(_BOUND_FLAG[r["at_bound"]])
+        if r.get("at_bound") in _BOUND_FLAG:  # a posterior row: the least-squares start was there, not the median
+            note.append(_BOUND_FLAG[r["at_bound"]] if estimate_kind(r) == "best fit"
+                        else f"least squares {_BOUND_FLAG[r['at_bound']]}")
         if name == "observation.sigma" and estimate_kind(r) == "median":
             note.append("reading noise, posterior")
         if r.get("rhat") is not None and r["rhat"] > 1.01:
