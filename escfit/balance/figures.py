@@ -184,7 +184,8 @@ def _envelope_figure(res, plt):
                "least-squares best fit), in degrees from the sensor's zero, so alternate half swings differ by twice "
                "the centre's offset. The decay's shape tells the "
                "damping: exponential for viscous drag, a straight line for dry (Coulomb) friction. Samples are "
-               "discrete, so a recorded peak may fall a little short of the true turning point.")
+               "discrete and noisy: a recorded peak may fall short of the true turning point (between samples) or "
+               "pass it (the largest of several noisy samples), so the lower panel may sit off zero.")
     return png(fig, caption=caption)
 
 
