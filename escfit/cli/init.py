@@ -113,8 +113,9 @@ def next_command(data: str, scene: Path) -> str:
               help="A gravity pendulum: torque omega0^2 sin(theta).")
 @click.option("--spring", "kind", flag_value="spring", help="A spring or torsion wire: linear restoring torque.")
 @click.option("--force", is_flag=True, help="Replace an existing scene file.")
-@click.option("--format", "fmt", type=click.Choice(["unit-curve", "timegrapher", "tg-applog", "timeseries", "raw"]),
-              default=None, help="Recording format (detected from the file's content).")
+@click.option("--format", "fmt", default=None,
+              help="Recording format (detected from the file's content): escfit's own, raw, or an instrument's or "
+                   "program's (phyphox, cassy, lvm, tracker, ...: see docs/recordings.md).")
 @click.option("--time-column", default=None, help="[recording] time_column: name or 1-based position.")
 @click.option("--sample-rate", default=None, help="[recording] sample_rate, e.g. '500 Hz' (instead of a time column).")
 @click.option("--angle-column", default=None, help="[recording] angle_column: name or 1-based position.")
@@ -129,6 +130,11 @@ def init(data, out, kind, force, fmt, **options):
     The period, the decay and the columns are measured from the record; options the record
     cannot settle (which column, its unit, a clock) are written in a [recording] table.
     """
+    from ..balance.recordings.formats_list import FORMAT_NAMES
+    from ..core.errors import DataError
+
+    if fmt is not None and fmt not in FORMAT_NAMES:
+        raise DataError(f"--format {fmt!r} is not a balance recording format; known: {', '.join(FORMAT_NAMES)}", data)
     out = Path(out) if out else default_scene_path(data)
     written, lines = write_starter(data, out, kind=kind, force=force, recording=recording_table(**options), fmt=fmt)
     for line in lines:

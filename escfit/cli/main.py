@@ -408,7 +408,9 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoi
     if scene_path is None:  # a record of one's own: offer a starter scene (on a terminal) or name `escfit init`
         from .init import offer_starter, recording_table
 
-        fmt_raw = fmt if fmt in ("unit-curve", "timegrapher", "tg-applog", "timeseries", "raw") else None
+        from ..balance.recordings.formats_list import FORMAT_NAMES
+
+        fmt_raw = fmt if fmt in FORMAT_NAMES else None
         scene_path = offer_starter(data, recording_table(
             time_column=time_column, sample_rate=sample_rate, angle_column=angle_column, angle_unit=angle_unit,
             counts_per_turn=counts_per_turn, scale=scale, start=start_time, stop=stop_time), fmt_raw)
