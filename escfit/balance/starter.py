@@ -36,7 +36,7 @@ from .recordings import UnitCurve
 from .recordings.timegrapher import TimegrapherRecording
 from .recordings.timeseries import TimeSeries
 
-__all__ = ["Survey", "read_with_help", "survey", "decay_estimates", "noise_is_correlated", "BOUND_FACTOR"]
+__all__ = ["Survey", "read_with_help", "survey", "decay_estimates", "BOUND_FACTOR"]
 
 BOUND_FACTOR = 3.0  # upper bounds of C and R: this many times the value that alone explains the decay
 MAX_COLUMNS = 12  # columns tried when the reader cannot tell which one swings
@@ -412,7 +412,3 @@ def _excess_lag1(x: np.ndarray, period_samples: float) -> float:
     white = float(np.dot(g[1:], g[:-1]) / np.dot(g, g))
     return measured - white
 
-
-def noise_is_correlated(s: Survey) -> bool:
-    """Whether a waveform fit of the surveyed record should model AR(1) noise."""
-    return bool(s.noise_ar1)

@@ -18,6 +18,7 @@ from .starter import Survey, decay_estimates, survey
 __all__ = ["starter_scene", "toml_number"]
 
 OMEGA0_SPAN = (0.8, 1.25)  # free omega0 within these factors of the measured period's value
+BOUND_TEXT = "three times"  # in words: escfit.balance.starter.BOUND_FACTOR
 
 
 def toml_number(x: float, digits: int = 4) -> str:
@@ -161,8 +162,6 @@ def _decay_body(s: Survey, restoring: str, said: str) -> list[str]:
                 f"reference = {_quote(reference)}", "friction = \"free\""]
     return out
 
-
-BOUND_TEXT = "three times"
 
 
 def _observation_lines(s: Survey) -> list[str]:

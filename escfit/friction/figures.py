@@ -82,7 +82,7 @@ def _mu_figure(res, plt, band_gf):
     curves = np.array([f"{v * gf:.3g} gf" for v in w])
     band = None if band_gf is None else tuple(mu(b / gf) for b in band_gf)
     fig = fit_figure(plt, x=speed, y=mu(obs["reading"].values), model=mu(lsq["expected"].values), curves=curves,
-                     band=band, xlabel="sliding speed (ft/s)", ylabel="friction coefficient mu (dimensionless)",
+                     band=band, xlabel="sliding speed (ft/s)", ylabel="friction coefficient mu",
                      reading_key="mu of each reading", figsize=(9.0, 5.6))
     caption = (f"The friction coefficient mu = F/N of each reading, worked out at the best-fit geometry (k = "
                f"{k / 0.0254:.4g} in, d = {d / 0.0254:.4g} in), against the sliding speed, one colour per normal load; "

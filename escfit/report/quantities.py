@@ -130,11 +130,13 @@ def derived_rows(res) -> tuple[list[str], list[list[str]], str]:
         with np.errstate(divide="ignore"):
             add("quality factor Q (viscous damping alone)", "", np.where(c > 0, w0 / c, np.inf), "ω0 / C")
         add("logarithmic decrement per period Λ (viscous)", "", math.pi * c / wd, "π C / ωd")
+    has_escapement = any(n.startswith("escapement[") for n in draws)
+    # with an escapement the impulse gives the amplitude back: say it is what friction alone would take
+    taken = "amplitude Coulomb friction alone would take per half swing" if has_escapement else \
+        "amplitude lost per half swing to Coulomb friction"
     for name, r in rs.items():
         at = _at_load(name, loads_in)
-        add(f"amplitude lost per half swing to Coulomb friction{at}{small}", "deg", 2 * r / w0 ** 2 * RAD_TO_DEG,
-            "2 R / ω0²")
-    has_escapement = any(n.startswith("escapement[") for n in draws)
+        add(f"{taken}{at}{small}", "deg", 2 * r / w0 ** 2 * RAD_TO_DEG, "2 R / ω0²")
     a0 = draws.get("oscillator.theta0")
     if a0 is not None and not has_escapement:
         amp = np.abs(a0)
