@@ -151,7 +151,8 @@ def test_held_parameters_are_listed_with_their_values(tmp_path):
     fit = load_fit(out)
     head, rows = held_table(fit)
     held = {r[-1]: r for r in rows}
-    assert held["escapement[2].X"][0] == "impulse torque X2 (window 2)" and held["escapement[2].X"][2] == "4119.34"
+    assert held["escapement[2].X"][0] == ("impulse torque X2 (window 2) at the reference load 330.66 g, in proportion "
+                                          "to the load") and held["escapement[2].X"][2] == "4119.34"
     assert held["oscillator.omega0"][2] == "15.78" and held["oscillator.theta0"][1] == "deg"
     assert json.loads(fit.attrs["held"])["escapement[1].X"] == pytest.approx(473.07)
 

@@ -163,6 +163,7 @@ def held_table(res) -> tuple[list[str], list[list[str]]]:
     units = json.loads(a.get("units", "{}") or "{}")
     loads_in = load_unit(meanings)
     free = set(res.summary())
+    reference = _load_reference(a)
     rows = []
     for name, value in held_values(res).items():
         if name in free:
@@ -170,8 +171,22 @@ def held_table(res) -> tuple[list[str], list[list[str]]]:
         shown, unit = to_display(value, units.get(name, ""), name)
         if name in CENTRE_BASE:
             shown = float(a.get(CENTRE_BASE[name], 0.0) or 0.0) * (180 / math.pi) - shown
-        rows.append([_label(name, meanings, loads_in, True, a), unit, format_row(shown)[0], name])
+        label = _label(name, meanings, loads_in, True, a)
+        if reference and name.startswith("escapement[") and name.endswith(".X"):
+            label += f" at the reference load {reference}, in proportion to the load"
+        rows.append([label, unit, format_row(shown)[0], name])
     return ["parameter", "unit", "held at", "name in the files"], rows
+
+
+def _load_reference(a: dict) -> str:
+    """The ``[fit.loads] reference`` of a joint fit of several loads (escapement torques are given there)."""
+    import tomllib
+
+    try:
+        loads = tomllib.loads(a.get("scene", "") or "").get("fit", {}).get("loads", {})
+    except tomllib.TOMLDecodeError:
+        return ""
+    return str(loads.get("reference", "")) if isinstance(loads, dict) else ""
 
 
 def _label(name: str, meanings: dict, loads_in: str, plain: bool, a: dict | None = None) -> str:
