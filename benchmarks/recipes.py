@@ -49,7 +49,7 @@ def run_recipe(path: Path, scratch: Path) -> dict:
 
 def summarise(record: dict) -> dict:
     """Estimates, intervals and diagnostics of a finished recipe (display units)."""
-    from escfit.core.display import format_row, to_display
+    from escfit.core.display import format_row, load_unit, to_display
     from escfit.core.names import plain_name
     from escfit.report.params import CENTRE_BASE, centre_row
     from escfit.results import load_fit
@@ -57,6 +57,7 @@ def summarise(record: dict) -> dict:
     res = load_fit(record["out"])
     a = res.attrs
     meanings = json.loads(a.get("meanings", "{}") or "{}")
+    loads_in = load_unit(meanings)
     rows = []
     for name, r in res.summary().items():
         if name not in res.parameter_names:
@@ -66,7 +67,7 @@ def summarise(record: dict) -> dict:
         value, unit = to_display(r["estimate"], r.get("unit"), name)
         lo, hi = (to_display(r[k], r.get("unit"), name)[0] for k in ("lo95", "hi95"))
         text, (lo_t, hi_t) = format_row(value, (lo, hi), hi - lo)
-        rows.append({"parameter": name, "plain": plain_name(name, meanings.get(name, "")), "unit": unit,
+        rows.append({"parameter": name, "plain": plain_name(name, meanings.get(name, ""), loads_in), "unit": unit,
                      "estimate": text, "lo95": lo_t, "hi95": hi_t, "kind": r.get("estimate_kind"),
                      "rhat": r.get("rhat"), "ess_bulk": r.get("ess_bulk"), "ess_tail": r.get("ess_tail")})
     return {**record, "title": a.get("title", ""), "method": a.get("method"), "walkers": a.get("walkers"),
@@ -111,8 +112,20 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out-dir", type=Path, default=ROOT / "benchmarks" / "results")
     ap.add_argument("--only", nargs="*", help="recipe names (file stems) to run")
     ap.add_argument("--keep", type=Path, default=None, help="keep the results files in this folder (reports)")
+    ap.add_argument("--from-kept", type=Path, default=None,
+                    help="do not run: re-read the results files kept by an earlier --keep run, with the times of its "
+                         "recipes.json (in --out-dir)")
     args = ap.parse_args(argv)
     records = []
+    if args.from_kept is not None:
+        earlier = json.loads((args.out_dir / "recipes.json").read_text())["recipes"]
+        for rec in earlier:
+            if rec.get("returncode"):
+                records.append(rec)
+                continue
+            keep = {k: rec[k] for k in ("recipe", "returncode", "wall_s", "cpu_s", "stderr")}
+            records.append(summarise({**keep, "out": str(args.from_kept / f"{Path(rec['recipe']).stem}.h5")}))
+        return _write(records, args.out_dir)
     with tempfile.TemporaryDirectory(prefix="escfit-recipes-") as tmp:
         scratch = args.keep or Path(tmp)
         scratch.mkdir(parents=True, exist_ok=True)
@@ -122,15 +135,23 @@ def main(argv: list[str] | None = None) -> int:
             records.append(summarise(rec) if rec["returncode"] == 0 else rec)
             print(f"  {rec['wall_s']:.0f} s wall, {rec['cpu_s']:.0f} s CPU, converged: {records[-1].get('converged')}",
                   file=sys.stderr, flush=True)
+    return _write(records, args.out_dir)
+
+
+def _write(records: list[dict], out_dir: Path) -> int:
+    """Write recipes.json and recipes.md, print the table; 1 when a recipe failed or did not converge."""
     for rec in records:
         rec.pop("out", None)
     table = markdown(records)
     meta = {"python": platform.python_version(), "machine": platform.machine(), "processors": _cpus(),
             "date": time.strftime("%Y-%m-%d")}
-    args.out_dir.mkdir(parents=True, exist_ok=True)
-    (args.out_dir / "recipes.json").write_text(json.dumps({"meta": meta, "recipes": records}, indent=1, default=str))
-    (args.out_dir / "recipes.md").write_text(f"Shipped recipes, run by `python benchmarks/recipes.py` on {meta['date']} "
-                                              f"({meta['processors']} processors, Python {meta['python']}).\n\n" + table)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / "recipes.json").write_text(json.dumps({"meta": meta, "recipes": records}, indent=1, default=str))
+    (out_dir / "recipes.md").write_text(f"Shipped recipes, run by `python benchmarks/recipes.py` on {meta['date']} "
+                                              f"({meta['processors']} processors, Python {meta['python']}).  Wall times depend on what else "
+                                         "runs on the machine; CPU times are the fits' own.  The run length of "
+                                         "every emcee recipe is set by convergence: split R-hat <= 1.01, bulk and "
+                                         "tail ESS >= 400, longer than 50 autocorrelation times.\n\n" + table)
     print(table)
     bad = [r["recipe"] for r in records if r.get("returncode") or r.get("converged") is False]
     if bad:
