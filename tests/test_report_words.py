@@ -175,3 +175,21 @@ def test_one_curve_caption_and_legend_say_one_curve(decay_fit):
     caption = figures["amplitude per swing"].caption
     assert "One colour per curve" not in caption
     assert "sensor's scale" in figures["data and fit"].caption
+
+
+def test_corner_plot_keeps_all_nine_parameters_of_a_waveform_fit():
+    """ArviZ draws at most 40 panels unless told: a 9-parameter corner plot (81 panels) crashed the report."""
+    import xarray as xr
+
+    from escfit.report.plots import report_figures
+    from escfit.results import FitResult
+
+    names = ["oscillator.omega0", "oscillator.theta0", "viscous.C", "coulomb.R", "observation.sigma",
+             "observation.offset", "observation.offset_rate", "observation.rho", "observation.t_release"]
+    units = dict(zip(names, ["1/s", "rad", "1/s", "1/s**2", "rad", "rad", "rad/s", "", "s"]))
+    rng = np.random.default_rng(1)
+    post = xr.Dataset({n: (("chain", "draw"), rng.normal(1.0 + k, 0.1, (4, 100))) for k, n in enumerate(names)})
+    tree = xr.DataTree.from_dict({"/posterior": post})
+    tree.attrs.update(model="friction_rig", parameters=json.dumps(names), units=json.dumps(units), burn=10)
+    figures, _ = report_figures(FitResult(tree))
+    assert figures["corner plot"][:8] == b"\x89PNG\r\n\x1a\n"

@@ -178,6 +178,14 @@ def _corner(res, names: list[str]) -> CaptionedPNG:
 
 
 def _pair(az, ds, side: float, text: float, n: int):
+    k = len(ds.data_vars)
+    # ArviZ draws at most plot.max_subplots (40) panels and silently drops parameters beyond: a 9-parameter
+    # waveform fit (81 panels) lost its last row and column, and the report failed
+    with az.rc_context(rc={"plot.max_subplots": max(40, k * k)}):
+        return _pair_plot(az, ds, side, text, n)
+
+
+def _pair_plot(az, ds, side: float, text: float, n: int):
     return az.plot_pair(ds, marginals=True, kind="scatter", point_estimate="median", figsize=(side, side),
                         textsize=text, scatter_kwargs={"alpha": 0.15 if n > 2000 else 0.3, "s": 3},
                         point_estimate_marker_kwargs={"color": "C3", "s": 30},
