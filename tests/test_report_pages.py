@@ -80,9 +80,15 @@ def test_unit_labels_people_read():
     assert display_unit("1/s**2", "escapement[2].X") == "rad/s^2"
     assert to_display(15.78, "1/s", "oscillator.omega0") == (15.78, "rad/s")
     assert to_display(2.3, "1/s", "viscous.C") == (2.3, "1/s")
-    assert to_display(0.1, "", "friction.mu") == (0.1, "1")
+    assert to_display(0.1, "", "friction.mu") == (0.1, "dimensionless")
+    # the friction rig's table reads in the rig's units: gram-force, inches, ft/s
+    assert to_display(9.80665e-3, "N", "observation.sigma")[0] == pytest.approx(1.0)
+    assert to_display(0.0254, "m", "rig.k") == (pytest.approx(1.0), "in")
+    assert to_display(1.0, "1/N", "friction.mu_w") == (pytest.approx(9.80665e-3), "1/gf")
+    assert to_display(1.0, "s/m", "friction.mu_v") == (pytest.approx(0.3048), "s/ft")
     assert to_display(None, "rad", "x") == (None, "deg")
-    assert display_unit("kg*m**2") == "kg m^2" and display_unit("rad/s", "verge.spin") == "rad/s"
+    assert display_unit("kg*m**2") == "kg m^2" and display_unit("rad/s", "geneva.speed") == "rad/s"
+    assert to_display(math.pi, "rad/s", "verge.spin") == (pytest.approx(30.0), "rpm")  # the source's spin unit
 
 
 def test_loads_get_their_unit():
@@ -96,6 +102,12 @@ def test_loads_get_their_unit():
 # --- the parameter table (report and command line) ----------------------------------------
 
 
+def _shows(text: str, value: float) -> bool:
+    """Whether ``text`` is ``value`` rounded to the digits it shows."""
+    digits = len(text.split(".")[1]) if "." in text and "e" not in text else 0
+    return abs(float(text) - value) <= 0.5 * 10.0 ** -digits * (1 + 1e-9) + 1e-12 * abs(value)
+
+
 def test_least_squares_table_says_best_fit_with_display_units(fits):
     res = load_fit(fits["balance"])
     head, rows = parameter_table(res)
@@ -104,7 +116,7 @@ def test_least_squares_table_says_best_fit_with_display_units(fits):
     r330 = by_name["coulomb.R[load=330.66 g]"]
     assert r330[1] == "rad/s^2"
     value = float(res.group("least_squares")["value"].sel(parameter="coulomb.R[load=330.66]"))
-    assert float(r330[2]) == pytest.approx(value, rel=1e-4)
+    assert _shows(r330[2], value)
     assert all("1/s**2" not in c for r in rows for c in r)
 
 
@@ -115,9 +127,9 @@ def test_posterior_table_shows_angles_in_degrees_and_labels_the_noise(fits, html
     sigma = next(r for r in rows if r[0] == "observation.sigma")
     draws = res.group("posterior")["observation.sigma"].values.ravel()
     assert sigma[1] == "deg"
-    assert float(sigma[2]) == pytest.approx(math.degrees(float(np.median(draws))), rel=1e-4)
-    lo95 = float(sigma[4].strip("[]").split(",")[0])
-    assert lo95 == pytest.approx(math.degrees(float(np.quantile(draws, 0.025))), rel=1e-4)
+    assert _shows(sigma[2], math.degrees(float(np.median(draws))))
+    lo95 = sigma[4].strip("[]").split(",")[0]
+    assert _shows(lo95, math.degrees(float(np.quantile(draws, 0.025))))
     assert "reading noise, posterior" in sigma[-1]  # the note column
     html = html_reports["balance_emcee"]
     assert "Least-squares reading scatter" in html
@@ -131,6 +143,7 @@ def test_command_line_table_uses_display_units(fits):
     assert "median" in header
     assert "rad/s^2" in out and "1/s**2" not in out
     assert re.search(r"observation\.sigma\s+deg\s", out)
+    assert re.search(r"R-hat", out) and not re.search(r"\b1\.\d{4}\b", out.split("note:")[0])  # R-hat: 3 decimals
     # JSON keeps the stored units
     js = json.loads(run("summary", fits["balance_emcee"], "--json").output)
     assert js["parameters"]["observation.sigma"]["unit"] == "rad"
@@ -150,9 +163,12 @@ class _Rows:
 def test_bound_flag_and_best_fit_from_the_summary_contract():
     head, rows = parameter_table(_Rows())
     assert head[2] == "best fit" and head[-1] == "note"
-    assert rows[0][-1] == "at lower bound" and rows[0][1] == "deg"
-    assert rows[0][4] == f"[0, {math.degrees(0.02):.5g}]"
+    # a zero offset on its lower bound is the centre of the swing (minus the offset) on its upper bound
+    assert rows[0][0] == "centre [observation.offset]"
+    assert rows[0][-1] == "at upper bound" and rows[0][1] == "deg"
+    assert rows[0][4] == f"[{-math.degrees(0.02):.1f}, 0]"
     assert rows[1][-1] == "" and rows[1][1] == "rad/s^2"
+    assert rows[1][4] == "[0, 0.020]"  # the last digit: the interval's width to two digits
 
 
 # --- the page --------------------------------------------------------------------------------

@@ -19,7 +19,7 @@ from ..core.errors import DataError, FitError
 from ..core.scene import load_scene
 from .recordings import UnitCurve
 
-__all__ = ["FAMILY", "make_problem"]
+__all__ = ["FAMILY", "make_problem", "read_data"]
 
 PROBLEM_OPTIONS = {"solver", "solver_options", "unit", "fmt", "notch_deg", "recording"}
 
@@ -140,6 +140,31 @@ def _scene_notch_deg(sc) -> float | None:
     from .observation.notches import _notch_angle
 
     return math.degrees(_notch_angle(obs["notch_deg"], f"{sc.where} [observation].notch_deg"))
+
+
+def read_data(path, *, recording: dict | None = None, fmt: str | None = None, notch_deg: float | None = None,
+              where: str | None = None):
+    """Read a balance recording file as a fit does with a scene whose ``[recording]`` table is ``recording``.
+
+    Parameters
+    ----------
+    path
+        The file.
+    recording
+        ``[recording]`` options (scene-table keys and values); empty or ``None``: detect everything.
+    fmt, notch_deg
+        As :func:`make_problem`.
+    where
+        Where ``recording`` comes from, for messages (default: the file).
+
+    Returns
+    -------
+    UnitCurve, PulseTrain, TimegrapherRecording or TimeSeries
+    """
+    from .recordings.recording_spec import recording_spec_from_table
+
+    spec = recording_spec_from_table(recording, where or f"{path} [recording]") if recording else None
+    return _read_data(path, spec, fmt, notch_deg)
 
 
 def _read_data(path, spec, fmt: str | None, notch_deg: float | None, default_notch_deg: float | None = None):

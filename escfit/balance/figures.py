@@ -85,8 +85,12 @@ def _amplitude_figure(res, plt) -> bytes:
         caption = ("Amplitude readings against the model's amplitude at the least-squares best fit (lines join the "
                    "recorded half swings)")
         key, err = "amplitude readings", ""
+    several = len(set(curves)) > 1
     caption += ("; shaded: 95 % band of the model over the posterior draws" if band is not None else "") + \
-        ". Lower panel: reading minus best fit. One colour per curve (load) in both panels."
+        ". Lower panel: reading minus best fit" + (
+            ", each curve's points moved a little sideways so they do not hide each other"
+            + (" and its band drawn as two lines" if band is not None else "")
+            + ". One colour per curve (load) in both panels." if several else ".")
     fig = fit_figure(plt, x=obs["swing"].values, y=shown, model=model * k, curves=curves,
                      band=None if band is None else (band[0] * k, band[1] * k), yerr=yerr,
                      names=_names(res, curves), xlabel="half swing (count from release)",
@@ -132,13 +136,13 @@ def _waveform_figure(res, plt) -> bytes:
                                   gridspec_kw={"height_ratios": [3, 1.3]})
     ms = 3 if y.size < 500 else 1.5
     ax.plot(t, k * y, "o", ms=ms, color="C0", mfc="none", label="recorded angle (every sample fitted)")
-    ax.plot(t, k * lsq_exp, "-", lw=0.9, color="C3", label="model theta(t), best fit")
+    ax.plot(t, k * lsq_exp, "-", lw=0.9, color="C3", label="model, best fit")
     if band is not None:
         axr.fill_between(t, k * (band[0] - lsq_exp), k * (band[1] - lsq_exp), alpha=0.3, color="C3",
                          label="95 % posterior band of the model")
     axr.plot(t, k * (y - lsq_exp), "o", ms=ms, color="C0", mfc="none", label="recording - best fit")
     axr.axhline(0, color="k", lw=0.6)
-    ax.set_ylabel("angle from the centre (deg)")
+    ax.set_ylabel("recorded angle, sensor's scale (deg)")
     axr.set_ylabel("reading - best fit (deg)")
     axr.set_xlabel("time on the recording's clock (s)")
     for a in (ax, axr):
@@ -147,9 +151,11 @@ def _waveform_figure(res, plt) -> bytes:
     ax.legend(fontsize=LEGEND_PT, loc="upper right")
     if band is not None:
         axr.legend(fontsize=LEGEND_PT, loc="upper right")
-    caption = ("The recorded angle of every sample (blue circles) and the model's theta(t) at the least-squares best "
-               "fit (red line), in degrees from the fitted centre. Lower panel: recording minus model; a pattern "
-               "that repeats each swing points at a missing effect, a slow trend at the centre's drift.")
+    caption = ("The recorded angle of every sample (blue circles) and the model's reading at the least-squares best "
+               "fit (red line: theta(t) about the fitted centre of the swing, placed on the sensor's scale), in "
+               "degrees as the sensor reads; the centre and its drift are in the parameter table. Lower panel: "
+               "recording minus model; a pattern that repeats each swing points at a missing effect, a slow trend at "
+               "the centre's drift.")
     return png(fig, caption=caption)
 
 
@@ -178,7 +184,8 @@ def _envelope_figure(res, plt):
                "least-squares best fit), in degrees from the sensor's zero, so alternate half swings differ by twice "
                "the centre's offset. The decay's shape tells the "
                "damping: exponential for viscous drag, a straight line for dry (Coulomb) friction. Samples are "
-               "discrete, so a recorded peak may fall a little short of the true turning point.")
+               "discrete and noisy: a recorded peak may fall short of the true turning point (between samples) or "
+               "pass it (the largest of several noisy samples), so the lower panel may sit off zero.")
     return png(fig, caption=caption)
 
 

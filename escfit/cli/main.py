@@ -38,6 +38,7 @@ LAZY_COMMANDS = {
     "fit-many": "escfit.cli.study:fit_many",
     "examples": "escfit.cli.examples:examples",
     "summary": "escfit.cli.summary:summary",
+    "init": "escfit.cli.init:init",
 }
 
 EXIT_INTERRUPTED = 130
@@ -153,8 +154,9 @@ class _Group(click.Group):
 def cli(debug) -> None:
     """Identify the physical parameters of mechanical timekeeping oscillators.
 
-    New here?  `escfit examples DIR` copies example recordings, scenes and fit recipes
-    into DIR and prints what to run next.
+    New here?  `escfit init DATA` writes a starter scene that fits a recording of your own;
+    `escfit examples DIR` copies example recordings, scenes and fit recipes into DIR and
+    prints what to run next.
     """
 
 
@@ -389,7 +391,10 @@ def _read_recipe(path: Path) -> dict:
 def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoint_every, burn, unit_id, material, fmt, time_column, sample_rate,
         angle_column, angle_unit, counts_per_turn, scale, start_time, stop_time, solver, moves, notch_deg, resume,
         force, report_path, quiet):
-    """Fit DATA (a recording) with --scene SCENE, or run a fit RECIPE.toml."""
+    """Fit DATA (a recording) with --scene SCENE, or run a fit RECIPE.toml.
+
+    Without a scene, `escfit init DATA` writes a starter scene (on a terminal this command offers to).
+    """
     from ..core.errors import SceneError
     from ..inference import fit as run_fit
 
@@ -401,8 +406,15 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoi
         data, scene_path = recipe["data"], recipe["scene"]
         for key in ("steps", "max_steps"):
             _recipe_steps(recipe, key, where)
-    if scene_path is None:
-        raise SceneError("give --scene SCENE.toml (or a fit recipe)", data)
+    if scene_path is None:  # a record of one's own: offer a starter scene (on a terminal) or name `escfit init`
+        from .init import offer_starter, recording_table
+
+        from ..balance.recordings.formats_list import FORMAT_NAMES
+
+        fmt_raw = fmt if fmt in FORMAT_NAMES else None
+        scene_path = offer_starter(data, recording_table(
+            time_column=time_column, sample_rate=sample_rate, angle_column=angle_column, angle_unit=angle_unit,
+            counts_per_turn=counts_per_turn, scale=scale, start=start_time, stop=stop_time), fmt_raw)
     pick = lambda cli_value, key, default: cli_value if cli_value is not None else recipe.get(key, default)  # noqa: E731
     method = pick(method, "method", "leastsq")
     out = pick(out, "out", None) or f"{Path(data).stem}_fit.h5"

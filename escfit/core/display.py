@@ -12,9 +12,18 @@ stored unit                    parameter name  display label               facto
 ``rad/s``                      ``*_rate``      ``deg/s``                   180/pi
 ``1/s**2``                     any             ``rad/s^2``                 1
 ``1/s``                        ``*omega0``     ``rad/s``                   1
-``""`` (dimensionless)         any             ``1``                       1
+``""`` (dimensionless)         any             ``dimensionless``           1
+``N``                          any             ``gf``                      1000/g0
+``1/N``                        any             ``1/gf``                    g0/1000
+``s/m``                        any             ``s/ft``                    0.3048
+``m``                          ``rig.*``       ``in``                      1/0.0254
+``N*m``                        ``geneva.*``    ``lbf in``                  1/(4.448 * 0.0254)
 anything else                  any             the unit, ``**`` -> ``^``   1
 =============================  ==============  ==========================  ===============
+
+Forces (only the friction rig's readings and noise are in N), the rig's geometry and its friction
+laws' slopes read in the rig's own units (gram-force, inches, ft/s), as its figures and Monday's
+session do; Geneva torques in the lbf in of Meyer's tables.
 
 Torques per inertia (R, X) are angular accelerations, so their ``1/s**2`` reads ``rad/s^2``;
 omega0 is an angular frequency (``rad/s``) while the viscous rate C stays ``1/s``.  A rate in
@@ -37,9 +46,15 @@ from typing import Callable, Mapping
 import numpy as np
 
 __all__ = ["RULES", "DisplayRule", "to_display", "display_unit", "display_name", "curve_label", "load_unit",
-           "format_value"]
+           "format_value", "format_row", "FIXED_RANGE"]
+
+FIXED_RANGE = (1e-3, 1e6)  # magnitudes written as plain decimals; outside, in powers of ten
 
 RAD_TO_DEG = 180.0 / math.pi
+G0 = 9.80665  # m/s^2: one gram-force is G0/1000 newton
+FT = 0.3048  # m per foot
+INCH = 0.0254  # m per inch
+LBF = 4.4482216152605  # N per pound-force
 
 
 @dataclass(frozen=True)
@@ -58,7 +73,21 @@ RULES: tuple[DisplayRule, ...] = (
     DisplayRule("rad/s", "deg/s", RAD_TO_DEG, applies=lambda n: n.endswith("_rate"), why="slow drift of an angle"),
     DisplayRule("1/s**2", "rad/s^2", why="torque per inertia is an angular acceleration"),
     DisplayRule("1/s", "rad/s", applies=lambda n: n.split(".")[-1].startswith("omega"), why="angular frequency"),
-    DisplayRule("", "1", why="dimensionless"),
+    DisplayRule("", "dimensionless", why="a ratio (friction coefficients, restitution, Q)"),
+    # the friction rig reads in gram-force, inches and ft/s (Monday's rig): its table does too
+    DisplayRule("N", "gf", 1000.0 / G0, why="force on the friction rig (its weights are grams)"),
+    DisplayRule("1/N", "1/gf", G0 / 1000.0, why="change of mu per gram-force of load"),
+    DisplayRule("s/m", "s/ft", FT, why="change of mu per ft/s of sliding speed"),
+    DisplayRule("m", "in", 1.0 / INCH, applies=lambda n: n.startswith("rig."), why="rig geometry (inches)"),
+    # Meyer's Geneva torques are in lbf*inch
+    DisplayRule("N*m", "lbf in", 1.0 / (LBF * INCH), applies=lambda n: n.startswith("geneva."),
+                why="driving torque, in the source's lbf in"),
+    # Meyer's and Lowen and Tepper's reports are in inches, pounds-force and seconds
+    DisplayRule("kg*m**2", "lbf in s^2", 1.0 / (LBF * INCH), applies=lambda n: n.startswith(("geneva.", "verge.")),
+                why="inertia, in the sources' lbf in s^2"),
+    DisplayRule("m", "in", 1.0 / INCH, applies=lambda n: n.startswith("verge."), why="verge geometry (inches)"),
+    DisplayRule("kg", "lbf s^2/in", INCH / LBF, applies=lambda n: n.startswith("verge."), why="verge masses"),
+    DisplayRule("rad/s", "rpm", 30.0 / math.pi, applies=lambda n: n == "verge.spin", why="fuze spin, in rpm"),
 )
 
 
@@ -165,3 +194,52 @@ def format_value(value, digits: int = 5) -> str:
     except (TypeError, ValueError):
         return str(value)
     return f"{v:.{digits}g}" if math.isfinite(v) else "-"
+
+
+def _step(width: float | None) -> int | None:
+    """Power of ten of the last digit shown: two significant digits of the interval's width."""
+    if width is None or not math.isfinite(width) or width <= 0:
+        return None
+    return math.floor(math.log10(width)) - 1
+
+
+def _fixed(value: float, step: int) -> str:
+    return f"{value:.{max(0, -step)}f}" if step < 0 else f"{round(value, -step):.0f}"
+
+
+def format_row(value, ends=(), width: float | None = None) -> tuple[str, list[str]]:
+    """An estimate and its interval ends with the same last digit, set by the interval's width.
+
+    The last digit shown is the second significant digit of ``width`` (default: the spread of
+    ``ends``), so an estimate of 2029 with a 95 % interval 11 wide reads ``2029 [2024, 2035]``
+    and 2.3493 with an interval 0.21 wide ``2.35 [2.24, 2.45]``.  Magnitudes outside
+    :data:`FIXED_RANGE` are written in powers of ten with as many significant digits.  Without
+    a width (a held value, an exact one) six significant digits are shown.
+
+    Returns
+    -------
+    tuple
+        ``(value text, [end texts])``; ``-`` for None or non-finite numbers.
+    """
+    nums = [float(v) for v in (value, *ends) if v is not None and math.isfinite(float(v))]
+    finite_ends = [float(e) for e in ends if e is not None and math.isfinite(float(e))]
+    if width is None and len(finite_ends) >= 2:
+        width = max(finite_ends) - min(finite_ends)
+    step = _step(width)
+    biggest = max((abs(v) for v in nums), default=0.0)
+
+    def one(v) -> str:
+        if v is None or not math.isfinite(float(v)):
+            return "-"
+        v = float(v)
+        if step is None:
+            text = f"{v:.6g}"
+        elif v == 0.0:
+            return "0"
+        elif biggest and not FIXED_RANGE[0] <= biggest < FIXED_RANGE[1]:
+            text = f"{v:.{max(0, math.floor(math.log10(biggest)) - step)}e}"
+        else:
+            text = _fixed(v, step)
+        return text[1:] if text.startswith("-") and float(text) == 0.0 else text  # no "-0.00"
+
+    return one(value), [one(e) for e in ends]

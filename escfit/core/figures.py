@@ -69,6 +69,12 @@ def curve_colours(labels: Sequence[str]) -> dict[str, str]:
     return {label: f"C{k % 10}" for k, label in enumerate(dict.fromkeys(labels))}
 
 
+def connect_only_line(x, curves) -> bool:
+    """Whether the readings are too dense to move sideways (hundreds per curve): then no dodge."""
+    curves = np.asarray(curves).astype(str)
+    return max((int(np.sum(curves == c)) for c in np.unique(curves)), default=0) > 200
+
+
 def fit_figure(plt, *, x, y, model, curves, xlabel: str, ylabel: str, band=None, yerr=None,
                names: dict[str, str] | None = None, reading_key: str = "readings",
                error_key: str = "reading interval", connect: bool = True, figsize=(9.0, 6.0)):
@@ -106,15 +112,28 @@ def fit_figure(plt, *, x, y, model, curves, xlabel: str, ylabel: str, band=None,
     colours = curve_colours(list(curves))
     fig, (ax, axr) = plt.subplots(2, 1, figsize=figsize, sharex=True, layout="constrained",
                                   gridspec_kw={"height_ratios": [3, 1.2]})
+    many = len(colours) > 1
+    # several curves share the residual panel: each curve's points are moved sideways by a fraction of the
+    # spacing of the readings and its band is drawn as two lines in its colour, so the curves stay apart
+    spacing = float(np.min(np.diff(np.unique(x)))) if np.unique(x).size > 1 else 1.0
+    dodge = {label: (k - (len(colours) - 1) / 2) * 0.18 * spacing / max(len(colours) - 1, 1) * min(len(colours) - 1, 2)
+             for k, label in enumerate(colours)} if many and not connect_only_line(x, curves) else {}
     for label, colour in colours.items():
         m = curves == label
         order = np.argsort(x[m], kind="stable")
         xs = x[m][order]
+        xr = xs + dodge.get(label, 0.0)
         if band is not None:
             lo, hi = (np.asarray(b, dtype=float)[m][order] for b in band)
-            ax.fill_between(xs, lo, hi, color=colour, alpha=0.22, lw=0, step=None if connect else "mid")
-            axr.fill_between(xs, lo - model[m][order], hi - model[m][order], color=colour,
-                             alpha=0.22 if len(colours) < 3 else 0.1, lw=0)
+            if xs.size > 1:
+                ax.fill_between(xs, lo, hi, color=colour, alpha=0.22, lw=0, step=None if connect else "mid")
+            else:  # one reading: the band is a bar
+                ax.vlines(xs, lo, hi, color=colour, alpha=0.35, lw=8)
+            if many:
+                for edge in (lo, hi):
+                    axr.plot(xr, edge - model[m][order], "-", color=colour, lw=1.0, alpha=0.85)
+            else:
+                axr.fill_between(xs, lo - model[m][order], hi - model[m][order], color=colour, alpha=0.22, lw=0)
         if connect:
             ax.plot(xs, model[m][order], "-", lw=1.4, color=colour)
         else:
@@ -122,7 +141,7 @@ def fit_figure(plt, *, x, y, model, curves, xlabel: str, ylabel: str, band=None,
         err = None if yerr is None else np.broadcast_to(np.asarray(yerr, dtype=float), y.shape)[m][order]
         ax.errorbar(xs, y[m][order], yerr=err, fmt="o", ms=4.5, mfc="white", mec=colour, ecolor=colour,
                     elinewidth=0.9, capsize=2 if err is not None else 0, color=colour)
-        axr.errorbar(xs, (y[m] - model[m])[order], yerr=err, fmt="o", ms=4.5, mfc="white", mec=colour,
+        axr.errorbar(xr, (y[m] - model[m])[order], yerr=err, fmt="o", ms=4.5, mfc="white", mec=colour,
                      ecolor=colour, elinewidth=0.9, capsize=2 if err is not None else 0)
     axr.axhline(0, color="k", lw=0.6)
     span = max(np.ptp(np.r_[y, model]), 0.0)
@@ -139,13 +158,18 @@ def fit_figure(plt, *, x, y, model, curves, xlabel: str, ylabel: str, band=None,
     for a in (ax, axr):
         a.tick_params(labelsize=LEGEND_PT)
         a.grid(alpha=0.25)
-    handles = [Patch(color=c, label=names.get(lab, lab)) for lab, c in colours.items()] if len(colours) > 1 else []
-    key = [Line2D([], [], ls="none", marker="o", mfc="white", mec="k", color="k",
+    handles = [Patch(color=c, label=names.get(lab, lab)) for lab, c in colours.items()] if many else []
+    # one curve: the key is drawn in its colour; several: in grey, each curve's own colour said in the label
+    ink = "0.45" if many else next(iter(colours.values()), "C0")
+    each = " (each curve's colour)" if many else ""
+    key = [Line2D([], [], ls="none", marker="o", mfc="white", mec=ink, color=ink,
                   label=reading_key + (f" (bars: {error_key})" if yerr is not None else "")),
-           Line2D([], [], ls="-" if connect else "none", marker=None if connect else "x", color="k",
-                  label="model, best fit")]
+           Line2D([], [], ls="-" if connect else "none", marker=None if connect else "x", color=ink,
+                  label="model, best fit" + each)]
     if band is not None:
-        key.append(Patch(color="0.6", alpha=0.5, label="95 % posterior band"))
+        key.append(Patch(color=ink, alpha=0.3, label="95 % posterior band" + each))
+        if many:
+            key.append(Line2D([], [], ls="-", color=ink, lw=1.0, label="its edges, in the residual panel"))
     entries = handles + key
     fig.legend(handles=entries, fontsize=LEGEND_PT, loc="outside upper center", frameon=False,
                ncol=min(len(entries), 3 if len(entries) > 4 else len(entries)))

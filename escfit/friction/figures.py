@@ -32,7 +32,7 @@ def figures(res) -> dict[str, bytes]:
     if "speed" in obs.coords:
         speed = obs["speed"].values.astype(float)
         curves = np.array([f"{v:.4g}" for v in speed])
-        names = {c: f"{float(c):.3g} m/s ({float(c) / FT:.3g} ft/s)" for c in dict.fromkeys(curves)}
+        names = {c: f"{float(c) / FT:.3g} ft/s" for c in dict.fromkeys(curves)}
     else:
         curves = obs["curve"].values.astype(str)
         names = None
@@ -82,10 +82,10 @@ def _mu_figure(res, plt, band_gf):
     curves = np.array([f"{v * gf:.3g} gf" for v in w])
     band = None if band_gf is None else tuple(mu(b / gf) for b in band_gf)
     fig = fit_figure(plt, x=speed, y=mu(obs["reading"].values), model=mu(lsq["expected"].values), curves=curves,
-                     band=band, xlabel="sliding speed (ft/s)", ylabel="friction coefficient mu (1)",
+                     band=band, xlabel="sliding speed (ft/s)", ylabel="friction coefficient mu",
                      reading_key="mu of each reading", figsize=(9.0, 5.6))
     caption = (f"The friction coefficient mu = F/N of each reading, worked out at the best-fit geometry (k = "
-               f"{k * 1000:.4g} mm, d = {d * 1000:.4g} mm), against the sliding speed, one colour per normal load; "
+               f"{k / 0.0254:.4g} in, d = {d / 0.0254:.4g} in), against the sliding speed, one colour per normal load; "
                "lines: mu(load, speed) of the least-squares best fit" +
                ("; shaded: the 95 % posterior band of the model's dw, converted at the best-fit geometry" if band is not None else "")
                + ". Lower panel: reading minus best fit.")

@@ -61,6 +61,9 @@ __all__ = ["RigScene", "parse", "DEFAULT_SD_RANGE", "SIGMA"]
 DEFAULT_SD_RANGE = (1e-8, 1.0)
 
 SIGMA = "observation.sigma"
+_GF_PER_N = 1000.0 / 9.80665  # gram-force per newton
+_INCH = 0.0254  # m
+_FT = 0.3048  # m
 _TOP = {"model", "rig", "friction", "observation"}
 _RIG = {"k", "d", "load_at"}
 _FRICTION = {"mu", "mu_w", "load_ref", "mu_v", "speed_ref"}
@@ -283,7 +286,7 @@ def _reading_sigma(table: Any, where: str, k: float, d: float) -> tuple[Param, s
     if route == "slope":
         _only(table, {"resolution", "slope", "settings"}, where)
         slope = _quantity(table["slope"], "m/N", f"{where}.slope", positive=True)
-        how = f"calibration slope {slope:.4g} m/N"
+        how = f"calibration slope {slope / _INCH / _GF_PER_N:.4g} in/gf"
     elif route == "full_scale_load":
         _only(table, {"resolution", "full_scale_load", "scale_length", "settings"}, where)
         if "scale_length" not in table:
@@ -291,7 +294,7 @@ def _reading_sigma(table: Any, where: str, k: float, d: float) -> tuple[Param, s
         full = _quantity(table["full_scale_load"], "force", f"{where}.full_scale_load", positive=True)
         length = _quantity(table["scale_length"], "length", f"{where}.scale_length", positive=True)
         slope = length / full
-        how = f"calibration spans {length:.4g} m of scale for {full:.4g} N"
+        how = f"calibration spans {length / _FT:.4g} ft of scale for {full * _GF_PER_N:.4g} gf"
     else:
         _only(table, {"resolution", "wire_stiffness", "scale_distance", "settings"}, where)
         if "scale_distance" not in table:
@@ -302,8 +305,9 @@ def _reading_sigma(table: Any, where: str, k: float, d: float) -> tuple[Param, s
         slope = 2.0 * dist * math.sqrt(k * k - d * d) / kappa
         how = f"wire stiffness {kappa:.4g} N*m/rad at {dist:.4g} m"
     sd = load_sd_from_scale(resolution, slope, settings)
-    note = (f"reading noise observation.sigma = {sd:.4g} N: spot read to {resolution:.4g} m, {how}, "
-            f"uniform rounding in each of {settings} setting(s)")
+    # said in the rig's own units (gram-force, inches, feet), as its readings and the report's table
+    note = (f"reading noise (observation.sigma) {sd * _GF_PER_N:.4g} gf = {sd:.4g} N: spot read to "
+            f"{resolution / _INCH:.4g} in, {how}, uniform rounding in each of {settings} setting(s)")
     return Param(SIGMA, sd, "N", meaning), note, "resolution"
 
 

@@ -162,7 +162,7 @@ class GenevaProblem(FreeParameters, ProblemBase):
                                   where=f"{where} [observation].sigma"))
             self.noise_source = "scene"
             self._sd = None
-            how = "free (profiled by least squares, sampled by emcee)" if params[SIGMA].vary else "fixed"
+            how = "free (profiled from the residuals by least squares; sampled with the other parameters when the method is emcee)" if params[SIGMA].vary else "fixed"
             self.notes.append(f"reading noise: observation.sigma from the scene, {how}"
                               + ("; the data's sd column is not used" if data.sd is not None else ""))
         elif data.sd is not None:

@@ -274,7 +274,7 @@ def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None,
         "versions": dependency_versions(), "started": started,
         "finished": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
         "warnings": warnings, "failures": dict(problem.failures), "misfit": misfit,
-        "notes": list(getattr(problem, "notes", [])),
+        "notes": list(getattr(problem, "notes", [])), "held": _held(problem, lsq),
     }
     if mc is not None:
         attrs.update(walkers=mc.walkers, steps=mc.steps, burn=mc.burn, resumed=mc.resumed, moves=mc.moves,
@@ -285,6 +285,21 @@ def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None,
     for name, ds in groups.items():
         root[name] = xr.DataTree(dataset=ds)
     return root
+
+
+def _held(problem: Problem, lsq: LeastSquaresResult) -> dict[str, float]:
+    """Parameters the fit did not vary (fixed by the scene, or tied to a free one), at their values.
+
+    Reports list them as held; a noise scale profiled by least squares and sampled later is free,
+    not held.
+    """
+    units = dict(problem.units)
+    free = set(problem.names) | set(lsq.names)
+    out = {}
+    for name, value in dict(lsq.values).items():
+        if name not in free and name in units and np.ndim(value) == 0 and np.isfinite(value):
+            out[name] = float(value)
+    return out
 
 
 def _unique(items: list[str]) -> list[str]:

@@ -4,9 +4,11 @@ Reports read the results file only; matplotlib, ArviZ's plotting and Jinja2 are 
 report is made.  The HTML page is rendered from ``templates/report.html.j2`` with autoescaping,
 so text from the scene or the recording (titles, notes) is shown, never interpreted.
 
-Sections: title, fit statistics, parameter table (display units: angles in deg, torques per
-inertia in rad/s^2, see :mod:`escfit.core.display`), warnings, notes on the recording, figures
-with captions, sampler diagnostics, provenance and the scene.
+Sections: title, fit statistics, parameter table (plain names and symbols, held parameters
+listed, display units: angles in deg, torques per inertia in rad/s^2, see
+:mod:`escfit.core.display` and :mod:`escfit.core.names`), derived quantities (Q, decrement,
+losses per swing, torques in N m, :mod:`escfit.report.quantities`), warnings, notes on the
+recording, figures with captions, sampler diagnostics, provenance and the scene.
 """
 
 from __future__ import annotations
@@ -22,7 +24,9 @@ from ..core.atomic import atomic_path, check_output_folder, refuse_clobbering_in
 from ..core.display import display_text, load_unit
 from ..core.errors import MissingDependency
 from ..results import FitResult, load_fit
-from .tables import fit_statistics, parameter_table, provenance_rows, sampler_rows
+from .quantities import derived_rows
+from .params import held_table
+from .tables import failures_text, fit_statistics, parameter_table, provenance_rows, sampler_rows
 
 __all__ = ["make_report", "parameter_table", "report_title"]
 
@@ -53,16 +57,27 @@ def _environment():
                               trim_blocks=True, lstrip_blocks=True, keep_trailing_newline=True)
 
 
-def _units_note(units: list[str]) -> str:
-    """A line saying which display units differ from the file's (empty when none do)."""
+def _units_note(units: list[str], res=None) -> str:
+    """A line saying which display units differ from the file's, and the sign of the centre (empty when
+    nothing needs saying)."""
     said = []
     if "deg" in units or "deg/s" in units:
         said.append("angles are shown in degrees")
     if "rad/s^2" in units:
         said.append("torques per inertia (R, X) in rad/s^2")
-    if not said:
-        return ""
-    return "Display units: " + ", ".join(said) + "; the results file and its JSON and CSV summaries keep angles in radians."
+    if {"gf", "in", "1/gf", "s/ft"} & set(units):
+        said.append("forces in gram-force (1 gf = 9.807 mN), lengths in inches and speeds in ft/s, as the rig's "
+                    "readings")
+    if "lbf in" in units:
+        said.append("torques in lbf in, as the source's")
+    text = ("Display units: " + ", ".join(said) + "; the results file and its JSON and CSV summaries keep SI units "
+            "(angles in radians).") if said else ""
+    names = res.parameter_names if res is not None else []
+    if "observation.offset" in names or "observation.offset_rate" in names:
+        text += (" The centre of the swing is where the sensor reads when the oscillator is at its centre, and its "
+                 "drift is how fast that moves, positive towards larger readings, as in the notes; the files store "
+                 "the scale's zero offset, observation.offset, which is minus the centre.")
+    return text.strip()
 
 
 def _md_text(text) -> str:
@@ -118,14 +133,17 @@ def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: 
         "title": report_title(res, title),
         "data_name": Path(a.get("data_file", "") or "").name,
         "fit_stats": fit_statistics(res),
+        "failures": failures_text(res),
         "warnings": [display_text(w, load_unit(json.loads(res.attrs.get("meanings", "{}") or "{}")))
                      for w in res.warnings],
         "notes": res.notes,
         "provenance": provenance_rows(res, path),
         "scene": a.get("scene", ""),
     }
-    head, rows = parameter_table(res)
-    page["units_note"] = _units_note([r[1] for r in rows])
+    head, rows = parameter_table(res, plain=True)
+    page["units_note"] = _units_note([r[1] for r in rows], res)
+    page["derived_head"], page["derived_rows"], page["derived_note"] = derived_rows(res)
+    page["held_head"], page["held_rows"] = held_table(res)
     sampler_text, sampler_head, sampler_table = sampler_rows(res)
     figures, diagnostics = report_figures(res)
     if fmt == "md":
@@ -143,7 +161,7 @@ def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: 
 
         note_col = head.index("note") if "note" in head else -1
         text = _environment().get_template("report.html.j2").render(
-            **page, head=head, rows=rows, note_col=note_col, figures=embed(figures), diagnostics=embed(diagnostics),
+            **page, head=head, rows=rows, note_col=note_col, code_col=len(head) - 1, figures=embed(figures), diagnostics=embed(diagnostics),
             sampler_text=sampler_text, sampler_head=sampler_head, sampler_rows=sampler_table)
     with atomic_path(out, force=force) as tmp:
         tmp.write_text(text, encoding="utf-8")
@@ -151,11 +169,24 @@ def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: 
 
 
 def _markdown(page, head, rows, sampler_text, sampler_head, sampler_table, figures, diagnostics, images) -> str:
-    lines = [f"# {_md_text(page['title'])}", "", _md_text(page["fit_stats"]), "", "## Parameters", "",
+    lines = [f"# {_md_text(page['title'])}", "", _md_text(page["fit_stats"])]
+    if page["failures"]:
+        lines += ["", _md_text(page["failures"])]
+    lines += ["", "## Parameters", "",
              "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     lines += ["| " + " | ".join(_md_cell(c) for c in r) + " |" for r in rows]
     if page["units_note"]:
         lines += ["", page["units_note"]]
+    if page["held_rows"]:
+        hh = page["held_head"]
+        lines += ["", f"Held at the scene's values (not fitted): {len(page['held_rows'])}", "",
+                  "| " + " | ".join(hh) + " |", "|" + "---|" * len(hh)]
+        lines += ["| " + " | ".join(_md_cell(c) for c in r) + " |" for r in page["held_rows"]]
+    if page["derived_rows"]:
+        dh = page["derived_head"]
+        lines += ["", "## Derived quantities", "", "| " + " | ".join(dh) + " |", "|" + "---|" * len(dh)]
+        lines += ["| " + " | ".join(_md_cell(c) for c in r) + " |" for r in page["derived_rows"]]
+        lines += ["", _md_text(page["derived_note"])]
     lines += ["", "## Warnings: identifiability, convergence and misfit", ""]
     lines += [f"- {_md_text(w)}" for w in page["warnings"]] or ["- no warnings"]
     if page["notes"]:

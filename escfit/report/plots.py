@@ -12,7 +12,8 @@ import warnings
 
 import numpy as np
 
-from ..core.display import display_name, load_unit, to_display
+from ..core.display import load_unit, to_display
+from ..core.names import plain_name
 from ..core.figures import LEGEND_PT, CaptionedPNG, fit_figure, png, pyplot
 
 __all__ = ["report_figures", "CORNER_MAX_INCHES", "CORNER_DPI"]
@@ -55,17 +56,25 @@ def _units(res) -> dict[str, str]:
     return json.loads(res.attrs.get("units", "{}") or "{}")
 
 
+# What the readings of a family's data kind are, for axis labels (the generic figure's y axis)
+READING_WORDS = {"terminal-speeds": "driver speed", "speed-trace": "driver speed",
+                 "turns-to-arm": "turns to arm", "rig-readings": "extra load dw"}
+
+
 def _generic_figure(res, plt) -> CaptionedPNG:
     """Readings against their plotting coordinate ``x`` (else their index), the model at the
     least-squares optimum and the 95 % posterior band, one colour per curve; residuals below."""
     obs = res.group("observed_data")
     model = res.group("least_squares")["expected"].values.astype(float)
     pp = res.group("posterior_predictive")
+    family = str(res.attrs.get("model", ""))
     y = obs["reading"].values.astype(float)
     y_disp, y_unit = to_display(y, obs["reading"].attrs.get("units", ""), "reading")
     model_disp = to_display(model, obs["reading"].attrs.get("units", ""), "reading")[0]
+    what = obs["reading"].attrs.get("long_name") or READING_WORDS.get(str(res.attrs.get("data_kind", "")), "reading")
     if "x" in obs.coords:
-        x, x_unit = to_display(obs["x"].values.astype(float), obs["x"].attrs.get("units", ""), "x")
+        # the family's own display rule applies to its coordinate (a Geneva torque in lbf in)
+        x, x_unit = to_display(obs["x"].values.astype(float), obs["x"].attrs.get("units", ""), f"{family}.x")
         xlabel = f"{obs['x'].attrs.get('long_name', 'x')} ({x_unit})"
     else:
         x, xlabel = np.arange(y.size, dtype=float), "reading number"
@@ -79,11 +88,13 @@ def _generic_figure(res, plt) -> CaptionedPNG:
                          for q in (0.025, 0.975))
     connect = len(np.unique(x)) < x.size or x.size > 2
     fig = fit_figure(plt, x=x, y=y_disp, model=model_disp, curves=curves, band=band, xlabel=xlabel,
-                     ylabel=f"reading ({y_unit})", connect=connect, figsize=(9.0, 5.6))
-    caption = (f"Readings ({y_unit}) against {xlabel}, one colour per series ({', '.join(dict.fromkeys(curves))}); "
-               "lines: the model at the least-squares best fit" +
-               ("; shaded: 95 % band of the model over the posterior draws" if band is not None else "") +
-               ". Lower panel: reading minus best fit.")
+                     ylabel=f"{what} ({y_unit})", connect=connect, figsize=(9.0, 5.6))
+    series = list(dict.fromkeys(curves))
+    colours = (f"one colour per series ({', '.join(series)}); " if len(series) > 1 else "")
+    caption = (f"{what[0].upper() + what[1:]} ({y_unit}) against {xlabel}; {colours}"
+               + ("lines" if connect else "crosses") + ": the model at the least-squares best fit" +
+               (("; shaded" if connect else "; bar") + ": 95 % band of the model over the posterior draws"
+                if band is not None else "") + ". Lower panel: reading minus best fit.")
     return png(fig, caption=caption)
 
 
@@ -92,12 +103,17 @@ def _display_draws(res, names: list[str]) -> tuple[dict[str, np.ndarray], dict[s
     post = res.group("posterior")
     units = _units(res)
     loads_in = load_unit(json.loads(res.attrs.get("meanings", "{}") or "{}"))
+    meanings = json.loads(res.attrs.get("meanings", "{}") or "{}")
     draws, labels = {}, {}
     for name in names:
         values, unit = to_display(post[name].values, units.get(name, ""), name)
-        key = display_name(name, loads_in)
+        if name in ("observation.offset", "observation.offset_rate"):  # shown as the centre, as in the table
+            from .params import CENTRE_BASE
+
+            values = float(res.attrs.get(CENTRE_BASE[name], 0.0) or 0.0) * (180 / np.pi) - values
+        key = plain_name(name, meanings.get(name, ""), loads_in)
         draws[key] = values
-        labels[key] = f"{key}\n({unit})" if unit and unit != "1" else key
+        labels[key] = f"{key}\n({unit})" if unit and unit not in ("1", "dimensionless") else key
     return draws, labels
 
 
@@ -162,6 +178,14 @@ def _corner(res, names: list[str]) -> CaptionedPNG:
 
 
 def _pair(az, ds, side: float, text: float, n: int):
+    k = len(ds.data_vars)
+    # ArviZ draws at most plot.max_subplots (40) panels and silently drops parameters beyond: a 9-parameter
+    # waveform fit (81 panels) lost its last row and column, and the report failed
+    with az.rc_context(rc={"plot.max_subplots": max(40, k * k)}):
+        return _pair_plot(az, ds, side, text, n)
+
+
+def _pair_plot(az, ds, side: float, text: float, n: int):
     return az.plot_pair(ds, marginals=True, kind="scatter", point_estimate="median", figsize=(side, side),
                         textsize=text, scatter_kwargs={"alpha": 0.15 if n > 2000 else 0.3, "s": 3},
                         point_estimate_marker_kwargs={"color": "C3", "s": 30},

@@ -13,89 +13,13 @@ from typing import Any
 import numpy as np
 
 from ..core.display import display_name, format_value, load_unit, to_display
+from ..core.names import plain_name
+from .params import estimate_kind, parameter_table
 
 __all__ = ["parameter_table", "estimate_kind", "fit_statistics", "sampler_rows", "provenance_rows"]
 
-_BOUND_FLAG = {"min": "at lower bound", "max": "at upper bound"}
-
-
-def estimate_kind(row: dict[str, Any]) -> str:
-    """``"median"`` (posterior row) or ``"best fit"`` (least-squares row) of a summary row.
-
-    Rows written before ``estimate_kind`` existed tell by their keys: posterior rows carry
-    ``mean``, least-squares rows ``stderr``.
-    """
-    if row.get("estimate_kind"):
-        return str(row["estimate_kind"])
-    return "median" if "mean" in row else "best fit"
-
-
-def _estimate(row: dict[str, Any]) -> float | None:
-    for key in ("estimate", "median", "best_fit"):
-        if row.get(key) is not None:
-            return row[key]
-    return None
-
-
 def _loads_unit(res) -> str:
     return load_unit(json.loads(res.attrs.get("meanings", "{}") or "{}"))
-
-
-def parameter_table(res) -> tuple[list[str], list[list[str]]]:
-    """Header and rows of the parameter table, in display units.
-
-    Parameters
-    ----------
-    res
-        A saved fit (:class:`escfit.results.FitResult`).
-
-    Returns
-    -------
-    tuple
-        ``(head, rows)``, all strings.  The estimate column is headed ``"median"`` for a
-        posterior, ``"best fit"`` for least squares (``"estimate"`` if the rows mix both, each
-        row then saying which in the note column).  Angles are in deg, R and X in rad/s^2,
-        omega0 in rad/s; intervals convert with their values.  R-hat and ESS columns appear
-        for posteriors only; a ``note`` column appears when a row needs one: an estimate on a
-        bound of the scene's range (``at lower bound``), or which reading noise a posterior
-        ``observation.sigma`` is.
-    """
-    summary = res.summary()
-    loads_in = _loads_unit(res)
-    kinds = {estimate_kind(r) for r in summary.values()}
-    column = kinds.pop() if len(kinds) == 1 else "estimate"
-    posterior = any(estimate_kind(r) == "median" for r in summary.values())
-    notes: list[list[str]] = []
-    rows = []
-    for name, r in summary.items():
-        value, unit = to_display(_estimate(r), r.get("unit"), name)
-        ends = [to_display(r.get(k), r.get("unit"), name)[0] for k in ("lo68", "hi68", "lo95", "hi95")]
-        bound = {"min": ends[2], "max": ends[3]}.get(r.get("at_bound"))
-        if bound is not None and value is not None and abs(value - bound) <= 1e-9 * max(abs(ends[3] - ends[2]), 1e-300):
-            value = bound  # on the bound to rounding (5.8e-17 against 0): show the bound
-        row = [display_name(name, loads_in), unit, format_value(value),
-               f"[{format_value(ends[0])}, {format_value(ends[1])}]", f"[{format_value(ends[2])}, {format_value(ends[3])}]"]
-        if posterior:
-            row += [format_value(r.get("rhat"), 4), _count(r.get("ess_bulk"))]
-        note = []
-        if column == "estimate":
-            note.append(estimate_kind(r))
-        if r.get("at_bound") in _BOUND_FLAG:
-            note.append(_BOUND_FLAG[r["at_bound"]])
-        if name == "observation.sigma" and estimate_kind(r) == "median":
-            note.append("reading noise, posterior")
-        rhat = r.get("rhat")
-        if rhat is not None and rhat > 1.01:
-            note.append("not converged (R-hat above 1.01)")
-        notes.append(note)
-        rows.append(row)
-    head = ["parameter", "unit", column, "68% interval", "95% interval"]
-    if posterior:
-        head += ["R-hat", "ESS (bulk)"]
-    if any(notes):
-        head.append("note")
-        rows = [row + ["; ".join(note)] for row, note in zip(rows, notes)]
-    return head, rows
 
 
 def fit_statistics(res) -> str:
@@ -114,17 +38,21 @@ def fit_statistics(res) -> str:
     obs = res.group("observed_data")
     units = obs["reading"].attrs.get("units", "rad") if obs is not None else "rad"
     sigma_unit = "rad" if units == "notches" else units  # notch counts: the jitter is an angle
-    method = {"emcee": "posterior sampled with emcee, started from a least-squares fit",
-              "leastsq": "least squares (lmfit)"}.get(str(a.get("method")), str(a.get("method", "")))
     noise = [name for name in res.parameter_names if name.startswith("observation.sigma")]
     profiled = [name for name in noise if lsq is None or name not in list(map(str, lsq["parameter"].values))]
     plural = lambda k, word: f"{k} {word}{'' if k == 1 else 's'}"  # noqa: E731
-    fitted = plural(npar, "parameter") + (" fitted by least squares and the reading noise profiled from the "
-                                          "residuals" if profiled else "")
-    model = {"balance": "Balance wheel or pendulum", "friction_rig": "Friction rig", "geneva": "Geneva escapement",
-             "verge": "Verge escapement"}.get(str(a.get("model", "balance")), str(a.get("model")))
-    head = (f"{model} model fitted to {plural(n, 'reading')} ({a.get('data_kind', 'readings')}): {fitted}; "
-            f"{method}")
+    sampled = str(a.get("method")) == "emcee"
+    n_free = len([r for r in res.summary() if r in res.parameter_names]) if sampled else npar
+    if sampled:
+        fitted = (f"{plural(n_free, 'free parameter')}" + (f": {npar}" if n_free > 1 else ",") + " fitted by least squares"
+                  + (" with the reading noise profiled from the residuals" if profiled else "")
+                  + (", then sampled with emcee from there" if n_free == 1 else
+                     f", then all {n_free} sampled with emcee from there"))
+    else:
+        fitted = (f"{plural(npar, 'parameter')} fitted by least squares (lmfit)"
+                  + (", the reading noise profiled from the residuals" if profiled else ""))
+    head = (f"{_model_words(a)} fitted to {plural(n, 'reading')} ({_kind_words(a.get('data_kind', 'readings'))}): "
+            f"{fitted}")
     if "redchi" not in la:
         return head + "."
     if n <= npar:
@@ -136,7 +64,7 @@ def fit_statistics(res) -> str:
         return f"{format_value(shown, 3)} {label}"
 
     posterior_sigma = res.group("posterior") is not None and "observation.sigma" in res.group("posterior")
-    where = " (the posterior's reading noise is the observation.sigma row of the table)" if posterior_sigma else ""
+    where = " (the posterior's reading noise is the reading-noise row of the table)" if posterior_sigma else ""
     tail = f". Information criteria at the best fit: AIC {format_value(la['aic'], 5)}, BIC {format_value(la['bic'], 5)}."
     if mixed:
         per_series = _series_scatter(res, units)
@@ -151,6 +79,61 @@ def fit_statistics(res) -> str:
     if not mixed:
         text += f" (least-squares residual scatter {scatter(float(la['sigma_hat']) * math.sqrt(float(la['redchi'])))})"
     return head + text + where + tail
+
+
+_KIND_WORDS = {"rig-readings": "rig readings: the extra load dw of each setting",
+               "terminal-speeds": "terminal speeds, peak and minimum of each run",
+               "speed-trace": "a driver-speed trace", "turns-to-arm": "turns to arm","notches": "notch counts per half swing", "amplitude": "amplitudes per half swing",
+               "timeseries": "a sampled angle", "timegrapher": "timegrapher readings", "pulses": "passage times",
+               "terminal_speeds": "terminal speeds", "speed_trace": "a driver-speed trace"}
+
+
+def _kind_words(kind) -> str:
+    return _KIND_WORDS.get(str(kind), str(kind).replace("_", " "))
+
+
+def _model_words(a: dict) -> str:
+    import tomllib
+
+    model = str(a.get("model", "balance"))
+    if model == "balance":
+        try:
+            osc = tomllib.loads(a.get("scene", "") or "").get("oscillator", {})
+        except tomllib.TOMLDecodeError:
+            osc = {}
+        return "Gravity pendulum model" if osc.get("restoring") == "pendulum" else "Balance wheel (spring) model"
+    return {"friction_rig": "Friction rig model", "geneva": "Geneva escapement model",
+            "verge": "Verge escapement model"}.get(model, f"{model} model")
+
+
+# Why an evaluation gave no prediction, for the codes that are not sentences already
+FAILURE_WORDS = {
+    "locked": "the pin jams in the slot (no friction sign is consistent)",
+    "no_terminal": "the driver keeps accelerating (no terminal speed)",
+    "not_settled": "the run was too short for the speed to settle",
+    "ambiguous": "both friction signs were consistent",
+    "truncated": "the engagement budget ran out",
+    "non-finite likelihood": "the likelihood was not a finite number",
+    "non-physical parameters": "the parameters were outside the physical range",
+}
+
+
+def failures_text(res) -> str:
+    """The evaluations that gave no prediction, counted and explained in words (empty when none)."""
+    raw = res.attrs.get("failures", "")
+    try:
+        failures = json.loads(raw) if isinstance(raw, str) and raw else dict(raw or {})
+    except (TypeError, ValueError):
+        return ""
+    failures = {k: int(v) for k, v in failures.items() if int(v) > 0}
+    if not failures:
+        return ""
+    total = sum(failures.values())
+    who = "the optimiser and the sampler" if res.attrs.get("method") == "emcee" else "the optimiser"
+    parts = [f"{n} time{'s' if n != 1 else ''}: {FAILURE_WORDS.get(k, k)}" for k, n in failures.items()]
+    return (f"{total} parameter set{'s' if total != 1 else ''} tried by {who} gave no prediction and "
+            f"{'were' if total != 1 else 'was'} rejected ({'; '.join(parts)}). Such values lie outside where the "
+            "mechanism works; rejecting them is part of the fit and does not bias it.")
 
 
 def _series_scatter(res, units: str) -> str:
@@ -199,11 +182,12 @@ def sampler_rows(res) -> tuple[str, list[str], list[list[str]]]:
     if diag is None or "rhat" not in diag:
         return sentence, [], []
     loads_in = _loads_unit(res)
+    meanings = json.loads(res.attrs.get("meanings", "{}") or "{}")
     head = ["parameter", "split R-hat", "ESS (bulk)", "ESS (tail)", "autocorrelation time (steps)"]
     rows = []
     for name in map(str, diag["parameter"].values):
         sel = diag.sel(parameter=name)
-        rows.append([display_name(name, loads_in), format_value(float(sel["rhat"]), 4),
+        rows.append([plain_name(name, meanings.get(name, ""), loads_in), f"{float(sel['rhat']):.3f}",
                      _count(float(sel["ess_bulk"])), _count(float(sel["ess_tail"])),
                      format_value(float(sel["tau"]), 3) if "tau" in sel else "-"])
     return sentence, head, rows
@@ -218,7 +202,7 @@ def provenance_rows(res, path) -> list[tuple[str, str]]:
             ("walkers x steps (burn)", f"{a.get('walkers', '-')} x {a.get('steps', '-')} ({a.get('burn', '-')})"
              if "walkers" in a else None),
             ("started / finished", f"{a.get('started')} / {a.get('finished')}"), ("schema", a.get("schema_version")),
-            ("versions", a.get("versions")), ("failed evaluations", a.get("failures"))]
+            ("versions", a.get("versions"))]
     return [(k, str(v)) for k, v in rows if v not in (None, "", "None None", "None / None")]
 
 

@@ -81,6 +81,10 @@ class BalanceProblem(ProblemBase):
         out = {"scene": self.scene.text, "scene_file": self.scene.where, "switching": self.scene.switching,
                "data_file": self.data.source, "data_sha256": self.data.sha256, "data_kind": self.data.kind,
                "solver": self.solver, "solver_options": self.solver_options}
+        meta = getattr(self.data, "meta", None) or {}
+        if "offset_rad" in meta:  # turning points read about an estimated centre: the fit's offset corrects it
+            out.update(centre_removed_rad=float(meta["offset_rad"]),
+                       centre_rate_removed_rad_per_s=float(meta.get("offset_rate_rad_per_s", 0.0)))
         if getattr(self.data, "kind", "") == "notches":  # how the counts read: the report draws their intervals
             out.update(notch_deg=math.degrees(float(self.data.notch)),
                        notch_reading=getattr(getattr(self, "observation", None), "reading", "counted"))

@@ -1,0 +1,414 @@
+"""Starter scenes from a recording: what the record says, for ``escfit init``.
+
+:func:`read_with_help` reads a file as a fit does (:func:`escfit.balance.family.read_data`) and,
+when the reader cannot decide alone, tries the few ``[recording]`` options its message names
+(the column that swings, degrees instead of radians); :func:`survey` measures what a starter
+scene needs from the record: the period, the amplitude of every half swing about the centre,
+starts and bounds of the viscous and Coulomb terms, and whether the samples' noise is
+correlated.  :mod:`escfit.balance.starter_text` writes the scene from a :class:`Survey`.
+
+Estimates (all from the record, none from a fit)
+-----------------------------------------------
+For a linear oscillator with viscous rate ``C`` and Coulomb term ``R`` (torque per inertia), the
+amplitude after a half swing is exactly ``A' = r A - (1 + r) R / omega0**2`` with
+``r = exp(-pi C / (2 omega_d))``, ``omega_d = sqrt(omega0**2 - C**2/4)``.  A straight-line fit of
+``A'`` on ``A`` over successive half swings gives ``r`` and ``R``: the starts.  The bounds are
+what the record allows: a viscous term alone explaining the whole decay is
+``C_all = 2 ln(A_first / A_last) / (t_last - t_first)``, a Coulomb term alone
+``R_all = omega0**2 (A_first - A_last) / (2 n)`` over ``n`` half swings; each upper bound is
+three times that (neither can explain more than the decay seen, noise aside).  A gravity
+pendulum's decay differs from the linear one by terms of order ``A**2 / 16``: enough for starts.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+
+from ..core.errors import DataError
+from .family import read_data
+from .recordings import UnitCurve
+from .recordings.timegrapher import TimegrapherRecording
+from .recordings.timeseries import TimeSeries
+
+__all__ = ["Survey", "read_with_help", "survey", "decay_estimates", "BOUND_FACTOR"]
+
+BOUND_FACTOR = 3.0  # upper bounds of C and R: this many times the value that alone explains the decay
+MAX_COLUMNS = 12  # columns tried when the reader cannot tell which one swings
+AR1_EXCESS = 0.3  # lag-1 correlation above white noise's (after smoothing) that calls for AR(1) noise
+
+
+_PAST_LAST = re.compile(r"has (only )?\d+ columns?|out of range|only \d+ columns?")
+
+
+@dataclass
+class Survey:
+    """What a record says, for a starter scene.
+
+    Attributes
+    ----------
+    kind : str
+        The observation the scene will use: ``"waveform"`` (samples in time), ``"amplitude"``
+        or ``"notches"`` (one reading per half swing), ``"timegrapher"``.
+    path : str
+        The file.
+    format_words, columns_words : str
+        How the file was read, in words.
+    recording : dict
+        ``[recording]`` options needed to read it (empty when detection sufficed), and why.
+    period : float
+        Measured period, s (``nan`` when the record has no times).
+    amplitudes : ndarray
+        Amplitude of each half swing about the centre, rad (readings' units for amplitude rows),
+        the release first.
+    times : ndarray or None
+        Time of each of those, s.
+    counts : dict
+        Numbers to quote: samples, duration, turning points, rate, loads, units...
+    noise_ar1 : bool
+        Whether the samples' noise looks correlated from sample to sample.
+    lag1 : float
+        The lag-1 correlation of the samples about a smoothing, minus white noise's.
+    notes : list of str
+        What was found or assumed.
+    data : object
+        The recording object as read.
+    """
+
+    kind: str
+    path: str
+    format_words: str = ""
+    columns_words: str = ""
+    recording: dict = field(default_factory=dict)
+    why: dict = field(default_factory=dict)
+    period: float = math.nan
+    amplitudes: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    times: np.ndarray | None = None
+    counts: dict = field(default_factory=dict)
+    noise_ar1: bool = False
+    lag1: float = math.nan
+    notes: list = field(default_factory=list)
+    data: object = None
+    tp: object = None
+
+
+# -- reading -------------------------------------------------------------------------------------
+def read_with_help(path: str | Path, recording: dict | None = None, *, fmt: str | None = None,
+                   notch_deg: float | None = None) -> tuple[object, dict, dict]:
+    """Read ``path`` as a fit does; where the reader cannot decide, try what its message names.
+
+    Parameters
+    ----------
+    path
+        The recording.
+    recording
+        ``[recording]`` options given by the user (scene-table keys), kept as given.
+    fmt, notch_deg
+        As :func:`escfit.balance.family.read_data`.
+
+    Returns
+    -------
+    tuple
+        ``(data, table, why)``: the recording, the ``[recording]`` options that read it (the
+        user's and those found here; empty when detection sufficed) and, per key found here,
+        why it was needed.
+
+    Raises
+    ------
+    DataError
+        The reader's own message when nothing found here helps (it names the option to give).
+    """
+    table = {k: v for k, v in (recording or {}).items() if v is not None}
+    why: dict[str, str] = {}
+    for _ in range(4):
+        try:
+            data = read_data(path, recording=table or None, fmt=fmt, notch_deg=notch_deg)
+        except DataError as exc:
+            step = _help(path, table, exc, fmt)
+            if step is None:
+                raise
+            key, value, reason = step
+            table[key] = value
+            why[key] = reason
+            continue
+        if isinstance(data, TimeSeries):
+            data = _amplitude_rows(path, data, table, why, fmt)
+            if data.meta.get("angle_unit_assumed") and "angle_unit" not in table:
+                table["angle_unit"] = data.meta["angle_unit_assumed"]
+                why["angle_unit"] = (f"the file names no unit for the angle: {data.meta['angle_unit_assumed']} "
+                                     "assumed; CHECK it (deg, rad, or counts with counts_per_turn)")
+        return data, table, why
+    raise DataError("cannot read the record with any options tried; give [recording] options (escfit init -h)",
+                    str(path))
+
+
+def _help(path, table: dict, exc: DataError, fmt) -> tuple[str, object, str] | None:
+    """One ``[recording]`` option the reader's message asks for and the record can settle."""
+    message = str(exc)
+    if "angle_column" in message and "angle_column" not in table:
+        found = _swinging_column(path, table, fmt)
+        if found is not None:
+            return "angle_column", found[0], found[1]
+    if "angle_unit" in message and '"deg"' in message and "angle_unit" not in table:
+        return "angle_unit", "deg", ("the readings span more than a turn if read as radians; degrees, as the reader "
+                                     "suggested")
+    return None
+
+
+def _swinging_column(path, table: dict, fmt) -> tuple[int, str] | None:
+    """The 1-based column that holds a decaying swing (or amplitude readings), and why."""
+    best = None
+    for col in range(1, MAX_COLUMNS + 1):
+        if table.get("time_column") == col:
+            continue
+        trial = {**table, "angle_column": col}
+        data = None
+        for extra in ({}, {"angle_unit": "deg"}):
+            try:
+                data = read_data(path, recording={**trial, **extra}, fmt=fmt)
+                break
+            except DataError as exc:
+                if _PAST_LAST.search(str(exc)):
+                    data = "end"
+                    break
+        if data == "end":
+            break
+        if not isinstance(data, TimeSeries):
+            continue
+        score, what = _swing_score(data)
+        if score > 0 and (best is None or score > best[0]):
+            best = (score, col, what)
+    if best is None:
+        return None
+    return best[1], f"the file does not say which column is the angle: column {best[1]} {best[2]}"
+
+
+def _swing_score(series: TimeSeries) -> tuple[float, str]:
+    """How much a column looks like a recorded free decay: turning points found, else amplitude rows."""
+    from .recordings.turning_points import reduce_series
+
+    try:
+        tp = reduce_series(series, strict=False)
+    except DataError:
+        return (0.5, "holds one amplitude per row, decreasing") if _looks_like_amplitudes(series.theta) else (0.0, "")
+    return 1.0 + len(tp.theta), f"swings ({len(tp.theta)} turning points)"
+
+
+def _looks_like_amplitudes(values: np.ndarray) -> bool:
+    """One sign, mostly falling, too few rows per swing to be samples: amplitude readings."""
+    v = np.asarray(values, float)
+    v = v[np.isfinite(v)]
+    if v.size < 4 or not (np.all(v > 0) or np.all(v < 0)):
+        return False
+    return bool(np.mean(np.diff(np.abs(v)) < 0) >= 0.7)
+
+
+def _amplitude_rows(path, series: TimeSeries, table: dict, why: dict, fmt) -> TimeSeries:
+    """Switch to ``readings = "amplitudes"`` when the samples are amplitudes, one per half swing."""
+    from .recordings.turning_points import reduce_series
+
+    if "readings" in table:
+        return series
+    try:
+        reduce_series(series, strict=False)
+        return series
+    except DataError:
+        if not _looks_like_amplitudes(series.theta):
+            raise
+    table["readings"] = "amplitudes"
+    why["readings"] = "each row is the amplitude of one half swing (one sign, falling, no oscillation in the rows)"
+    return series
+
+
+# -- what the record says -------------------------------------------------------------------------
+def survey(path: str | Path, *, restoring: str = "spring", recording: dict | None = None, fmt: str | None = None,
+           notch_deg: float | None = None) -> Survey:
+    """Read ``path`` and measure what a starter scene needs (see the module docstring).
+
+    Raises
+    ------
+    DataError
+        An unreadable record (the reader's message), a record with no swing in it, or a kind
+        of recording a starter scene is not written for (pulse trains).
+    """
+    data, table, why = read_with_help(path, recording, fmt=fmt, notch_deg=notch_deg)
+    s = Survey(kind="", path=str(path), recording=table, why=why, data=data)
+    if isinstance(data, TimeSeries):
+        from .recordings.series import refuse_unless_angle
+
+        refuse_unless_angle(data)  # velocities and displacements are read, not fitted yet
+        if table.get("readings") == "amplitudes":
+            _survey_amplitude_rows(s, data)
+        else:
+            _survey_samples(s, data, restoring)
+    elif isinstance(data, UnitCurve):
+        _survey_unit_curve(s, data)
+    elif isinstance(data, TimegrapherRecording):
+        _survey_timegrapher(s, data)
+    else:
+        raise DataError(f"escfit init writes starter scenes for sampled angles, amplitude tables and timegrapher "
+                        f"logs; this file is a {type(data).__name__} (photo-cell pulses): start from "
+                        "datasets/recordings/pulses_scene.toml (escfit examples DIR copies it)", str(path))
+    return s
+
+
+def _survey_samples(s: Survey, series: TimeSeries, restoring: str) -> None:
+    from .problems.recorded import omega0_from_period
+    from .recordings.turning_points import reduce_series
+
+    tp = reduce_series(series, strict=False)
+    s.kind, s.tp = "waveform", tp
+    s.period = float(tp.period)
+    times = np.concatenate([[tp.release_time], np.asarray(tp.time, float)])
+    theta = np.concatenate([[tp.release_theta], np.asarray(tp.theta, float)])
+    s.amplitudes = np.abs(theta - tp.centre(times))
+    s.times = times
+    t = np.asarray(series.time, float)
+    s.counts = {"samples": int(t.size), "duration": float(t[-1] - t[0]), "turning points": int(len(tp.theta)),
+                "rate": float((t.size - 1) / (t[-1] - t[0])) if t.size > 1 and t[-1] > t[0] else math.nan,
+                "centre": float(tp.offset), "centre rate": float(tp.offset_rate),
+                "omega0": float(omega0_from_period(SimpleNamespace(restoring=restoring), tp))}
+    s.notes = list(tp.notes)
+    s.format_words = series.meta.get("source_format", "escfit time series (time_s, theta)")
+    s.columns_words = _columns_words(series.meta)
+    s.lag1 = _excess_lag1(np.asarray(series.theta, float), s.period / np.median(np.diff(t)))
+    s.noise_ar1 = bool(s.lag1 > AR1_EXCESS)
+
+
+def _survey_amplitude_rows(s: Survey, series: TimeSeries) -> None:
+    t = np.asarray(series.time, float)
+    s.kind = "amplitude"
+    s.amplitudes = np.abs(np.asarray(series.theta, float))
+    s.times = t - t[0]
+    s.period = float(2.0 * np.median(np.diff(t))) if t.size > 2 else math.nan
+    s.counts = {"readings": int(t.size), "duration": float(t[-1] - t[0]),
+                "omega0": 2 * math.pi / s.period if math.isfinite(s.period) else math.nan}
+    s.format_words = series.meta.get("source_format", "table")
+    s.columns_words = _columns_words(series.meta)
+
+
+def _survey_unit_curve(s: Survey, curve: UnitCurve) -> None:
+    groups = curve.groups()
+    (unit, load), rows = groups[0]
+    s.kind = curve.kind
+    amp = curve.amplitude_rad if curve.kind == "amplitude" else (curve.value + 0.5) * curve.notch
+    s.amplitudes = np.asarray(amp, float)[rows]
+    s.counts = {"readings": int(curve.swing.size), "curves": len(groups), "first swing": int(curve.swing[rows][0]),
+                "swing step": int(np.median(np.diff(curve.swing[rows]))) if rows.size > 1 else 1,
+                "units": sorted(set(map(str, curve.unit)) - {""}),
+                "loads": [] if curve.load is None else sorted({float(x) for x in curve.load if math.isfinite(x)}),
+                "load unit": curve.load_unit, "notch": float(curve.notch)}
+    if curve.time is not None and rows.size > 2:
+        ts, sw = np.asarray(curve.time, float)[rows], np.asarray(curve.swing, float)[rows]
+        half = float(np.polyfit(sw, ts, 1)[0])
+        s.period, s.times = 2.0 * half, ts - ts[0]
+    s.counts["omega0"] = 2 * math.pi / s.period if math.isfinite(s.period) else math.nan
+    s.format_words = "escfit unit curve (one reading per half swing)"
+    s.columns_words = ("notch counts" if curve.kind == "notches" else "amplitudes") + \
+        (", times" if curve.time is not None else ", no times") + (", loads" if curve.load is not None else "")
+
+
+def _survey_timegrapher(s: Survey, rec: TimegrapherRecording) -> None:
+    s.kind = "timegrapher"
+    beats = np.asarray(rec.beat_time, float)
+    if beats.size > 3:
+        s.period = float(2.0 * np.median(np.diff(beats)))
+        how = "beat times"
+    else:
+        rate = np.asarray(rec.rate, float) if rec.rate is not None else np.zeros(0)
+        rate = rate[np.isfinite(rate)]
+        nominal = 7200.0 / rec.bph
+        s.period = nominal / (1.0 + float(np.median(rate)) / 86400.0) if rate.size else nominal
+        how = "the rate shown" if rate.size else "the nominal beat rate"
+    amp = np.asarray(rec.amp_deg, float)
+    s.amplitudes = np.radians(amp[np.isfinite(amp)])
+    s.times = np.asarray(rec.amp_time, float)[np.isfinite(amp)]
+    s.counts = {"beats": int(beats.size), "amplitude readings": int(s.amplitudes.size), "bph": int(rec.bph),
+                "lift angle": float(rec.lift_angle), "period from": how, "omega0": 2 * math.pi / s.period,
+                "format": rec.format}
+    s.format_words = {"tg-json": "tg-timer JSON dump", "csv": "timegrapher per-beat CSV",
+                      "tg-applog": "timegrapher app log"}.get(rec.format, rec.format)
+    s.columns_words = f"{beats.size} beats, {s.amplitudes.size} amplitude readings, {rec.bph} bph, lift angle " \
+                      f"{math.degrees(rec.lift_angle):.4g} deg"
+
+
+def _columns_words(meta: dict) -> str:
+    parts = []
+    if meta.get("time_column"):
+        parts.append(f"time: {meta['time_column']}")
+    if meta.get("angle_column"):
+        unit = meta.get("angle_unit", "")
+        assumed = " (assumed)" if meta.get("angle_unit_assumed") else ""
+        parts.append(f"angle: {meta['angle_column']}" + (f" in {unit}{assumed}" if unit else ""))
+    return "; ".join(parts) or "time_s and theta columns"
+
+
+# -- estimates -----------------------------------------------------------------------------------
+def decay_estimates(amplitudes: np.ndarray, omega0: float, times: np.ndarray | None = None) -> dict[str, float]:
+    """Starts and upper bounds of C (1/s) and R (rad/s^2) from successive half-swing amplitudes.
+
+    Parameters
+    ----------
+    amplitudes
+        Amplitude of successive half swings about the centre (rad), the release first.
+    omega0
+        Natural frequency, rad/s.
+    times
+        Their times (s); ``None``: half a period apart.
+
+    Returns
+    -------
+    dict
+        ``C``, ``C_max``, ``R``, ``R_max`` (see the module docstring) and ``decays`` (whether the
+        record shows a decay at all).
+    """
+    a = np.abs(np.asarray(amplitudes, float))
+    half = math.pi / omega0
+    if a.size < 2 or not (a[0] > a[-1] > 0):
+        # no decay to measure: bounds wide enough for a light one
+        return {"C": 1e-3 * omega0, "C_max": 0.05 * omega0, "R": 0.0, "R_max": 0.05 * omega0 ** 2 * float(a.max(initial=1)),
+                "decays": False}
+    n = a.size - 1
+    span = float(times[-1] - times[0]) if times is not None and times[-1] > times[0] else n * half
+    c_all = 2.0 * math.log(a[0] / a[-1]) / span
+    r_all = omega0 ** 2 * (a[0] - a[-1]) / (2.0 * n)
+    c0, r0 = 0.5 * c_all, 0.5 * r_all
+    if n >= 3:
+        slope, intercept = np.polyfit(a[:-1], a[1:], 1)
+        if 0.0 < slope < 1.0:
+            wd = math.sqrt(max(omega0 ** 2 - (c_all / 2) ** 2, 0.25 * omega0 ** 2))
+            c0 = -2.0 * wd * math.log(slope) / math.pi
+            r0 = -intercept * omega0 ** 2 / (1.0 + slope)
+    # keep the starts inside the bounds and off zero (a start on a bound stalls some optimisers)
+    c0 = min(max(c0, 0.05 * c_all), c_all)
+    r0 = min(max(r0, 0.05 * r_all), r_all)
+    return {"C": c0, "C_max": BOUND_FACTOR * c_all, "R": r0, "R_max": BOUND_FACTOR * r_all, "decays": True}
+
+
+def _excess_lag1(x: np.ndarray, period_samples: float) -> float:
+    """Lag-1 correlation of the samples about their smoothing, minus what white noise would give."""
+    from scipy.signal import savgol_coeffs
+
+    from .recordings.extrema import smooth
+
+    if x.size < 50 or not math.isfinite(period_samples):
+        return math.nan
+    r = x - smooth(x, period_samples)
+    r = r - r.mean()
+    den = float(np.dot(r, r))
+    if den <= 0:
+        return math.nan
+    measured = float(np.dot(r[1:], r[:-1]) / den)
+    n = max(5, int(round(0.1 * period_samples)) | 1)  # the smoothing's window (as extrema.smooth)
+    if n > x.size:
+        return measured
+    g = -savgol_coeffs(n, 2)
+    g[n // 2] += 1.0  # residual filter: identity minus the smoother
+    white = float(np.dot(g[1:], g[:-1]) / np.dot(g, g))
+    return measured - white
+

@@ -1,0 +1,174 @@
+"""``escfit init DATA``: write a commented starter scene that fits a recording.
+
+The record is read as ``escfit fit`` reads it; what the scene needs (the period, the decay, the
+columns, the noise) is measured from it (:mod:`escfit.balance.starter`), and the scene is
+checked by parsing it before it is written, atomically, never over an existing file without
+``--force``.  Whether the oscillator is a gravity pendulum or a spring is the user's to say
+(``--pendulum`` / ``--spring``); on a terminal the command asks, elsewhere it says which it
+assumed and how to change it.
+
+``escfit fit DATA`` without a scene calls :func:`offer_starter`: on a terminal it offers to
+write the starter scene and go on with it; elsewhere it says, in one line, to run ``escfit init``.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+__all__ = ["init", "offer_starter", "write_starter", "interactive"]
+
+RECORDING_OPTIONS = ("time_column", "sample_rate", "angle_column", "angle_unit", "counts_per_turn", "scale", "start",
+                     "stop")
+
+
+def interactive() -> bool:
+    """Whether a person is at a terminal on both ends (questions may be asked)."""
+    try:
+        return sys.stdin.isatty() and sys.stdout.isatty()
+    except (AttributeError, ValueError):  # closed or replaced streams
+        return False
+
+
+def default_scene_path(data: str | Path) -> Path:
+    """``<data stem>.toml`` in the current folder (``<stem>_scene.toml`` if that would be the data)."""
+    stem = Path(data).stem or "scene"
+    out = Path(f"{stem}.toml")
+    return Path(f"{stem}_scene.toml") if out.resolve() == Path(data).resolve() else out
+
+
+def _column(text):
+    return int(text) if isinstance(text, str) and text.strip().isdigit() else text
+
+
+def recording_table(**given) -> dict:
+    """Command-line reading options as ``[recording]`` table entries (scene keys and values)."""
+    table = {}
+    for key in RECORDING_OPTIONS:
+        value = given.get(key)
+        if value is not None:
+            table[key] = _column(value) if key.endswith("_column") else value
+    return table
+
+
+def _restoring(kind: str | None) -> tuple[str, str]:
+    """``(restoring, how it was chosen)``: the flag, an answer on a terminal, or the assumption."""
+    if kind:
+        return kind, f"--{kind}"
+    if interactive():
+        answer = click.prompt("Is the oscillator a gravity pendulum, or does a spring or torsion wire restore it?",
+                              type=click.Choice(["pendulum", "spring"]), default="spring")
+        return answer, "your answer"
+    return "spring", "assumed"
+
+
+def write_starter(data: str, out: str | Path, *, kind: str | None = None, force: bool = False,
+                  recording: dict | None = None, fmt: str | None = None) -> tuple[Path, list[str]]:
+    """Measure the record, write the starter scene atomically and return ``(path, lines to print)``.
+
+    Raises
+    ------
+    EscfitError
+        An unreadable record (one line naming the option to give), an existing ``out``
+        without ``force``, an output that is the data, or a folder that cannot take it.
+    """
+    from ..balance.starter_text import starter_scene
+    from ..core.atomic import atomic_path, check_output_folder, refuse_clobbering_inputs, refuse_existing
+    from ..core.errors import DataError
+    from ..core.scene import load_scene
+
+    out = Path(out)
+    if not Path(data).is_file():
+        raise DataError("data file not found", str(data))
+    refuse_clobbering_inputs({"--out": out}, {"data": data})
+    check_output_folder(out, "--out")
+    refuse_existing(out, force)
+    restoring, said = _restoring(kind)
+    text, summary, _ = starter_scene(data, restoring=restoring, recording=recording, fmt=fmt, restoring_said=said)
+    load_scene(str(out), text=text)  # the scene must parse before it is written
+    with atomic_path(out, force=force) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    lines = list(summary)
+    if said == "assumed":
+        lines.append("assumed a spring (linear restoring torque: a balance spring, a torsion wire); for a gravity "
+                     f"pendulum run: escfit init {data} --pendulum --force" + (f" --out {out}" if out != default_scene_path(data) else ""))
+    else:
+        lines.append(f"restoring torque: {'gravity pendulum' if restoring == 'pendulum' else 'spring (linear)'} ({said})")
+    lines.append(f"wrote {out}")
+    return out, lines
+
+
+def next_command(data: str, scene: Path) -> str:
+    report = f"{Path(data).stem}.html"
+    return f"escfit fit {data} --scene {scene} --report {report}"
+
+
+@click.command("init")
+@click.argument("data", type=click.Path(dir_okay=False))
+@click.option("--out", type=click.Path(dir_okay=False), default=None,
+              help="Scene file to write (default: DATA's name with .toml, in the current folder).")
+@click.option("--pendulum", "kind", flag_value="pendulum", default=None,
+              help="A gravity pendulum: torque omega0^2 sin(theta).")
+@click.option("--spring", "kind", flag_value="spring", help="A spring or torsion wire: linear restoring torque.")
+@click.option("--force", is_flag=True, help="Replace an existing scene file.")
+@click.option("--format", "fmt", default=None,
+              help="Recording format (detected from the file's content): escfit's own, raw, or an instrument's or "
+                   "program's (phyphox, cassy, lvm, tracker, ...: see docs/recordings.md).")
+@click.option("--time-column", default=None, help="[recording] time_column: name or 1-based position.")
+@click.option("--sample-rate", default=None, help="[recording] sample_rate, e.g. '500 Hz' (instead of a time column).")
+@click.option("--angle-column", default=None, help="[recording] angle_column: name or 1-based position.")
+@click.option("--angle-unit", default=None, help="[recording] angle_unit: deg, rad, ... or counts.")
+@click.option("--counts-per-turn", type=float, default=None, help="[recording] counts_per_turn (with counts).")
+@click.option("--scale", type=float, default=None, help="[recording] scale: multiplies the raw readings.")
+@click.option("--start", "start", default=None, help="[recording] start of the window, e.g. '13 s'.")
+@click.option("--stop", "stop", default=None, help="[recording] end of the window, e.g. '60 s'.")
+def init(data, out, kind, force, fmt, **options):
+    """Write a starter scene that fits DATA (a recording of your own), and say what to run next.
+
+    The period, the decay and the columns are measured from the record; options the record
+    cannot settle (which column, its unit, a clock) are written in a [recording] table.
+    """
+    from ..balance.recordings.formats_list import FORMAT_NAMES
+    from ..core.errors import DataError
+
+    if fmt is not None and fmt not in FORMAT_NAMES:
+        raise DataError(f"--format {fmt!r} is not a balance recording format; known: {', '.join(FORMAT_NAMES)}", data)
+    out = Path(out) if out else default_scene_path(data)
+    written, lines = write_starter(data, out, kind=kind, force=force, recording=recording_table(**options), fmt=fmt)
+    for line in lines:
+        click.echo(line)
+    click.echo(f"next: {next_command(data, written)}")
+
+
+def offer_starter(data: str, recording: dict | None = None, fmt: str | None = None) -> str:
+    """``escfit fit DATA`` without a scene: on a terminal, offer a starter scene; else say how to make one.
+
+    Returns
+    -------
+    str
+        The scene written (the fit goes on with it).
+
+    Raises
+    ------
+    SceneError
+        Not on a terminal, or the offer declined: one line naming ``escfit init``.
+    """
+    from ..core.errors import SceneError
+
+    out = default_scene_path(data)
+    command = f"escfit init {data}" + ("" if out == Path(f"{Path(data).stem}.toml") else f" --out {out}")
+    if not interactive():
+        raise SceneError(f"no scene given: write a starter scene with `{command}` (or give --scene SCENE.toml, or a "
+                         "fit recipe)", data)
+    if out.exists():
+        raise SceneError(f"no scene given; {out} exists: fit with `escfit fit {data} --scene {out}`", data)
+    if not click.confirm(f"No scene given. Write a starter scene for {Path(data).name} to {out} and fit with it?",
+                         default=True):
+        raise SceneError(f"no scene given: write one with `{command}`, or give --scene SCENE.toml", data)
+    written, lines = write_starter(data, out, recording=recording, fmt=fmt)
+    for line in lines:
+        click.echo(line)
+    click.echo(f"fitting with {written} (next time: escfit fit {data} --scene {written})")
+    return str(written)
