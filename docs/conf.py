@@ -31,7 +31,6 @@ version = release = __version__
 extensions = [
     "myst_parser",
     "sphinx.ext.autodoc",
-    "sphinx.ext.mathjax",
     "numpydoc",
     "sphinx_click",
     "escfit_scenekeys",
@@ -45,6 +44,8 @@ templates_path = []
 # MyST: anchors for headings down to ### so pages can link to sections (#sampled-free-decays)
 myst_heading_anchors = 3
 myst_enable_extensions = ["colon_fence", "deflist", "attrs_block"]
+# "--scene" in the click commands' help must stay two hyphens, not become a dash
+smartquotes = False
 
 # autodoc + numpydoc: the public facade only; members of classes are listed where a page asks
 autodoc_member_order = "bysource"

@@ -133,18 +133,20 @@ class Renderer:
         return self.glossary.get(family, {}).get(path or TOP, {}).get(key, "")
 
     def rows(self, family: str, path: str, keys: list[str], required: set[str]) -> list[str]:
-        out = ["| key | parameter | unit | allowed | meaning |", "|---|---|---|---|---|"]
+        """A table of the keys: five columns where some key has a unit or a parameter, else two."""
+        body, rich = [], False
         for key in keys:
             name = f"`{key}`" + (" (required)" if key in required else "")
             ps = self.params.get((family, path, key), [])
             if ps:
+                rich = True
                 for p in ps:
                     unit = _unit(p["unit"])
                     if p.get("converted") and p.get("input_unit") and p["input_unit"] != p["unit"]:
                         unit = f"read in {_unit(p['input_unit'])}, kept as {unit}"
                     meaning = p["meaning"] or self.describe(family, path, key)
                     variant = f" (`model = \"{p['variant']}\"`)" if p.get("variant") and len(ps) > 1 else ""
-                    out.append(f"| {name} | `{p['name']}`{variant} | {unit} | {_range(p)} | {_cell(meaning)} |")
+                    body.append((name, f"`{p['name']}`{variant}", unit, _range(p), _cell(meaning)))
                     name = ""
                 continue
             text = self.describe(family, path, key)
@@ -152,8 +154,13 @@ class Renderer:
                 self.undescribed.append(f"{family} [{path or TOP}] {key}")
                 text = "*not described yet*"
             v = self.values.get((family, path, key))
-            unit = _unit(v["unit"]) if v else ""
-            out.append(f"| {name} | | {unit} | | {_cell(text)} |")
+            rich = rich or v is not None
+            body.append((name, "", _unit(v["unit"]) if v else "", "", _cell(text)))
+        if rich:
+            out = ["| key | parameter | unit | allowed | meaning |", "|---|---|---|---|---|"]
+            out += [f"| {' | '.join(row)} |" for row in body]
+        else:
+            out = ["| key | meaning |", "|---|---|"] + [f"| {row[0]} | {row[4]} |" for row in body]
         return out
 
     def family(self, family: str) -> list[str]:
@@ -178,8 +185,9 @@ class Renderer:
                     for other in ts:
                         allowed |= set(other["allowed"])
                 required = set(t["required"])
-                shown = "top level" if path == "" else (f"[[{path}]]" if t["array"] else f"[{path}]")
-                head = f"### `{shown}`" + (f" with `model = \"{variant}\"`" if variant else "")
+                shown = f"[[{path}]]" if t["array"] else f"[{path}]"
+                head = "### Top level" if path == "" else (
+                    f"### `{shown}`" + (f" with `model = \"{variant}\"`" if variant else ""))
                 lines += [head, ""]
                 src = t.get("source", "")
                 if src:
