@@ -34,6 +34,7 @@ extensions = [
     "numpydoc",
     "sphinx_click",
     "escfit_scenekeys",
+    "escfit_sitepages",
 ]
 
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}

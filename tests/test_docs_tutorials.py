@@ -28,7 +28,7 @@ PAGE_LIMIT_S = 900  # a page's commands together; the longest (a quick-start emc
 _FENCE = re.compile(r"^% tested[^\n]*\n```bash\n(.*?)^```", re.S | re.M)
 
 
-def tested_blocks(page: Path) -> list[str]:
+def marked_blocks(page: Path) -> list[str]:
     """The tested ``bash`` blocks of a page, in order."""
     return _FENCE.findall(page.read_text(encoding="utf-8"))
 
@@ -46,13 +46,13 @@ def escfit_commands(block: str) -> list[str]:
 
 @pytest.mark.parametrize("page", PAGES, ids=lambda p: p.relative_to(DOCS).as_posix())
 def test_page_has_tested_commands(page):
-    assert tested_blocks(page), f"{page.name} has no '% tested' bash block"
+    assert marked_blocks(page), f"{page.name} has no '% tested' bash block"
 
 
 def test_tested_commands_exist():
     from escfit.cli.main import cli
 
-    used = {(page.name, cmd) for page in PAGES for block in tested_blocks(page) for cmd in escfit_commands(block)}
+    used = {(page.name, cmd) for page in PAGES for block in marked_blocks(page) for cmd in escfit_commands(block)}
     assert used, "no escfit command found in the tutorials"
     missing = sorted((page, cmd) for page, cmd in used if cmd not in cli.commands)
     assert not missing, f"tutorials run escfit commands that do not exist: {missing}"
@@ -62,7 +62,7 @@ def test_extraction_reads_only_marked_blocks(tmp_path):
     page = tmp_path / "p.md"
     page.write_text("```bash\nnot me\n```\n\n% tested\n```bash\necho one\ncd x && escfit fit a\n```\n"
                     "% tested: slow\n```bash\nescfit summary b.h5 | head\n```\n", encoding="utf-8")
-    blocks = tested_blocks(page)
+    blocks = marked_blocks(page)
     assert blocks == ["echo one\ncd x && escfit fit a\n", "escfit summary b.h5 | head\n"]
     assert [c for b in blocks for c in escfit_commands(b)] == ["fit", "summary"]
 
@@ -70,7 +70,7 @@ def test_extraction_reads_only_marked_blocks(tmp_path):
 @pytest.mark.slow
 @pytest.mark.parametrize("page", PAGES, ids=lambda p: p.relative_to(DOCS).as_posix())
 def test_tutorial_commands_run(page, tmp_path):
-    blocks = tested_blocks(page)
+    blocks = marked_blocks(page)
     script = "set -euo pipefail\n" + "\n".join(
         f"echo '>>> block {i + 1}'\n{block}" for i, block in enumerate(blocks))
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
