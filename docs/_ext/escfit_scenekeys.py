@@ -132,12 +132,14 @@ class Renderer:
             return self.fit_help[key]
         return self.glossary.get(family, {}).get(path or TOP, {}).get(key, "")
 
-    def rows(self, family: str, path: str, keys: list[str], required: set[str]) -> list[str]:
+    def rows(self, family: str, path: str, keys: list[str], required: set[str], variant: str | None = None) -> list[str]:
         """A table of the keys: five columns where some key has a unit or a parameter, else two."""
         body, rich = [], False
         for key in keys:
             name = f"`{key}`" + (" (required)" if key in required else "")
             ps = self.params.get((family, path, key), [])
+            if variant is not None:
+                ps = [p for p in ps if p.get("variant") in (variant, None)]
             if ps:
                 rich = True
                 for p in ps:
@@ -145,8 +147,8 @@ class Renderer:
                     if p.get("converted") and p.get("input_unit") and p["input_unit"] != p["unit"]:
                         unit = f"read in {_unit(p['input_unit'])}, kept as {unit}"
                     meaning = p["meaning"] or self.describe(family, path, key)
-                    variant = f" (`model = \"{p['variant']}\"`)" if p.get("variant") and len(ps) > 1 else ""
-                    body.append((name, f"`{p['name']}`{variant}", unit, _range(p), _cell(meaning)))
+                    which = f" (`model = \"{p['variant']}\"`)" if p.get("variant") and len(ps) > 1 else ""
+                    body.append((name, f"`{p['name']}`{which}", unit, _range(p), _cell(meaning)))
                     name = ""
                 continue
             text = self.describe(family, path, key)
@@ -192,10 +194,10 @@ class Renderer:
                 src = t.get("source", "")
                 if src:
                     lines += [f"Read by `escfit/{src.split(':')[0]}`.", ""]
-                keys = sorted(allowed - ({"model"} if variant and path == "observation" else set()))
-                if variant and path == "observation" and "model" in allowed:
-                    keys = ["model", *keys]
-                lines += self.rows(family, path, keys, required) + [""]
+                keys = sorted(allowed - {"model"}) if variant else sorted(allowed)
+                if variant:
+                    keys = ["model", *keys]  # the key that chose this table's keys
+                lines += self.rows(family, path, keys, required, variant) + [""]
         return lines
 
     def render(self) -> str:

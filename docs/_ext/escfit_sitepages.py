@@ -37,6 +37,12 @@ def add_unlisted(app, docname, source):
         source[0] += "\n\n```{toctree}\n:caption: More\n:maxdepth: 1\n:hidden:\n\n" + "\n".join(extra) + "\n```\n"
 
 
+def reread_index(app, env, added, changed, removed):
+    """The index is read on every build, so a page added or removed since the last one is seen."""
+    return [app.config.root_doc]
+
+
 def setup(app):
     app.connect("source-read", add_unlisted)
+    app.connect("env-get-outdated", reread_index)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}
