@@ -61,6 +61,8 @@ def collect(root: Path, cache: Path) -> dict:
     if proc.returncode != 0:
         raise RuntimeError(f"scene-key collection failed:\n{proc.stderr[-3000:]}")
     catalogue = json.loads(proc.stdout)
+    if catalogue.get("counts", {}).get("key_probes", 0) < 0:
+        logger.warning("scene keys: the probes of unused keys ran out of time; the reference is incomplete")
     cache.parent.mkdir(parents=True, exist_ok=True)
     cache.write_text(json.dumps({"fingerprint": key, "catalogue": catalogue}), encoding="utf-8")
     return catalogue
@@ -230,7 +232,7 @@ class Renderer:
         lines += ["```{admonition} How this page was made", ":class: note", "",
                   f"Generated when the site was built, by watching escfit's readers read {c.get('scenes', 0)} "
                   f"shipped scenes, {c.get('recipes', 0)} fit recipes and {c.get('pairs', 0)} scene-recording "
-                  f"pairs, and by {c.get('key_probes', 0) + c.get('effect_probes', 0) + c.get('table_probes', 0)} "
+                  f"pairs, and by {abs(c.get('key_probes', 0)) + c.get('effect_probes', 0) + c.get('table_probes', 0)} "
                   "probes of keys that no shipped file uses (`docs/_ext/scenekeys_collect.py`). "
                   "Descriptions of keys that are not parameters: `docs/reference/scene-keys-glossary.toml`.",
                   "```", ""]
