@@ -13,6 +13,7 @@ from __future__ import annotations
 import os
 import re
 import shlex
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -76,10 +77,16 @@ def test_tutorial_commands_run(page, tmp_path):
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
            "PATH": os.pathsep.join([str(Path(sys.executable).parent), os.environ.get("PATH", "")]),
            "ESCFIT_QUIET_COMPILE": "1", "ESCFIT_DOCS_ROOT": str(ROOT)}
+    # a session of its own, so that a time-out ends the escfit processes the shell started too
+    proc = subprocess.Popen(["bash", "-c", script], cwd=tmp_path, env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL, start_new_session=True)
     try:
-        proc = subprocess.run(["bash", "-c", script], cwd=tmp_path, env=env, capture_output=True, text=True,
-                              timeout=PAGE_LIMIT_S, stdin=subprocess.DEVNULL)
-    except subprocess.TimeoutExpired as exc:
-        pytest.fail(f"{page.name}: the commands took over {PAGE_LIMIT_S} s\n{(exc.stdout or '')[-3000:]}")
-    assert proc.returncode == 0, (f"{page.name}: exit {proc.returncode}\n--- stdout\n{proc.stdout[-4000:]}\n"
-                                  f"--- stderr\n{proc.stderr[-4000:]}")
+        out, err = proc.communicate(timeout=PAGE_LIMIT_S)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        out, _err = proc.communicate()
+        pytest.fail(f"{page.name}: the commands took over {PAGE_LIMIT_S} s\n{out[-3000:]}")
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 0, f"{page.name}: exit {proc.returncode}\n--- stdout\n{out[-4000:]}\n--- stderr\n{err[-4000:]}"
