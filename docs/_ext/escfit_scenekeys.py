@@ -274,7 +274,7 @@ def _fit_help() -> dict[str, str]:
 def generate(app) -> None:
     docs = Path(app.srcdir)
     root = docs.parent
-    cat = collect(root, Path(app.doctreedir).parent / "scenekeys-cache.json")
+    cat = collect(root, Path(app.doctreedir) / "scenekeys-cache.json")
     glossary = tomllib.loads((docs / "reference" / "scene-keys-glossary.toml").read_text(encoding="utf-8"))
     r = Renderer(cat, glossary, _fit_help())
     text = r.render()
