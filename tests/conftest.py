@@ -10,7 +10,7 @@ from hypothesis import settings
 
 ROOT = Path(__file__).resolve().parents[1]
 DATASETS = ROOT / "datasets"
-SHARED = ROOT.parent / "shared"
+SHARED = Path(os.environ.get("ESCFIT_SHARED", ROOT.parent / "shared"))  # the real recordings beside the checkout
 
 settings.register_profile("escfit", derandomize=True, deadline=None, print_blob=True)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "escfit"))

@@ -56,15 +56,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ...core.errors import DataError
 from .extrema import alternating_extrema, kinked_vertex, resolution, smooth, spectral_period, vertex_at
-
-if TYPE_CHECKING:
-    from .timeseries import TimeSeries
+from .series import TimeSeries
 
 __all__ = ["TurningPoints", "reduce_series", "turning_points", "MIN_SAMPLES_PER_PERIOD"]
 
