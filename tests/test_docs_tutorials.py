@@ -1,8 +1,8 @@
 """The documentation's tutorials run as written.
 
 A fenced ``bash`` block right after a ``% tested`` line (a MyST comment, invisible on the
-site) in ``docs/getting-started.md`` or ``docs/tutorials/*.md`` is a command a reader is told
-to type.  The slow test runs each page's tested blocks in page order, in one bash shell per
+site) in ``docs/getting-started.md``, ``docs/howto/formats.md`` or ``docs/tutorials/*.md``
+holds commands a reader is told to type.  The slow test runs each page's tested blocks in page order, in one bash shell per
 page (so ``cd`` carries over), in a fresh temporary folder, with this checkout's escfit first
 on the path and a time limit; a block that fails fails the page, with its output.  The fast
 tests check that every page has tested blocks and that each ``escfit`` command they use exists.
@@ -22,7 +22,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
-PAGES = [DOCS / "getting-started.md", *sorted((DOCS / "tutorials").glob("*.md"))]
+PAGES = [DOCS / "getting-started.md", DOCS / "howto" / "formats.md", *sorted((DOCS / "tutorials").glob("*.md"))]
 PAGES = [p for p in PAGES if p.is_file() and p.name != "index.md"]
 PAGE_LIMIT_S = 900  # a page's commands together; the longest (a quick-start emcee fit) takes 1-2 minutes
 
