@@ -17,6 +17,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import re
 import subprocess
 import sys
 import tomllib
@@ -103,7 +104,9 @@ def _range(p: dict) -> str:
 
 
 def _cell(text: str) -> str:
-    return " ".join(str(text).split()).replace("|", "\\|")
+    """One table cell: one line, pipes escaped, docstring roles (:data:`~x.y`) as plain code."""
+    text = re.sub(r":[\w:]+:`~?([^`]+)`", r"`\1`", " ".join(str(text).split()))
+    return text.replace("|", "\\|")
 
 
 class Renderer:
