@@ -156,7 +156,7 @@ def install(cat: Catalogue):
     def to_canonical(value, kind, where="", *args, **kw):
         # numbers that are not parameters (window limits, banking angle, notch angle, lever ...)
         path, key, _array = _split_where(str(where), cat.where)
-        if cat.family is not None and key:
+        if cat.family is not None:  # a key inside the brackets ([rig.k]) is split off at the end
             cat.values.append({"family": cat.family, "path": path, "key": key, "kind": kind,
                                "variant": _variant() if path == "observation" and cat.family == "balance" else None,
                                "unit": cu.CANONICAL.get(kind, "")})
@@ -456,7 +456,7 @@ def collect(root: Path, budget_s: float = 600.0) -> dict:
     values, vseen = [], set()
     for v in cat.values:
         sig = (v["family"], v["path"], v["variant"], v["key"])
-        if sig not in vseen:
+        if v["key"] and sig not in vseen:
             vseen.add(sig)
             values.append(v)
     params, seen = [], set()
