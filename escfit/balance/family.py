@@ -212,10 +212,14 @@ class BalanceFamily:
         return make_problem(scene, data, **options)
 
     def figures(self, result) -> dict[str, bytes]:
-        """Data against the model, drawn by the kind of the readings (see :mod:`escfit.balance.figures`)."""
+        """Data against the model, drawn by the kind of the readings (see :mod:`escfit.balance.figures`),
+        and the decrement per half swing of a decay (:mod:`escfit.balance.decrement_figure`)."""
+        from .decrement_figure import decrement_figure
         from .figures import figures
 
-        return figures(result)
+        out = figures(result)
+        decrement = decrement_figure(result)
+        return out if decrement is None else {**out, "decrement per half swing": decrement}
 
 
 FAMILY = BalanceFamily()

@@ -34,6 +34,7 @@ __all__ = ["main", "cli"]
 # Commands that live beside the features they drive, imported only when used.
 LAZY_COMMANDS = {
     "bench": "escfit.cli.bench:bench",
+    "compare": "escfit.cli.compare:compare",
     "fit-many": "escfit.cli.study:fit_many",
     "examples": "escfit.cli.examples:examples",
     "summary": "escfit.cli.summary:summary",
