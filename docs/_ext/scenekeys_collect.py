@@ -347,11 +347,13 @@ def probe(cat: Catalogue, deadline: float) -> int:
 
 
 def probe_effects(cat: Catalogue) -> int:
-    """Effects of the registry that no shipped scene names, read from probe tables.
+    """Every balance effect of the registry, read directly from probe tables.
 
-    Each effect reads its own table (``Effect.read(table, ctx)``), so an empty table shows the
-    keys it allows (it refuses the table after checking them) and a table with one key set to
-    :data:`PROBE` shows the parameter that key declares.
+    Each effect reads its own table (``Effect.read(table, ctx)``, here with an inertia of
+    1 kg m^2 so physical torques convert), so an empty table shows the keys it allows (it
+    refuses the table after checking them), and a table with a key set to :data:`PROBE`,
+    alone or beside one other key (a static torque may need a kinetic one), shows the
+    parameter that key declares.
     """
     from escfit.balance.effects import EFFECTS
     from escfit.balance.effects.base import ReadContext
@@ -360,15 +362,18 @@ def probe_effects(cat: Catalogue) -> int:
     cat.family, cat.where = "balance", "probe.toml"
     try:
         for name, cls in EFFECTS.items():
-            if ("balance", f"effects.{name}", None) in cat.tables:
-                continue
             ctx = ReadContext(where="probe.toml", inertia=1.0, switching="angle")
-            _quiet(cls.read, {}, ctx)
-            n += 1
-            entry = cat.tables.get(("balance", f"effects.{name}", None))
-            for key in sorted(entry["allowed"]) if entry else ():
-                _quiet(cls.read, {key: PROBE}, ctx)
+            if ("balance", f"effects.{name}", None) not in cat.tables:
+                _quiet(cls.read, {}, ctx)
                 n += 1
+            entry = cat.tables.get(("balance", f"effects.{name}", None))
+            allowed = sorted(entry["allowed"]) if entry else []
+            for key in allowed:
+                for other in [None, *[o for o in allowed if o != key]]:
+                    if ("balance", f"effects.{name}", None, key) in _seen_keys(cat):
+                        break
+                    _quiet(cls.read, {key: PROBE} if other is None else {other: PROBE / 2, key: PROBE}, ctx)
+                    n += 1
     finally:
         cat.family = cat.where = None
     return n
