@@ -54,7 +54,9 @@ def parameter_table(res) -> tuple[list[str], list[list[str]]]:
     tuple
         ``(head, rows)``, all strings.  The estimate column is headed ``"median"`` for a
         posterior, ``"best fit"`` for least squares (``"estimate"`` if the rows mix both, each
-        row then saying which in the note column).  Angles are in deg, R and X in rad/s^2,
+        row then saying which in the note column), ``"value (NOT determined)"`` when the fit
+        determines nothing (:attr:`escfit.results.FitResult.verdict`); a parameter the fit does
+        not determine says so in the note column.  Angles are in deg, R and X in rad/s^2,
         omega0 in rad/s; intervals convert with their values.  R-hat and ESS columns appear
         for posteriors only; a ``note`` column appears when a row needs one: an estimate on a
         bound of the scene's range (``at lower bound``), or which reading noise a posterior
@@ -64,6 +66,10 @@ def parameter_table(res) -> tuple[list[str], list[list[str]]]:
     loads_in = _loads_unit(res)
     kinds = {estimate_kind(r) for r in summary.values()}
     column = kinds.pop() if len(kinds) == 1 else "estimate"
+    verdict = getattr(res, "verdict", "")
+    undetermined = set(getattr(res, "undetermined", []) or [])
+    if verdict == "not determined":
+        column = "value (NOT determined)"
     posterior = any(estimate_kind(r) == "median" for r in summary.values())
     notes: list[list[str]] = []
     rows = []
@@ -80,6 +86,8 @@ def parameter_table(res) -> tuple[list[str], list[list[str]]]:
         note = []
         if column == "estimate":
             note.append(estimate_kind(r))
+        if name in undetermined and verdict != "not determined":
+            note.append("not determined")
         if r.get("at_bound") in _BOUND_FLAG:
             note.append(_BOUND_FLAG[r["at_bound"]])
         if name == "observation.sigma" and estimate_kind(r) == "median":

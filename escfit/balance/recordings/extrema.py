@@ -11,7 +11,8 @@ import math
 
 import numpy as np
 
-__all__ = ["spectral_period", "smooth", "resolution", "alternating_extrema", "kinked_vertex", "vertex_at"]
+__all__ = ["spectral_period", "extrema_period", "smooth", "resolution", "alternating_extrema", "kinked_vertex", "vertex_at",
+           "local_amplitude"]
 
 
 def spectral_period(t: np.ndarray, x: np.ndarray, *, min_cycles: float = 2.0) -> tuple[float, float]:
@@ -60,6 +61,32 @@ def spectral_period(t: np.ndarray, x: np.ndarray, *, min_cycles: float = 2.0) ->
     if median <= 0.0:
         return 1.0 / f, math.inf if p[k] > 0 else 0.0
     return 1.0 / f, float(p[k] / median)
+
+
+def extrema_period(t: np.ndarray, x: np.ndarray) -> float:
+    """Period (s) from the spacing of the record's larger extrema, without knowing it first.
+
+    A light smoothing (5 samples), a hysteresis of six noise scales (the noise from the second
+    differences, which a smooth oscillation sampled many times a period hardly feels), three
+    quantisation steps and 0.2 % of the record's range, and twice the median interval between
+    the extrema of the larger half of the swings; ``nan`` when fewer than four extrema stand out.  A cross-check of the periodogram, whose low
+    frequencies a hold or a step can dominate.
+    """
+    if x.size < 20:
+        return math.nan
+    d2 = np.diff(x, 2)
+    sigma = float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / math.sqrt(6.0))
+    xs = smooth(x, 50.0)
+    quantum = resolution(x, xs)[1]
+    ext = alternating_extrema(xs, max(6.0 * sigma, 3.0 * quantum, 2e-3 * float(np.ptp(x)),
+                                      1e-9 * float(np.max(np.abs(x)) or 1.0)))
+    if len(ext) < 4:
+        return math.nan
+    tc = np.array([0.5 * (t[a] + t[b]) for a, b, _ in ext])
+    v = np.array([xs[a] for a, _, _ in ext])
+    pp = np.abs(np.diff(v))
+    big = pp >= np.median(pp)
+    return 2.0 * float(np.median(np.diff(tc)[big]))
 
 
 def smooth(x: np.ndarray, period_samples: float) -> np.ndarray:
@@ -231,3 +258,34 @@ def vertex_at(s: np.ndarray, x: np.ndarray, degree: int = 4, *,
         return 0.0, solve(0.0)[1]
     res = minimize_scalar(lambda sc: solve(sc)[0], bounds=search, method="bounded", options={"xatol": 1e-9})
     return float(res.x), solve(float(res.x))[1]
+
+
+def local_amplitude(t: np.ndarray, x: np.ndarray, period: float) -> tuple[np.ndarray, np.ndarray]:
+    """Amplitude of the oscillation at ``period`` in windows one period long, a quarter apart.
+
+    In each window a least-squares fit of ``a + b s + c cos(w s) + d sin(w s)`` (``w = 2 pi /
+    period``, ``s`` the time from the window's centre) gives the amplitude ``hypot(c, d)``:
+    the swing as the whole window sees it, far less noisy than any one sample (for white
+    noise of scale ``sigma`` and ``N`` samples, ``c`` and ``d`` scatter by
+    ``sigma * sqrt(2 / N)``).
+
+    Returns
+    -------
+    start : ndarray
+        Start time of each window, s.
+    amplitude : ndarray
+        Rad (nan for a window with fewer than 8 samples).
+    """
+    w = 2.0 * math.pi / period
+    starts = np.arange(t[0], t[-1] - period + 1e-12, 0.25 * period)
+    amp = np.full(starts.size, math.nan)
+    lo = np.searchsorted(t, starts)
+    hi = np.searchsorted(t, starts + period)
+    for k, (a, b) in enumerate(zip(lo, hi)):
+        if b - a < 8:
+            continue
+        s = t[a:b] - (starts[k] + 0.5 * period)
+        basis = np.stack([np.ones_like(s), s, np.cos(w * s), np.sin(w * s)], axis=1)
+        coef, *_ = np.linalg.lstsq(basis, x[a:b], rcond=None)
+        amp[k] = math.hypot(coef[2], coef[3])
+    return starts, amp
