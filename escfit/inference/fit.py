@@ -25,7 +25,7 @@ from .identifiability import bound_warnings, correlation_warnings, ridge_warning
 from .lsq import LeastSquaresResult, least_squares
 from .mcmc import McmcResult, run_emcee
 from .misfit import misfit_report
-from .reconcile import reconcile, verdict
+from .reconcile import reconcile, verdict, with_held_uncertainty
 from .registry import family
 
 __all__ = ["fit", "fit_problem", "build_tree"]
@@ -132,6 +132,8 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
     clock = time.perf_counter()
     lsq = least_squares(problem, n_starts=n_starts, n_refine=n_refine, seed=seed, priors_count=method == "emcee")
     lsq, fixes, unresolved = reconcile(problem, lsq, seed=seed, priors_count=method == "emcee")
+    lsq, more = with_held_uncertainty(problem, lsq)
+    fixes += more
     timings = {"least_squares_s": time.perf_counter() - clock}
     mc = None
     if method == "emcee":

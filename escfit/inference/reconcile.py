@@ -27,7 +27,7 @@ import numpy as np
 from ..likelihood.consistency import Implied
 from .lsq import LeastSquaresResult, least_squares
 
-__all__ = ["reconcile", "verdict", "NOT_DETERMINED", "PARTLY", "DETERMINED"]
+__all__ = ["reconcile", "with_held_uncertainty", "verdict", "NOT_DETERMINED", "PARTLY", "DETERMINED"]
 
 DETERMINED, PARTLY, NOT_DETERMINED = "determined", "partly determined", "not determined"
 ROUNDS = 4
@@ -89,6 +89,45 @@ def reconcile(problem, lsq: LeastSquaresResult, *, seed: int = 0,
         lsq = refit
     bad = [c for c in consistency(lsq.values) if not c.agrees]
     return lsq, notes, bad
+
+
+def with_held_uncertainty(problem, lsq: LeastSquaresResult) -> tuple[LeastSquaresResult, list[str]]:
+    """Add the uncertainty of the parameters the problem holds to the fitted ones' covariance.
+
+    A held parameter (an omega0 taken from the measured period) is known only as well as that
+    measurement; the fitted parameters that scale with it (C with omega0, R with its square)
+    inherit that: ``cov += J J^T var(held)`` with ``J`` the derivatives the problem gives
+    (:meth:`held_effects`).  Without that, the intervals of C and R from turning points would
+    ignore the period's uncertainty, which can exceed their own.
+    """
+    effects = getattr(problem, "held_effects", None)
+    if effects is None or not getattr(problem, "held", ()):
+        return lsq, []
+    from dataclasses import replace
+
+    from .lsq import bound_flags, interval_table
+
+    se = np.nan_to_num(np.asarray(lsq.stderr, float), nan=np.nan)
+    corr = np.asarray(lsq.correlation, float)
+    cov = corr * np.outer(se, se)
+    notes = []
+    for name, held_se, slopes in effects(lsq.values):
+        j = np.array([slopes.get(n, 0.0) for n in lsq.names])
+        if not np.any(j) or not math.isfinite(held_se):
+            continue
+        cov = cov + np.outer(j, j) * held_se**2
+        grew = [n for n, a, b in zip(lsq.names, se, np.sqrt(np.diag(cov))) if a > 0 and b > 1.001 * a]
+        if grew:
+            notes.append(f"the standard errors of {', '.join(grew)} include the uncertainty of the held {name} "
+                         f"(+- {held_se:.3g})")
+    new_se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    new_se = np.where(np.isfinite(se), new_se, np.nan)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        new_corr = np.clip(cov / np.outer(new_se, new_se), -1.0, 1.0)
+    at_bound = bound_flags(lsq.value, lsq.lower, lsq.upper, new_se)
+    out = replace(lsq, stderr=new_se, correlation=new_corr, at_bound=at_bound,
+                  intervals=interval_table(lsq.value, new_se, lsq.lower, lsq.upper, at_bound))
+    return out, notes
 
 
 def verdict(problem, lsq: LeastSquaresResult, unresolved: list[Implied], *,

@@ -122,6 +122,13 @@ class BalanceProblem(ProblemBase):
         for cache in ("_merged_fixed", "_merge_keys", "_layout_cache"):
             self.__dict__.pop(cache, None)
 
+    def held_effects(self, values: Mapping[str, float]) -> list[tuple[str, float, dict[str, float]]]:
+        """For each held parameter: its standard error and the derivative of every fitted
+        parameter along the family of equally good fits (see :mod:`escfit.balance.problems.period`)."""
+        from .period import held_omega0_effects
+
+        return held_omega0_effects(self, values)
+
     def checks_of_posterior(self, chain: np.ndarray) -> list[str]:
         warnings = phase_mode_warning(self)
         if "observation.rho" in self.names:

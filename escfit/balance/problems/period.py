@@ -27,7 +27,7 @@ from ...core.errors import DataError
 from ...likelihood.consistency import Implied
 
 __all__ = ["MeasuredPeriod", "measured_period", "implied_omega0", "check_scene_omega0", "hold_omega0",
-           "period_consistency", "REL_TOL", "CHECK_SIGMAS"]
+           "start_omega0", "period_consistency", "held_omega0_effects", "REL_TOL", "CHECK_SIGMAS"]
 
 REL_TOL = 0.03  # a scene's omega0 within this fraction of the period's value (plus damping) is accepted
 CHECK_SIGMAS = 5.0  # a fit's period further than this many standard errors from the measured one disagrees
@@ -188,3 +188,37 @@ def period_consistency(problem, values) -> list[Implied]:
     tolerance = max(CHECK_SIGMAS * se, MIN_REL * mp.period) / mp.period * w
     return [Implied("oscillator.omega0", w, implied, tolerance,
                     f"the fitted model's period is {p_model:.5g} s where the record's is {mp.describe()}")]
+
+
+def _time_power(unit: str) -> float:
+    """Exponent of time in a unit (-1 for 1/s, -2 for rad/s^2); 0 when it has none or is unknown."""
+    if not unit:
+        return 0.0
+    from ...core.units import ureg
+
+    try:
+        return float(ureg.Quantity(1.0, unit).dimensionality.get("[time]", 0.0))
+    except Exception:  # noqa: BLE001 - a unit pint cannot read scales with nothing
+        return 0.0
+
+
+def held_omega0_effects(problem, values) -> list[tuple[str, float, dict[str, float]]]:
+    """The held omega0's standard error and how the fitted parameters move with it.
+
+    Turning-point amplitudes fix only time-free combinations (``C/omega0``, ``R/omega0^2``):
+    along the family of equally good fits a parameter whose unit holds time to the power
+    ``-k`` moves as ``omega0^k``, so its derivative is ``k * value / omega0``.
+    """
+    mp = getattr(problem, "measured_period", None)
+    if mp is None or "oscillator.omega0" not in getattr(problem, "held", ()) or not math.isfinite(mp.stderr):
+        return []
+    w = float(values["oscillator.omega0"])
+    se = w * mp.stderr / mp.period
+    slopes = {}
+    for name in problem.names:
+        if name.startswith("observation."):  # read against the record's own clock: they do not rescale
+            continue
+        k = -_time_power(problem.params[name].unit)
+        if k:
+            slopes[name] = k * float(values[name]) / w
+    return [("oscillator.omega0", se, slopes)]

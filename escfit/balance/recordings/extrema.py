@@ -69,7 +69,7 @@ def extrema_period(t: np.ndarray, x: np.ndarray) -> float:
     A light smoothing (5 samples), a hysteresis of six noise scales (the noise from the second
     differences, which a smooth oscillation sampled many times a period hardly feels), three
     quantisation steps and 0.2 % of the record's range, and twice the median interval between
-    the extrema of the larger half of the swings; ``nan`` when fewer than four extrema stand out.  A cross-check of the periodogram, whose low
+    the extrema of the larger half of the swings; ``nan`` when fewer than three extrema stand out.  A cross-check of the periodogram, whose low
     frequencies a hold or a step can dominate.
     """
     if x.size < 20:
@@ -80,7 +80,7 @@ def extrema_period(t: np.ndarray, x: np.ndarray) -> float:
     quantum = resolution(x, xs)[1]
     ext = alternating_extrema(xs, max(6.0 * sigma, 3.0 * quantum, 2e-3 * float(np.ptp(x)),
                                       1e-9 * float(np.max(np.abs(x)) or 1.0)))
-    if len(ext) < 4:
+    if len(ext) < 3:
         return math.nan
     tc = np.array([0.5 * (t[a] + t[b]) for a, b, _ in ext])
     v = np.array([xs[a] for a, _, _ in ext])

@@ -34,13 +34,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Turn", "Start", "faded_end", "growth_tolerance", "growth_steps", "find_start", "levels_off",
+__all__ = ["Turn", "Start", "faded_end", "growth_tolerance", "growth_steps", "find_start", "levels_off", "rises",
            "INTERVAL_RANGE", "HOLD_PERIODS"]
 
 INTERVAL_RANGE = (0.6, 1.6)  # admissible interval between turning points, in local half periods
 HOLD_PERIODS = 0.1  # a flat stretch at least this long is a held oscillator
 BEAT_EPISODES = 3  # the swing growing again this many times is not one decay (beats, a drive)
 SUSTAIN_BLOCK = 4  # half swings per block of the loss-law checks
+# a cubic after a release: a quartic's freedom trades the release instant against the first
+# curvature when the noise is some 1 % of the swing (errors of 0.6 s on a 9 s period)
+RELEASE_DEGREE = 3
 
 
 @dataclass(frozen=True)
@@ -125,17 +128,6 @@ def growth_steps(values: np.ndarray, tol: float) -> np.ndarray:
     return np.flatnonzero((pp[1:] > pp[:-1] + tol) & (pp[1:] >= 0.2 * np.max(pp))) + 1
 
 
-def _episodes(steps: np.ndarray) -> list[int]:
-    """First step of each run of consecutive growth steps."""
-    if not steps.size:
-        return []
-    starts = [int(steps[0])]
-    for a, b in zip(steps[:-1], steps[1:]):
-        if b > a + 2:
-            starts.append(int(b))
-    return starts
-
-
 def held_release(rec, turn: Turn, amplitude: float = math.inf) -> tuple[float, float] | None:
     """The release from a hold at ``turn``: the instant motion starts and the held angle.
 
@@ -158,7 +150,7 @@ def held_release(rec, turn: Turn, amplitude: float = math.inf) -> tuple[float, f
     free = rec.period / math.pi * math.sqrt(2.0 * rec.band / amplitude) if amplitude > rec.band else rec.period
     if t[j1] - t[j0] < max(HOLD_PERIODS * rec.period, 2.0 * free):
         return None
-    got = rec.refine(j1, j1, flat="left")
+    got = rec.refine(j1, j1, flat="left", degree=RELEASE_DEGREE)
     return got if got is not None else (float(t[j1]), float(np.median(x[j0:j1])))
 
 
@@ -191,22 +183,24 @@ def _losses(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _driven_prefix(values: np.ndarray, tol: float) -> int:
     """Turning points at the start of a run that a drive kept going (0 when none).
 
-    A prefix at constant amplitude (within ``tol``) of at least two blocks, followed by a
-    decay that at that same amplitude loses in two blocks more than ``3 tol`` and at least
-    four times what the prefix lost: a free oscillator's loss is a function of its amplitude.
+    A prefix of at least two blocks of half swings of one size (peak to peak, within ``tol``),
+    followed by a decay that loses more than ``3 tol`` in two blocks from that same size and at
+    least four times what the prefix lost per half swing: a free oscillator's loss depends on its
+    amplitude only, so the prefix was driven.  The last turning point of the prefix is where the
+    free motion starts.
     """
-    amp = _amplitudes(values)
-    n = amp.size
+    pp = np.abs(np.diff(np.asarray(values, float)))
+    n = pp.size
     if n < 3 * SUSTAIN_BLOCK:
         return 0
-    steady = int(np.argmax(np.abs(amp - amp[0]) > tol)) if np.any(np.abs(amp - amp[0]) > tol) else n
+    off = np.abs(pp - pp[0]) > tol
+    steady = int(np.argmax(off)) if off.any() else n
     if steady < 2 * SUSTAIN_BLOCK or steady > n - 2 * SUSTAIN_BLOCK:
         return 0
-    k = steady - 1
-    prefix_loss = (amp[0] - amp[k]) / max(k, 1)
-    after = (amp[k] - amp[k + 2 * SUSTAIN_BLOCK]) / (2 * SUSTAIN_BLOCK)
+    prefix_loss = (pp[0] - pp[steady - 1]) / max(steady - 1, 1)
+    after = (pp[steady - 1] - pp[steady - 1 + 2 * SUSTAIN_BLOCK]) / (2 * SUSTAIN_BLOCK)
     if after * 2 * SUSTAIN_BLOCK > 3 * tol and prefix_loss < 0.25 * after:
-        return k
+        return steady
     return 0
 
 
@@ -215,8 +209,9 @@ def levels_off(times: np.ndarray, values: np.ndarray, tol: float) -> float:
 
     Losses per half swing (blocks of :data:`SUSTAIN_BLOCK`) must fall no faster than the
     cube of the amplitude (air drag falls with its square, viscous damping with it, Coulomb
-    friction not at all): a last stretch of at least three blocks losing under a quarter of
-    that bound, when the bound is well above the resolution ``tol``, is sustained.
+    friction not at all): a last stretch of at least three blocks losing on average under a
+    quarter of that bound, when the bound adds up to well above the resolution ``tol`` over the
+    stretch, is sustained.
     """
     level, loss = _losses(values)
     if level.size < 5:
@@ -225,9 +220,43 @@ def levels_off(times: np.ndarray, values: np.ndarray, tol: float) -> float:
     for j in range(2, level.size - 2):
         bound = first * (level[j] / level[0]) ** 3
         tail = loss[j:]
-        if bound * SUSTAIN_BLOCK > 3 * tol and np.all(tail < 0.25 * bound) and tail.size >= 3:
+        if bound * SUSTAIN_BLOCK * tail.size > 3 * tol and np.mean(tail) < 0.25 * bound and tail.size >= 3:
             return float(times[j * SUSTAIN_BLOCK])
     return math.nan
+
+
+def rises(rec) -> list[float]:
+    """Start times (s) of the episodes in which the swing grows, from its envelope.
+
+    The envelope is half the range of the smoothed angle in windows of one and a half periods,
+    a quarter period apart (long enough to hold a whole swing of a pendulum whose period
+    shortens as it decays).  An episode starts when it climbs a quarter above its lowest value
+    since the last episode (and by more than the smoothed noise can), and ends once it has
+    fallen a tenth below its highest.  A release from a hold or from rest is one episode,
+    beating modes make one per beat.
+    """
+    t, xs = rec.t, rec.xs
+    width = 1.5 * rec.period
+    starts = np.arange(t[0], t[-1] - width + 1e-12, 0.25 * rec.period)
+    if starts.size < 3:
+        return []
+    lo = np.searchsorted(t, starts)
+    hi = np.searchsorted(t, starts + width)
+    env = np.array([0.5 * float(np.ptp(xs[a:b])) if b > a else 0.0 for a, b in zip(lo, hi)])
+    floor = 3.0 * rec.sigma + 2.0 * rec.quantum
+    out: list[float] = []
+    low, high, rising = env[0], env[0], False
+    for s, e in zip(starts, env):
+        if rising:
+            high = max(high, e)
+            if e < 0.9 * high:
+                rising, low = False, e
+        else:
+            low = min(low, e)
+            if e > 1.25 * low + floor:
+                rising, high = True, e
+                out.append(float(s))
+    return out
 
 
 def find_start(rec, turns: list[Turn], end: int, *, at_start: bool = False) -> Start:
@@ -249,12 +278,6 @@ def find_start(rec, turns: list[Turn], end: int, *, at_start: bool = False) -> S
     values = np.array([turns[i].value if turns[i].value is not None else np.nan for i in range(end)])
     tol = growth_tolerance(rec, values[first_ok:])
     grow = growth_steps(values[first_ok:], tol) + first_ok
-    episodes = _episodes(grow)
-    if len(episodes) >= BEAT_EPISODES:
-        when = ", ".join(f"{times[k]:.4g}" for k in episodes[:5])
-        raise DataError(f"the swing grows again {len(episodes)} times (after the turning points at t = {when} s): "
-                        "beating modes, a drive or repeated pushes, not one oscillator's free decay; cut the record to "
-                        "one decay with [recording] start and stop", rec.where)
     r = first_ok
     why = ""
     if grow.size:
@@ -272,7 +295,12 @@ def find_start(rec, turns: list[Turn], end: int, *, at_start: bool = False) -> S
         why = (f"the swing keeps its amplitude until t = {times[r + driven]:.4g} s and then decays at that same "
                "amplitude (a drive switched off)")
         r += driven
-    if r > first_ok:
+    pulled = r == first_ok + 1 and held_release(rec, turns[first_ok]) is not None
+    if pulled:
+        rec.notes.append(f"held at {math.degrees(values[first_ok]):.4g} deg, then moved to "
+                         f"{math.degrees(values[r]):.4g} deg by hand: the free swing starts at that turning point "
+                         f"(t = {times[r]:.4g} s), the reference")
+    elif r > first_ok:
         rec.notes.append(f"the record before t = {times[r]:.4g} s is not a free decay ({why}); the free decay is "
                          "taken from there")
     amplitude = 0.5 * abs(values[r + 1] - values[r]) if r + 1 < end else math.inf

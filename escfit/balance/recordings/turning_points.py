@@ -66,7 +66,7 @@ from ...core.errors import DataError
 from .centre import measure_centre
 from .extrema import (alternating_extrema, extrema_period, kinked_vertex, local_amplitude, resolution, smooth,
                       spectral_period, vertex_at)
-from .motion import INTERVAL_RANGE, Turn, faded_end, find_start, growth_tolerance, levels_off
+from .motion import BEAT_EPISODES, INTERVAL_RANGE, RELEASE_DEGREE, Turn, faded_end, find_start, growth_tolerance, levels_off, rises
 
 if TYPE_CHECKING:
     from .timeseries import TimeSeries
@@ -389,16 +389,34 @@ def _reference(rec: "_Record", turns: list[Turn]) -> tuple[float, float, list[Tu
     if not turns:
         raise DataError("no turning point found: the angle never comes back by more than "
                         f"{math.degrees(rec.step):.3g} deg", rec.where)
-    at_start = False
+    at_start = held = False
     if turns[0].time is None:  # the first extremum lies too close to the start for a local fit
         start = _turn_at_start(rec)
+        flat = _flat_start(rec) if start is None or start[2] != turns[0].is_max else None
+        if flat is not None:  # a held start fits a cubic's turn of the wrong kind
+            start = None
         if start is not None:
             at_start = True
             # the turn found may be the extremum after the first sample, not the sample itself
             rest = turns[1:] if start[2] == turns[0].is_max else turns[2:]
             turns = [Turn(0, 0, start[2], start[0], start[1])] + rest
+        elif flat is not None:
+            at_start = held = True
+            turns = [Turn(turns[0].first, turns[0].last, turns[0].is_max, flat[0], flat[1])] + turns[1:]
         else:
             turns = turns[1:]
+    episodes = rises(rec)
+    if len(episodes) >= BEAT_EPISODES:
+        when = ", ".join(f"{s:.4g}" for s in episodes[:6])
+        raise DataError(f"the swing grows again {len(episodes)} times (from about t = {when} s): beating modes, a "
+                        "drive or repeated pushes, not one oscillator's free decay; cut the record to one decay with "
+                        "[recording] start and stop", rec.where)
+    if len(episodes) >= 2:  # a decay, then the oscillator was set swinging again: the last one counts
+        later = [i for i, u in enumerate(turns) if u.time is not None and u.time >= episodes[-1] - 0.5 * rec.period]
+        if later and later[0] > 0:
+            rec.notes.append(f"the swing grows again from about t = {episodes[-1]:.4g} s (a second push or pull): "
+                             "the record before is left out")
+            turns, at_start, held = turns[later[0]:], False, False
     end = len(turns)
     while end and turns[end - 1].time is None:
         end -= 1
@@ -409,12 +427,27 @@ def _reference(rec: "_Record", turns: list[Turn]) -> tuple[float, float, list[Tu
         end = skipped + faded_end(rec, np.array([u.time for u in done]), np.array([u.value for u in done]))
     found = find_start(rec, turns, end, at_start=at_start)
     if at_start and found.first == 1 and found.kind == "turn":
-        rec.notes.append(f"the record starts at a turning point ({math.degrees(found.theta):.4g} deg on the sensor's "
-                         "scale)")
+        if held:
+            rec.notes.append(f"held at {math.degrees(found.theta):.4g} deg until the release at t = "
+                             f"{found.time:.4g} s")
+        else:
+            rec.notes.append(f"the record starts at a turning point ({math.degrees(found.theta):.4g} deg on the "
+                             "sensor's scale)")
     return found.time, found.theta, turns[found.first:end]
 
 
 turning_points = reduce_series  # the earlier name
+
+
+def _flat_start(rec: "_Record") -> tuple[float, float] | None:
+    """A record that starts flat (held, however briefly) and then moves: the release and the held angle."""
+    t, x = rec.t, rec.x
+    k = max(3, int(np.sum(t < t[0] + 0.02 * rec.period)))
+    level = float(np.median(x[:k]))
+    out = np.flatnonzero(np.abs(rec.xs - level) > rec.band)
+    if not out.size or out[0] < 3:
+        return None
+    return rec.refine(int(out[0]), int(out[0]), flat="left", degree=RELEASE_DEGREE)
 
 
 def _prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, where: str) -> _Record:
