@@ -11,8 +11,8 @@ import math
 
 import numpy as np
 
-__all__ = ["spectral_period", "extrema_period", "smooth", "resolution", "alternating_extrema", "kinked_vertex", "vertex_at",
-           "local_amplitude"]
+__all__ = ["spectral_period", "extrema_period", "power_near", "smooth", "resolution", "alternating_extrema", "kinked_vertex", "vertex_at",
+           "local_amplitude", "second_mode"]
 
 
 def spectral_period(t: np.ndarray, x: np.ndarray, *, min_cycles: float = 2.0) -> tuple[float, float]:
@@ -61,6 +61,23 @@ def spectral_period(t: np.ndarray, x: np.ndarray, *, min_cycles: float = 2.0) ->
     if median <= 0.0:
         return 1.0 / f, math.inf if p[k] > 0 else 0.0
     return 1.0 / f, float(p[k] / median)
+
+
+def power_near(t: np.ndarray, x: np.ndarray, periods: list[float], width: float = 0.15) -> list[float]:
+    """Largest periodogram power (as :func:`spectral_period` computes it) within ``+-width`` of
+    each frequency ``1/period``."""
+    from scipy.fft import next_fast_len, rfft, rfftfreq
+    from scipy.signal.windows import tukey
+
+    n = t.size
+    dt = (t[-1] - t[0]) / (n - 1)
+    xu = np.interp(t[0] + dt * np.arange(n), t, x)
+    s = np.arange(n) - 0.5 * (n - 1)
+    xu = xu - xu.mean() - s * (s @ xu) / (s @ s)
+    nfft = next_fast_len(8 * n)
+    power = np.abs(rfft(xu * tukey(n, 0.1), nfft)) ** 2
+    freq = rfftfreq(nfft, dt)
+    return [float(np.max(power[(freq > (1 - width) / p) & (freq < (1 + width) / p)], initial=0.0)) for p in periods]
 
 
 def extrema_period(t: np.ndarray, x: np.ndarray) -> float:
@@ -289,3 +306,42 @@ def local_amplitude(t: np.ndarray, x: np.ndarray, period: float) -> tuple[np.nda
         coef, *_ = np.linalg.lstsq(basis, x[a:b], rcond=None)
         amp[k] = math.hypot(coef[2], coef[3])
     return starts, amp
+
+
+def second_mode(t: np.ndarray, x: np.ndarray, period: float, *, min_ratio: float = 0.5,
+                harmonic_tol: float = 0.04) -> tuple[float, float]:
+    """The strongest faster oscillation than the one at ``period``: its period (s) and its peak
+    power relative to the main peak's.
+
+    Only frequencies above ``1/min_ratio`` times the main one are searched: nearer ones belong
+    to the main oscillation (a pendulum's frequency sweeps that far as its swing decays; two
+    close modes show as beats instead), slower ones are where holds, steps and drifts put their
+    power.  Whole multiples of the main frequency (the harmonics of an anharmonic swing, within
+    ``harmonic_tol``) are skipped.  ``(nan, 0)`` when there is none.
+    """
+    from scipy.fft import next_fast_len, rfft, rfftfreq
+    from scipy.signal.windows import tukey
+
+    n = t.size
+    dt = (t[-1] - t[0]) / (n - 1)
+    xu = np.interp(t[0] + dt * np.arange(n), t, x)
+    s = np.arange(n) - 0.5 * (n - 1)
+    xu = xu - xu.mean() - s * (s @ xu) / (s @ s)
+    nfft = next_fast_len(4 * n)
+    power = np.abs(rfft(xu * tukey(n, 0.1), nfft)) ** 2
+    freq = rfftfreq(nfft, dt)
+    f0 = 1.0 / period
+    main = float(np.max(power[(freq > f0 * 0.9) & (freq < f0 * 1.1)], initial=0.0))
+    if main <= 0.0:
+        return math.nan, 0.0
+    ratio = freq / f0
+    other = (freq <= 0.45 / dt) & (ratio > 1.0 / min_ratio)
+    other &= np.abs(ratio - np.round(ratio)) > harmonic_tol * np.maximum(np.round(ratio), 1.0)
+    if not other.any():
+        return math.nan, 0.0
+    p = np.where(other, power, 0.0)
+    peaks = np.flatnonzero((p[1:-1] >= p[:-2]) & (p[1:-1] >= p[2:]) & (p[1:-1] > 0)) + 1
+    if not peaks.size:
+        return math.nan, 0.0
+    k = peaks[np.argmax(p[peaks])]
+    return 1.0 / float(freq[k]), float(p[k] / main)

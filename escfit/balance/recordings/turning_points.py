@@ -64,8 +64,8 @@ import numpy as np
 
 from ...core.errors import DataError
 from .centre import measure_centre
-from .extrema import (alternating_extrema, extrema_period, kinked_vertex, local_amplitude, resolution, smooth,
-                      spectral_period, vertex_at)
+from .extrema import (alternating_extrema, extrema_period, kinked_vertex, local_amplitude, power_near, resolution,
+                      second_mode, smooth, spectral_period, vertex_at)
 from .motion import BEAT_EPISODES, INTERVAL_RANGE, RELEASE_DEGREE, Turn, faded_end, find_start, growth_tolerance, levels_off, rises
 
 if TYPE_CHECKING:
@@ -78,6 +78,9 @@ MIN_PROMINENCE = 50.0  # periodogram peak over median power; white noise alone g
 START_TURN_PERIODS = 0.03  # a turn this close before the first sample counts as a start at a turn
 MIN_TURNS = 3  # turning points (the reference included) a decay needs: one whole period
 MOVING_SIGMAS = 6.0  # a window's swing above this many of its noise scales is motion
+# a second oscillation with this share of the main one's spectral power is another mode (real
+# decays in the shared corpus stay under 0.04; a struck rod's second mode holds 0.53)
+SECOND_MODE_SHARE = 0.2
 
 
 @dataclass(frozen=True)
@@ -475,6 +478,12 @@ def _prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, wh
     if not math.isfinite(period) or prominence < MIN_PROMINENCE:
         raise DataError(f"no oscillation found: the spectrum has no clear peak (peak {prominence:.3g} times the median "
                         f"power, a decay gives over {MIN_PROMINENCE:g}); is this a free decay?", where)
+    other, share = second_mode(t, x, period)
+    if share >= SECOND_MODE_SHARE:
+        raise DataError(f"besides the swing of period {period:.4g} s the record holds a second oscillation of period "
+                        f"{other:.4g} s with {100 * share:.0f} % of its power: two modes (a structure's, a rod's) or "
+                        "two coupled oscillators, not one oscillator's free decay; isolate one mode before fitting",
+                        where)
     spp = period / dt
     if spp < MIN_SAMPLES_PER_PERIOD:
         raise DataError(f"the period of {period:.4g} s spans only {spp:.1f} samples; the turning-point fits need at "
@@ -497,12 +506,16 @@ def _working_period(t: np.ndarray, x: np.ndarray, min_cycles: float = 2.0) -> tu
 
     A hold or a step puts the periodogram's largest peak at a low frequency when the decay is
     short (a strongly damped one): the spacing of the larger extrema is then the better working
-    period (the turning times give the final one).
+    period (the turning times give the final one), provided the spectrum has a real peak there
+    too (a weak faster ripple on the main swing makes extrema of its own; it holds under a
+    thousandth of the power, a strongly damped swing next to a step a third).
     """
     period, prominence = spectral_period(t, x, min_cycles=min_cycles)
     check = extrema_period(t, x)
     if math.isfinite(check) and math.isfinite(period) and not 0.7 <= check / period <= 1.4:
-        period = check
+        there, here = power_near(t, x, [check, period])
+        if there >= 0.05 * here:
+            period = check
     return period, prominence
 
 
