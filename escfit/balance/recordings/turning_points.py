@@ -66,7 +66,7 @@ from ...core.errors import DataError
 from .centre import measure_centre
 from .extrema import (alternating_extrema, extrema_period, kinked_vertex, local_amplitude, power_near, resolution,
                       second_mode, smooth, spectral_period, vertex_at)
-from .motion import BEAT_EPISODES, INTERVAL_RANGE, RELEASE_DEGREE, Turn, faded_end, find_start, growth_tolerance, levels_off, rises
+from .motion import INTERVAL_RANGE, Turn, faded_end, growth_tolerance, levels_off, reference
 
 if TYPE_CHECKING:
     from .timeseries import TimeSeries
@@ -75,7 +75,6 @@ __all__ = ["TurningPoints", "reduce_series", "turning_points", "period_of", "MIN
 
 MIN_SAMPLES_PER_PERIOD = 16  # the local fits need some 5 samples each side of a turn
 MIN_PROMINENCE = 50.0  # periodogram peak over median power; white noise alone gives ~log2(n)
-START_TURN_PERIODS = 0.03  # a turn this close before the first sample counts as a start at a turn
 MIN_TURNS = 3  # turning points (the reference included) a decay needs: one whole period
 MOVING_SIGMAS = 6.0  # a window's swing above this many of its noise scales is motion
 # a second oscillation with this share of the main one's spectral power is another mode (real
@@ -291,7 +290,7 @@ def reduce_series(series: "TimeSeries", *, window: float | None = None, degree: 
     else:
         cands = alternating_extrema(rec.xs, rec.step, 0)
         turns = _refine_all(rec, cands, t_end)
-        t_ref, theta_ref, turns = _reference(rec, turns)
+        t_ref, theta_ref, turns = reference(rec, turns)
     times = [u.time for u in turns]
     values = [u.value for u in turns]
     stop_time = math.nan
@@ -387,70 +386,7 @@ def _given_release(rec: "_Record", release_s: float) -> tuple[float, float, list
     return float(release_s), theta, cands
 
 
-def _reference(rec: "_Record", turns: list[Turn]) -> tuple[float, float, list[Turn]]:
-    """Reference instant and angle (step 4) and the turning points after it."""
-    if not turns:
-        raise DataError("no turning point found: the angle never comes back by more than "
-                        f"{math.degrees(rec.step):.3g} deg", rec.where)
-    at_start = held = False
-    if turns[0].time is None:  # the first extremum lies too close to the start for a local fit
-        start = _turn_at_start(rec)
-        flat = _flat_start(rec) if start is None or start[2] != turns[0].is_max else None
-        if flat is not None:  # a held start fits a cubic's turn of the wrong kind
-            start = None
-        if start is not None:
-            at_start = True
-            # the turn found may be the extremum after the first sample, not the sample itself
-            rest = turns[1:] if start[2] == turns[0].is_max else turns[2:]
-            turns = [Turn(0, 0, start[2], start[0], start[1])] + rest
-        elif flat is not None:
-            at_start = held = True
-            turns = [Turn(turns[0].first, turns[0].last, turns[0].is_max, flat[0], flat[1])] + turns[1:]
-        else:
-            turns = turns[1:]
-    episodes = rises(rec)
-    if len(episodes) >= BEAT_EPISODES:
-        when = ", ".join(f"{s:.4g}" for s in episodes[:6])
-        raise DataError(f"the swing grows again {len(episodes)} times (from about t = {when} s): beating modes, a "
-                        "drive or repeated pushes, not one oscillator's free decay; cut the record to one decay with "
-                        "[recording] start and stop", rec.where)
-    if len(episodes) >= 2:  # a decay, then the oscillator was set swinging again: the last one counts
-        later = [i for i, u in enumerate(turns) if u.time is not None and u.time >= episodes[-1] - 0.5 * rec.period]
-        if later and later[0] > 0:
-            rec.notes.append(f"the swing grows again from about t = {episodes[-1]:.4g} s (a second push or pull): "
-                             "the record before is left out")
-            turns, at_start, held = turns[later[0]:], False, False
-    end = len(turns)
-    while end and turns[end - 1].time is None:
-        end -= 1
-    done = [u for u in turns[:end] if u.time is not None]
-    _check_decay(np.array([u.time for u in done]), np.array([u.value for u in done]), rec.where)
-    if done:  # the faded end first: extrema of the noise must not pass for a push
-        skipped = end - len(done)
-        end = skipped + faded_end(rec, np.array([u.time for u in done]), np.array([u.value for u in done]))
-    found = find_start(rec, turns, end, at_start=at_start)
-    if at_start and found.first == 1 and found.kind == "turn":
-        if held:
-            rec.notes.append(f"held at {math.degrees(found.theta):.4g} deg until the release at t = "
-                             f"{found.time:.4g} s")
-        else:
-            rec.notes.append(f"the record starts at a turning point ({math.degrees(found.theta):.4g} deg on the "
-                             "sensor's scale)")
-    return found.time, found.theta, turns[found.first:end]
-
-
 turning_points = reduce_series  # the earlier name
-
-
-def _flat_start(rec: "_Record") -> tuple[float, float] | None:
-    """A record that starts flat (held, however briefly) and then moves: the release and the held angle."""
-    t, x = rec.t, rec.x
-    k = max(3, int(np.sum(t < t[0] + 0.02 * rec.period)))
-    level = float(np.median(x[:k]))
-    out = np.flatnonzero(np.abs(rec.xs - level) > rec.band)
-    if not out.size or out[0] < 3:
-        return None
-    return rec.refine(int(out[0]), int(out[0]), flat="left", degree=RELEASE_DEGREE)
 
 
 def _prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, where: str) -> _Record:
@@ -547,37 +483,6 @@ def _resting_tail(rec: _Record) -> tuple[int, float]:
     return i, float(np.median(rec.x[i:]))
 
 
-def _turn_at_start(rec: _Record) -> tuple[float, float, bool] | None:
-    """Time, angle and kind (maximum?) of a turning point within a few hundredths of a period
-    of the first sample; or None.
-
-    A cubic through the first fifth of a period decides (its slope vanishes there); the
-    vertex itself comes from a one-sided polynomial without linear term whose vertex time is
-    searched within 0.02 periods of that (:func:`~escfit.balance.recordings.extrema.vertex_at`).
-    """
-    t, x, period = rec.t, rec.x, rec.period
-    sel = t <= t[0] + 0.2 * period
-    s = (t[sel] - t[0]) / period
-    if s.size < 6:
-        return None
-    poly = np.polynomial.Polynomial.fit(s, x[sel], 3).convert()
-    slope = poly.deriv()
-    roots = slope.roots()
-    roots = roots[np.isreal(roots)].real
-    roots = roots[(roots >= -START_TURN_PERIODS) & (roots <= 0.05)]
-    if not roots.size:
-        return None
-    r = float(roots[np.argmin(np.abs(roots))])
-    is_max = bool(slope.deriv()(r) < 0)
-    t_turn = float(t[0] + r * period)
-    near = t <= t_turn + rec.half_width()
-    if np.count_nonzero(near) < 6:
-        return t_turn, float(poly(r)), is_max
-    bounds = (max(-START_TURN_PERIODS * period, r * period - 0.02 * period), r * period + 0.02 * period)
-    sc, value = vertex_at(t[near] - t[0], x[near], rec.degree, search=bounds)
-    return float(t[0] + sc), value, is_max
-
-
 def _final_turn(rec: _Record, i_rest: int, rest: float, t_ref: float, theta_ref: float, times: list,
                 values: list) -> float:
     """Stop instant; appends the stop as the last turning point when a half swing runs into it."""
@@ -615,16 +520,3 @@ def _check_intervals(rec: _Record, times: np.ndarray, strict: bool) -> None:
     if strict:
         raise DataError(message + " (cut the record there, or pass strict=False to keep it with a note)", rec.where)
     rec.notes.append(message)
-
-
-def _check_decay(times: np.ndarray, values: np.ndarray, where: str) -> None:
-    """Refuse a swing that grows steadily (most peak-to-peak swings larger than the one before): not a free decay."""
-    size = np.abs(np.diff(values))
-    if size.size < 4:
-        return
-    m = max(1, size.size // 3)
-    first, last = float(np.mean(size[:m])), float(np.mean(size[-m:]))
-    if last > 1.2 * first and np.mean(np.diff(size) > 0) > 0.6:
-        raise DataError(f"the swing grows from {math.degrees(first):.4g} to {math.degrees(last):.4g} deg "
-                        f"(peak to peak) between t = {times[0]:.4g} s and {times[-1]:.4g} s: not a free decay "
-                        "(driven, or the escapement keeps it going?)", where)
