@@ -474,7 +474,8 @@ def _resting_tail(rec: _Record) -> tuple[int, float]:
         return n, math.nan
     starts, amp = local_amplitude(t[i:], rec.x[i:], rec.period)
     per_window = max(rec.period / rec.dt, 8.0)
-    floor = MOVING_SIGMAS * max(rec.sigma, 0.5 * rec.quantum) * math.sqrt(2.0 / per_window)
+    # an encoder without dither cannot show a swing under half a count, however many samples
+    floor = max(MOVING_SIGMAS * max(rec.sigma, 0.5 * rec.quantum) * math.sqrt(2.0 / per_window), 0.5 * rec.quantum)
     moving = np.flatnonzero(amp > floor)
     if moving.size:  # the swing goes on below the band: motion ends after the last window that shows it
         i = int(np.searchsorted(t, starts[moving[-1]] + rec.period))
