@@ -152,6 +152,10 @@ def verdict(problem, lsq: LeastSquaresResult, unresolved: list[Implied], *,
     structural = [n for n in lsq.names if not n.startswith("observation.")] or list(lsq.names)
     if unresolved:
         c = unresolved[0]
+        if c.name not in lsq.names:
+            return NOT_DETERMINED, structural, (
+                f"the parameters are NOT determined: {c.facts}, but the scene fixes {c.name} = {c.fitted:.5g} where "
+                f"the record implies {c.implied:.5g}: set it there, or let it vary")
         return NOT_DETERMINED, structural, (
             f"the parameters are NOT determined: {c.facts}, and the fit's {c.name} = {c.fitted:.5g} disagrees with "
             f"the {c.implied:.5g} it implies even when refitted from there: the scene does not describe this record "

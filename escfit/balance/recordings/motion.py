@@ -437,5 +437,5 @@ def _check_decay(times: np.ndarray, values: np.ndarray, where: str) -> None:
     first, last = float(np.mean(size[:m])), float(np.mean(size[-m:]))
     if last > 1.2 * first and np.mean(np.diff(size) > 0) > 0.6:
         raise DataError(f"the swing grows from {math.degrees(first):.4g} to {math.degrees(last):.4g} deg "
-                        f"(peak to peak) between t = {times[0]:.4g} s and {times[-1]:.4g} s: not a free decay "
-                        "(driven, or the escapement keeps it going?)", where)
+                        f"(peak to peak) between t = {times[0]:.4g} s and {times[-1]:.4g} s: a driven or sustained "
+                        "oscillation (a drive, an escapement, a sound), not a free decay", where)
