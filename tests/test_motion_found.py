@@ -176,3 +176,29 @@ def test_a_swing_that_levels_off_is_marked_sustained():
     y = 0.3 * np.cos(2 * math.pi * t / np.sqrt(1 - 1 / 400)) + 0.7 * y
     tp = reduce_series(series(t, y + 0.003 * rng.standard_normal(t.size)))
     assert math.isfinite(tp.sustained_from) and tp.sustained_from < 20.0
+
+
+def test_a_driven_oscillation_is_refused_as_driven():
+    """Driven 10 % above resonance from rest (Q = 20): the transient beats against the drive,
+    then the swing settles at the drive's steady amplitude for the rest of the record.  The
+    analysis marks where it settles, and a fit with a scene that has no drive refuses it."""
+    from escfit.core.scene import load_scene
+    from escfit.inference import make_problem
+
+    rng = np.random.default_rng(7)
+    t = np.arange(0.0, 120.0, 0.01)
+    w0, q, wd = 2 * math.pi, 20.0, 1.1 * 2 * math.pi
+    g = w0 / (2 * q)
+    amp = 1.0 / math.hypot(w0 * w0 - wd * wd, 2 * g * wd)
+    phase = math.atan2(2 * g * wd, w0 * w0 - wd * wd)
+    steady = amp * np.cos(wd * t - phase)
+    w1 = math.sqrt(w0 * w0 - g * g)
+    x0, v0 = -amp * math.cos(phase), -amp * wd * math.sin(phase)  # the transient cancels the start
+    transient = np.exp(-g * t) * (-x0 * np.cos(w1 * t) - (v0 + g * x0) / w1 * np.sin(w1 * t))
+    record = series(t, (steady + transient) / amp + 0.003 * rng.standard_normal(t.size))
+    tp = reduce_series(record)
+    assert 5.0 < tp.sustained_from < 30.0
+    scene = load_scene("s.toml", text='model = "balance"\n[oscillator]\nomega0 = { value = 6, vary = true, min = 3, '
+                                      'max = 9 }\n[effects.viscous]\nC = { value = 0.2, vary = true, min = 0, max = 2 }\n')
+    with pytest.raises(DataError, match=r"keeps its amplitude .* something drives it"):
+        make_problem(scene, record)

@@ -101,16 +101,16 @@ def jensen_first_period(res):
 
 
 DECAYS = [
-    Decay("encoder pendulum, 1 kHz, from 135 deg (jensen)", REAL / "encoder_pendulum_jensen" /
+    Decay("encoder pendulum, 1 kHz, from 135 deg (jensen)", OURS / "encoder_pendulum_jensen" /
           "pendulum_free_swing_data_02.txt", "encoder_pendulum_jensen.toml", 15,
           slow=True,
           reference=(("the source's zero-crossing period, 0.65 s (amplitude-dependent)",
                       lambda r: (measured_period(r), 0.65, 0.03)),
                      ("compute.py's decay of the first period (first two maxima)", jensen_first_period))),
-    Decay("bicycle wheel on a torsion rod, rate gyro", REAL / "gyro_torsion_resonance" /
+    Decay("bicycle wheel on a torsion rod, rate gyro", OURS / "gyro_torsion_resonance" /
           "bicycle-wheel-radial-inertia-rate-gyro-measurement.csv", "gyro_torsion_radial.toml", 10,
           reference=(("the source's period, 0.422 s", lambda r: (small_swing_period(r), 0.422, 0.002)),)),
-    Decay("bicycle wheel as a compound pendulum, rate gyro", REAL / "gyro_torsion_resonance" /
+    Decay("bicycle wheel as a compound pendulum, rate gyro", OURS / "gyro_torsion_resonance" /
           "bicycle-wheel-axial-inertia-rate-gyro-measurement.csv", "gyro_compound_axial.toml", 7,
           slow=True,
           reference=(("the source's period, 1.429 s", lambda r: (small_swing_period(r), 1.429, 0.005)),)),

@@ -38,7 +38,7 @@ from ...core.errors import DataError
 from .extrema import vertex_at
 
 __all__ = ["Turn", "Start", "reference", "faded_end", "growth_tolerance", "growth_steps", "find_start", "levels_off",
-           "rises",
+           "envelope", "rises", "steady_tail",
            "INTERVAL_RANGE", "HOLD_PERIODS"]
 
 INTERVAL_RANGE = (0.6, 1.6)  # admissible interval between turning points, in local half periods
@@ -230,24 +230,31 @@ def levels_off(times: np.ndarray, values: np.ndarray, tol: float) -> float:
     return math.nan
 
 
-def rises(rec) -> list[float]:
-    """Start times (s) of the episodes in which the swing grows, from its envelope.
+def envelope(rec) -> tuple[np.ndarray, np.ndarray]:
+    """Start times (s) and swing (rad) of windows of one and a half periods, a quarter apart.
 
-    The envelope is half the range of the smoothed angle in windows of one and a half periods,
-    a quarter period apart (long enough to hold a whole swing of a pendulum whose period
-    shortens as it decays).  An episode starts when it climbs a quarter above its lowest value
-    since the last episode (and by more than the smoothed noise can), and ends once it has
-    fallen a tenth below its highest.  A release from a hold or from rest is one episode,
-    beating modes make one per beat.
+    The swing is half the range of the smoothed angle in the window: long enough to hold a
+    whole swing of a pendulum whose period shortens as it decays, and blind to the frequency.
     """
     t, xs = rec.t, rec.xs
     width = 1.5 * rec.period
     starts = np.arange(t[0], t[-1] - width + 1e-12, 0.25 * rec.period)
-    if starts.size < 3:
-        return []
     lo = np.searchsorted(t, starts)
     hi = np.searchsorted(t, starts + width)
-    env = np.array([0.5 * float(np.ptp(xs[a:b])) if b > a else 0.0 for a, b in zip(lo, hi)])
+    return starts, np.array([0.5 * float(np.ptp(xs[a:b])) if b > a else 0.0 for a, b in zip(lo, hi)])
+
+
+def rises(rec) -> list[float]:
+    """Start times (s) of the episodes in which the swing grows, from its :func:`envelope`.
+
+    An episode starts when the envelope climbs a quarter above its lowest value since the last
+    episode (and by more than the smoothed noise can), and ends once it has fallen a tenth below
+    its highest.  A release from a hold or from rest is one episode, beating modes make one per
+    beat.
+    """
+    starts, env = envelope(rec)
+    if starts.size < 3:
+        return []
     floor = 3.0 * rec.sigma + 2.0 * rec.quantum
     out: list[float] = []
     low, high, rising = env[0], env[0], False
@@ -262,6 +269,39 @@ def rises(rec) -> list[float]:
                 rising, high = True, e
                 out.append(float(s))
     return out
+
+
+def steady_tail(rec) -> tuple[float, float, float]:
+    """Where the swing settles for good while a free decay could not: start (s), amplitude (rad)
+    and length (periods) of the final stretch of the :func:`envelope` that stays within 15 % of
+    itself; ``(nan, nan, 0)`` when there is none.
+
+    A free decay may slow down as it fades (air drag loses with the square of the speed), but
+    its logarithmic decrement cannot fall faster than the square of the amplitude: with the
+    decrement of the first three periods after the largest swing, ``d0`` at amplitude ``A0``, a
+    stretch at amplitude ``A`` must lose at least ``d0 (A/A0)^2`` per period.  A stretch of ten
+    periods or more that is expected to lose over a quarter of its amplitude that way and loses
+    under a quarter of that is kept going by something (a drive's steady state after its
+    transient, an escapement).
+    """
+    starts, env = envelope(rec)
+    if starts.size < 40:
+        return math.nan, math.nan, 0.0
+    k = env.size - 1
+    while k > 0 and np.max(env[k - 1:]) <= 1.15 * np.min(env[k - 1:]):
+        k -= 1
+    periods = (starts[-1] - starts[k]) / rec.period
+    level = float(np.mean(env[k:]))
+    top = int(np.argmax(env))
+    later = top + int(round(3 * 4))  # windows are a quarter period apart
+    if periods < 10 or level < 20 * (rec.sigma + rec.quantum) or later >= k:
+        return math.nan, math.nan, 0.0
+    d0 = math.log(env[top] / max(env[later], 1e-300)) / 3.0
+    expected = d0 * (level / env[top]) ** 2 * periods
+    observed = math.log(np.max(env[k:]) / max(np.min(env[k:]), 1e-300))
+    if expected > math.log(4.0 / 3.0) and observed < 0.25 * expected:
+        return float(starts[k]), level, periods
+    return math.nan, math.nan, 0.0
 
 
 def find_start(rec, turns: list[Turn], end: int, *, at_start: bool = False) -> Start:
@@ -358,6 +398,12 @@ def reference(rec, turns: list[Turn]) -> tuple[float, float, list[Turn]]:
     episodes = rises(rec)
     if len(episodes) >= BEAT_EPISODES:
         when = ", ".join(f"{s:.4g}" for s in episodes[:6])
+        settled, level, periods = steady_tail(rec)
+        if math.isfinite(settled):
+            raise DataError(f"the swing grows again {len(episodes)} times and from about t = {settled:.4g} s keeps an "
+                            f"amplitude of {math.degrees(level):.3g} deg for {periods:.0f} periods, to the end: a "
+                            "driven oscillation (a drive's steady state), not a free decay; a decay after the drive "
+                            "is switched off can be cut out with [recording] start and stop", rec.where)
         raise DataError(f"the swing grows again {len(episodes)} times (from about t = {when} s): beating modes, a "
                         "drive or repeated pushes, not one oscillator's free decay; cut the record to one decay with "
                         "[recording] start and stop", rec.where)

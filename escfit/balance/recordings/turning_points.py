@@ -66,7 +66,7 @@ from ...core.errors import DataError
 from .centre import measure_centre
 from .extrema import (alternating_extrema, extrema_period, kinked_vertex, local_amplitude, power_near, resolution,
                       second_mode, smooth, spectral_period, vertex_at)
-from .motion import INTERVAL_RANGE, Turn, faded_end, growth_tolerance, levels_off, reference
+from .motion import INTERVAL_RANGE, Turn, faded_end, growth_tolerance, levels_off, reference, steady_tail
 
 if TYPE_CHECKING:
     from .timeseries import TimeSeries
@@ -322,6 +322,8 @@ def reduce_series(series: "TimeSeries", *, window: float | None = None, degree: 
         rec.notes.append(f"motion stopped at t = {stop_time:.4g} s (resting {math.degrees(rest_theta - level):+.3g} "
                          "deg from the centre)")
     sustained = levels_off(all_t, all_v, growth_tolerance(rec, all_v))
+    if not math.isfinite(sustained):  # or settled after a larger transient: a drive's steady state
+        sustained = steady_tail(rec)[0]
     if math.isfinite(sustained):
         rec.notes.append(f"from t = {sustained:.4g} s the swing no longer decays as a free oscillator's would (it "
                          "keeps its amplitude): something keeps it going")
