@@ -134,6 +134,9 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
     lsq, fixes, unresolved = reconcile(problem, lsq, seed=seed, priors_count=method == "emcee")
     lsq, more = with_held_uncertainty(problem, lsq)
     fixes += more
+    if method == "emcee" and getattr(problem, "held", ()):
+        fixes.append(f"the posterior holds {', '.join(problem.held)} where the recording's own measurement puts it; "
+                     "its uncertainty is in the least-squares intervals but not in the posterior's")
     timings = {"least_squares_s": time.perf_counter() - clock}
     mc = None
     if method == "emcee":
