@@ -130,6 +130,15 @@ def _balance_reader(path):
     return read_recording(path)
 
 
+def _format_reader(spec=None):
+    """An instrument's or program's file read with the scene's [recording] options."""
+    def read(path):
+        from escfit.balance.recordings.detect import read_with_spec
+
+        return read_with_spec(path, spec)
+    return read
+
+
 def _friction_reader(path):
     from escfit.friction.readers import read_readings
 
@@ -160,6 +169,21 @@ DATA = [
     (DATASETS / "geneva" / "synthetic_four_pin_trace.csv", _geneva_reader),
     (DATASETS / "verge" / "m739_output_turns.csv", _verge_reader),
 ] + [(p, _balance_reader) for p in sorted((DATASETS / "monday1965" / "synthetic").glob("*.csv"))[:2]]
+
+
+def _format_specs():
+    import math
+
+    from escfit.balance.recordings.recording_spec import RecordingSpec
+
+    special = {"arduino_serial.txt": RecordingSpec(angle_unit="deg"), "phyphox_gyroscope.csv": RecordingSpec(
+        velocity_column=2), "timegrapher_slices.csv": RecordingSpec(bph=28800, lift_angle=math.radians(52.0))}
+    folder = DATASETS / "recordings" / "formats"
+    return [(p, _format_reader(special.get(p.name))) for p in sorted(folder.iterdir()) if p.suffix != ".py"] + \
+        [(DATASETS / "real" / "pohl_heilaut" / "raw" / "Dämpfung.trk", _format_reader())]
+
+
+DATA += _format_specs()
 
 HOSTILE_FIELDS = ["1e400", "nan", "inf", "-1e12", "1000000000", "1e19", "10" * 200, "load_g**9**9**9", '"', "",
                   "\x00", "9" * 5000, "9" * 200_000, "-0", "1,5", "\u00b0", "[[[[[[[[[[" * 200, "1" + "0" * 400,

@@ -3,7 +3,9 @@
 The import graph is built statically with :mod:`ast` from every ``.py`` file under
 ``escfit/``: module-level and function-level imports, relative ones resolved, ``from X import
 name`` counted as an edge to ``X.name`` when that is a module and to ``X`` otherwise.  Imports
-guarded by ``if TYPE_CHECKING:`` are ignored (they never run).  Importing a module runs its
+guarded by ``if TYPE_CHECKING:`` never run, so the layering check ignores them; the cycle check
+counts them (:data:`FULL_GRAPH`): a cycle hidden behind TYPE_CHECKING is still two modules that
+each need the other, and a reader of either must hold both in mind.  Importing a module runs its
 packages' ``__init__`` too, but that implicit step is not an edge: only what a file names is.
 Dynamic imports (``importlib.import_module`` of the scene's ``MODELS`` strings) are not seen.
 """
@@ -54,15 +56,16 @@ def _is_type_checking(test: ast.expr) -> bool:
         (isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING")
 
 
-def _imports(tree: ast.AST):
-    """Import and ImportFrom nodes anywhere in ``tree`` except under ``if TYPE_CHECKING:``."""
+def _imports(tree: ast.AST, type_checking: bool = False):
+    """Import and ImportFrom nodes anywhere in ``tree``; under ``if TYPE_CHECKING:`` only when
+    ``type_checking``."""
     stack = [tree]
     while stack:
         node = stack.pop()
         if isinstance(node, (ast.Import, ast.ImportFrom)):
             yield node
             continue
-        if isinstance(node, ast.If) and _is_type_checking(node.test):
+        if isinstance(node, ast.If) and _is_type_checking(node.test) and not type_checking:
             stack.extend(node.orelse)  # the else branch does run
             continue
         stack.extend(ast.iter_child_nodes(node))
@@ -79,13 +82,14 @@ def _known(name: str) -> str | None:
     return None
 
 
-def _edges_of(module: str, path: Path) -> set[str]:
-    """Modules of the package that ``module`` imports."""
+def _edges_of(module: str, path: Path, type_checking: bool = False) -> set[str]:
+    """Modules of the package that ``module`` imports (with ``type_checking``: also under
+    ``if TYPE_CHECKING:``)."""
     tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
     is_pkg = path.name == "__init__.py"
     here = module.split(".") if is_pkg else module.split(".")[:-1]  # the package relative imports start from
     out = set()
-    for node in _imports(tree):
+    for node in _imports(tree, type_checking):
         if isinstance(node, ast.Import):
             targets = [alias.name for alias in node.names]
         else:
@@ -105,9 +109,10 @@ def _edges_of(module: str, path: Path) -> set[str]:
     return out
 
 
-def import_graph() -> dict[str, set[str]]:
-    """Module -> the package's modules it imports."""
-    return {m: _edges_of(m, p) for m, p in MODULES.items()}
+def import_graph(type_checking: bool = False) -> dict[str, set[str]]:
+    """Module -> the package's modules it imports (``type_checking``: also those imported only
+    for type annotations)."""
+    return {m: _edges_of(m, p, type_checking) for m, p in MODULES.items()}
 
 
 def find_cycle(graph: dict[str, set[str]]) -> list[str] | None:
@@ -168,6 +173,7 @@ def layering_violations(graph: dict[str, set[str]]) -> set[tuple[str, str]]:
 
 
 GRAPH = import_graph()
+FULL_GRAPH = import_graph(type_checking=True)
 
 
 # -- tests -------------------------------------------------------------------------------------
@@ -183,8 +189,15 @@ def test_cycle_finder_finds_a_cycle():
     assert find_cycle({"a": {"b"}, "b": set()}) is None
 
 
+def test_type_checking_imports_are_seen():
+    tree = ast.parse("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    import a\nelse:\n    import b\n")
+    names = lambda nodes: sorted(n.names[0].name for n in nodes if isinstance(n, ast.Import))  # noqa: E731
+    assert names(_imports(tree)) == ["b"]
+    assert names(_imports(tree, type_checking=True)) == ["a", "b"]
+
+
 def test_no_import_cycles():
-    cycle = find_cycle(GRAPH)
+    cycle = find_cycle(FULL_GRAPH)
     assert cycle is None, "import cycle: " + " -> ".join(cycle)
 
 

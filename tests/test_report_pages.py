@@ -213,7 +213,7 @@ def test_corner_plot_of_six_parameters_fits_the_page():
 def test_markdown_writes_nothing_when_an_output_exists(fits, tmp_path):
     md = tmp_path / "r.md"
     make_report(fits["balance"], md, fmt="md")
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.md", "r_data_and_fit.png"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.md", "r_data_and_fit.png", "r_decrement_per_half_swing.png"]
     text = md.read_text()
     assert "![data and fit](r_data_and_fit.png)" in text
     assert text.startswith("# Unit 3 &lt;script&gt;") and "<script>" not in text.split("## Scene")[0]

@@ -75,6 +75,9 @@ def make_problem(scene, data, *, solver: str | None = None, solver_options: dict
         raise FitError("--unit selects a unit of a unit-curve file; this recording holds one unit",
                        getattr(data, "source", None))
     if isinstance(data, TimeSeries):
+        from .recordings.series import refuse_unless_angle
+
+        refuse_unless_angle(data)
         readings = spec.readings if spec is not None else "samples"
         problem = problem_from_series(sc, data, solver=solver, solver_options=options, readings=readings)
         problem.notes += _override_notes(sc, recording)
@@ -140,28 +143,34 @@ def _scene_notch_deg(sc) -> float | None:
 
 
 def _read_data(path, spec, fmt: str | None, notch_deg: float | None, default_notch_deg: float | None = None):
-    """Read a recording file: a known escfit format, else a raw table or MATLAB file."""
+    """Read a recording file: escfit's own formats, an instrument's or program's file, or a raw
+    table or MATLAB file (read with the scene's ``[recording]`` options)."""
     from .recordings.rawseries import read_raw_series
-    from .recordings.detect import detect_format, read_recording
+    from .recordings.detect import detect_format, read_recording, read_with_spec
+    from .recordings.formats_list import ESCFIT_FORMATS
 
-    if spec is not None or fmt == "raw":
-        return read_raw_series(path, spec)
+    fmt = fmt or (spec.format if spec is not None else None)
+    if fmt == "raw" or (spec is not None and fmt not in ESCFIT_FORMATS):
+        return read_with_spec(path, spec, fmt)
     detected = fmt
     if detected is None:
         try:
             detected = detect_format(path)
         except DataError as exc:
+            if "several formats" in exc.message:
+                raise
             try:
                 return read_raw_series(path, None)
             except DataError as raw_exc:
                 if "binary" in exc.message or "empty" in exc.message:
                     raise exc from None
                 raise raw_exc from None
+    if detected not in ESCFIT_FORMATS:
+        return read_with_spec(path, spec, detected)
     options = {}
     if detected == "unit-curve":
         options = {"notch_deg": notch_deg, "default_notch_deg": default_notch_deg}
     return read_recording(path, detected, **options)
-
 
 
 class BalanceFamily:
@@ -183,8 +192,12 @@ class BalanceFamily:
         from .recordings.rawseries import read_raw_series
         from .recordings.detect import read_recording
 
-        names = ("unit-curve", "pulses", "timegrapher", "tg-applog", "timeseries")
-        return {**{n: partial(read_recording, fmt=n) for n in names}, "raw": read_raw_series}
+        from .recordings.detect import read_with_spec
+        from .recordings.formats_list import ESCFIT_FORMATS, FORMAT_NAMES
+
+        readers = {n: partial(read_recording, fmt=n) for n in ESCFIT_FORMATS}
+        readers.update({n: partial(read_with_spec, spec=None, fmt=n) for n in FORMAT_NAMES if n not in ESCFIT_FORMATS})
+        return {**readers, "raw": read_raw_series}
 
     def detect(self, path) -> str:
         from .recordings.detect import detect_format
@@ -199,10 +212,14 @@ class BalanceFamily:
         return make_problem(scene, data, **options)
 
     def figures(self, result) -> dict[str, bytes]:
-        """Data against the model, drawn by the kind of the readings (see :mod:`escfit.balance.figures`)."""
+        """Data against the model, drawn by the kind of the readings (see :mod:`escfit.balance.figures`),
+        and the decrement per half swing of a decay (:mod:`escfit.balance.decrement_figure`)."""
+        from .decrement_figure import decrement_figure
         from .figures import figures
 
-        return figures(result)
+        out = figures(result)
+        decrement = decrement_figure(result)
+        return out if decrement is None else {**out, "decrement per half swing": decrement}
 
 
 FAMILY = BalanceFamily()

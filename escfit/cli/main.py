@@ -36,6 +36,7 @@ __all__ = ["main", "cli"]
 # Commands that live beside the features they drive, imported only when used.
 LAZY_COMMANDS = {
     "bench": "escfit.cli.bench:bench",
+    "compare": "escfit.cli.compare:compare",
     "fit-many": "escfit.cli.study:fit_many",
     "examples": "escfit.cli.examples:examples",
     "summary": "escfit.cli.summary:summary",
@@ -368,10 +369,9 @@ def _read_recipe(path: Path) -> dict:
 @click.option("--burn", type=click.IntRange(0), default=None)
 @click.option("--unit", "unit_id", default=None, help="Fit only this unit of a multi-unit file.")
 @click.option("--material", default=None, help="friction_rig: fit only this material of a rig readings file.")
-@click.option("--format", "fmt", type=click.Choice(["unit-curve", "pulses", "timegrapher", "tg-applog", "timeseries", "raw",
-                                                   "speed-trace", "terminal-speeds"]),
-              default=None, help="Recording format (detected from the file's content; raw: a table or .mat file read "
-              "with the [recording] options; speed-trace and terminal-speeds: Geneva data).")
+@click.option("--format", "fmt", default=None, help="Recording format (detected from the file's content; raw: a table or .mat file read "
+              "with the [recording] options; phyphox, cassy, lvm, ...: an instrument's or program's file, see "
+              "docs/recordings.md; speed-trace and terminal-speeds: Geneva data).")
 @click.option("--time-column", default=None, help="[recording] time_column: name or 1-based position.")
 @click.option("--sample-rate", default=None, help="[recording] sample_rate, e.g. '500 Hz' (instead of a time column).")
 @click.option("--angle-column", default=None, help="[recording] angle_column: name or 1-based position.")

@@ -21,6 +21,7 @@ from ..core.provenance import dependency_versions
 from ..core.scene import load_scene
 from ..likelihood.problem import Problem
 from ..results import SCHEMA_VERSION, FitResult, clean_attrs, write_fit
+from .information import information_attrs
 from .identifiability import bound_warnings, correlation_warnings, ridge_warnings, sloppy_directions
 from .lsq import LeastSquaresResult, least_squares
 from .mcmc import McmcResult, run_emcee
@@ -237,7 +238,8 @@ def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None,
                       {"units": reading_units, "long_name": "expected reading at the optimum"})},
         coords={"parameter": lsq.names, "parameter_b": lsq.names, **obs_coords},
         attrs=clean_attrs({"chisqr": lsq.chisqr, "redchi": lsq.redchi, "sigma_hat": lsq.sigma_hat,
-                           "n_data": lsq.n_data, "aic": lsq.aic(), "bic": lsq.bic(), "success": lsq.success,
+                           "n_data": lsq.n_data, "aic": lsq.aic(), "bic": lsq.bic(), **information_attrs(problem, lsq),
+                           "success": lsq.success,
                            "message": lsq.message, "n_starts": lsq.n_starts, "noise_profiled": lsq.profiled,
                            "interval_method": "delta method in log(x - min), -log(max - x) or logit coordinates "
                                               "(identity when unbounded); one-sided on a bound"}))

@@ -26,11 +26,10 @@ import numpy as np
 import xarray as xr
 
 from ..core.errors import ResultsError
-from ..results import SCHEMA_VERSION, clean_attrs
+from ..inference.compare import K_GOOD as K_BAD
+from ..results import clean_attrs, load_fit
 
 __all__ = ["ModelComparison", "compare_models", "decay_residuals", "chapter5_contrast", "unit_files"]
-
-K_BAD = 0.7  # Pareto k above which a reading's LOO estimate is unreliable
 
 
 def unit_files(results: str | Path, units: Sequence[str] | None = None) -> dict[str, Path]:
@@ -57,16 +56,10 @@ def _open_group(path: Path, group: str | None) -> xr.Dataset:
 
 
 def _loo(path: Path):
-    import arviz as az
+    """PSIS-LOO of one results file (see :func:`escfit.inference.compare.psis_loo`)."""
+    from ..inference.compare import psis_loo
 
-    root = _open_group(path, None)
-    if root.attrs.get("schema_version") != SCHEMA_VERSION:
-        raise ResultsError(f"not an escfit fit file of schema {SCHEMA_VERSION!r}", str(path))
-    idata = az.InferenceData(posterior=_open_group(path, "posterior"),
-                             log_likelihood=_open_group(path, "log_likelihood"))
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # high Pareto k is reported in the table instead
-        return az.loo(idata, pointwise=True)
+    return psis_loo(load_fit(path))
 
 
 @dataclass

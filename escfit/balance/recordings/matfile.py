@@ -41,7 +41,7 @@ import numpy as np
 from ...core.errors import DataError
 from .rawsteps import MIN_SAMPLES, build_series
 from .recording_spec import COUNT_WORDS, RecordingSpec, rad_per_unit
-from .timeseries import TimeSeries
+from .series import TimeSeries
 
 __all__ = ["read_mat_series", "load_mat_variables"]
 

@@ -27,7 +27,7 @@ from .matfile import read_mat_series
 from .rawsteps import FILE_OPTIONS, MIN_SAMPLES, build_series, file_options, merge_file_meta, notes_of, regular_times
 from .rawtable import read_raw_table
 from .recording_spec import RecordingSpec
-from .timeseries import TimeSeries
+from .series import TimeSeries
 
 __all__ = ["read_raw_series", "build_series", "regular_times", "notes_of", "merge_file_meta", "file_options",
            "FILE_OPTIONS", "MIN_SAMPLES"]

@@ -24,7 +24,7 @@ import numpy as np
 
 from ...core.errors import DataError, SceneError
 from .recording_spec import RecordingSpec, parse_option
-from .timeseries import TimeSeries
+from .series import TimeSeries
 
 __all__ = ["build_series", "regular_times", "notes_of", "merge_file_meta", "file_options", "unwrap_angles",
            "FILE_OPTIONS", "MIN_SAMPLES"]
@@ -96,13 +96,15 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
         bad = np.flatnonzero(~np.isfinite(values))
         if bad.size:
             raise DataError(f"{name} value {float(values[bad[0]])!r} is not a finite number", where_of_row(int(bad[0])))
+    if np.size(time) < 2:
+        raise DataError(f"only {np.size(time)} samples; a decay needs at least {MIN_SAMPLES}", source)
     time = regular_times(np.asarray(time, dtype=float), where_of_row, notes)
     theta = np.asarray(theta, dtype=float)
     if meta.get("angle_unit_assumed") and np.ptp(theta) > 2.0 * math.pi:
         raise DataError(f"the angles span {np.ptp(theta):.4g} with no unit given (rad assumed): more than a turn, so "
                         "not radians of a swinging balance; if they are degrees set [recording] angle_unit = \"deg\" "
                         "(or --angle-unit deg)", source)
-    if spec.readings == "samples":
+    if spec.readings == "samples" and spec.quantity == "angle":
         theta = unwrap_angles(theta, notes)
     if spec.start is not None or spec.stop is not None:
         lo = -math.inf if spec.start is None else spec.start

@@ -13,6 +13,14 @@ the angle, in which units, and which part of the record to keep::
     start = "13 s"                 # optional window, in the file's clock
     stop = "60 s"
     readings = "samples"           # or "amplitudes": one amplitude per half swing per row
+    velocity_column = "Gyroscope x (rad/s)"   # instead of angle_column: an angular velocity
+    velocity_unit = "rad/s"        # any pint angular velocity; or "V" with scale in rad/s per V
+    displacement_column = "Position (m)"      # instead of angle_column: a linear coordinate
+    displacement_unit = "m"        # any pint length; or "V" with scale in m per V
+    format = "phyphox"             # the file's format where detection cannot decide (see detect.FORMATS)
+    run = 2                        # which run of a file holding several (CASSY, PASCO, Vernier), from 1
+    lift_angle = "52 deg"          # timegrapher files that do not say the lift angle set
+    bph = 28800                    # timegrapher files that do not say the beat rate
 
 Every key is optional; what is not given is detected from the file where that is safe.
 The command line overrides the table key by key (:func:`merge_spec`).
@@ -72,6 +80,22 @@ class RecordingSpec:
         ``"samples"`` (default): the angle sampled in time; ``"amplitudes"``: each row is
         already the amplitude of one half swing (a pointer read at every turning point), row 0
         being the release.
+    velocity_column, displacement_column : str, int or None
+        Instead of ``angle_column``: a column holding an angular velocity or a linear
+        displacement (the series' ``quantity``).
+    velocity_unit, displacement_unit : str or None
+        Unit of ``raw * scale``: a pint angular velocity (rad/s, deg/s, rpm) or length (m, mm);
+        a voltage (V, mV) means the sensor's reading, and ``scale`` (required) is then the SI
+        value per that unit (rad/s per V, m per V).
+    format : str or None
+        The file's format (one of :data:`escfit.balance.recordings.detect.FORMATS`) where detection
+        cannot decide.
+    run : int or None
+        Which run (from 1) of a file holding several side by side (CASSY, PASCO, Vernier).
+    lift_angle : float or None
+        Lift angle set on a timegrapher, rad, for files that do not record it.
+    bph : int or None
+        Beats per hour of the watch, for timegrapher files that do not record it.
     """
 
     time_column: Column | None = None
@@ -83,6 +107,35 @@ class RecordingSpec:
     start: float | None = None
     stop: float | None = None
     readings: str = "samples"
+    velocity_column: Column | None = None
+    velocity_unit: str | None = None
+    displacement_column: Column | None = None
+    displacement_unit: str | None = None
+    format: str | None = None
+    run: int | None = None
+    lift_angle: float | None = None
+    bph: int | None = None
+
+    @property
+    def quantity(self) -> str:
+        """What the chosen column measures: ``"angle"``, ``"angular_velocity"`` or ``"displacement"``."""
+        if self.velocity_column is not None or (self.velocity_unit is not None and self.displacement_column is None):
+            return "angular_velocity"
+        if self.displacement_column is not None or self.displacement_unit is not None:
+            return "displacement"
+        return "angle"
+
+    @property
+    def signal_column(self) -> Column | None:
+        """The column of the chosen quantity (``None``: detect it)."""
+        return {"angle": self.angle_column, "angular_velocity": self.velocity_column,
+                "displacement": self.displacement_column}[self.quantity]
+
+    @property
+    def signal_unit(self) -> str | None:
+        """The unit option of the chosen quantity."""
+        return {"angle": self.angle_unit, "angular_velocity": self.velocity_unit,
+                "displacement": self.displacement_unit}[self.quantity]
 
     @classmethod
     def from_options(cls, **options: Any) -> RecordingSpec:
@@ -131,7 +184,10 @@ def _parse_unit(text: str, where: str):
     try:
         q = ureg.parse_expression(text.strip())
     except Exception:
-        raise DataError(f"unknown unit {text!r}", where) from None
+        try:  # free-text unit labels (LabVIEW's Y_Unit_Label "Deg", "Sec") in another case
+            q = ureg.parse_expression(text.strip().lower())
+        except Exception:
+            raise DataError(f"unknown unit {text!r}", where) from None
     if not hasattr(q, "units"):
         raise DataError(f"{text!r} is a number, not a unit", where)
     return q
@@ -282,6 +338,44 @@ def _angle_unit(value: Any, where: str, cli: bool) -> str:
     return value.strip()
 
 
+def _signal_unit(dimension: str, what: str):
+    def parse(value: Any, where: str, cli: bool) -> str:
+        if isinstance(value, str) and safe_unit_text(value):
+            try:
+                q = ureg.parse_expression(value.strip())
+                dim = q.dimensionality if hasattr(q, "dimensionality") else None
+            except Exception:
+                dim = None
+            if dim is not None and (dim == ureg.parse_expression(dimension).dimensionality or
+                                    dim == ureg.volt.dimensionality):
+                return value.strip()
+        raise SceneError(f"expected {what} (e.g. {dimension}) or a voltage (V, mV) with scale, got {value!r}", where)
+    return parse
+
+
+def _format(value: Any, where: str, cli: bool) -> str:
+    from .formats_list import FORMAT_NAMES
+
+    if value not in FORMAT_NAMES:
+        raise SceneError(f"unknown format {value!r}; one of {', '.join(FORMAT_NAMES)}", where)
+    return value
+
+
+def _run(value: Any, where: str, cli: bool) -> int:
+    if cli and isinstance(value, str) and value.strip().isdigit():
+        value = int(value)
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 10000:
+        raise SceneError(f"run counts from 1, got {value!r}", where)
+    return value
+
+
+def _lift(value: Any, where: str, cli: bool) -> float:
+    v = _quantity(value, "angle", where) if isinstance(value, str) else math.radians(_number(value, where, cli))
+    if not math.radians(10.0) <= v <= math.radians(90.0):
+        raise SceneError(f"a lift angle lies within 10-90 deg, got {value!r} (a number is in deg)", where)
+    return v
+
+
 _PARSE: dict[str, Callable[[Any, str, bool], Any]] = {
     "time_column": _column,
     "sample_rate": lambda v, w, cli: _positive(v, "frequency", w),
@@ -292,7 +386,23 @@ _PARSE: dict[str, Callable[[Any, str, bool], Any]] = {
     "start": lambda v, w, cli: _quantity(v, "time", w),
     "stop": lambda v, w, cli: _quantity(v, "time", w),
     "readings": lambda v, w, cli: _readings(v, w),
+    "velocity_column": _column,
+    "velocity_unit": _signal_unit("rad/s", "an angular velocity unit"),
+    "displacement_column": _column,
+    "displacement_unit": _signal_unit("m", "a length unit"),
+    "format": _format,
+    "run": _run,
+    "lift_angle": _lift,
+    "bph": lambda v, w, cli: _bph(v, w, cli),
 }
+
+
+def _bph(value: Any, where: str, cli: bool) -> int:
+    if cli and isinstance(value, str) and value.strip().isdigit():
+        value = int(value)
+    if isinstance(value, bool) or not isinstance(value, int) or not 3600 <= value <= 172800:
+        raise SceneError(f"bph is a whole number of beats per hour in 3600-172800, got {value!r}", where)
+    return value
 
 
 def _readings(value: Any, where: str) -> str:
@@ -315,6 +425,19 @@ def _check(spec: RecordingSpec, where_of: Callable[[str], str]) -> RecordingSpec
                          where_of("counts_per_turn"))
     if counts and spec.counts_per_turn is None:
         raise SceneError("angle_unit = 'counts' needs counts_per_turn", where_of("angle_unit"))
+    chosen = [k for k in ("angle_column", "velocity_column", "displacement_column") if getattr(spec, k) is not None]
+    if len(chosen) > 1:
+        raise SceneError(f"give one of angle_column, velocity_column, displacement_column, not {' and '.join(chosen)}",
+                         where_of(chosen[-1]))
+    for unit_key, col_key in (("velocity_unit", "velocity_column"), ("displacement_unit", "displacement_column")):
+        if getattr(spec, unit_key) is not None and spec.quantity != col_key.split("_")[0].replace("velocity",
+                                                                                              "angular_velocity"):
+            raise SceneError(f"{unit_key} goes with {col_key}", where_of(unit_key))
+        unit = getattr(spec, unit_key)
+        if unit is not None and ureg.parse_expression(unit).dimensionality == ureg.volt.dimensionality \
+                and spec.scale is None:
+            raise SceneError(f"{unit_key} = {unit!r} is the sensor's reading: give scale, the SI value per {unit} "
+                             f"({'rad/s' if col_key.startswith('velocity') else 'm'} per {unit})", where_of(unit_key))
     if spec.start is not None and spec.stop is not None and not spec.start < spec.stop:
         raise SceneError(f"start ({spec.start:g} s) must come before stop ({spec.stop:g} s)", where_of("stop"))
     return spec
@@ -380,6 +503,9 @@ def merge_spec(spec: RecordingSpec | None, *, where: str = "command line", **ove
         base = replace(base, time_column=None)
     if "time_column" in given:
         base = replace(base, sample_rate=None)
+    columns = ("angle_column", "velocity_column", "displacement_column")
+    if any(k in given for k in columns):  # the command line's column replaces the scene's, whatever its quantity
+        base = replace(base, **{k: None for k in columns if k not in given})
     unit = given.get("angle_unit")
     if unit is not None and unit.lower() not in COUNT_WORDS and "counts_per_turn" not in given:
         base = replace(base, counts_per_turn=None)

@@ -50,7 +50,7 @@ from ...core.errors import DataError
 from .sniff import file_kind
 from .timegrapher import CSV_COLUMNS, TimegrapherRecording
 
-__all__ = ["read_tg_applog", "sniff_tg_applog", "is_steady_state", "amplitude_drift", "FORMAT", "STEADY_STATE_WARNING"]
+__all__ = ["read_tg_applog", "applog_recording", "sniff_tg_applog", "is_steady_state", "amplitude_drift", "FORMAT", "STEADY_STATE_WARNING"]
 
 FORMAT = "tg-applog"
 STEADY_STATE_WARNING = ("a steady-state record fixes only the balance of C, R and X; a free decay (let down the "
@@ -245,13 +245,26 @@ def read_tg_applog(path: str | Path) -> TimegrapherRecording:
     where, kind = str(path), file_kind(path)
     if kind != "text":
         raise DataError(f"{kind} file, not a timegrapher app log", where)
-    raw, h, header, cols, given, meta, rows, parsed, notes, comma = _table(path)
+    return applog_recording(where, *_table(path))
+
+
+def applog_recording(where: str, raw: bytes, h: int, header: list[str], cols: dict, given: dict, meta: dict,
+                     rows: list, parsed: list[dict], notes: list[str], comma: bool, *,
+                     fmt: str = FORMAT) -> TimegrapherRecording:
+    """A TimegrapherRecording from a display log's parsed rows (shared by the app-log readers).
+
+    ``cols`` maps roles (time, rate, amplitude, beat_error, bph) to ``(field index, factor)``,
+    ``parsed`` holds each row's values by role (and ``valid``, ``clock``), ``rows`` the
+    ``(line, fields)`` pairs, ``given`` the settings ``{key: (value, where)}``.
+    """
     ti, clock = cols["time"][0], parsed[0]["clock"]
     t = np.array([r["time"] for r in parsed])
     if clock:  # a time of day runs past midnight (a full date needs no help)
         t = t + 86400.0 * np.concatenate([[0], np.cumsum(np.diff(t) < -43200.0)])
     origin, t = t[0], t - t[0]
-    bad = np.flatnonzero((np.diff(t) <= 0) | [r["clock"] != clock for r in parsed[1:]])
+    if len(parsed) < 2:
+        raise DataError(f"need at least 2 rows under the header (line {h + 1}), found {len(parsed)}", where)
+    bad = np.flatnonzero((np.diff(t) <= 0) | np.array([r["clock"] != clock for r in parsed[1:]], dtype=bool))
     if bad.size:
         k = int(bad[0]) + 1
         raise DataError(f"time {rows[k][1][ti]!r} does not come after {rows[k - 1][1][ti]!r}; rows must be in time "
@@ -287,7 +300,8 @@ def read_tg_applog(path: str | Path) -> TimegrapherRecording:
         if not release < t[idx[0]]:
             raise DataError(f"release {value!r} does not come before the first kept row (line {rows[idx[0]][0]})", at)
     tk = t[idx]
-    k, per_update, period = _count_beats(tk, [rows[i][0] for i in idx], bph, where, header[ti])
+    rates = np.array([parsed[i].get("rate", math.nan) for i in idx])
+    k, per_update, period = _count_beats(tk, [rows[i][0] for i in idx], bph, where, header[ti], rates, notes)
     value, at = given.get("averaging", (f"{per_update} beats", where))  # beats a reading averages (at least 2)
     avg = re.fullmatch(r"([0-9.]+)\s*(beats?|s|sec|seconds)", value.lower())
     if not avg:
@@ -318,7 +332,7 @@ def read_tg_applog(path: str | Path) -> TimegrapherRecording:
     return TimegrapherRecording(grid[heard], (j % 2 == 0)[heard], amp_time if a.size else np.zeros(0), a,
                                 math.radians(lift), int(bph), (m - 0.5) * period, "centre", 10.0 ** -max(decimals),
                                 (0.0, math.inf), False, release, per_row["rate"], per_row["beat_error"], math.nan,
-                                FORMAT, where, hashlib.sha256(raw).hexdigest(), meta)
+                                fmt, where, hashlib.sha256(raw).hexdigest(), meta)
 
 
 def _bph(setting: tuple[str, str] | None, column: set, at: str, h: int) -> float:
@@ -338,10 +352,31 @@ def _bph(setting: tuple[str, str] | None, column: set, at: str, h: int) -> float
     return bph
 
 
-def _count_beats(t: np.ndarray, lines: list[int], bph: float, where: str, col: str):
-    """Beat index of each kept row (the first 0), beats per update and the typical beat period."""
+#: Rows further apart than this many beats are long-window readings (a run-down log): the beats
+#: between them are counted from the logged rate, not checked to fall on whole beats.
+LONG_WINDOW_BEATS = 20
+
+
+def _count_beats(t: np.ndarray, lines: list[int], bph: float, where: str, col: str,
+                 rate: np.ndarray | None = None, notes: list[str] | None = None):
+    """Beat index of each kept row (the first 0), beats per update and the typical beat period.
+
+    Rows a few beats apart fall on beats (checked).  Rows many beats apart (each a window of
+    minutes, as in a run-down log) follow the logged rate: a watch gaining ``r`` s/day beats every
+    ``(3600/bph) / (1 + r/86400)`` s, and the beats between rows are that interval's count.
+    """
     d = np.diff(t)
     typical = float(np.median(d)) * bph / 3600.0
+    if typical > LONG_WINDOW_BEATS:
+        nominal = 3600.0 / bph
+        r = np.nan_to_num(np.asarray(rate if rate is not None else np.zeros(t.size), dtype=float)[1:], nan=0.0)
+        period = nominal / (1.0 + r / 86400.0)
+        k = np.round(np.concatenate([[0.0], np.cumsum(d / period)])).astype(np.int64)
+        if notes is not None:
+            follows = "the logged rate" if rate is not None and np.isfinite(rate).any() else "the nominal beat"
+            notes.append(f"rows are some {typical:.0f} beats apart (long windows): the beats between them are counted "
+                         f"from {follows}, not required to fall on whole beats")
+        return k, max(1, round(typical)), float(np.median(d)) / typical
     per_update = max(1, round(typical))
     if abs(typical / per_update - 1.0) > 0.1:
         raise DataError(f"rows are typically {np.median(d):.4g} s apart, {typical:.2f} beats at {bph:g} bph: not a "

@@ -234,11 +234,14 @@ def read_tg_json(path: str | Path) -> TimegrapherRecording:
         raise DataError("expected a list of true/false", f"{where} [beats.tictoc]")
     if len(tictoc) != beats.size:
         raise DataError(f"{len(tictoc)} tictoc flags for {beats.size} beats", f"{where} [beats.tictoc]")
-    la = number("amplitude.liftangle")
-    if not 10.0 <= la <= 90.0:
-        raise DataError(f"lift angle {la!r} deg lies outside tg's 10-90 deg", f"{where} [amplitude.liftangle]")
-    amp_t = numbers("amplitude.times", increasing=True)
-    values = numbers("amplitude.values")
+    if "amplitude" in doc and doc["amplitude"] is None:  # tg's dump_to_json writes null without an amplitude
+        la, amp_t, values = math.nan, np.zeros(0), np.zeros(0)
+    else:
+        la = number("amplitude.liftangle")
+        if not 10.0 <= la <= 90.0:
+            raise DataError(f"lift angle {la!r} deg lies outside tg's 10-90 deg", f"{where} [amplitude.liftangle]")
+        amp_t = numbers("amplitude.times", increasing=True)
+        values = numbers("amplitude.values")
     if values.size != amp_t.size:
         raise DataError(f"{values.size} amplitude values for {amp_t.size} times", f"{where} [amplitude.values]")
     zero = np.flatnonzero(values == 0)

@@ -19,7 +19,6 @@ turns its result into amplitude readings per half swing for the unit-curve fit.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -27,38 +26,13 @@ import numpy as np
 from ...core.errors import DataError
 from ...core.units import ureg
 from ...core.csvtable import read_table
+from .series import TimeSeries
 from .sniff import canonical_header, did_you_mean, refuse_unless_csv
 from .turning_points import TurningPoints, reduce_series, turning_points
 from .unit_curve import UnitCurve
 
 __all__ = ["TimeSeries", "TurningPoints", "read_timeseries", "write_timeseries", "reduce_series", "turning_points",
            "timeseries_to_unit_curve"]
-
-
-@dataclass
-class TimeSeries:
-    """A sampled balance angle.
-
-    Attributes
-    ----------
-    time : ndarray
-        Sample times, s (strictly increasing).
-    theta : ndarray
-        Balance angle, rad (signed; a sensor's zero offset is still in it).
-    release_s : float
-        Release instant, s (``nan``: found from the record, see
-        :func:`~escfit.balance.recordings.turning_points.reduce_series`).
-    source, sha256, meta
-        File name, content hash and ``# key: value`` metadata.
-    """
-
-    time: np.ndarray
-    theta: np.ndarray
-    release_s: float = math.nan
-    source: str = ""
-    sha256: str = ""
-    meta: dict = field(default_factory=dict)
-    kind = "timeseries"
 
 
 def read_timeseries(path: str | Path) -> TimeSeries:

@@ -58,7 +58,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -67,9 +66,7 @@ from .centre import measure_centre
 from .extrema import (alternating_extrema, extrema_period, kinked_vertex, local_amplitude, power_near, resolution,
                       second_mode, smooth, spectral_period, vertex_at)
 from .motion import INTERVAL_RANGE, Turn, faded_end, growth_tolerance, levels_off, reference, steady_tail
-
-if TYPE_CHECKING:
-    from .timeseries import TimeSeries
+from .series import TimeSeries
 
 __all__ = ["TurningPoints", "reduce_series", "turning_points", "period_of", "MIN_SAMPLES_PER_PERIOD", "MIN_TURNS"]
 
@@ -243,7 +240,7 @@ class _Record:
         return got if self._plausible(first, last, is_max, *got) else None
 
 
-def reduce_series(series: "TimeSeries", *, window: float | None = None, degree: int = 4,
+def reduce_series(series: TimeSeries, *, window: float | None = None, degree: int = 4,
                   strict: bool = True) -> TurningPoints:
     """Turning points of a sampled free decay (see the module docstring for the method).
 

@@ -1,0 +1,254 @@
+"""The decrement per half swing against the amplitude: which damping law a free decay shows.
+
+Over one half swing of a lightly damped oscillator the amplitude falls by
+
+================  ==========================  =======================================
+law               torque per inertia          decrement per half swing (linear spring)
+================  ==========================  =======================================
+Coulomb (dry)     ``-R sgn(theta')``          ``2 R / omega0**2``, constant
+viscous           ``-C theta'``               ``pi C A / (2 omega0)``, proportional to A
+quadratic drag    ``-D |theta'| theta'``      ``4 D A**2 / 3``, proportional to A**2
+================  ==========================  =======================================
+
+Derivation (first order in the damping): along the undamped half swing ``theta = A cos(omega0
+t)``, ``0 <= t <= pi/omega0``, each torque does work ``W`` per unit inertia, and the energy
+``E = omega0**2 A**2 / 2`` changes by ``dE/dA * dA = omega0**2 A dA``, so ``dA = W /
+(omega0**2 A)``.  Coulomb: ``W = R * 2A``.  Viscous: ``W = C * int theta'**2 dt = C pi
+omega0 A**2 / 2``.  Drag: ``W = D * int |theta'|**3 dt = D omega0**3 A**3 * 4/(3 omega0)``.
+Evaluated at the mean amplitude of the half swing, the neglected terms nearly cancel: on a
+linear spring viscous damping and Coulomb friction add *exactly*, ``2 tanh(pi C/(4 omega1)) A
++ 2R/omega0**2`` (``omega1 = sqrt(omega0**2 - C**2/4)``; this is what :func:`law_parts` draws,
+``pi C A/(2 omega0)`` to first order), and drag is off by about ``0.3 (D A)**2`` relative.
+
+A gravity pendulum (``omega0**2 sin(theta)``) uses the same energy balance with the exact
+undamped swing, ``E = omega0**2 (1 - cos A)``, ``dE/dA = omega0**2 sin A`` and ``theta'**2 =
+2 omega0**2 (cos theta - cos A)``: Coulomb ``2 R A / (omega0**2 sin A)``, viscous ``8 C [E(m) -
+(1 - m) K(m)] / (omega0 sin A)`` with ``m = sin(A/2)**2`` (complete elliptic integrals), drag
+``4 D (sin A - A cos A) / sin A``; each reduces to the table at small A.
+
+An escapement window of constant torque per inertia ``X`` (impulse drives, unlocking opposes)
+over the swing-frame angles ``[lo, hi)`` does work ``+-X |[lo, hi) & [-A, A]|``, a gain
+``-W/(omega0**2 A)`` that falls like 1/A: the shape that makes an escapement's amplitude
+settle.  In Monday's phase convention a window at phase offsets ``[lo, hi)`` spans ``A (sin hi
+- sin lo)`` of the swing, so its part is a constant, about ``-+X (sin hi - sin lo)/omega0**2``,
+which no decay can tell from Coulomb friction's constant; the motion is then linear with
+phase-locked forcing, and :func:`law_parts` gives their joint constant exactly from the
+one-cycle map (:func:`escfit.balance.monday.charts.cycle_offset`).
+
+Measured decrements (:func:`from_readings`, :func:`from_turns`) come from amplitudes read at
+turning points.  Three consecutive half swings ``k, k+1, k+2`` give ``(A_k - A_{k+2}) / 2`` at
+``(A_k + 2 A_{k+1} + A_{k+2}) / 4``: ``A_k`` and ``A_{k+2}`` lie on the same side, so a zero
+offset of the scale cancels, as it does in the weighted mean amplitude.  Readings further apart
+(Monday's every fourth half swing) give ``(A_i - A_j)/(j - i)`` at ``(A_i + A_j)/2`` when
+``j - i`` is even.  All angles are in radians here.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Decrements", "Window", "from_readings", "from_turns", "law_parts", "binned", "LAWS"]
+
+#: the parts drawn, in order: key -> (name, shape)
+LAWS = {"coulomb": ("Coulomb (dry) friction", "constant"),
+        "viscous": ("viscous damping", "proportional to A"),
+        "drag": ("quadratic air drag", "proportional to A^2"),
+        "escapement": ("escapement (impulse minus unlocking)", "falls like 1/A"),
+        "constant": ("Coulomb friction + escapement", "constant")}
+
+
+@dataclass(frozen=True)
+class Decrements:
+    """Decrements per half swing measured from amplitudes.
+
+    Attributes
+    ----------
+    amplitude
+        Amplitude at which each decrement is measured (rad).
+    decrement
+        Loss of amplitude per half swing (rad; negative: the amplitude grew).
+    error
+        Half-width of each decrement's interval (rad) when the readings are intervals (notch
+        counts), else zeros.
+    swing
+        Half swing at the start of each measurement.
+    """
+
+    amplitude: np.ndarray
+    decrement: np.ndarray
+    error: np.ndarray
+    swing: np.ndarray
+
+
+@dataclass(frozen=True)
+class Window:
+    """An escapement window for :func:`law_parts`: ``sign`` +1 impulse / -1 unlocking, ``x`` its
+    torque per inertia (rad/s^2), ``lo``, ``hi`` its limits (rad; phase offsets with phase
+    switching) and ``share`` the fraction of half swings it acts on (1, or 1/2 for one direction)."""
+
+    sign: float
+    x: float
+    lo: float
+    hi: float
+    share: float = 1.0
+
+
+def from_readings(swing, amplitude, half_width=None) -> Decrements:
+    """Decrements from amplitude readings of one curve (see the module docstring).
+
+    Parameters
+    ----------
+    swing
+        Half swing of each reading (integers, increasing).
+    amplitude
+        Amplitude readings (rad, unsigned; a constant zero offset of the scale may remain).
+    half_width
+        Half-width of each reading's interval (rad), for notch counts; ``None``: exact readings.
+    """
+    s = np.asarray(swing, np.int64)
+    a = np.asarray(amplitude, float)
+    h = np.zeros_like(a) if half_width is None else np.broadcast_to(np.asarray(half_width, float), a.shape)
+    amp, dec, err, start = [], [], [], []
+    for i in range(a.size - 1):
+        if i + 2 < a.size and s[i + 1] == s[i] + 1 and s[i + 2] == s[i] + 2:
+            amp.append((a[i] + 2 * a[i + 1] + a[i + 2]) / 4)
+            dec.append((a[i] - a[i + 2]) / 2)
+            err.append((h[i] + h[i + 2]) / 2)
+        elif s[i + 1] - s[i] >= 2 and (s[i + 1] - s[i]) % 2 == 0:
+            g = s[i + 1] - s[i]
+            amp.append((a[i] + a[i + 1]) / 2)
+            dec.append((a[i] - a[i + 1]) / g)
+            err.append((h[i] + h[i + 1]) / g)
+        else:
+            continue
+        start.append(s[i])
+    return Decrements(np.array(amp), np.array(dec), np.array(err), np.array(start, np.int64))
+
+
+def from_turns(theta) -> Decrements:
+    """Decrements from consecutive signed turning-point angles (rad) in the sensor's frame.
+
+    ``|theta_k - theta_{k+1}| = A_k + A_{k+1}`` whatever the centre, so with
+    ``S_k = |theta_k - theta_{k+1}|`` the decrement ``(A_k - A_{k+2})/2 = (S_k - S_{k+1})/2``
+    at ``(S_k + S_{k+1})/4`` needs no estimate of the centre (a drifting centre should be
+    removed from ``theta`` first).
+    """
+    e = np.asarray(theta, float)
+    span = np.abs(np.diff(e))
+    if span.size < 2:
+        return Decrements(np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0, np.int64))
+    return Decrements((span[:-1] + span[1:]) / 4, (span[:-1] - span[1:]) / 2, np.zeros(span.size - 1),
+                      np.arange(span.size - 1, dtype=np.int64))
+
+
+def law_parts(amplitude, *, omega0: float, C: float = 0.0, R: float = 0.0, D: float = 0.0,
+              windows: tuple[Window, ...] = (), restoring: str = "spring", switching: str = "angle") -> dict:
+    """Each law's decrement per half swing at ``amplitude`` (rad), first order in the damping.
+
+    Parameters
+    ----------
+    amplitude
+        Amplitudes (rad, > 0).
+    omega0
+        Natural frequency (rad/s).
+    C, R, D
+        Viscous (1/s), Coulomb (rad/s^2) and quadratic-drag (1/rad) coefficients per inertia.
+    windows
+        Escapement windows.
+    restoring
+        ``"spring"`` (``omega0**2 theta``) or ``"pendulum"`` (``omega0**2 sin theta``).
+    switching
+        ``"angle"`` or ``"phase"`` (Monday's convention: Coulomb friction and the windows then
+        give one constant, returned as ``"constant"``).
+
+    Returns
+    -------
+    dict
+        Law key (see :data:`LAWS`) -> decrement array (rad per half swing), only for the laws
+        with a non-zero coefficient.
+    """
+    a = np.asarray(amplitude, float)
+    w2 = omega0 * omega0
+    if restoring == "pendulum":
+        from scipy.special import ellipe, ellipk
+
+        m = np.sin(a / 2) ** 2
+        gain = w2 * np.sin(a)  # dE/dA
+        swing_v = 8.0 * omega0 * (ellipe(m) - (1.0 - m) * ellipk(m))  # int |theta'| dtheta over a half swing
+        swing_v2 = 4.0 * w2 * (np.sin(a) - a * np.cos(a))  # int theta'^2 dtheta
+        viscous = C * swing_v / gain
+    elif restoring == "spring":
+        gain = w2 * a
+        swing_v2 = 4.0 / 3.0 * w2 * a**3
+        viscous = _viscous_spring(a, C, omega0)
+    else:
+        raise ValueError(f"restoring must be 'spring' or 'pendulum', got {restoring!r}")
+    out = {}
+    if C:
+        out["viscous"] = viscous
+    if D:
+        out["drag"] = D * swing_v2 / gain
+    if switching == "phase":
+        if R or windows:
+            out["constant"] = np.full(a.shape, _phase_constant(omega0, C, R, windows))
+        return _ordered(out)
+    if R:
+        out["coulomb"] = R * 2.0 * a / gain
+    if windows:
+        work = sum(w.sign * w.x * w.share * np.clip(np.minimum(w.hi, a) - np.maximum(w.lo, -a), 0.0, None)
+                   for w in windows)
+        out["escapement"] = -work / gain
+    return _ordered(out)
+
+
+def _viscous_spring(a: np.ndarray, C: float, omega0: float) -> np.ndarray:
+    """Viscous part on a linear spring at the mean amplitude of the half swing, exactly.
+
+    A half swing multiplies the amplitude about the (friction-shifted) centre by ``l =
+    exp(-pi C/(2 omega1))``, so at the half swing's mean amplitude the decrement is ``2 (1 - l)/(1
+    + l) A = 2 tanh(pi C/(4 omega1)) A`` plus Coulomb friction's ``2R/omega0**2``: the two add
+    exactly.  To first order this is ``pi C A/(2 omega0)``.
+    """
+    h = 0.5 * C
+    if h >= omega0:
+        return np.full(a.shape, np.nan)  # not a swing: no decrement per half swing
+    return 2.0 * np.tanh(math.pi * C / (4.0 * math.sqrt(omega0**2 - h * h))) * a
+
+
+def _phase_constant(omega0: float, C: float, R: float, windows) -> float:
+    """Monday's phase convention: the constant of the decrement at mean amplitude, exactly.
+
+    The half-cycle map is affine, ``A' = l A + b_h``, so at the mean amplitude the decrement is
+    ``2 tanh(...) A - 2 b_h/(1 + l)``; the one-cycle offset ``b = b_h (1 + l)`` of Coulomb
+    friction and the windows together comes from :func:`escfit.balance.monday.charts.cycle_offset`.
+    """
+    from .monday.charts import Pulse, cycle_offset
+
+    c = C / omega0
+    pulses = [Pulse(w.lo, w.hi, w.sign * w.x * w.share / omega0**2) for w in windows]
+    if R:
+        pulses.append(Pulse(-math.pi / 2, math.pi / 2, -R / omega0**2))
+    lam_half = math.exp(-math.pi * c / (2.0 * math.sqrt(1.0 - c * c / 4.0)))
+    return -2.0 * cycle_offset(c, pulses) / (1.0 + lam_half) ** 2
+
+
+def _ordered(parts: dict) -> dict:
+    return {k: parts[k] for k in LAWS if k in parts}
+
+
+def binned(amplitude, decrement, *, bins: int = 8, min_count: int = 3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Means of the decrements in amplitude bins of equal count, with their standard errors.
+
+    Returns
+    -------
+    amplitude, decrement, standard error
+        One entry per bin holding at least ``min_count`` measurements.
+    """
+    a, d = np.asarray(amplitude, float), np.asarray(decrement, float)
+    order = np.argsort(a)
+    groups = [g for g in np.array_split(order, max(1, min(bins, a.size // min_count))) if g.size >= min_count]
+    return (np.array([a[g].mean() for g in groups]), np.array([d[g].mean() for g in groups]),
+            np.array([d[g].std(ddof=1) / math.sqrt(g.size) for g in groups]))
