@@ -7,8 +7,8 @@ repository's ``datasets/real``; the scenes in ``datasets/real/scenes`` hold at m
 escfit finds the turning points counted by eye on plots of the record (the counts below, the
 reference included), and that the fit agrees with the source's own value where the source gives
 one.  What is not a free decay (a driven pendulum, a sound, a struck rod, beating modes) must be
-read and refused in one line that says why.  Files whose format escfit cannot read yet are
-expected failures naming the reader they wait for.
+read and refused in one line that says why.  What escfit cannot do yet is an expected failure
+naming what it waits for.
 """
 
 from __future__ import annotations
@@ -42,7 +42,7 @@ class Decay:
     slack: int = 0  # turning points at the noise floor that the eye cannot settle
     reference: tuple = ()  # (what, check(result) -> (value, source value, tolerance))
     slow: bool = False
-    pending: str = ""  # the reader it waits for
+    pending: str = ""  # what it waits for
 
 
 @dataclass(frozen=True)
@@ -138,16 +138,19 @@ DECAYS = [
           "SinglePendulumDataForParameterEstimation.mat", "multiarm_estimation.toml", 134, slow=True,
           reference=(("the authors' omega0 = 8.01 rad/s", lambda r: (omega0(r), 8.01, 0.12)),)),
     Decay("torsion pendulum, CASSY Lab 2 .labx", REAL / "gpl_tests_only" / "cassy_phyprakit" / "Drehpendel.labx",
-          "cassy_torsion_pendulum.toml", 0, pending="the CASSY .labx reader"),
+          "cassy_torsion_pendulum.toml", 186, slack=2, slow=True,
+          reference=(("the source's period, about 1.79 s", lambda r: (measured_period(r), 1.79, 0.01)),)),
     Decay("torsion pendulum, CASSY Lab 2 .labx, 0.2 s sampling", REAL / "gpl_tests_only" / "cassy_phyprakit" /
-          "CassyExample.labx", "cassy_torsion_pendulum.toml", 0, pending="the CASSY .labx reader"),
-    Decay("Pohl wheel, Tracker .trk", REAL / "pohl_heilaut" / "raw" / "Dämpfung.trk", "pohl_tracker.toml", 11,
-          pending="the Tracker .trk reader"),
+          "CassyExample.labx", "cassy_torsion_pendulum.toml", 0,
+          pending="a turning-point analysis for under 16 samples per period (this record has 9.7)"),
+    Decay("Pohl wheel, Tracker .trk (the rim marker's track)", OURS / "pohl_heilaut" / "raw" / "Dämpfung.trk",
+          "pohl_tracker_trk.toml", 11,
+          reference=(("Tracker's damped sine, B = 4.610 rad/s", lambda r: (omega0(r), 4.610, 0.025)),)),
 ]
 
 NOT_DECAYS = [
     NotADecay("impact test of a structure (LabVIEW .lvm, two records)", REAL / "labview_impact_ladisk" /
-              "long_single_header_multi_ch.lvm", "labview_impact.toml", r"beating modes", pending="the LabVIEW .lvm reader"),
+              "long_single_header_multi_ch.lvm", "labview_impact.toml", r"beating modes"),
     NotADecay("driven torsion pendulum with its drive (CASSY text export)", REAL / "gpl_tests_only" / "cassy_phyprakit" /
               "Cassy.txt", "cassy_driven.toml", r"a drive|keeps its amplitude|driven"),
     NotADecay("sound recording (phyphox audio scope)", REAL / "gpl_tests_only" / "picoscope_phyprakit" / "AudioData.csv",

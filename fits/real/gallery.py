@@ -41,10 +41,14 @@ SOURCE_VALUES = {
     "pohl_tracker": "Tracker damped sine: B = 4.610 rad/s, E = -0.288 1/s (C = 0.576 1/s, viscous only)",
     "string_pendulum_lab1": "Q ~ 140 (C ~ 0.027 1/s)",
     "string_pendulum_trial1": "released at 1.44 rad",
+    "pohl_tracker_trk": "Tracker damped sine: B = 4.610 rad/s, E = -0.288 1/s (C = 0.576 1/s, viscous only)",
+    "cassy_drehpendel": "period ~1.79 s; amplitude 1.81 rad -> 0.05 rad, close to linear (dry friction)",
 }
 
 #: free decays of the shared folder that are not shipped (GPL): (name, file, scene, title)
 SHARED_DECAYS = [
+    ("cassy_drehpendel", "gpl_tests_only/cassy_phyprakit/Drehpendel.labx", "cassy_torsion_pendulum.toml",
+     "Torsion pendulum, CASSY Lab 2 .labx (PhyPraKit example)"),
     ("galileo_short", "gpl_tests_only/arduino_encoder_galileo_ferrucci/galileo_2024-07-19_09-27-13.csv",
      "galileo_encoder_pendulum.toml", "Encoder pendulum, Arduino 50 Hz, 17 s (from_galileo_to_arduino)"),
     ("galileo_long", "gpl_tests_only/arduino_encoder_galileo_ferrucci/galileo_2024-07-19_15-25-54.csv",
