@@ -64,6 +64,17 @@ class FitResult:
         return json.loads(self.tree.attrs.get("notes", "[]") or "[]")
 
     @property
+    def verdict(self) -> str:
+        """What the fit determines: ``"determined"``, ``"partly determined"`` or ``"not determined"``
+        (see :func:`escfit.inference.reconcile.verdict`; ``""`` in files written before it existed)."""
+        return str(self.tree.attrs.get("verdict", ""))
+
+    @property
+    def undetermined(self) -> list[str]:
+        """Structural parameters the fit does not determine."""
+        return json.loads(self.tree.attrs.get("undetermined", "[]") or "[]")
+
+    @property
     def misfit(self) -> dict[str, float]:
         """Residual-structure figures at the best fit (see :mod:`escfit.inference.misfit`)."""
         return json.loads(self.tree.attrs.get("misfit", "{}") or "{}")

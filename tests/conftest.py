@@ -10,7 +10,19 @@ from hypothesis import settings
 
 ROOT = Path(__file__).resolve().parents[1]
 DATASETS = ROOT / "datasets"
-SHARED = Path(os.environ.get("ESCFIT_SHARED", ROOT.parent / "shared"))  # the real recordings beside the checkout
+
+def _shared() -> Path:
+    """The shared source folder (``../shared`` of the checkout, or of the folder holding worktrees;
+    ``ESCFIT_SHARED`` overrides)."""
+    if os.environ.get("ESCFIT_SHARED"):
+        return Path(os.environ["ESCFIT_SHARED"])
+    for base in (ROOT.parent, ROOT.parent.parent):
+        if (base / "shared").is_dir():
+            return base / "shared"
+    return ROOT.parent / "shared"
+
+
+SHARED = _shared()
 
 settings.register_profile("escfit", derandomize=True, deadline=None, print_blob=True)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "escfit"))

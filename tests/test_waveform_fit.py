@@ -95,7 +95,7 @@ def test_waveform_is_tighter_than_turning_points_on_a_short_noisy_record():
     for name in ("viscous.C", "coulomb.R"):
         se_w = wave.stderr[wave.names.index(name)]
         se_t = turns.stderr[turns.names.index(name)]
-        assert se_t / se_w > 2.5, (name, se_t, se_w)  # measured: 3.8 (C) and 4.2 (R)
+        assert se_t / se_w > 2.0, (name, se_t, se_w)  # measured: 2.6 (C) and 2.8 (R)
 
 
 def correlated_record(seed: int, rho: float = 0.8) -> TimeSeries:

@@ -1,7 +1,9 @@
 """The ``escfit`` command line.
 
 Exit status: 0 on success, 2 on bad input or usage (one line naming the file, key or value),
-1 on an internal error, 130 when interrupted (Ctrl-C) and 141 (128 + SIGPIPE, as the shell
+3 when ``escfit fit`` ran but determined nothing (the table is printed under "NOT DETERMINED"
+and the results file written, so that it can be inspected; see
+:func:`escfit.inference.reconcile.verdict`), 1 on an internal error, 130 when interrupted (Ctrl-C) and 141 (128 + SIGPIPE, as the shell
 tools give) when the reader of the output went away, as ``head`` does: that exit is quiet.
 Output files are written atomically, readable as the umask allows, and never replaced
 without ``--force``.  Before any work, every output path is checked: one that is an input
@@ -41,6 +43,7 @@ LAZY_COMMANDS = {
     "init": "escfit.cli.init:init",
 }
 
+EXIT_NOT_DETERMINED = 3  # a fit ran but its parameters are not determined
 EXIT_INTERRUPTED = 130
 EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE: what a shell reports for `yes | head -1`
 SEED_MAX = 2**32 - 1  # numpy's RandomState takes seeds in [0, 2**32)
@@ -470,6 +473,8 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoi
 
         make_report(out, report_path, fmt="md" if str(report_path).endswith(".md") else "html", force=force)
         click.echo(f"wrote {report_path}")
+    if getattr(result, "verdict", "") == "not determined":
+        raise click.exceptions.Exit(EXIT_NOT_DETERMINED)
 
 
 def _column(text: str | None):

@@ -24,6 +24,8 @@ def print_summary(result) -> None:
             how = ("stopped when converged, " if int(a.get("converged", 0)) else "stopped at the cap, NOT converged, ") \
                 + str(a.get("convergence", ""))
         click.echo(f"emcee: {a['walkers']} walkers x {a['steps']} steps, first {a['burn']} discarded ({how})")
+    if getattr(result, "verdict", "") == "not determined":
+        click.echo("NOT DETERMINED: the values below are not a best fit of this record (see the first warning)")
     head, rows = parameter_table(result)
     widths = [max([len(h)] + [len(r[i]) for r in rows]) for i, h in enumerate(head)]
     click.echo("  ".join(h.ljust(w) for h, w in zip(head, widths)))

@@ -26,6 +26,7 @@ from .identifiability import bound_warnings, correlation_warnings, ridge_warning
 from .lsq import LeastSquaresResult, least_squares
 from .mcmc import McmcResult, run_emcee
 from .misfit import misfit_report
+from .reconcile import reconcile, verdict, with_held_uncertainty
 from .registry import family
 
 __all__ = ["fit", "fit_problem", "build_tree"]
@@ -131,6 +132,12 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
     started = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
     clock = time.perf_counter()
     lsq = least_squares(problem, n_starts=n_starts, n_refine=n_refine, seed=seed, priors_count=method == "emcee")
+    lsq, fixes, unresolved = reconcile(problem, lsq, seed=seed, priors_count=method == "emcee")
+    lsq, more = with_held_uncertainty(problem, lsq)
+    fixes += more
+    if method == "emcee" and getattr(problem, "held", ()):
+        fixes.append(f"the posterior holds {', '.join(problem.held)} where the recording's own measurement puts it; "
+                     "its uncertainty is in the least-squares intervals but not in the posterior's")
     timings = {"least_squares_s": time.perf_counter() - clock}
     mc = None
     if method == "emcee":
@@ -139,7 +146,8 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
                        checkpoint_every=checkpoint_every)
         timings.update(mc.timings)
     clock = time.perf_counter()
-    tree = build_tree(problem, lsq, mc, method=method, seed=seed, started=started, predictive_draws=predictive_draws)
+    tree = build_tree(problem, lsq, mc, method=method, seed=seed, started=started, predictive_draws=predictive_draws,
+                      fixes=fixes, unresolved=unresolved)
     timings["diagnostics_s"] = time.perf_counter() - clock
     tree.attrs.update(clean_attrs({"timings": {k: round(float(v), 4) for k, v in timings.items()}}))
     if title:
@@ -200,8 +208,13 @@ def _remove_stale_temporaries(out: str | Path, checkpoint: str | Path | None) ->
 
 
 def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None, *, method: str, seed: int,
-               started: str, predictive_draws: int = 400) -> xr.DataTree:
-    """The results tree of a fit (groups and attributes of :mod:`escfit.results`)."""
+               started: str, predictive_draws: int = 400, fixes: list[str] | None = None,
+               unresolved: list | None = None) -> xr.DataTree:
+    """The results tree of a fit (groups and attributes of :mod:`escfit.results`).
+
+    ``fixes`` and ``unresolved`` come from :func:`~escfit.inference.reconcile.reconcile`: what was
+    refitted to agree with the recording's direct measurements, and what still disagrees.
+    """
     names = list(problem.names)
     units, meanings = dict(problem.units), dict(problem.meanings)
     obs_coords = problem.obs_coords()
@@ -267,14 +280,17 @@ def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None,
             convergence.append("the run is shorter than 50 autocorrelation times: intervals are approximate")
         warnings = convergence + correlation_warnings(names, pc) + sloppy_directions(names, flat)
         warnings += [w for w in problem.checks_of_posterior(mc.chain) if w not in family_warnings]
-    warnings = _unique(warnings + misfit_warnings + list(getattr(problem, "data_warnings", [])))
+    status, undetermined, statement = verdict(problem, lsq, list(unresolved or []), posterior=mc is not None)
+    warnings = _unique(([statement] if statement else []) + warnings + misfit_warnings
+                       + list(getattr(problem, "data_warnings", [])))
     attrs = {
         "schema_version": SCHEMA_VERSION, "model": problem.family, "method": method, "seed": seed,
         "parameters": names, "units": units, "meanings": meanings, **problem.provenance(),
         "versions": dependency_versions(), "started": started,
         "finished": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
         "warnings": warnings, "failures": dict(problem.failures), "misfit": misfit,
-        "notes": list(getattr(problem, "notes", [])), "held": _held(problem, lsq),
+        "notes": list(getattr(problem, "notes", [])) + list(fixes or []), "held": _held(problem, lsq),
+        "verdict": status, "undetermined": undetermined,
     }
     if mc is not None:
         attrs.update(walkers=mc.walkers, steps=mc.steps, burn=mc.burn, resumed=mc.resumed, moves=mc.moves,

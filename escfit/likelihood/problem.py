@@ -119,6 +119,14 @@ class Problem(Protocol):
     def checks_of_posterior(self, chain: np.ndarray) -> list[str]:
         """Family-specific warnings from posterior draws, shape ``(walkers, draws, ndim)``."""
 
+    def consistency(self, values: Mapping[str, float]) -> list:
+        """What the recording measures directly about parameters, at ``values``
+        (:class:`~escfit.likelihood.consistency.Implied`; empty when it measures nothing)."""
+
+    def hold(self, name: str, value: float) -> None:
+        """Set a parameter the problem holds fixed (one it chose to hold, such as an omega0
+        taken from the measured period) to ``value``."""
+
 
 class ModelFamily(Protocol):
     """A mechanism's entry in the registry: everything ``escfit`` commands need to know.
@@ -216,6 +224,16 @@ class ProblemBase:
 
     def checks_of_posterior(self, chain: np.ndarray) -> list[str]:
         return []
+
+    def consistency(self, values: Mapping[str, float]) -> list:
+        return []
+
+    held: tuple[str, ...] = ()  # fixed parameters the problem chose to hold and may move (see hold)
+
+    def hold(self, name: str, value: float) -> None:
+        from ..core.errors import FitError
+
+        raise FitError(f"{name} is not a parameter this problem holds")
 
     @property
     def n_data(self) -> int:

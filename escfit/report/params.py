@@ -102,7 +102,9 @@ def parameter_table(res, plain: bool = False) -> tuple[list[str], list[list[str]
     tuple
         ``(head, rows)``, all strings.  The estimate column is headed ``"median"`` for a
         posterior, ``"best fit"`` for least squares (``"estimate"`` if the rows mix both, each
-        row then saying which in the note column).  R-hat and ESS columns appear for
+        row then saying which in the note column), ``"value (NOT determined)"`` when the fit
+        determines nothing (:attr:`escfit.results.FitResult.verdict`); a parameter the fit does
+        not determine says so in the note column.  R-hat and ESS columns appear for
         posteriors only; a ``note`` column when a row needs one: an estimate on a bound of
         the scene's range, which reading noise a posterior ``observation.sigma`` is, a held
         value.
@@ -113,6 +115,10 @@ def parameter_table(res, plain: bool = False) -> tuple[list[str], list[list[str]
     loads_in = load_unit(meanings)
     kinds = {estimate_kind(r) for r in summary.values()}
     column = kinds.pop() if len(kinds) == 1 else "estimate"
+    verdict = getattr(res, "verdict", "")
+    undetermined = set(getattr(res, "undetermined", []) or [])
+    if verdict == "not determined":
+        column = "value (NOT determined)"
     posterior = any(estimate_kind(r) == "median" for r in summary.values())
     rows, notes, codes = [], [], []
     for name, r in summary.items():
@@ -133,6 +139,8 @@ def parameter_table(res, plain: bool = False) -> tuple[list[str], list[list[str]
         note = []
         if column == "estimate":
             note.append(estimate_kind(r))
+        if name in undetermined and verdict != "not determined":
+            note.append("not determined")
         if r.get("at_bound") in _BOUND_FLAG:  # a posterior row: the least-squares start was there, not the median
             note.append(_BOUND_FLAG[r["at_bound"]] if estimate_kind(r) == "best fit"
                         else f"least squares {_BOUND_FLAG[r['at_bound']]}")

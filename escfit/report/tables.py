@@ -18,6 +18,7 @@ from .params import estimate_kind, parameter_table
 
 __all__ = ["parameter_table", "estimate_kind", "fit_statistics", "sampler_rows", "provenance_rows"]
 
+
 def _loads_unit(res) -> str:
     return load_unit(json.loads(res.attrs.get("meanings", "{}") or "{}"))
 

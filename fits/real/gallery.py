@@ -1,11 +1,14 @@
-"""Fit every shipped real recording as read raw and draw the gallery of docs/real-data.md.
+"""Fit every real recording at hand as read raw and draw the gallery of docs/real-data.md.
 
-Run:  python fits/real/gallery.py [--out docs/real-data]   (about a minute; least squares)
+Run:  python fits/real/gallery.py [--out docs/real-data]   (a few minutes; least squares)
 
-For each recipe in this folder: the recording is read raw with its scene's ``[recording]``
-table, fitted by least squares, and compared with a naive log-linear envelope of its turning
-points (viscous damping only: ln A falls by C/2 per second).  Prints one Markdown table row per
-recording and writes one figure each (data and model against time, residuals).
+For each recipe in this folder, and each free decay of the shared folder that may not be shipped
+(``../shared/realdata/gpl_tests_only``, when present): the recording is read raw with its
+scene's ``[recording]`` table, fitted by least squares as ``escfit fit`` does it (checked against
+the record's own period, :mod:`escfit.inference.reconcile`), and compared with the source's own
+value and with a naive log-linear envelope of its turning points (viscous damping only: ln A
+falls by C/2 per second).  Prints one Markdown table row per recording and writes one figure
+each (data and model against time, residuals).
 """
 
 from __future__ import annotations
@@ -18,9 +21,53 @@ from pathlib import Path
 import numpy as np
 
 from escfit.inference import least_squares, make_problem
+from escfit.inference.reconcile import reconcile, with_held_uncertainty
 from escfit.core.scene import load_scene
 
 HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
+
+#: the sources' own values, as their SOURCE.txt or their authors' code give them
+SOURCE_VALUES = {
+    "encoder_pendulum_jensen": ("zero-crossing period 0.65 s; compute.py: zeta = 5.462e-4 at w_n = 475 deg/s, the "
+                                "first maximum falling as exp(-0.259 t), a viscous C of 0.52 1/s over the first period"),
+    "gyro_torsion_radial": "period 0.422 s",
+    "gyro_compound_axial": "period 1.429 s",
+    "galileo_short": "period 1.16 s",
+    "galileo_long": "period 1.36 s",
+    "multiarm_estimation": "omega0 = 8.01 rad/s, viscous only C = 0.0668 1/s (authors' identification)",
+    "multiarm_free_swing": "omega0 = 8.01 rad/s (authors' identification)",
+    "pohl_amplitudes": "LabPlot: A0 exp(b t), b = -0.158 1/s (C = 0.317 1/s, viscous only)",
+    "pohl_tracker": "Tracker damped sine: B = 4.610 rad/s, E = -0.288 1/s (C = 0.576 1/s, viscous only)",
+    "string_pendulum_lab1": "Q ~ 140 (C ~ 0.027 1/s)",
+    "string_pendulum_trial1": "released at 1.44 rad",
+    "pohl_tracker_trk": "Tracker damped sine: B = 4.610 rad/s, E = -0.288 1/s (C = 0.576 1/s, viscous only)",
+    "cassy_drehpendel": "period ~1.79 s; amplitude 1.81 rad -> 0.05 rad, close to linear (dry friction)",
+}
+
+#: free decays of the shared folder that are not shipped (GPL): (name, file, scene, title)
+SHARED_DECAYS = [
+    ("cassy_drehpendel", "gpl_tests_only/cassy_phyprakit/Drehpendel.labx", "cassy_torsion_pendulum.toml",
+     "Torsion pendulum, CASSY Lab 2 .labx (PhyPraKit example)"),
+    ("galileo_short", "gpl_tests_only/arduino_encoder_galileo_ferrucci/galileo_2024-07-19_09-27-13.csv",
+     "galileo_encoder_pendulum.toml", "Encoder pendulum, Arduino 50 Hz, 17 s (from_galileo_to_arduino)"),
+    ("galileo_long", "gpl_tests_only/arduino_encoder_galileo_ferrucci/galileo_2024-07-19_15-25-54.csv",
+     "galileo_encoder_pendulum.toml", "Encoder pendulum, Arduino 50 Hz, 90 s (from_galileo_to_arduino)"),
+]
+
+
+def records():
+    """(name, data path, scene path, title) of every recording to show."""
+    for recipe in sorted(HERE.glob("*.toml")):
+        doc = tomllib.loads(recipe.read_text())
+        yield (recipe.stem, (recipe.parent / doc["data"]).resolve(), (recipe.parent / doc["scene"]).resolve(),
+               doc.get("title", recipe.stem))
+    for base in (ROOT.parent / "shared" / "realdata", ROOT.parents[1] / "shared" / "realdata"):
+        if base.is_dir():
+            for name, data, scene, title in SHARED_DECAYS:
+                if (base / data).exists():
+                    yield name, base / data, ROOT / "datasets" / "real" / "scenes" / scene, title
+            break
 
 
 def envelope_c(problem) -> float:
@@ -74,30 +121,36 @@ def main() -> None:
     args = ap.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    print("| recording | read as | C (1/s) | R (rad/s^2) | omega0 (rad/s) | envelope C (1/s) | reading scatter | misfit |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| recording | read as | C (1/s) | R (rad/s^2) | omega0 (rad/s) | period (s) | the source's own value | "
+          "envelope C (1/s) | reading scatter | misfit |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     from escfit.inference.fit import _misfit
 
-    for recipe in sorted(HERE.glob("*.toml")):
-        doc = tomllib.loads(recipe.read_text())
-        scene = load_scene((recipe.parent / doc["scene"]).resolve())
-        problem = make_problem(scene, str((recipe.parent / doc["data"]).resolve()))
-        res = least_squares(problem, n_starts=8)
+    for name, data, scene_path, title in records():
+        scene = load_scene(scene_path)
+        problem = make_problem(scene, str(data))
+        res, _, unresolved = reconcile(problem, least_squares(problem, n_starts=8))
+        res, _ = with_held_uncertainty(problem, res)
 
-        def fmt(name):
-            if name not in res.names:
-                v = res.values.get(name, math.nan)
-                return f"{v:.4g} (fixed)"
-            i = res.names.index(name)
+        def fmt(key):
+            if key not in res.names:
+                v = res.values.get(key, math.nan)
+                return "-" if math.isnan(v) else f"{v:.4g} (held)" if key in getattr(problem, "held", ()) \
+                    else f"{v:.4g} (fixed)"
+            i = res.names.index(key)
             return f"{res.value[i]:.4g} +- {1.96 * res.stderr[i]:.2g}"
 
         _, warnings = _misfit(problem, res, problem.obs_coords())
         warnings = warnings + problem.checks_at_best_fit(res.values)[1]
+        if unresolved:
+            warnings.insert(0, "NOT determined: the fit contradicts the measured period")
         kind = "waveform" if problem.curves[0].label == "waveform" else "turning points"
-        print(f"| {recipe.stem} | {kind}, {problem.n_data} readings | {fmt('viscous.C')} | {fmt('coulomb.R')} | "
-              f"{fmt('oscillator.omega0')} | {envelope_c(problem):.4g} | {res.sigma_hat:.3g} | "
-              f"{'; '.join(w.split(':')[0] for w in warnings) or 'clean'} |")
-        figure(problem, res, doc.get("title", recipe.stem), out / f"{recipe.stem}.png")
+        mp = getattr(problem, "measured_period", None)
+        period = f"{mp.period:.4g}" if mp is not None else "-"
+        print(f"| {name} | {kind}, {problem.n_data} readings | {fmt('viscous.C')} | {fmt('coulomb.R')} | "
+              f"{fmt('oscillator.omega0')} | {period} | {SOURCE_VALUES.get(name, '-')} | {envelope_c(problem):.4g} | "
+              f"{res.sigma_hat:.3g} | {'; '.join(w.split(':')[0] for w in warnings) or 'clean'} |", flush=True)
+        figure(problem, res, title, out / f"{name}.png")
 
 
 if __name__ == "__main__":

@@ -105,6 +105,34 @@ class BalanceProblem(ProblemBase):
                             "the intervals describe the best fit of an incomplete model")
         return {}, warnings
 
+    def consistency(self, values: Mapping[str, float]) -> list:
+        """omega0 against the record's measured period, for sampled records (see
+        :mod:`escfit.balance.problems.period`)."""
+        from .period import period_consistency
+
+        return period_consistency(self, values)
+
+    def hold(self, name: str, value: float) -> None:
+        """Move a parameter the problem holds (``held``) to ``value``: the fixed values the
+        forward model reads, and the parameter's record."""
+        from dataclasses import replace
+
+        from ...core.errors import FitError
+
+        if name not in self.held:
+            raise FitError(f"{name} is not a parameter this problem holds")
+        self._base[name] = float(value)
+        self.params.params[name] = replace(self.params[name], value=float(value))
+        for cache in ("_merged_fixed", "_merge_keys", "_layout_cache"):
+            self.__dict__.pop(cache, None)
+
+    def held_effects(self, values: Mapping[str, float]) -> list[tuple[str, float, dict[str, float]]]:
+        """For each held parameter: its standard error and the derivative of every fitted
+        parameter along the family of equally good fits (see :mod:`escfit.balance.problems.period`)."""
+        from .period import held_omega0_effects
+
+        return held_omega0_effects(self, values)
+
     def checks_of_posterior(self, chain: np.ndarray) -> list[str]:
         warnings = phase_mode_warning(self)
         if "observation.rho" in self.names:

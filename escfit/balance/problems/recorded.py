@@ -26,6 +26,8 @@ from ...core.params import ParamSet
 from ..recordings import UnitCurve
 from ..recordings.rawseries import notes_of
 from .curves import FitProblem
+from .nuisance import centre_priors
+from .period import check_scene_omega0, hold_omega0, measured_period, start_omega0
 from .release import release_from_record
 
 __all__ = ["problem_from_series", "turning_point_curve", "amplitude_readings_curve"]
@@ -77,43 +79,11 @@ def amplitude_readings_curve(series) -> UnitCurve:
 
 
 def _free_centre(scene: BalanceScene, curve: UnitCurve, tp) -> BalanceScene:
-    """Free the centre and its drift unless the scene's ``[observation]`` fixes them."""
+    """Free the centre and its drift, within what the record measured, unless ``[observation]`` fixes them."""
     obs = dict(scene.extra.get("observation", {}))
-    amp = float(np.max(curve.value))
-    span_t = float(max(curve.time[-1], 1e-9))
-    rate0 = float(getattr(tp, "offset_rate", 0.0))
-    obs.setdefault("offset", {"value": 0.0, "vary": True, "min": -0.25 * amp, "max": 0.25 * amp})
-    obs.setdefault("offset_rate", {"value": 0.0, "vary": True, "min": -(abs(rate0) + amp / span_t),
-                                   "max": abs(rate0) + amp / span_t})
+    for key, table in centre_priors(tp, removed=True).items():
+        obs.setdefault(key, table)
     return replace(scene, extra={**scene.extra, "observation": obs})
-
-
-def omega0_from_period(scene: BalanceScene, tp) -> float:
-    """Natural frequency (rad/s) implied by the record's measured period.
-
-    A spring's period does not depend on the amplitude: ``omega0 = 2 pi / P``.  A pendulum's
-    grows with it: ``P = 4 K(sin^2(A/2)) / omega0`` with ``A`` the median turning-point amplitude
-    (light damping shifts either by a fraction ``(C/2 omega0)^2``, negligible here).
-    """
-    if getattr(scene, "restoring", "spring") != "pendulum":
-        return 2.0 * math.pi / tp.period
-    from scipy.special import ellipk
-
-    amp = float(np.median(np.abs(np.asarray(tp.theta) - tp.offset)))
-    return 4.0 * float(ellipk(math.sin(0.5 * amp) ** 2)) / tp.period
-
-
-def _start_omega0(scene: BalanceScene, tp) -> list[str]:
-    """Start a free ``oscillator.omega0`` at the measured period's value, in place; notes."""
-    if "oscillator.omega0" not in scene.params or not scene.params["oscillator.omega0"].vary:
-        return []
-    p = scene.params["oscillator.omega0"]
-    w = omega0_from_period(scene, tp)
-    if not p.min <= w <= p.max:
-        return [f"the measured period {tp.period:.4g} s implies omega0 = {w:.4g} rad/s, outside the scene's range "
-                f"[{p.min:.4g}, {p.max:.4g}]: is the range right?"]
-    scene.params.params[p.name] = replace(p, value=w)
-    return [f"omega0 started at {w:.4g} rad/s from the measured period {tp.period:.4g} s"]
 
 
 def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_options: dict | None = None,
@@ -151,22 +121,42 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
     # a waveform fit uses the turning points only for its start (reference, period, centre): an
     # irregular interval late in the record is a note there, not a refusal
     tp = reduce_series(series, strict=model != "waveform")
-    notes += list(getattr(tp, "notes", [])) + _start_omega0(scene, tp)
+    notes += list(getattr(tp, "notes", []))
+    _refuse_sustained(scene, tp, series.source)
+    mp = measured_period(tp, series.source)
+    check_scene_omega0(scene, mp)
     if model == "waveform":
         from .waveform import WaveformProblem
 
+        notes += start_omega0(scene, mp)
         problem = WaveformProblem(scene, series, tp, solver, solver_options)
-        problem.notes = notes + problem.notes
+        problem.notes = notes + [_count_note(tp)] + problem.notes
+        problem.measured_period = mp
         return problem
+    held = hold_omega0(scene, mp)
     curve = turning_point_curve(series, tp)
-    notes.append(f"{curve.value.size - 1} turning points after the reference one at t = {tp.release_time:.4g} s "
-                 f"({math.degrees(tp.release_theta - tp.offset):+.2f} deg from the centre); period {tp.period:.4g} s")
+    notes.append(_count_note(tp))
+    notes += held
     notes += release_from_record(scene.params, float(tp.release_theta - tp.offset), series.source, scene.restoring)
     problem = FitProblem(_free_centre(scene, curve, tp), curve, solver, dict(solver_options or {}))
     problem.notes = notes
-    if "oscillator.omega0" in problem.names:
-        problem.data_warnings = [
-            "turning-point amplitudes fix omega0 only through the damping per swing: fit the whole waveform "
-            f"([observation] model = \"waveform\") or fix omega0 near {omega0_from_period(scene, tp):.4g} rad/s "
-            f"(from the measured period {tp.period:.4g} s)"]
+    problem.measured_period = mp
+    problem.held = ("oscillator.omega0",) if held else ()
     return problem
+
+
+def _count_note(tp) -> str:
+    return (f"{tp.swing.size} turning points after the reference one at t = {tp.release_time:.4g} s "
+            f"({math.degrees(tp.release_theta - tp.offset):+.2f} deg from the centre); period {tp.period:.5g} s")
+
+
+def _refuse_sustained(scene: BalanceScene, tp, source: str) -> None:
+    """A swing that stops decaying needs a drive in the model: refused when the scene has none."""
+    when = float(getattr(tp, "sustained_from", math.nan))
+    if not math.isfinite(when) or any(n.startswith("escapement") for n in scene.params.params):
+        return
+    from ...core.errors import DataError
+
+    raise DataError(f"from t = {when:.4g} s the swing keeps its amplitude where a free decay would go on losing: "
+                    "something drives it (a motor, an escapement), and the scene has no drive, so it cannot be fitted "
+                    "as a free decay; cut the record before that with [recording] stop, or model the drive", source)

@@ -26,6 +26,7 @@ from ..observation.waveform import WaveformObservation
 from ...core.params import ParamSet
 from .curves import Curve
 from .pulses import RecordingProblem
+from .nuisance import centre_priors
 from .release import release_from_record
 
 __all__ = ["WaveformProblem", "noise_from_samples"]
@@ -68,6 +69,8 @@ class WaveformProblem(RecordingProblem):
         super().__init__(scene, series, solver, solver_options)
         where = f"{scene.where} [observation]"
         table = {k: v for k, v in dict(scene.extra.get("observation", {})).items() if k != "model"}
+        for key, value in centre_priors(reference, sign=-1.0).items():
+            table.setdefault(key, value)
         t_ref = float(reference.release_time)
         period = float(reference.period)
         stop = float(getattr(reference, "stop_time", math.nan))

@@ -11,7 +11,8 @@ import math
 
 import numpy as np
 
-__all__ = ["spectral_period", "smooth", "resolution", "alternating_extrema", "kinked_vertex", "vertex_at"]
+__all__ = ["spectral_period", "extrema_period", "power_near", "smooth", "resolution", "alternating_extrema", "kinked_vertex", "vertex_at",
+           "local_amplitude", "second_mode"]
 
 
 def spectral_period(t: np.ndarray, x: np.ndarray, *, min_cycles: float = 2.0) -> tuple[float, float]:
@@ -60,6 +61,49 @@ def spectral_period(t: np.ndarray, x: np.ndarray, *, min_cycles: float = 2.0) ->
     if median <= 0.0:
         return 1.0 / f, math.inf if p[k] > 0 else 0.0
     return 1.0 / f, float(p[k] / median)
+
+
+def power_near(t: np.ndarray, x: np.ndarray, periods: list[float], width: float = 0.15) -> list[float]:
+    """Largest periodogram power (as :func:`spectral_period` computes it) within ``+-width`` of
+    each frequency ``1/period``."""
+    from scipy.fft import next_fast_len, rfft, rfftfreq
+    from scipy.signal.windows import tukey
+
+    n = t.size
+    dt = (t[-1] - t[0]) / (n - 1)
+    xu = np.interp(t[0] + dt * np.arange(n), t, x)
+    s = np.arange(n) - 0.5 * (n - 1)
+    xu = xu - xu.mean() - s * (s @ xu) / (s @ s)
+    nfft = next_fast_len(8 * n)
+    power = np.abs(rfft(xu * tukey(n, 0.1), nfft)) ** 2
+    freq = rfftfreq(nfft, dt)
+    return [float(np.max(power[(freq > (1 - width) / p) & (freq < (1 + width) / p)], initial=0.0)) for p in periods]
+
+
+def extrema_period(t: np.ndarray, x: np.ndarray) -> float:
+    """Period (s) from the spacing of the record's larger extrema, without knowing it first.
+
+    A light smoothing (5 samples), a hysteresis of six noise scales (the noise from the second
+    differences, which a smooth oscillation sampled many times a period hardly feels), three
+    quantisation steps and 0.2 % of the record's range, and twice the median interval between
+    the extrema of the larger half of the swings; ``nan`` when fewer than three extrema stand out.  A cross-check of the periodogram, whose low
+    frequencies a hold or a step can dominate.
+    """
+    if x.size < 20:
+        return math.nan
+    d2 = np.diff(x, 2)
+    sigma = float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / math.sqrt(6.0))
+    xs = smooth(x, 50.0)
+    quantum = resolution(x, xs)[1]
+    ext = alternating_extrema(xs, max(6.0 * sigma, 3.0 * quantum, 2e-3 * float(np.ptp(x)),
+                                      1e-9 * float(np.max(np.abs(x)) or 1.0)))
+    if len(ext) < 3:
+        return math.nan
+    tc = np.array([0.5 * (t[a] + t[b]) for a, b, _ in ext])
+    v = np.array([xs[a] for a, _, _ in ext])
+    pp = np.abs(np.diff(v))
+    big = pp >= np.median(pp)
+    return 2.0 * float(np.median(np.diff(tc)[big]))
 
 
 def smooth(x: np.ndarray, period_samples: float) -> np.ndarray:
@@ -231,3 +275,73 @@ def vertex_at(s: np.ndarray, x: np.ndarray, degree: int = 4, *,
         return 0.0, solve(0.0)[1]
     res = minimize_scalar(lambda sc: solve(sc)[0], bounds=search, method="bounded", options={"xatol": 1e-9})
     return float(res.x), solve(float(res.x))[1]
+
+
+def local_amplitude(t: np.ndarray, x: np.ndarray, period: float) -> tuple[np.ndarray, np.ndarray]:
+    """Amplitude of the oscillation at ``period`` in windows one period long, a quarter apart.
+
+    In each window a least-squares fit of ``a + b s + c cos(w s) + d sin(w s)`` (``w = 2 pi /
+    period``, ``s`` the time from the window's centre) gives the amplitude ``hypot(c, d)``:
+    the swing as the whole window sees it, far less noisy than any one sample (for white
+    noise of scale ``sigma`` and ``N`` samples, ``c`` and ``d`` scatter by
+    ``sigma * sqrt(2 / N)``).
+
+    Returns
+    -------
+    start : ndarray
+        Start time of each window, s.
+    amplitude : ndarray
+        Rad (nan for a window with fewer than 8 samples).
+    """
+    w = 2.0 * math.pi / period
+    starts = np.arange(t[0], t[-1] - period + 1e-12, 0.25 * period)
+    amp = np.full(starts.size, math.nan)
+    lo = np.searchsorted(t, starts)
+    hi = np.searchsorted(t, starts + period)
+    for k, (a, b) in enumerate(zip(lo, hi)):
+        if b - a < 8:
+            continue
+        s = t[a:b] - (starts[k] + 0.5 * period)
+        basis = np.stack([np.ones_like(s), s, np.cos(w * s), np.sin(w * s)], axis=1)
+        coef, *_ = np.linalg.lstsq(basis, x[a:b], rcond=None)
+        amp[k] = math.hypot(coef[2], coef[3])
+    return starts, amp
+
+
+def second_mode(t: np.ndarray, x: np.ndarray, period: float, *, min_ratio: float = 0.5,
+                harmonic_tol: float = 0.04) -> tuple[float, float]:
+    """The strongest faster oscillation than the one at ``period``: its period (s) and its peak
+    power relative to the main peak's.
+
+    Only frequencies above ``1/min_ratio`` times the main one are searched: nearer ones belong
+    to the main oscillation (a pendulum's frequency sweeps that far as its swing decays; two
+    close modes show as beats instead), slower ones are where holds, steps and drifts put their
+    power.  Whole multiples of the main frequency (the harmonics of an anharmonic swing, within
+    ``harmonic_tol``) are skipped.  ``(nan, 0)`` when there is none.
+    """
+    from scipy.fft import next_fast_len, rfft, rfftfreq
+    from scipy.signal.windows import tukey
+
+    n = t.size
+    dt = (t[-1] - t[0]) / (n - 1)
+    xu = np.interp(t[0] + dt * np.arange(n), t, x)
+    s = np.arange(n) - 0.5 * (n - 1)
+    xu = xu - xu.mean() - s * (s @ xu) / (s @ s)
+    nfft = next_fast_len(4 * n)
+    power = np.abs(rfft(xu * tukey(n, 0.1), nfft)) ** 2
+    freq = rfftfreq(nfft, dt)
+    f0 = 1.0 / period
+    main = float(np.max(power[(freq > f0 * 0.9) & (freq < f0 * 1.1)], initial=0.0))
+    if main <= 0.0:
+        return math.nan, 0.0
+    ratio = freq / f0
+    other = (freq <= 0.45 / dt) & (ratio > 1.0 / min_ratio)
+    other &= np.abs(ratio - np.round(ratio)) > harmonic_tol * np.maximum(np.round(ratio), 1.0)
+    if not other.any():
+        return math.nan, 0.0
+    p = np.where(other, power, 0.0)
+    peaks = np.flatnonzero((p[1:-1] >= p[:-2]) & (p[1:-1] >= p[2:]) & (p[1:-1] > 0)) + 1
+    if not peaks.size:
+        return math.nan, 0.0
+    k = peaks[np.argmax(p[peaks])]
+    return 1.0 / float(freq[k]), float(p[k] / main)

@@ -13,15 +13,20 @@ Steps
    quantisation step of an encoder; they set the hysteresis of the extremum search and the
    band within which the balance counts as at rest.
 3. **Resting tail**: where the smoothed angle stays within that band of its final value for
-   at least a period, motion has stopped; the rest is cut and reported (``stop_time``,
-   ``rest_theta``).  With dry friction the balance stops at a turning point short of the
-   centre, so when the last half swing runs into the rest that stop is the last turning point.
+   at least a period and the swing measured over whole periods
+   (:func:`~escfit.balance.recordings.extrema.local_amplitude`) has sunk into the noise,
+   motion has stopped; the rest is cut and reported (``stop_time``, ``rest_theta``).  With
+   dry friction the balance stops at a turning point short of the centre, so when the last
+   half swing runs into the rest that stop is the last turning point.
 4. **Reference** (``release_time``, ``release_theta``, the instant the model is released at
-   rest): the series' ``release_s`` when given; else the release from a held start (the
-   angle flat for a tenth of a period or more, then moving: the release is where motion
-   starts and its angle the held one); else a turning point at the first sample; else the
-   first turning point (the record starts mid-swing: releasing the model at rest at that
-   turning point is exact, the velocity being zero there).  Either sign.
+   rest): the series' ``release_s`` when given; else the start of the record's **last** free
+   decay (:mod:`escfit.balance.recordings.motion`): after the last push, pull, hold or drive,
+   the release from a hold (the angle flat for a tenth of a period or more, then moving
+   freely: the release is where motion starts and its angle the held one) or a turning point
+   (a turning point at the first sample, the first one of a record that starts mid-swing, or
+   the one a hand's pull ends in: releasing the model at rest at a turning point is exact, the
+   velocity being zero there).  Either sign.  At least three turning points (the reference
+   included) must stand above the noise.
 5. **Extrema** by hysteresis on the smoothed series
    (:func:`~escfit.balance.recordings.extrema.alternating_extrema`): maxima and minima alternate and
    a plateau of equal samples is one extremum at its centre.  Turning points are numbered by
@@ -41,11 +46,8 @@ Steps
    the resolution exceeds 2e-3 of the amplitude, only the curvature is kinked (the cubic and
    quartic terms are common to both sides): fewer parameters, less scatter, and a bias (up
    to some 2e-4 of the amplitude) well below that resolution.
-7. **Centre**: from consecutive turning points ``e1, e2, e3`` the centre estimate
-   ``((e1 + e3)/2 + e2)/2`` (exact for a linear decay) at the time of ``e2``; its drift
-   ``offset_rate`` is their Theil-Sen slope when that is significant (its 95% interval
-   excludes zero and the drift over the record exceeds a quarter of the rest band), else 0;
-   ``offset`` is the median of the estimates carried back to the release: the centre is
+7. **Centre** and its drift, with their standard errors
+   (:func:`~escfit.balance.recordings.centre.measure_centre`): the centre is
    ``offset + offset_rate*(t - release_time)``.
 
 Sign convention: angles are the series' own (signed, the sensor's zero offset still in
@@ -60,16 +62,21 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...core.errors import DataError
-from .extrema import alternating_extrema, kinked_vertex, resolution, smooth, spectral_period, vertex_at
+from .centre import measure_centre
+from .extrema import (alternating_extrema, extrema_period, kinked_vertex, local_amplitude, power_near, resolution,
+                      second_mode, smooth, spectral_period, vertex_at)
+from .motion import INTERVAL_RANGE, Turn, faded_end, growth_tolerance, levels_off, reference, steady_tail
 from .series import TimeSeries
 
-__all__ = ["TurningPoints", "reduce_series", "turning_points", "MIN_SAMPLES_PER_PERIOD"]
+__all__ = ["TurningPoints", "reduce_series", "turning_points", "period_of", "MIN_SAMPLES_PER_PERIOD", "MIN_TURNS"]
 
 MIN_SAMPLES_PER_PERIOD = 16  # the local fits need some 5 samples each side of a turn
 MIN_PROMINENCE = 50.0  # periodogram peak over median power; white noise alone gives ~log2(n)
-INTERVAL_RANGE = (0.6, 1.6)  # admissible interval between turning points, in local half periods
-HOLD_PERIODS = 0.1  # a flat start at least this long is a held balance
-START_TURN_PERIODS = 0.03  # a turn this close before the first sample counts as a start at a turn
+MIN_TURNS = 3  # turning points (the reference included) a decay needs: one whole period
+MOVING_SIGMAS = 6.0  # a window's swing above this many of its noise scales is motion
+# a second oscillation with this share of the main one's spectral power is another mode (real
+# decays in the shared corpus stay under 0.04; a struck rod's second mode holds 0.53)
+SECOND_MODE_SHARE = 0.2
 
 
 @dataclass(frozen=True)
@@ -85,8 +92,8 @@ class TurningPoints:
     theta : ndarray
         Signed angle of each, rad, the zero offset not removed.
     period : float
-        Mean period, s: twice the least-squares slope of the turning times against their
-        number.
+        Mean period, s: twice the slope of the turning times after the reference against their
+        number, weighted by the squared amplitude (:func:`period_of`).
     offset : float
         Centre of oscillation at ``release_time``, rad.
     offset_rate : float
@@ -100,6 +107,18 @@ class TurningPoints:
         ``nan`` when the record ends in motion.
     notes : list of str
         What the analysis found or assumed, as plain sentences.
+    period_stderr : float
+        Standard error of ``period``, s.
+    offset_stderr, offset_rate_stderr : float
+        Standard errors of the centre and of the measured drift (rad, rad/s); the drift's
+        is given even when the drift is not significant (``offset_rate`` 0).
+    offset_rate_measured : float
+        The drift as measured, significant or not, rad/s.
+    noise : float
+        Robust scale of the samples about a smoothing, rad (the reading noise).
+    sustained_from : float
+        Instant (s) from which the swing stops decaying while a free decay could not (a
+        drive or an escapement keeps it going); ``nan`` when it decays to the end.
     """
 
     swing: np.ndarray
@@ -113,6 +132,17 @@ class TurningPoints:
     stop_time: float = math.nan
     rest_theta: float = math.nan
     notes: list = field(default_factory=list)
+    period_stderr: float = math.nan
+    offset_stderr: float = math.nan
+    offset_rate_stderr: float = math.nan
+    offset_rate_measured: float = 0.0
+    noise: float = math.nan
+    sustained_from: float = math.nan
+
+    @property
+    def count(self) -> int:
+        """Turning points after the reference."""
+        return int(self.swing.size)
 
     def centre(self, t: np.ndarray | float) -> np.ndarray | float:
         """Centre of oscillation (rad) at times ``t`` (s)."""
@@ -135,6 +165,8 @@ class _Record:
     where: str
     notes: list
     shared: bool  # noise or quantisation dominate: only the curvature kinked at a turn
+    sigma: float = 0.0  # reading noise, rad
+    quantum: float = 0.0  # sensor step, rad
 
     def half_width(self) -> float:
         """Half width of a local vertex fit, s: ``window`` periods, at least 4.5 samples."""
@@ -152,6 +184,7 @@ class _Record:
         t, x = self.t, self.x
         tc = 0.5 * (t[first] + t[last])
         half = max(self.half_width(), 0.5 * (t[last] - t[first]) + 3 * self.dt)
+        got = None
         for _ in range(4):  # recentre on a vertex found off-centre
             if min(tc - t[0], t[-1] - tc) < 0.4 * half:
                 return None
@@ -162,18 +195,52 @@ class _Record:
                 break
             tc += fit[0] * half
             if abs(fit[0]) < 0.3:
-                return tc, fit[1]
-        if fit is not None and abs(fit[0]) < 0.7:
-            return tc, fit[1]
+                got = (tc, fit[1])
+                break
+        else:
+            if fit is not None and abs(fit[0]) < 0.7:
+                got = (tc, fit[1])
         if is_max is None:
-            return None
+            return got
+        if got is not None and self._plausible(first, last, is_max, *got):
+            return got
+        # noise can make the kinked fit prefer a corner away from the turn: a plain parabola then
+        para = self._parabola(first, last, is_max)
+        if para is not None:
+            return para
         span = self.xs[first:last + 1]
         i = first + int(np.argmax(span) if is_max else np.argmin(span))
         self.notes.append(f"the local fit near t = {t[i]:.4g} s failed; the smoothed extremum is used there")
         return float(t[i]), float(self.xs[i])
 
+    def _plausible(self, first: int, last: int, is_max: bool, tc: float, value: float) -> bool:
+        """Whether a vertex lies near the smoothed extremum, in time and in value."""
+        t = self.t
+        centre = 0.5 * (t[first] + t[last])
+        span = self.xs[first:last + 1]
+        ext = float(np.max(span) if is_max else np.min(span))
+        near = abs(tc - centre) <= 0.15 * self.period + 0.5 * (t[last] - t[first])
+        return near and abs(value - ext) <= self.step
 
-def reduce_series(series: "TimeSeries", *, window: float | None = None, degree: int = 4,
+    def _parabola(self, first: int, last: int, is_max: bool) -> tuple[float, float] | None:
+        """Vertex of a parabola through the samples within an eighth of a period of the smoothed extremum."""
+        t, x = self.t, self.x
+        centre = 0.5 * (t[first] + t[last])
+        half = max(0.125 * self.period + 0.5 * (t[last] - t[first]), 3.5 * self.dt)
+        sel = np.abs(t - centre) <= half
+        if np.count_nonzero(sel & (t < centre)) < 3 or np.count_nonzero(sel & (t > centre)) < 3:
+            return None
+        c2, c1, c0 = np.polyfit(t[sel] - centre, x[sel], 2)
+        if (c2 >= 0) if is_max else (c2 <= 0):
+            return None
+        s = -c1 / (2.0 * c2)
+        if abs(s) > half:
+            return None
+        got = (centre + s, c0 - c1 * c1 / (4.0 * c2))
+        return got if self._plausible(first, last, is_max, *got) else None
+
+
+def reduce_series(series: TimeSeries, *, window: float | None = None, degree: int = 4,
                   strict: bool = True) -> TurningPoints:
     """Turning points of a sampled free decay (see the module docstring for the method).
 
@@ -209,57 +276,113 @@ def reduce_series(series: "TimeSeries", *, window: float | None = None, degree: 
     rec = _prepare(t, x, window, degree, where)
     i_rest, rest_theta = _resting_tail(rec)
     if i_rest < t.size:
-        period, prominence = spectral_period(t[:i_rest], x[:i_rest], min_cycles=1.5)
+        period, prominence = _working_period(t[:i_rest], x[:i_rest], min_cycles=1.5)
         if math.isfinite(period) and prominence > MIN_PROMINENCE:
             rec.period = period
             rec.xs = smooth(x, period / rec.dt)
-    t_ref, theta_ref, cands = _reference(rec, series.release_s)
     t_end = t[i_rest] if i_rest < t.size else math.inf
-    if t_end - t_ref < 1.5 * rec.period:
-        raise DataError(f"motion lasts from t = {t_ref:.4g} s to {t_end:.4g} s, less than one and a half periods "
-                        f"({rec.period:.4g} s each): too short a decay to analyse", where)
-    late = [c for c in cands if t[c[0]] > t_end]
-    if late:
-        rec.notes.append(f"{len(late)} extrema after motion stopped (disturbances) left out")
-    times, values = [], []
-    for a, b, is_max in (c for c in cands if t[c[0]] <= t_end):
-        got = rec.refine(a, b, is_max=is_max)
-        if got is None:
-            rec.notes.append(f"the turning point near t = {t[a]:.4g} s is too close to the end of the record for a "
-                             "local fit; left out")
-            break
-        times.append(got[0])
-        values.append(got[1])
+    if math.isfinite(series.release_s):
+        t_ref, theta_ref, cands = _given_release(rec, series.release_s)
+        turns = _refine_all(rec, cands, t_end)
+    else:
+        cands = alternating_extrema(rec.xs, rec.step, 0)
+        turns = _refine_all(rec, cands, t_end)
+        t_ref, theta_ref, turns = reference(rec, turns)
+    times = [u.time for u in turns]
+    values = [u.value for u in turns]
     stop_time = math.nan
     if i_rest < t.size:
         stop_time = _final_turn(rec, i_rest, rest_theta, t_ref, theta_ref, times, values)
-    if len(times) < 2:
-        raise DataError(f"only {len(times)} turning point(s) after the reference at t = {t_ref:.4g} s; a decay needs "
-                        "at least two half swings", where)
-    expected = 2.0 * (min(t_end, t[-1]) - t_ref) / rec.period
-    if len(times) < 0.5 * expected - 1:
-        raise DataError(f"only {len(times)} turning points where the period of {rec.period:.4g} s suggests about "
-                        f"{expected:.0f}: not a clear oscillation", where)
     all_t = np.r_[t_ref, times]
     all_v = np.r_[theta_ref, values]
-    keep = _faded_end(rec, all_t, all_v)
+    keep = faded_end(rec, all_t, all_v)
     if keep < all_t.size:
         all_t, all_v = all_t[:keep], all_v[:keep]
         times, values = times[:keep - 1], values[:keep - 1]
         stop_time = math.nan
+    if all_t.size < MIN_TURNS:
+        raise DataError(f"only {all_t.size} turning point(s) from the reference at t = {t_ref:.4g} s on stand above "
+                        f"the noise ({math.degrees(rec.band):.2g} deg); a decay needs at least {MIN_TURNS} (one whole "
+                        "period)", where)
     _check_intervals(rec, all_t, strict)
-    _check_decay(all_t, all_v, where)
-    offset, rate = _centre(rec, all_t, all_v)
-    moving = all_t[:all_t.size - 1] if math.isfinite(stop_time) and stop_time == all_t[-1] else all_t
-    period = 2.0 * float(np.polyfit(np.arange(moving.size), moving, 1)[0])
+    centre = measure_centre(all_t, all_v, rec.band)
+    if centre.note:
+        rec.notes.append(centre.note)
+    # the reference is left out: a release from a hold or a hand is not a free turning point on
+    # its left, and a stop is none on its right
+    n_moving = all_t.size - 1 if math.isfinite(stop_time) and stop_time == all_t[-1] else all_t.size
+    amps = all_v - centre.offset - centre.rate * (all_t - t_ref)
+    period, period_se = period_of(all_t[1:n_moving], amps[1:n_moving]) if n_moving > 3 \
+        else period_of(all_t[:n_moving], amps[:n_moving])
     if math.isfinite(stop_time):
-        centre = offset + rate * (stop_time - t_ref)
-        rec.notes.append(f"motion stopped at t = {stop_time:.4g} s (resting {math.degrees(rest_theta - centre):+.3g} "
+        level = centre.offset + centre.rate * (stop_time - t_ref)
+        rec.notes.append(f"motion stopped at t = {stop_time:.4g} s (resting {math.degrees(rest_theta - level):+.3g} "
                          "deg from the centre)")
+    sustained = levels_off(all_t, all_v, growth_tolerance(rec, all_v))
+    if not math.isfinite(sustained):  # or settled after a larger transient: a drive's steady state
+        sustained = steady_tail(rec)[0]
+    if math.isfinite(sustained):
+        rec.notes.append(f"from t = {sustained:.4g} s the swing no longer decays as a free oscillator's would (it "
+                         "keeps its amplitude): something keeps it going")
     swing = np.arange(1, len(times) + 1, dtype=np.int64)
     return TurningPoints(swing, np.array(times, dtype=float), np.array(values, dtype=float), float(period),
-                         float(offset), float(rate), float(t_ref), float(theta_ref), float(stop_time),
-                         float(rest_theta) if math.isfinite(stop_time) else math.nan, rec.notes)
+                         float(centre.offset), float(centre.rate), float(t_ref), float(theta_ref), float(stop_time),
+                         float(rest_theta) if math.isfinite(stop_time) else math.nan, rec.notes,
+                         period_stderr=period_se, offset_stderr=centre.offset_stderr,
+                         offset_rate_stderr=centre.rate_stderr, offset_rate_measured=centre.measured_rate,
+                         noise=rec.sigma, sustained_from=sustained)
+
+
+def period_of(times: np.ndarray, amplitudes: np.ndarray) -> tuple[float, float]:
+    """Period (s) and its standard error from turning times and the amplitudes there.
+
+    Twice the slope of the turning times on their number, weighted by the squared amplitude:
+    a turning point's time is fixed by its curvature, so its error grows as the swing fades
+    (the last turning points of a strongly damped record scatter by a good part of a second).
+    The same rule applied to a model's turning points gives the model's period.
+    """
+    times = np.asarray(times, float)
+    k = np.arange(times.size, dtype=float)
+    if times.size < 3:
+        return 2.0 * float(times[-1] - times[0]) / max(times.size - 1, 1), math.inf
+    a = np.abs(np.asarray(amplitudes, float))
+    w = np.maximum((a / max(float(np.max(a)), 1e-300)) ** 2, 1e-4)
+    design = np.stack([k, np.ones_like(k)], axis=1)
+    normal = design.T @ (design * w[:, None])
+    coef = np.linalg.solve(normal, design.T @ (w * times))
+    resid = times - design @ coef
+    s2 = float(w @ resid**2) / (times.size - 2)
+    cov = np.linalg.inv(normal) * s2
+    return 2.0 * float(coef[0]), 2.0 * math.sqrt(max(float(cov[0, 0]), 0.0))
+
+
+def _refine_all(rec: "_Record", cands: list, t_end: float) -> list[Turn]:
+    """The candidates before ``t_end`` refined on the raw samples; stops at one too close to the end."""
+    t = rec.t
+    late = [c for c in cands if t[c[0]] > t_end]
+    if late:
+        rec.notes.append(f"{len(late)} extrema after motion stopped (disturbances) left out")
+    out: list[Turn] = []
+    for k, (a, b, is_max) in enumerate(c for c in cands if t[c[0]] <= t_end):
+        got = rec.refine(a, b, is_max=is_max)
+        if got is None and k > 0 and t[a] > t[0] + rec.period:
+            rec.notes.append(f"the turning point near t = {t[a]:.4g} s is too close to the end of the record for a "
+                             "local fit; left out")
+            break
+        out.append(Turn(a, b, is_max, None if got is None else float(got[0]), None if got is None else float(got[1])))
+    return out
+
+
+def _given_release(rec: "_Record", release_s: float) -> tuple[float, float, list]:
+    """The series' own release instant, its angle from the samples after it, and the extrema after it."""
+    t, x = rec.t, rec.x
+    i0 = int(np.searchsorted(t, release_s))
+    if i0 >= t.size - 10:
+        raise DataError(f"release_s = {release_s!r} s leaves no samples after it", rec.where)
+    right = (t >= release_s) & (t <= release_s + rec.half_width())
+    theta = vertex_at(t[right] - release_s, x[right], rec.degree)[1]
+    cands = [c for c in alternating_extrema(rec.xs, rec.step, i0) if t[c[0]] > release_s + 0.25 * rec.period]
+    return float(release_s), theta, cands
 
 
 turning_points = reduce_series  # the earlier name
@@ -286,10 +409,16 @@ def _prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, wh
     if gaps.size:
         notes.append(f"{gaps.size} gap(s) in the sampling, the first from t = {t[gaps[0]]:.4g} s to "
                      f"{t[gaps[0] + 1]:.4g} s")
-    period, prominence = spectral_period(t, x)
+    period, prominence = _working_period(t, x)
     if not math.isfinite(period) or prominence < MIN_PROMINENCE:
         raise DataError(f"no oscillation found: the spectrum has no clear peak (peak {prominence:.3g} times the median "
                         f"power, a decay gives over {MIN_PROMINENCE:g}); is this a free decay?", where)
+    other, share = second_mode(t, x, period)
+    if share >= SECOND_MODE_SHARE:
+        raise DataError(f"besides the swing of period {period:.4g} s the record holds a second oscillation of period "
+                        f"{other:.4g} s with {100 * share:.0f} % of its power: two modes (a structure's, a rod's) or "
+                        "two coupled oscillators, not one oscillator's free decay; isolate one mode before fitting",
+                        where)
     spp = period / dt
     if spp < MIN_SAMPLES_PER_PERIOD:
         raise DataError(f"the period of {period:.4g} s spans only {spp:.1f} samples; the turning-point fits need at "
@@ -304,11 +433,34 @@ def _prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, wh
     if window is None:
         window = 0.2 if resolution_ratio > 2e-4 or 0.125 * spp < 6 else 0.125
     shared = resolution_ratio > 2e-3
-    return _Record(t, x, xs, period, dt, band, step, window, degree, where, notes, shared)
+    return _Record(t, x, xs, period, dt, band, step, window, degree, where, notes, shared, sigma, quantum)
+
+
+def _working_period(t: np.ndarray, x: np.ndarray, min_cycles: float = 2.0) -> tuple[float, float]:
+    """Period (s) and periodogram prominence; the spacing of the extrema decides when they disagree.
+
+    A hold or a step puts the periodogram's largest peak at a low frequency when the decay is
+    short (a strongly damped one): the spacing of the larger extrema is then the better working
+    period (the turning times give the final one), provided the spectrum has a real peak there
+    too (a weak faster ripple on the main swing makes extrema of its own; it holds under a
+    thousandth of the power, a strongly damped swing next to a step a third).
+    """
+    period, prominence = spectral_period(t, x, min_cycles=min_cycles)
+    check = extrema_period(t, x)
+    if math.isfinite(check) and math.isfinite(period) and not 0.7 <= check / period <= 1.4:
+        there, here = power_near(t, x, [check, period])
+        if there >= 0.05 * here:
+            period = check
+    return period, prominence
 
 
 def _resting_tail(rec: _Record) -> tuple[int, float]:
-    """Index of the first sample at rest (``t.size`` when the record ends in motion) and the rest angle."""
+    """Index of the first sample at rest (``t.size`` when the record ends in motion) and the rest angle.
+
+    At rest means within the rest band of the final level for at least a period *and* no
+    swing left above the noise: a slow record's small swings hide in the band sample by
+    sample but stand out over a whole period (:func:`~escfit.balance.recordings.extrema.local_amplitude`).
+    """
     t, n = rec.t, rec.t.size
     final = t >= t[-1] - rec.period
     rest = float(np.median(rec.x[final]))
@@ -319,86 +471,16 @@ def _resting_tail(rec: _Record) -> tuple[int, float]:
     i = int(out[-1]) + 1
     if i >= n or t[-1] - t[i] < rec.period:
         return n, math.nan
+    starts, amp = local_amplitude(t[i:], rec.x[i:], rec.period)
+    per_window = max(rec.period / rec.dt, 8.0)
+    # an encoder without dither cannot show a swing under half a count, however many samples
+    floor = max(MOVING_SIGMAS * max(rec.sigma, 0.5 * rec.quantum) * math.sqrt(2.0 / per_window), 0.5 * rec.quantum)
+    moving = np.flatnonzero(amp > floor)
+    if moving.size:  # the swing goes on below the band: motion ends after the last window that shows it
+        i = int(np.searchsorted(t, starts[moving[-1]] + rec.period))
+        if i >= n or t[-1] - t[i] < rec.period:
+            return n, math.nan
     return i, float(np.median(rec.x[i:]))
-
-
-def _reference(rec: _Record, release_s: float) -> tuple[float, float, list[tuple[int, int, bool]]]:
-    """Reference instant and angle (step 4) and the extrema after it."""
-    t, x, xs, period = rec.t, rec.x, rec.xs, rec.period
-    half = rec.half_width()
-    if math.isfinite(release_s):
-        i0 = int(np.searchsorted(t, release_s))
-        if i0 >= t.size - 10:
-            raise DataError(f"release_s = {release_s!r} s leaves no samples after it", rec.where)
-        right = (t >= release_s) & (t <= release_s + half)
-        theta = vertex_at(t[right] - release_s, x[right], rec.degree)[1]
-        cands = [c for c in alternating_extrema(xs, rec.step, i0) if t[c[0]] > release_s + 0.25 * period]
-        return float(release_s), theta, cands
-    k = max(3, int(np.sum(t < t[0] + 0.05 * period)))
-    level = float(np.median(x[:k]))
-    moving = np.flatnonzero(np.abs(xs - level) > rec.band)
-    j = int(moving[0]) if moving.size else 0
-    if t[j] - t[0] >= HOLD_PERIODS * period:
-        got = rec.refine(j, j, flat="left")
-        t_ref, theta = got if got is not None else (float(t[j]), float(np.median(x[:j])))
-        rec.notes.append(f"held at {math.degrees(theta):.4g} deg until the release at t = {t_ref:.4g} s")
-        # the smoothing rings at the corner of the release: no turn comes within P/4 of it
-        cands = [c for c in alternating_extrema(xs, rec.step, j) if t[c[0]] > t_ref + 0.25 * period]
-        return t_ref, theta, cands
-    cands = alternating_extrema(xs, rec.step, 0)
-    if not cands:
-        raise DataError("no turning point found: the angle never comes back by more than "
-                        f"{math.degrees(rec.step):.3g} deg", rec.where)
-    a, b, is_max = cands[0]
-    got = rec.refine(a, b, is_max=is_max)
-    if got is None:
-        start = _turn_at_start(rec)
-        if start is not None:
-            rec.notes.append(f"the record starts at a turning point ({math.degrees(start[1]):.4g} deg on the sensor's "
-                             "scale)")
-            # the turn found may be the extremum after the first sample, not the sample itself
-            return start[0], start[1], cands[1:] if start[2] == is_max else cands[2:]
-        cands = cands[1:]
-        if not cands:
-            raise DataError("no turning point found after the first sample", rec.where)
-        a, b, is_max = cands[0]
-        got = rec.refine(a, b, is_max=is_max)
-        if got is None:
-            raise DataError(f"the first turning point near t = {t[a]:.4g} s cannot be fitted", rec.where)
-    rec.notes.append(f"the record starts mid-swing; reference: the first turning point at t = {got[0]:.4g} s "
-                     f"({math.degrees(got[1]):.4g} deg on the sensor's scale)")
-    return got[0], got[1], cands[1:]
-
-
-def _turn_at_start(rec: _Record) -> tuple[float, float, bool] | None:
-    """Time, angle and kind (maximum?) of a turning point within a few hundredths of a period
-    of the first sample; or None.
-
-    A cubic through the first fifth of a period decides (its slope vanishes there); the
-    vertex itself comes from a one-sided polynomial without linear term whose vertex time is
-    searched within 0.02 periods of that (:func:`~escfit.balance.recordings.extrema.vertex_at`).
-    """
-    t, x, period = rec.t, rec.x, rec.period
-    sel = t <= t[0] + 0.2 * period
-    s = (t[sel] - t[0]) / period
-    if s.size < 6:
-        return None
-    poly = np.polynomial.Polynomial.fit(s, x[sel], 3).convert()
-    slope = poly.deriv()
-    roots = slope.roots()
-    roots = roots[np.isreal(roots)].real
-    roots = roots[(roots >= -START_TURN_PERIODS) & (roots <= 0.05)]
-    if not roots.size:
-        return None
-    r = float(roots[np.argmin(np.abs(roots))])
-    is_max = bool(slope.deriv()(r) < 0)
-    t_turn = float(t[0] + r * period)
-    near = t <= t_turn + rec.half_width()
-    if np.count_nonzero(near) < 6:
-        return t_turn, float(poly(r)), is_max
-    bounds = (max(-START_TURN_PERIODS * period, r * period - 0.02 * period), r * period + 0.02 * period)
-    sc, value = vertex_at(t[near] - t[0], x[near], rec.degree, search=bounds)
-    return float(t[0] + sc), value, is_max
 
 
 def _final_turn(rec: _Record, i_rest: int, rest: float, t_ref: float, theta_ref: float, times: list,
@@ -421,32 +503,6 @@ def _final_turn(rec: _Record, i_rest: int, rest: float, t_ref: float, theta_ref:
     return float(t[i_rest])
 
 
-def _faded_end(rec: _Record, times: np.ndarray, values: np.ndarray) -> int:
-    """How many turning points to keep when the spacing breaks down only where the swing has faded.
-
-    A decay that dies into the reading noise ends in extrema of the noise, not of the motion:
-    when the first irregular interval comes after the swing has fallen below a tenth of its
-    reference amplitude (or three rest bands of the noise), the turning points from there on are dropped with a note (earlier
-    irregularities are left to :func:`_check_intervals`).
-    """
-    if times.size < 4:
-        return times.size
-    d = np.diff(times)
-    local = np.array([np.median(d[max(0, i - 3):i + 4]) for i in range(d.size)])
-    ratio = d / local
-    bad = np.flatnonzero((ratio < INTERVAL_RANGE[0]) | (ratio > INTERVAL_RANGE[1]))
-    if not bad.size:
-        return times.size
-    i = int(bad[0])
-    centre = np.median(values)
-    amp = np.abs(values - centre)
-    if amp[i] > max(0.1 * amp[0], 3.0 * rec.band):
-        return times.size
-    rec.notes.append(f"turning points from t = {times[i]:.4g} s on left out: the swing had faded to "
-                     f"{math.degrees(amp[i]):.2g} deg and their spacing is irregular (noise, not motion)")
-    return i + 1
-
-
 def _check_intervals(rec: _Record, times: np.ndarray, strict: bool) -> None:
     """Each interval between turning points within :data:`INTERVAL_RANGE` local half periods."""
     d = np.diff(times)
@@ -464,34 +520,3 @@ def _check_intervals(rec: _Record, times: np.ndarray, strict: bool) -> None:
     if strict:
         raise DataError(message + " (cut the record there, or pass strict=False to keep it with a note)", rec.where)
     rec.notes.append(message)
-
-
-def _check_decay(times: np.ndarray, values: np.ndarray, where: str) -> None:
-    """Refuse a swing that grows steadily: not a free decay."""
-    size = np.abs(np.diff(values))
-    if size.size < 4:
-        return
-    m = max(1, size.size // 3)
-    first, last = float(np.mean(size[:m])), float(np.mean(size[-m:]))
-    if last > 1.2 * first and np.mean(np.diff(size) > 0) > 0.6:
-        raise DataError(f"the swing grows from {math.degrees(first):.4g} to {math.degrees(last):.4g} deg "
-                        f"(peak to peak) between t = {times[0]:.4g} s and {times[-1]:.4g} s: not a free decay "
-                        "(driven, or the escapement keeps it going?)", where)
-
-
-def _centre(rec: _Record, times: np.ndarray, values: np.ndarray) -> tuple[float, float]:
-    """Centre at the first time and its drift (step 7)."""
-    if values.size < 3:
-        return float(0.5 * (values[0] + values[1])), 0.0
-    c = 0.5 * (0.5 * (values[:-2] + values[2:]) + values[1:-1])
-    tc = times[1:-1] - times[0]
-    if c.size >= 4:
-        from scipy.stats import theilslopes
-
-        rate, _, low, high = theilslopes(c, tc)
-        span = abs(rate) * (tc[-1] - tc[0])
-        if (low > 0 or high < 0) and span > 0.25 * rec.band:
-            rec.notes.append(f"the centre drifts by {math.degrees(rate * (tc[-1] - tc[0])):+.3g} deg over the "
-                             f"record ({math.degrees(rate):+.3g} deg/s)")
-            return float(np.median(c - rate * tc)), float(rate)
-    return float(np.median(c)), 0.0

@@ -1,0 +1,487 @@
+"""Where the free decay of a record starts and where it ends.
+
+A record seldom holds a free decay only.  It may begin with the oscillator held, pulled
+further by hand, pushed a second time, or kept going by a drive that is then switched off;
+it may end in a long stretch of noise once the swing has faded.  The free decay is the
+**last** stretch over which the motion obeys a free oscillator:
+
+- consecutive swings never grow: the peak-to-peak swing after a turning point is not larger
+  than the one before it, beyond the record's resolution (a hand, a second pull or a drive
+  adds energy; friction only removes it);
+- the losses per swing follow a dissipation law: a loss that grows with the amplitude
+  (Coulomb friction loses the same at every amplitude, viscous damping in proportion to it,
+  air drag in proportion to its square), so a stretch at the largest amplitudes that loses
+  almost nothing while the smaller swings after it lose much was driven (a drive switched
+  off), and a swing that stops decaying well above the noise is kept going;
+- a hold (the angle flat for a tenth of a period or more) ends it backwards: the release
+  from a hold is where the free motion starts.
+
+Its first point is the reference at which the model is released at rest: the end of a hold
+when the motion from it is free, else a turning point, where the velocity is zero, so that a
+release there is exact physics whatever the hand did before (a hand that lets go while the
+oscillator still moves outwards leaves it to reach that turning point freely).
+
+The end: turning points whose spacing breaks down once the swing has faded are noise, not
+motion (:func:`faded_end`).  Functions here take the analysis record of
+:mod:`escfit.balance.recordings.turning_points` (``t``, ``x``, ``xs``, ``period``, ``band``,
+``step``, ``notes``, ``refine``) and its refined turning points (:class:`Turn`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...core.errors import DataError
+from .extrema import vertex_at
+
+__all__ = ["Turn", "Start", "reference", "faded_end", "growth_tolerance", "growth_steps", "find_start", "levels_off",
+           "envelope", "rises", "steady_tail",
+           "INTERVAL_RANGE", "HOLD_PERIODS"]
+
+INTERVAL_RANGE = (0.6, 1.6)  # admissible interval between turning points, in local half periods
+HOLD_PERIODS = 0.1  # a flat stretch at least this long is a held oscillator
+BEAT_EPISODES = 3  # the swing growing again this many times is not one decay (beats, a drive)
+SUSTAIN_BLOCK = 4  # half swings per block of the loss-law checks
+# a cubic after a release: a quartic's freedom trades the release instant against the first
+# curvature when the noise is some 1 % of the swing (errors of 0.6 s on a 9 s period)
+RELEASE_DEGREE = 3
+START_TURN_PERIODS = 0.03  # a turn this close before the first sample counts as a start at a turn
+
+
+@dataclass(frozen=True)
+class Turn:
+    """A turning point found by the extremum search and refined on the raw samples.
+
+    ``first``/``last`` are the sample indices of the smoothed extremum (its plateau);
+    ``time`` (s) and ``value`` (rad) the refined vertex, ``None`` when no local fit fits in
+    the record there (the very start or end).
+    """
+
+    first: int
+    last: int
+    is_max: bool
+    time: float | None
+    value: float | None
+
+
+@dataclass(frozen=True)
+class Start:
+    """The reference of the free decay: instant (s), angle (rad) and the index of the first
+    turning point after it in the list of turns."""
+
+    time: float
+    theta: float
+    first: int
+    kind: str  # "held", "turn", "start" (a turning point at the first sample)
+
+
+def _amplitudes(values: np.ndarray) -> np.ndarray:
+    """Amplitude of each turning point about the centre of the ones around it (rad)."""
+    v = np.asarray(values, float)
+    if v.size < 3:
+        return np.abs(v - np.median(v))
+    mid = 0.5 * (v[:-1] + v[1:])
+    centre = np.interp(np.arange(v.size), np.arange(mid.size) + 0.5, mid)
+    return np.abs(v - centre)
+
+
+def faded_end(rec, times: np.ndarray, values: np.ndarray) -> int:
+    """How many turning points to keep when the spacing breaks down only where the swing has faded.
+
+    A decay that dies into the reading noise ends in extrema of the noise, not of the motion:
+    when the first irregular interval comes after the swing has fallen below a tenth of its
+    largest amplitude (or three rest bands), the turning points from there on are dropped with
+    a note (earlier irregularities are left to the interval check).
+    """
+    if times.size < 4:
+        return times.size
+    d = np.diff(times)
+    # the intervals before each one set its scale: the noise's own extrema come close together
+    local = np.array([np.median(d[max(0, i - 6):i]) if i >= 3 else np.median(d[:7]) for i in range(d.size)])
+    ratio = d / local
+    bad = np.flatnonzero((ratio < INTERVAL_RANGE[0]) | (ratio > INTERVAL_RANGE[1]))
+    if not bad.size:
+        return times.size
+    amp = _amplitudes(values)
+    big = float(np.max(amp))
+    for i in bad:
+        if amp[i] <= max(0.1 * big, 3.0 * rec.band) and amp[i] < 0.5 * np.max(amp[:i + 1]):
+            rec.notes.append(f"turning points from t = {times[i + 1]:.4g} s on left out: the swing had faded to "
+                             f"{math.degrees(amp[i]):.2g} deg and their spacing is irregular (noise, not motion)")
+            return int(i) + 1
+    return times.size
+
+
+def growth_tolerance(rec, values: np.ndarray) -> float:
+    """Largest change of a peak-to-peak swing that the record's resolution explains, rad."""
+    pp = np.abs(np.diff(values)) if values.size > 1 else np.zeros(1)
+    return max(rec.step, 0.02 * float(np.median(pp)))
+
+
+def growth_steps(values: np.ndarray, tol: float) -> np.ndarray:
+    """Indices ``k`` of turning points after which the swing grew: ``|v[k+1]-v[k]| > |v[k]-v[k-1]| + tol``.
+
+    Only swings of at least a fifth of the largest count: where the swing has faded, the noise
+    moves turning points by more than its scale sample by sample suggests (correlated noise).
+    """
+    pp = np.abs(np.diff(np.asarray(values, float)))
+    if not pp.size:
+        return np.zeros(0, int)
+    return np.flatnonzero((pp[1:] > pp[:-1] + tol) & (pp[1:] >= 0.2 * np.max(pp))) + 1
+
+
+def held_release(rec, turn: Turn, amplitude: float = math.inf) -> tuple[float, float] | None:
+    """The release from a hold at ``turn``: the instant motion starts and the held angle.
+
+    ``None`` unless the angle stays within the rest band of the turn's level for at least
+    :data:`HOLD_PERIODS` periods up to the departure, and for twice as long as a free turning
+    point of that ``amplitude`` (rad, about the centre) would (a small swing is flat near its
+    turning points for a good part of a period).
+    """
+    t, x, xs = rec.t, rec.x, rec.xs
+    k = max(1, int(round(0.05 * rec.period / rec.dt)))
+    lo, hi = max(0, turn.first - k), min(t.size, turn.last + k + 1)
+    level = float(np.median(x[lo:hi]))
+    out = np.abs(xs - level) > rec.band
+    right = np.flatnonzero(out[turn.last:])
+    if not right.size:
+        return None
+    j1 = turn.last + int(right[0])
+    left = np.flatnonzero(out[:turn.first + 1])
+    j0 = int(left[-1]) + 1 if left.size else 0
+    free = rec.period / math.pi * math.sqrt(2.0 * rec.band / amplitude) if amplitude > rec.band else rec.period
+    if t[j1] - t[j0] < max(HOLD_PERIODS * rec.period, 2.0 * free):
+        return None
+    got = rec.refine(j1, j1, flat="left", degree=RELEASE_DEGREE)
+    return got if got is not None else (float(t[j1]), float(np.median(x[j0:j1])))
+
+
+def _regular(interval: float, half: float) -> bool:
+    return INTERVAL_RANGE[0] <= interval / half <= INTERVAL_RANGE[1]
+
+
+def _spans_gap(rec, t0: float, t1: float) -> bool:
+    """Whether the sampling has a gap (over three median intervals) between ``t0`` and ``t1``."""
+    sel = (rec.t >= t0) & (rec.t <= t1)
+    return bool(np.any(np.diff(rec.t[sel]) > 3.0 * rec.dt)) if np.count_nonzero(sel) > 1 else True
+
+
+def _local_half(times: np.ndarray, i: int, end: int, fallback: float) -> float:
+    """Median interval of the turning points from ``i`` on (up to six), or ``fallback``."""
+    d = np.diff(times[i:min(end, i + 7)])
+    return float(np.median(d)) if d.size else fallback
+
+
+def _losses(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Amplitude and loss per half swing of blocks of :data:`SUSTAIN_BLOCK` half swings."""
+    amp = _amplitudes(values)
+    n = (amp.size - 1) // SUSTAIN_BLOCK
+    starts = np.arange(n) * SUSTAIN_BLOCK
+    level = np.array([np.mean(amp[s:s + SUSTAIN_BLOCK + 1]) for s in starts])
+    loss = np.array([(amp[s] - amp[s + SUSTAIN_BLOCK]) / SUSTAIN_BLOCK for s in starts])
+    return level, loss
+
+
+def _driven_prefix(values: np.ndarray, tol: float) -> int:
+    """Turning points at the start of a run that a drive kept going (0 when none).
+
+    A prefix of at least two blocks of half swings of one size (peak to peak, within ``tol``),
+    followed by a decay that loses more than ``3 tol`` in two blocks from that same size and at
+    least four times what the prefix lost per half swing: a free oscillator's loss depends on its
+    amplitude only, so the prefix was driven.  The last turning point of the prefix is where the
+    free motion starts.
+    """
+    pp = np.abs(np.diff(np.asarray(values, float)))
+    n = pp.size
+    if n < 3 * SUSTAIN_BLOCK:
+        return 0
+    off = np.abs(pp - pp[0]) > tol
+    steady = int(np.argmax(off)) if off.any() else n
+    if steady < 2 * SUSTAIN_BLOCK or steady > n - 2 * SUSTAIN_BLOCK:
+        return 0
+    prefix_loss = (pp[0] - pp[steady - 1]) / max(steady - 1, 1)
+    after = (pp[steady - 1] - pp[steady - 1 + 2 * SUSTAIN_BLOCK]) / (2 * SUSTAIN_BLOCK)
+    if after * 2 * SUSTAIN_BLOCK > 3 * tol and prefix_loss < 0.25 * after:
+        return steady
+    return 0
+
+
+def levels_off(times: np.ndarray, values: np.ndarray, tol: float) -> float:
+    """Instant (s) from which the swing stops decaying while a free decay could not, else ``nan``.
+
+    Losses per half swing (blocks of :data:`SUSTAIN_BLOCK`) must fall no faster than the
+    cube of the amplitude (air drag falls with its square, viscous damping with it, Coulomb
+    friction not at all): a last stretch of at least three blocks losing on average under a
+    quarter of that bound, when the bound adds up to well above the resolution ``tol`` over the
+    stretch, is sustained.
+    """
+    level, loss = _losses(values)
+    if level.size < 5:
+        return math.nan
+    first = float(np.max(loss[:2]))
+    for j in range(2, level.size - 2):
+        bound = first * (level[j] / level[0]) ** 3
+        tail = loss[j:]
+        if bound * SUSTAIN_BLOCK * tail.size > 3 * tol and np.mean(tail) < 0.25 * bound and tail.size >= 3:
+            return float(times[j * SUSTAIN_BLOCK])
+    return math.nan
+
+
+def envelope(rec) -> tuple[np.ndarray, np.ndarray]:
+    """Start times (s) and swing (rad) of windows of one and a half periods, a quarter apart.
+
+    The swing is half the range of the smoothed angle in the window: long enough to hold a
+    whole swing of a pendulum whose period shortens as it decays, and blind to the frequency.
+    """
+    t, xs = rec.t, rec.xs
+    width = 1.5 * rec.period
+    starts = np.arange(t[0], t[-1] - width + 1e-12, 0.25 * rec.period)
+    lo = np.searchsorted(t, starts)
+    hi = np.searchsorted(t, starts + width)
+    return starts, np.array([0.5 * float(np.ptp(xs[a:b])) if b > a else 0.0 for a, b in zip(lo, hi)])
+
+
+def rises(rec) -> list[float]:
+    """Start times (s) of the episodes in which the swing grows, from its :func:`envelope`.
+
+    An episode starts when the envelope climbs a quarter above its lowest value since the last
+    episode (and by more than the smoothed noise can), and ends once it has fallen a tenth below
+    its highest.  A release from a hold or from rest is one episode, beating modes make one per
+    beat.
+    """
+    starts, env = envelope(rec)
+    if starts.size < 3:
+        return []
+    floor = 3.0 * rec.sigma + 2.0 * rec.quantum
+    out: list[float] = []
+    low, high, rising = env[0], env[0], False
+    for s, e in zip(starts, env):
+        if rising:
+            high = max(high, e)
+            if e < 0.9 * high:
+                rising, low = False, e
+        else:
+            low = min(low, e)
+            if e > 1.25 * low + floor:
+                rising, high = True, e
+                out.append(float(s))
+    return out
+
+
+def steady_tail(rec) -> tuple[float, float, float]:
+    """Where the swing settles for good while a free decay could not: start (s), amplitude (rad)
+    and length (periods) of the final stretch of the :func:`envelope` that stays within 15 % of
+    itself; ``(nan, nan, 0)`` when there is none.
+
+    A free decay may slow down as it fades (air drag loses with the square of the speed), but
+    its logarithmic decrement cannot fall faster than the square of the amplitude: with the
+    decrement of the first three periods after the largest swing, ``d0`` at amplitude ``A0``, a
+    stretch at amplitude ``A`` must lose at least ``d0 (A/A0)^2`` per period.  A stretch of ten
+    periods or more that is expected to lose over a quarter of its amplitude that way and loses
+    under a quarter of that is kept going by something (a drive's steady state after its
+    transient, an escapement).
+    """
+    starts, env = envelope(rec)
+    if starts.size < 40:
+        return math.nan, math.nan, 0.0
+    k = env.size - 1
+    while k > 0 and np.max(env[k - 1:]) <= 1.15 * np.min(env[k - 1:]):
+        k -= 1
+    periods = (starts[-1] - starts[k]) / rec.period
+    level = float(np.mean(env[k:]))
+    top = int(np.argmax(env))
+    later = top + int(round(3 * 4))  # windows are a quarter period apart
+    if periods < 10 or level < 20 * (rec.sigma + rec.quantum) or later >= k:
+        return math.nan, math.nan, 0.0
+    d0 = math.log(env[top] / max(env[later], 1e-300)) / 3.0
+    expected = d0 * (level / env[top]) ** 2 * periods
+    observed = math.log(np.max(env[k:]) / max(np.min(env[k:]), 1e-300))
+    if expected > math.log(4.0 / 3.0) and observed < 0.25 * expected:
+        return float(starts[k]), level, periods
+    return math.nan, math.nan, 0.0
+
+
+def find_start(rec, turns: list[Turn], end: int, *, at_start: bool = False) -> Start:
+    """The reference of the free decay among ``turns[:end]`` (see the module docstring).
+
+    Appends what was found to ``rec.notes``.  ``turns`` must be refined (``time`` set) from
+    the first one that can be the reference on; an unrefined first turn (at the very start
+    of the record) is handled by the caller.  ``at_start``: ``turns[0]`` is a turning point at
+    the record's first sample (the caller notes it).
+    """
+    ok = [i for i in range(end) if turns[i].time is not None]
+    if not ok:
+        raise DataError("no turning point found: the angle never comes back by more than "
+                        f"{math.degrees(rec.step):.3g} deg", rec.where)
+    first_ok = ok[0]
+    times = np.array([turns[i].time if turns[i].time is not None else np.nan for i in range(end)])
+    values = np.array([turns[i].value if turns[i].value is not None else np.nan for i in range(end)])
+    tol = growth_tolerance(rec, values[first_ok:])
+    grow = growth_steps(values[first_ok:], tol) + first_ok
+    r = first_ok
+    why = ""
+    if grow.size:
+        r = int(grow[-1])
+        why = f"the swing grows after the turning point at t = {times[r]:.4g} s (a push or pull)"
+    # a hold within the run (a long interval after a flat turn) ends it backwards: the last one is the release
+    for i in range(end - 1, r, -1):
+        half = _local_half(times, i, end, 0.5 * rec.period)
+        if (times[i] - times[i - 1]) / half > INTERVAL_RANGE[1] \
+                and held_release(rec, turns[i - 1], 0.5 * abs(values[i] - values[i - 1])) is not None:
+            r, why = i - 1, f"the oscillator is held at {math.degrees(values[i - 1]):.4g} deg before t = {times[i]:.4g} s"
+            break
+    driven = _driven_prefix(values[r:end], tol)
+    if driven:
+        why = (f"the swing keeps its amplitude until t = {times[r + driven]:.4g} s and then decays at that same "
+               "amplitude (a drive switched off)")
+        r += driven
+    pulled = r == first_ok + 1 and held_release(rec, turns[first_ok]) is not None
+    if pulled:
+        rec.notes.append(f"held at {math.degrees(values[first_ok]):.4g} deg, then moved to "
+                         f"{math.degrees(values[r]):.4g} deg by hand: the free swing starts at that turning point "
+                         f"(t = {times[r]:.4g} s), the reference")
+    elif r > first_ok:
+        rec.notes.append(f"the record before t = {times[r]:.4g} s is not a free decay ({why}); the free decay is "
+                         "taken from there")
+    amplitude = 0.5 * abs(values[r + 1] - values[r]) if r + 1 < end else math.inf
+    held = held_release(rec, turns[r], amplitude)
+    if held is not None and r + 1 < end \
+            and _regular(times[r + 1] - held[0], _local_half(times, r + 1, end, 0.5 * rec.period)):
+        rec.notes.append(f"held at {math.degrees(held[1]):.4g} deg until the release at t = {held[0]:.4g} s")
+        return Start(held[0], held[1], r + 1, "held")
+    if r == first_ok and not (at_start and r == 0):
+        _note_pull(rec, turns[r])
+    return Start(float(times[r]), float(values[r]), r + 1, "turn")
+
+
+def _note_pull(rec, turn: Turn) -> None:
+    """Note how the record reached its reference turning point."""
+    t, x = rec.t, rec.x
+    k = max(3, int(np.sum(t < t[0] + 0.05 * rec.period)))
+    level = float(np.median(x[:k]))
+    moved = np.abs(rec.xs[:turn.first + 1] - level) > rec.band
+    j = int(np.argmax(moved)) if moved.any() else turn.first
+    if t[j] - t[0] >= HOLD_PERIODS * rec.period and abs(level - turn.value) > rec.band:
+        rec.notes.append(f"held at {math.degrees(level):.4g} deg until t = {t[j]:.4g} s, then moved to "
+                         f"{math.degrees(turn.value):.4g} deg: the free swing starts at that turning point "
+                         f"(t = {turn.time:.4g} s), the reference")
+    elif turn.first > 0 or turn.time > t[0] + 0.05 * rec.period:
+        rec.notes.append(f"the record starts mid-swing; reference: the first turning point at t = {turn.time:.4g} s "
+                         f"({math.degrees(turn.value):.4g} deg on the sensor's scale)")
+
+
+def reference(rec, turns: list[Turn]) -> tuple[float, float, list[Turn]]:
+    """The reference instant and angle of a record without a given release, and the turning
+    points after it (see the module docstring and :mod:`escfit.balance.recordings.turning_points`)."""
+    if not turns:
+        raise DataError("no turning point found: the angle never comes back by more than "
+                        f"{math.degrees(rec.step):.3g} deg", rec.where)
+    at_start = held = False
+    if turns[0].time is None:  # the first extremum lies too close to the start for a local fit
+        start = _turn_at_start(rec)
+        flat = _flat_start(rec) if start is None or start[2] != turns[0].is_max else None
+        if flat is not None:  # a held start fits a cubic's turn of the wrong kind
+            start = None
+        if start is not None:
+            at_start = True
+            # the turn found may be the extremum after the first sample, not the sample itself
+            rest = turns[1:] if start[2] == turns[0].is_max else turns[2:]
+            turns = [Turn(0, 0, start[2], start[0], start[1])] + rest
+        elif flat is not None:
+            at_start = held = True
+            turns = [Turn(turns[0].first, turns[0].last, turns[0].is_max, flat[0], flat[1])] + turns[1:]
+        else:
+            turns = turns[1:]
+    episodes = rises(rec)
+    if len(episodes) >= BEAT_EPISODES:
+        when = ", ".join(f"{s:.4g}" for s in episodes[:6])
+        settled, level, periods = steady_tail(rec)
+        if math.isfinite(settled):
+            raise DataError(f"the swing grows again {len(episodes)} times and from about t = {settled:.4g} s keeps an "
+                            f"amplitude of {math.degrees(level):.3g} deg for {periods:.0f} periods, to the end: a "
+                            "driven oscillation (a drive's steady state), not a free decay; a decay after the drive "
+                            "is switched off can be cut out with [recording] start and stop", rec.where)
+        raise DataError(f"the swing grows again {len(episodes)} times (from about t = {when} s): beating modes, a "
+                        "drive or repeated pushes, not one oscillator's free decay; cut the record to one decay with "
+                        "[recording] start and stop", rec.where)
+    if len(episodes) >= 2:  # a decay, then the oscillator was set swinging again: the last one counts
+        later = [i for i, u in enumerate(turns) if u.time is not None and u.time >= episodes[-1] - 0.5 * rec.period]
+        if later and later[0] > 0:
+            rec.notes.append(f"the swing grows again from about t = {episodes[-1]:.4g} s (a second push or pull): "
+                             "the record before is left out")
+            turns, at_start, held = turns[later[0]:], False, False
+    end = len(turns)
+    while end and turns[end - 1].time is None:
+        end -= 1
+    done = [u for u in turns[:end] if u.time is not None]
+    _check_decay(np.array([u.time for u in done]), np.array([u.value for u in done]), rec.where)
+    if done:  # the faded end first: extrema of the noise must not pass for a push
+        skipped = end - len(done)
+        end = skipped + faded_end(rec, np.array([u.time for u in done]), np.array([u.value for u in done]))
+    found = find_start(rec, turns, end, at_start=at_start)
+    if at_start and found.first == 1 and found.kind == "turn":
+        if held:
+            rec.notes.append(f"held at {math.degrees(found.theta):.4g} deg until the release at t = "
+                             f"{found.time:.4g} s")
+        else:
+            rec.notes.append(f"the record starts at a turning point ({math.degrees(found.theta):.4g} deg on the "
+                             "sensor's scale)")
+    return found.time, found.theta, turns[found.first:end]
+
+
+def _flat_start(rec) -> tuple[float, float] | None:
+    """A record that starts flat (held, however briefly) and then moves: the release and the held angle."""
+    t, x = rec.t, rec.x
+    k = max(3, int(np.sum(t < t[0] + 0.02 * rec.period)))
+    level = float(np.median(x[:k]))
+    out = np.flatnonzero(np.abs(rec.xs - level) > rec.band)
+    if not out.size or out[0] < 3:
+        return None
+    return rec.refine(int(out[0]), int(out[0]), flat="left", degree=RELEASE_DEGREE)
+
+
+def _turn_at_start(rec) -> tuple[float, float, bool] | None:
+    """Time, angle and kind (maximum?) of a turning point within a few hundredths of a period
+    of the first sample; or None.
+
+    A cubic through the first fifth of a period decides (its slope vanishes there); the
+    vertex itself comes from a one-sided polynomial without linear term whose vertex time is
+    searched within 0.02 periods of that (:func:`~escfit.balance.recordings.extrema.vertex_at`).
+    """
+    t, x, period = rec.t, rec.x, rec.period
+    sel = t <= t[0] + 0.2 * period
+    s = (t[sel] - t[0]) / period
+    if s.size < 6:
+        return None
+    poly = np.polynomial.Polynomial.fit(s, x[sel], 3).convert()
+    slope = poly.deriv()
+    roots = slope.roots()
+    roots = roots[np.isreal(roots)].real
+    roots = roots[(roots >= -START_TURN_PERIODS) & (roots <= 0.05)]
+    if not roots.size:
+        return None
+    r = float(roots[np.argmin(np.abs(roots))])
+    is_max = bool(slope.deriv()(r) < 0)
+    t_turn = float(t[0] + r * period)
+    near = t <= t_turn + rec.half_width()
+    if np.count_nonzero(near) < 6:
+        return t_turn, float(poly(r)), is_max
+    bounds = (max(-START_TURN_PERIODS * period, r * period - 0.02 * period), r * period + 0.02 * period)
+    sc, value = vertex_at(t[near] - t[0], x[near], rec.degree, search=bounds)
+    return float(t[0] + sc), value, is_max
+
+
+def _check_decay(times: np.ndarray, values: np.ndarray, where: str) -> None:
+    """Refuse a swing that grows steadily (most peak-to-peak swings larger than the one before): not a free decay."""
+    size = np.abs(np.diff(values))
+    if size.size < 4:
+        return
+    m = max(1, size.size // 3)
+    first, last = float(np.mean(size[:m])), float(np.mean(size[-m:]))
+    if last > 1.2 * first and np.mean(np.diff(size) > 0) > 0.6:
+        raise DataError(f"the swing grows from {math.degrees(first):.4g} to {math.degrees(last):.4g} deg "
+                        f"(peak to peak) between t = {times[0]:.4g} s and {times[-1]:.4g} s: a driven or sustained "
+                        "oscillation (a drive, an escapement, a sound), not a free decay", where)
