@@ -26,7 +26,6 @@ import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from types import SimpleNamespace
 
 import numpy as np
 
@@ -258,7 +257,7 @@ def survey(path: str | Path, *, restoring: str = "spring", recording: dict | Non
 
 
 def _survey_samples(s: Survey, series: TimeSeries, restoring: str) -> None:
-    from .problems.recorded import omega0_from_period
+    from .problems.period import implied_omega0, measured_period
     from .recordings.turning_points import reduce_series
 
     tp = reduce_series(series, strict=False)
@@ -272,7 +271,7 @@ def _survey_samples(s: Survey, series: TimeSeries, restoring: str) -> None:
     s.counts = {"samples": int(t.size), "duration": float(t[-1] - t[0]), "turning points": int(len(tp.theta)),
                 "rate": float((t.size - 1) / (t[-1] - t[0])) if t.size > 1 and t[-1] > t[0] else math.nan,
                 "centre": float(tp.offset), "centre rate": float(tp.offset_rate),
-                "omega0": float(omega0_from_period(SimpleNamespace(restoring=restoring), tp))}
+                "omega0": implied_omega0(restoring, measured_period(tp, series.source))}
     s.notes = list(tp.notes)
     s.format_words = series.meta.get("source_format", "escfit time series (time_s, theta)")
     s.columns_words = _columns_words(series.meta)
