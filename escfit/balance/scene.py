@@ -11,7 +11,9 @@ from ..core.params import Param, ParamSet, read_param
 from ..core.scene import check_keys
 from ..core.units import BARE_ANGLE_LIMIT, to_canonical
 from .effects import EFFECTS
-from .effects.base import OMEGA0_RANGE, ReadContext, SystemBuilder
+from .effects.base import OMEGA0_RANGE, ReadContext, squared
+from .records import blank
+from .system import System
 
 __all__ = ["BalanceScene", "parse", "TOP_KEYS"]
 
@@ -61,7 +63,7 @@ class BalanceScene:
         """The effect named ``key`` or ``None``."""
         return next((e for e in self.effects if e.key == key), None)
 
-    def build(self, values: Mapping[str, float] | None = None) -> SystemBuilder:
+    def build(self, values: Mapping[str, float] | None = None) -> System:
         """Assemble the numeric system for a parameter set (defaults: the scene's values).
 
         Parameters
@@ -72,13 +74,25 @@ class BalanceScene:
         vals = self.params.values() if values is None else self.params.with_values(values).values()
         return self.system(vals)
 
-    def system(self, vals: Mapping[str, float]) -> SystemBuilder:
-        """Assemble the numeric system from a complete name -> value mapping (ties resolved)."""
-        sys = SystemBuilder(theta0=vals["oscillator.theta0"], omega0=vals.get("oscillator.omega0", math.nan),
-                            restoring=self.restoring)
+    def system(self, vals: Mapping[str, float], n: int = 1) -> System:
+        """Assemble the coefficient records from a complete name -> value mapping (ties resolved).
+
+        Parameters
+        ----------
+        vals
+            Every parameter by name: numbers, or arrays of ``n`` entries (one per parameter set).
+        n
+            Number of parameter sets.
+        """
+        k = blank(n)
+        omega0 = vals.get("oscillator.omega0", math.nan)
+        k["theta0"] = vals["oscillator.theta0"]
+        k["omega0"] = omega0
+        k["sp_w2"][:, 0] = squared(omega0)  # the linear spring (or gravity), unless a hairspring's pieces replace it
+        k["pendulum"] = self.restoring == "pendulum"
         for eff in self.effects:
-            eff.apply(vals, sys)
-        return sys
+            eff.fill(vals, k)
+        return System(k, self.switching, self.effects, self.restoring)
 
     def with_values(self, values: Mapping[str, float]) -> "BalanceScene":
         """A copy whose parameters take the given values."""
