@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 
 from ..core.kernels import kernel
+from .effects import stiffening
 
 __all__ = ["acceleration", "jerk", "smooth_terms"]
 
@@ -26,9 +27,7 @@ __all__ = ["acceleration", "jerk", "smooth_terms"]
 @kernel(inline="always")
 def smooth_terms(x, v, k):
     """Swing-frame acceleration of every smooth effect (rad/s^2) and its derivatives by x and v."""
-    a = 0.0
-    a_x = 0.0
-    a_v = 0.0
+    a, a_x, a_v = stiffening.torque(x, v, k)
     return a, a_x, a_v
 
 
