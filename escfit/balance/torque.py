@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 
 from ..core.kernels import kernel
-from .effects import stiffening
+from .effects import drag, stiffening
 
 __all__ = ["acceleration", "jerk", "smooth_terms"]
 
@@ -28,7 +28,8 @@ __all__ = ["acceleration", "jerk", "smooth_terms"]
 def smooth_terms(x, v, k):
     """Swing-frame acceleration of every smooth effect (rad/s^2) and its derivatives by x and v."""
     a, a_x, a_v = stiffening.torque(x, v, k)
-    return a, a_x, a_v
+    d, d_x, d_v = drag.torque(x, v, k)
+    return a + d, a_x + d_x, a_v + d_v
 
 
 @kernel(inline="always")
