@@ -165,8 +165,8 @@ def _spread(scene, n_sets: int, seed: int = 0) -> list:
     return [scene.build({key: v * rng.uniform(0.7, 1.3) for key, v in base.items()}) for _ in range(n_sets)]
 
 
-def worker(min_time: float, n_sets: int) -> dict:
-    """One repetition of every case: microseconds per unit of work (CPU and wall)."""
+def worker(min_time: float, n_sets: int, only: str = "") -> dict:
+    """One repetition of every case (whose name holds ``only``): microseconds per unit of work."""
     import escfit.balance.solvers as solvers
 
     root = Path(os.getcwd())
@@ -176,6 +176,8 @@ def worker(min_time: float, n_sets: int) -> dict:
             CASES[5]: 120}
     out = {}
     for name, call in calls.items():
+        if only not in name:
+            continue
         call(1)  # compile or load, and warm the caches
         w0 = time.perf_counter()
         call(1)
@@ -189,13 +191,14 @@ def worker(min_time: float, n_sets: int) -> dict:
 
 # -- the driver --------------------------------------------------------------------------------
 
-def run(repeat: int, baseline: str, min_time: float, n_sets: int) -> dict:
+def run(repeat: int, baseline: str, min_time: float, n_sets: int, only: str = "") -> dict:
     """All measurements, as a JSON-ready dictionary."""
     from previous import checkout, run_in
 
     folders = {"previous": checkout(baseline), "new": None}
-    samples = {impl: {case: {"cpu": [], "wall": []} for case in CASES} for impl in folders}
-    args = ["--worker", "--min-time", str(min_time), "--sets", str(n_sets)]
+    cases = [case for case in CASES if only in case]
+    samples = {impl: {case: {"cpu": [], "wall": []} for case in cases} for impl in folders}
+    args = ["--worker", "--min-time", str(min_time), "--sets", str(n_sets), "--only", only]
     for _ in range(repeat):
         for impl, folder in folders.items():
             res = run_in(folder, HERE, args)
@@ -203,7 +206,7 @@ def run(repeat: int, baseline: str, min_time: float, n_sets: int) -> dict:
                 for clock in ("cpu", "wall"):
                     samples[impl][case][clock].append(m[clock])
     records = []
-    for case in CASES:
+    for case in cases:
         rec = {"case": case}
         for impl in folders:
             s = samples[impl][case]
@@ -238,10 +241,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--min-time", type=float, default=0.3, help="seconds per case and repetition (default 0.3)")
     parser.add_argument("--sets", type=int, default=2048, help="parameter sets of the batch cases (default 2048)")
     parser.add_argument("--force", action="store_true", help="replace existing output files")
+    parser.add_argument("--only", default="", help="run only the cases whose name contains this text")
     parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.worker:
-        print(json.dumps(worker(args.min_time, args.sets)))
+        print(json.dumps(worker(args.min_time, args.sets, args.only)))
         return 0
     if args.json and Path(args.json).exists() and not args.force:  # refused before the run, not after it
         parser.error(f"{args.json} exists; pass --force to replace it")
@@ -249,7 +253,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--repeat must be >= 1 and --min-time > 0")
     before = os.getloadavg()
     print(f"load average before: {before[0]:.2f} {before[1]:.2f} {before[2]:.2f} ({os.cpu_count()} cpus)")
-    result = run(args.repeat, args.baseline, args.min_time, args.sets)
+    result = run(args.repeat, args.baseline, args.min_time, args.sets, args.only)
     after = os.getloadavg()
     result["load_average_before"], result["load_average_after"] = before, after
     print(table(result))

@@ -29,6 +29,7 @@ import numpy as np
 
 import escfit
 from escfit.balance import System
+from escfit.balance.system import Structure
 from escfit.balance.batch import solve_batch
 from escfit.balance.solvers import solve_system
 
@@ -214,7 +215,8 @@ def run_case(case: Case, *, quick: bool = False, batch_sets: int = 1024,
             # naive RK4 cannot model banking; the reference run never reaches the pins
             k = sys.k.copy()
             k["bank"] = math.inf
-            run_sys = replace(sys, k=k, effects=tuple(e for e in sys.effects if e.key != "banking"))
+            run_sys = replace(sys, k=k, structure=Structure(tuple(e for e in sys.effects if e.key != "banking"),
+                                                            sys.restoring, sys.switching))
             note = "banking removed (never reached)"
         solve_system(run_sys, 1, solver, **opts)  # compile / warm up on one swing
         last = {}

@@ -40,7 +40,7 @@ from scipy.integrate._ivp import dop853_coefficients as _coefficients
 from ..core.errors import SolverError
 from ..core.kernels import kernel
 from ..core.status import Status
-from .records import ROWS_FULL, half_swings, run_options, with_rows
+from .records import ROWS_FULL, columns, half_swings, run_options, with_rows
 from .regions import region_tables
 from .segment import CREEP_OVERSHOOT, creep_horizon
 from .solution import ROW_DOP853, RowSolution
@@ -444,8 +444,7 @@ def solve_dop853(system: System, n_swings: int, *, rtol: float = 1e-10, atol: fl
     # room for ~64 steps per half swing; more is made when a run needs it
     (n_done, status, n_seg, steps, t, th, om, n_rows), rows = with_rows(
         lambda buf: run_one(k, run, out, buf), 64 * min(n_swings, 10_000) + 256, 9, dense)
-    traj = Trajectory(*(out[f][:n_done].copy() for f in ("amplitude", "theta_turn", "half_period", "time")),
-                      out["banked"][:n_done].astype(bool), Status(status), system.omega0, "dop853", options, n_seg,
+    traj = Trajectory(*columns(out, n_done), Status(status), system.omega0, "dop853", options, n_seg,
                       steps, (t, th, om))
     if dense:
         traj.dense = RowSolution(rows[:n_rows].copy(), ROW_DOP853, k, traj)

@@ -17,6 +17,7 @@ positional arrays it replaces (``benchmarks/kernels.py``).
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -26,7 +27,7 @@ from .effects.base import Slot
 from .effects.hairspring import MAX_PIECES
 
 __all__ = ["COEFFICIENTS", "SLOTS", "RUN", "HALF_SWING", "MAX_PIECES", "ROWS_FULL", "blank", "run_options",
-           "half_swings", "with_rows"]
+           "half_swings", "columns", "with_rows"]
 
 #: What a kernel returns as its status when the dense solution's rows ran out of room: the front
 #: end runs it again with more (:func:`with_rows`).  Not a :class:`~escfit.core.status.Status`:
@@ -40,6 +41,7 @@ OSCILLATOR_SLOTS = (
     Slot("v0", 0.0, "v0", "rad/s", "angular velocity at the release (0: released at rest)"),
     Slot("omega0", 1.0, "omega0", "rad/s", "reference natural frequency (the rate's)"),
     Slot("pendulum", 0, "pendulum", "", "1: restoring acceleration omega0**2 * sin(theta) (gravity)", dtype="i8"),
+    Slot("smooth", 0, "smooth torques", "", "1: an effect adds a smooth torque (escfit.balance.torque)", dtype="i8"),
     Slot("n_pieces", 1, "pieces", "", "pieces of the restoring torque", dtype="i8"),
     Slot("sp_bp", 0.0, "hairspring angles", "rad", "angles between the restoring torque's pieces (ascending)",
          size=MAX_PIECES - 1, count="n_pieces", extra=-1),
@@ -76,12 +78,16 @@ def _prototype() -> np.ndarray:
     return proto
 
 
-_PROTOTYPE = _prototype()
+#: the defaults as the record's raw 8-byte words (copying those is a memcpy; copying a structured
+#: array with subarray fields goes field by field and took 9 us)
+_PROTOTYPE = _prototype().view(np.float64)
 
 
 def blank(n: int) -> np.ndarray:
     """``n`` coefficient records holding every slot's default."""
-    return _PROTOTYPE.copy() if n == 1 else np.repeat(_PROTOTYPE, n)
+    k = np.empty(n, COEFFICIENTS)
+    k.view(np.float64).reshape(n, _PROTOTYPE.size)[:] = _PROTOTYPE
+    return k
 
 
 #: Run options of a kernel call (each solver reads the ones it takes).
@@ -99,10 +105,14 @@ RUN = np.dtype([
 ])
 
 
+@functools.lru_cache(maxsize=512)
 def run_options(n_swings: int, *, max_segments: int = 0, max_steps: int = 0, t_end: float = math.inf,
                 dense: bool = False, rtol: float = 0.0, atol_x: float = 0.0, atol_v: float = 0.0,
                 h: float = 0.0, mode: int = 0) -> np.ndarray:
-    """One :data:`RUN` record (an array of one, which numba receives fastest)."""
+    """One :data:`RUN` record (an array of one, which numba receives fastest).
+
+    The same options give the same array (kernels only read it): do not write to it.
+    """
     run = np.zeros(1, RUN)
     run[0] = (n_swings, max_segments, max_steps, t_end, int(dense), rtol, atol_x, atol_v, h, mode)
     return run
@@ -116,6 +126,14 @@ HALF_SWING = np.dtype([
     ("time", "f8"),         # time at its end since the release (s)
     ("banked", "i8"),       # 1: it ended on the banking pins
 ])
+
+
+def columns(out: np.ndarray, n: int) -> tuple:
+    """Copies of the first ``n`` half swings' amplitude, theta_turn, half_period, time and banked
+    (bool) columns: the arrays a :class:`~escfit.balance.trajectory.Trajectory` holds."""
+    done = out[:n]
+    return (done["amplitude"].copy(), done["theta_turn"].copy(), done["half_period"].copy(), done["time"].copy(),
+            done["banked"].astype(bool))
 
 
 def half_swings(*shape: int, nan: bool = False) -> np.ndarray:

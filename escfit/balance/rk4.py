@@ -27,7 +27,7 @@ import numpy as np
 from ..core.errors import SolverError
 from ..core.kernels import kernel
 from ..core.status import Status
-from .records import ROWS_FULL, half_swings, run_options, with_rows
+from .records import ROWS_FULL, columns, half_swings, run_options, with_rows
 from .regions import region_at, swing_edges
 from .segment import CREEP_OVERSHOOT, creep_horizon
 from .solution import ROW_RK4, RowSolution
@@ -368,8 +368,7 @@ def solve_rk4(system: System, n_swings: int, *, h: float = 1e-6, locate_events: 
     rows_per_swing = 4 + int(min(math.pi / (system.omega0 * h), 1e7)) // ROW_STEPS
     (n_done, status, steps, t, th, om, n_rows), rows = with_rows(
         lambda buf: _run_one(system.k, run, out, buf), rows_per_swing * min(n_swings, 1000) + 64, 10, dense)
-    traj = Trajectory(*(out[f][:n_done].copy() for f in ("amplitude", "theta_turn", "half_period", "time")),
-                      out["banked"][:n_done].astype(bool), Status(status), system.omega0, "rk4",
+    traj = Trajectory(*columns(out, n_done), Status(status), system.omega0, "rk4",
                       {"h": h, "locate_events": locate_events, "max_steps": max_steps}, 0, steps, (t, th, om))
     if dense:
         traj.dense = RowSolution(rows[:n_rows].copy(), ROW_RK4, system.k, traj)

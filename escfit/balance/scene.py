@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Any, Mapping
@@ -12,8 +13,7 @@ from ..core.scene import check_keys
 from ..core.units import BARE_ANGLE_LIMIT, to_canonical
 from .effects import EFFECTS
 from .effects.base import OMEGA0_RANGE, ReadContext, squared
-from .records import blank
-from .system import System
+from .system import Structure, System
 
 __all__ = ["BalanceScene", "parse", "TOP_KEYS"]
 
@@ -59,6 +59,11 @@ class BalanceScene:
     model: str = "balance"
     restoring: str = "spring"
 
+    @functools.cached_property
+    def structure(self) -> Structure:
+        """What the scene's effects fix for all its parameter sets (needs, prepared record)."""
+        return Structure(self.effects, self.restoring, self.switching)
+
     def effect(self, key: str):
         """The effect named ``key`` or ``None``."""
         return next((e for e in self.effects if e.key == key), None)
@@ -84,15 +89,14 @@ class BalanceScene:
         n
             Number of parameter sets.
         """
-        k = blank(n)
+        k = self.structure.records(n)
         omega0 = vals.get("oscillator.omega0", math.nan)
         k["theta0"] = vals["oscillator.theta0"]
         k["omega0"] = omega0
         k["sp_w2"][:, 0] = squared(omega0)  # the linear spring (or gravity), unless a hairspring's pieces replace it
-        k["pendulum"] = self.restoring == "pendulum"
         for eff in self.effects:
             eff.fill(vals, k)
-        return System(k, self.switching, self.effects, self.restoring)
+        return System(k, self.structure)
 
     def with_values(self, values: Mapping[str, float]) -> "BalanceScene":
         """A copy whose parameters take the given values."""

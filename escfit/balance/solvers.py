@@ -22,6 +22,7 @@ solver      method                                               handles
 
 from __future__ import annotations
 
+import functools
 import importlib
 import math
 from typing import Any, Callable, NamedTuple
@@ -32,9 +33,9 @@ from ..core.errors import SolverError
 from ..core.status import Status
 from .effects.base import NEEDS
 from .exact import run_one, run_phase_one
-from .records import half_swings, run_options, with_rows
+from .records import COEFFICIENTS, columns, half_swings, run_options, with_rows
 from .solution import ROW_EXACT, RowSolution
-from .system import System
+from .system import Structure, System
 from .trajectory import Trajectory
 
 __all__ = ["SOLVERS", "SolverSpec", "solve_system", "default_solver", "check", "capability", "check_scene",
@@ -68,8 +69,7 @@ def solve_exact(system: System, n_swings: int, *, max_segments: int | None = Non
     # room for the segments of ~4 regions per half swing; more is made when a run needs it
     (n_done, status, n_seg, t, theta, omega), log = with_rows(
         lambda rows: kernel(system.k, run, out, rows), min(nseg, 4 * n_swings + 64), 9, dense)
-    traj = Trajectory(*(out[f][:n_done].copy() for f in ("amplitude", "theta_turn", "half_period", "time")),
-                      out["banked"][:n_done].astype(bool), Status(status), system.omega0, "exact",
+    traj = Trajectory(*columns(out, n_done), Status(status), system.omega0, "exact",
                       {"max_segments": nseg}, n_seg, 0, (t, theta, omega))
     if dense:
         traj.dense = RowSolution(log[:n_seg].copy(), ROW_EXACT, system.k, traj)
@@ -128,14 +128,21 @@ def default_solver(scene_or_system: Any) -> str:
     scene_or_system
         A :class:`~escfit.balance.scene.BalanceScene` or a :class:`~escfit.balance.system.System`.
     """
-    needs = _needs_of(scene_or_system)
+    return _default_for(_needs_of(scene_or_system))
+
+
+@functools.lru_cache(maxsize=64)
+def _default_for(needs: frozenset[str]) -> str:
     return next((name for name in _PREFERENCE if needs <= SOLVERS[name].handles), "dop853")
 
 
 def _structure(scene: Any) -> System:
     """A system with the scene's structure and no parameter sets (what capability checks read)."""
-    return System(np.zeros(0), getattr(scene, "switching", "angle"), tuple(getattr(scene, "effects", ())),
-                  getattr(scene, "restoring", "spring"))
+    structure = getattr(scene, "structure", None)
+    if not isinstance(structure, Structure):
+        structure = Structure(tuple(getattr(scene, "effects", ())), getattr(scene, "restoring", "spring"),
+                              getattr(scene, "switching", "angle"))
+    return System(np.zeros(0, COEFFICIENTS), structure)
 
 
 def _needs_of(obj: Any) -> frozenset[str]:
@@ -170,7 +177,7 @@ def capability(system: System, solver: str, options: Any = ()) -> SolverSpec:
     bad = sorted(set(options) - spec.options)
     if bad:
         raise SolverError(f"solver {solver!r} takes options {sorted(spec.options)}, not {bad}")
-    missing = [(need, who) for need, who in system.demands() if need not in spec.handles]
+    missing = _missing(system.structure, spec.handles)
     if missing:
         need, who = missing[0]
         what = "has no closed form for" if need == "smooth" else "does not handle"
@@ -179,6 +186,11 @@ def capability(system: System, solver: str, options: Any = ()) -> SolverSpec:
             "no solver handles this combination"
         raise SolverError(f"solver {solver!r} {what} {who} ({NEEDS[need]}); {use}")
     return spec
+
+
+@functools.lru_cache(maxsize=256)
+def _missing(structure: Structure, handles: frozenset[str]) -> tuple:
+    return tuple((need, who) for need, who in structure.demands if need not in handles)
 
 
 def solve_system(system: System, n_swings: int, solver: str | None = None, **options: Any) -> Trajectory:

@@ -12,6 +12,7 @@ same :meth:`refusals`, so they refuse alike.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Sequence
@@ -19,9 +20,10 @@ from typing import Sequence
 import numpy as np
 
 from ..core.errors import SolverError
-from .records import COEFFICIENTS, SLOTS
+from ..core.kernels import kernel
+from .records import COEFFICIENTS, SLOTS, blank
 
-__all__ = ["System"]
+__all__ = ["System", "Structure"]
 
 
 def _columns(filter_) -> tuple[np.ndarray, list]:
@@ -41,6 +43,95 @@ _FINITE_COLS, _FINITE_OWNERS = _columns(lambda s: s.finite and s.name != "theta0
 _LOWER_COLS, _LOWER_OWNERS = _columns(lambda s: s.lower is not None)
 _LOWER_VALUES = np.array([slot.lower for slot, _ in _LOWER_OWNERS], float)
 _WIDTH = COEFFICIENTS.itemsize // 8
+_THETA0_COL = COEFFICIENTS.fields["theta0"][1] // 8
+# one row per checked column: (column, lower bound or -inf, whether the value must be finite)
+_CHECKS = np.array(sorted({(float(c), -math.inf, 1.0) for c in _FINITE_COLS}
+                          | {(float(c), lo, 0.0) for c, lo in zip(_LOWER_COLS, _LOWER_VALUES)}))
+_C_COL = COEFFICIENTS.fields["c"][1] // 8
+_OMEGA0_COL = COEFFICIENTS.fields["omega0"][1] // 8
+
+
+@kernel
+def _flag_values(table, checks, mode, bad):
+    """Flag the rows of the records' float table that no solver can run; returns how many.
+
+    ``checks`` rows are ``(column, lower bound, must be finite)`` (theta0 is always checked);
+    ``mode`` adds 1: a pendulum's |theta0| < pi, 2: phase switching's C < 2 omega0.
+    """
+    n_bad = 0
+    for i in range(table.shape[0]):
+        theta0 = table[i, _THETA0_COL]
+        flag = not math.isfinite(theta0) or (mode & 1 and not abs(theta0) < math.pi)
+        if mode & 2 and not table[i, _C_COL] < 2.0 * table[i, _OMEGA0_COL]:
+            flag = True
+        for j in range(checks.shape[0]):
+            v = table[i, int(checks[j, 0])]
+            if v < checks[j, 1] or (checks[j, 2] != 0.0 and not math.isfinite(v)):
+                flag = True
+        bad[i] = flag
+        n_bad += flag
+    return n_bad
+
+
+@dataclass(frozen=True, eq=False)
+class Structure:
+    """What a scene's effects fix for all its parameter sets, worked out once.
+
+    Attributes
+    ----------
+    effects
+        The scene's effect objects.
+    restoring
+        ``"spring"`` or ``"pendulum"``.
+    switching
+        ``"angle"`` or ``"phase"``.
+    """
+
+    effects: tuple = ()
+    restoring: str = "spring"
+    switching: str = "angle"
+
+    @functools.cached_property
+    def demands(self) -> tuple[tuple[str, str], ...]:
+        """``(need, who)`` pairs: each need of :data:`escfit.balance.effects.base.NEEDS` and what asks for it."""
+        out = [(need, f"[effects.{e.key}]") for e in self.effects for need in sorted(e.needs)]
+        if self.restoring == "pendulum":
+            out.append(("smooth", "[oscillator] restoring = 'pendulum'"))
+        if self.switching == "phase":
+            out.append(("phase_switching", "switching = 'phase'"))
+        return tuple(out)
+
+    @functools.cached_property
+    def needs(self) -> frozenset[str]:
+        """Everything a solver must handle."""
+        return frozenset(need for need, _ in self.demands)
+
+    @functools.cached_property
+    def relations(self) -> tuple:
+        """The effects that declare relations between their parameters (``refusals``)."""
+        return tuple(e for e in self.effects if hasattr(e, "refusals"))
+
+    @functools.cached_property
+    def words(self) -> np.ndarray:
+        """A record holding what the structure fixes, as its raw 8-byte words (read-only).
+
+        The defaults, the restoring torque's kind, whether an effect adds a smooth torque (the
+        integrators then add up :mod:`escfit.balance.torque`'s terms) and each effect's
+        ``prepare``.  Parameter sets start from copies of it (a copy of the words is a memcpy; a
+        structured copy goes field by field, ten times slower).
+        """
+        k = blank(1)
+        k["pendulum"] = self.restoring == "pendulum"
+        k["smooth"] = "smooth" in {need for e in self.effects for need in e.needs}
+        for e in self.effects:
+            getattr(e, "prepare", lambda _: None)(k)
+        words = k.view(np.float64)
+        words.flags.writeable = False
+        return words
+
+    def records(self, n: int) -> np.ndarray:
+        """``n`` records prepared for this structure, to be filled with parameter values."""
+        return (self.words.copy() if n == 1 else np.tile(self.words, n)).view(COEFFICIENTS)
 
 
 @dataclass(frozen=True)
@@ -51,26 +142,32 @@ class System:
     ----------
     k : ndarray
         Records of :data:`escfit.balance.records.COEFFICIENTS`, shape ``(sets,)``.
-    switching
-        ``"angle"`` or ``"phase"``.
-    effects
-        The scene's effect objects (their needs and relational checks).
-    restoring
-        ``"spring"`` or ``"pendulum"``.
+    structure : Structure
+        The scene's effects, restoring torque and switching law.
     """
 
     k: np.ndarray
-    switching: str = "angle"
-    effects: tuple = ()
-    restoring: str = "spring"
+    structure: Structure = Structure()
+
+    @property
+    def switching(self) -> str:
+        return self.structure.switching
+
+    @property
+    def effects(self) -> tuple:
+        return self.structure.effects
+
+    @property
+    def restoring(self) -> str:
+        return self.structure.restoring
 
     def __len__(self) -> int:
-        return int(self.k.shape[0])
+        return self.k.shape[0]
 
     def __getitem__(self, i: int) -> "System":
         """Parameter set ``i`` alone."""
         i = range(len(self))[i]
-        return System(self.k[i:i + 1], self.switching, self.effects, self.restoring)
+        return System(self.k[i:i + 1], self.structure)
 
     @classmethod
     def stack(cls, systems: Sequence["System"]) -> "System":
@@ -83,27 +180,27 @@ class System:
         """
         if not systems:
             raise SolverError("a batch needs at least one parameter set")
-        switching = {s.switching for s in systems}
-        if len(switching) > 1:
-            raise SolverError(f"a batch has one switching law, got {sorted(switching)}")
-        effects = tuple({id(e): e for s in systems for e in s.effects}.values())
-        restoring = "pendulum" if any(s.restoring == "pendulum" for s in systems) else "spring"
-        return cls(np.concatenate([s.k for s in systems]), systems[0].switching, effects, restoring)
+        structures = {id(s.structure): s.structure for s in systems}
+        if len(structures) == 1:
+            structure = systems[0].structure
+        else:
+            switching = {s.switching for s in systems}
+            if len(switching) > 1:
+                raise SolverError(f"a batch has one switching law, got {sorted(switching)}")
+            effects = tuple({id(e): e for s in systems for e in s.effects}.values())
+            restoring = "pendulum" if any(s.restoring == "pendulum" for s in systems) else "spring"
+            structure = Structure(effects, restoring, systems[0].switching)
+        return cls(np.concatenate([s.k for s in systems]), structure)
 
     # -- what the solvers are asked for -----------------------------------------------------------
-    def demands(self) -> list[tuple[str, str]]:
+    def demands(self) -> tuple[tuple[str, str], ...]:
         """``(need, who)`` pairs: each need of :data:`escfit.balance.effects.base.NEEDS` and what asks for it."""
-        out = [(need, f"[effects.{e.key}]") for e in self.effects for need in sorted(e.needs)]
-        if self.restoring == "pendulum":
-            out.append(("smooth", "[oscillator] restoring = 'pendulum'"))
-        if self.switching == "phase":
-            out.append(("phase_switching", "switching = 'phase'"))
-        return out
+        return self.structure.demands
 
     @property
     def needs(self) -> frozenset[str]:
         """Everything a solver must handle to run this system."""
-        return frozenset(need for need, _ in self.demands())
+        return self.structure.needs
 
     # -- one set's numbers -----------------------------------------------------------------------
     def field(self, name: str, i: int = 0) -> np.ndarray | float:
@@ -131,21 +228,19 @@ class System:
         k = self.k
         n = len(self)
         table = k.view(np.float64).reshape(n, _WIDTH)
-        theta0 = k["theta0"]
-        with np.errstate(invalid="ignore"):
-            bad_finite = ~np.isfinite(table[:, _FINITE_COLS])
-            bad_lower = table[:, _LOWER_COLS] < _LOWER_VALUES
-            fine = ~(bad_finite.any(axis=1) | bad_lower.any(axis=1)) & np.isfinite(theta0)
-            if self.restoring == "pendulum":
-                fine &= np.abs(theta0) < math.pi
-            if self.switching == "phase":
-                fine &= k["c"] < 2.0 * k["omega0"]
-        checks = [check for e in self.effects for check in getattr(e, "refusals", lambda _: [])(k)]
-        for bad, _ in checks:
-            fine &= ~bad
-        if fine.all():  # the usual case: no message to build
+        bad = np.empty(n, np.bool_)
+        mode = (self.structure.restoring == "pendulum") + 2 * (self.structure.switching == "phase")
+        n_bad = _flag_values(table, _CHECKS, mode, bad)
+        checks = [check for e in self.structure.relations for check in e.refusals(k)]
+        for flagged, _ in checks:
+            bad |= flagged
+        if not n_bad and not any(flagged.any() for flagged, _ in checks):  # the usual case: no message to build
             return [""] * n
+        fine = ~bad
         reasons = [""] * n
+        bad_finite = ~np.isfinite(table[:, _FINITE_COLS])
+        with np.errstate(invalid="ignore"):
+            bad_lower = table[:, _LOWER_COLS] < _LOWER_VALUES
         for i in np.flatnonzero(~fine):
             reasons[i] = self._reason(i, bad_finite[i], bad_lower[i], checks)
         return reasons

@@ -45,15 +45,21 @@ def acceleration(x, v, w2, xc, k):
     k : record
         The coefficient record (:mod:`escfit.balance.records`).
     """
-    smooth, _, _ = smooth_terms(x, v, k)
     if k.pendulum:
-        return -k.c * v - w2 * (math.sin(x) - xc) + smooth
-    return -k.c * v - w2 * (x - xc) + smooth
+        a = -k.c * v - w2 * (math.sin(x) - xc)
+    else:
+        a = -k.c * v - w2 * (x - xc)
+    if k.smooth:  # skipped, not computed as zeros, in scenes without a smooth torque
+        smooth, _, _ = smooth_terms(x, v, k)
+        a += smooth
+    return a
 
 
 @kernel(inline="always")
 def jerk(x, v, a, w2, k):
     """Time derivative (rad/s^3) of :func:`acceleration` along the motion, at acceleration ``a``."""
-    _, a_x, a_v = smooth_terms(x, v, k)
     stiffness = w2 * (math.cos(x) if k.pendulum else 1.0)
+    if not k.smooth:
+        return -k.c * a - stiffness * v
+    _, a_x, a_v = smooth_terms(x, v, k)
     return (a_v - k.c) * a + (a_x - stiffness) * v

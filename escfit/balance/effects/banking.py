@@ -47,6 +47,8 @@ class Banking:
                        meaning="coefficient of restitution at the banking pins", where=f"{where}.restitution")
         return cls(angle), [e]
 
-    def fill(self, values: Mapping[str, float], k: np.ndarray) -> None:
+    def prepare(self, k: np.ndarray) -> None:
         k["bank"] = self.angle
+
+    def fill(self, values: Mapping[str, float], k: np.ndarray) -> None:
         k["restitution"] = values["banking.e"]

@@ -17,9 +17,13 @@ scene is read.  Each effect module says, in one place, everything the solvers ne
     them is refused before any work, naming the solvers that do.
 ``read(table, ctx)``
     Reads its table into the effect and its parameters.
+``prepare(k)`` (optional)
+    Writes the slots fixed by the scene's structure (window edges, break angles), once per
+    scene: the scene keeps the prepared record and copies it for every parameter set.
 ``fill(values, k)``
-    Writes its slots of the record array ``k`` from parameter values; ``values`` holds numbers
-    or arrays of one entry per parameter set, so the same code fills one set or a batch.
+    Writes its slots that depend on parameter values into the record array ``k``; ``values``
+    holds numbers or arrays of one entry per parameter set, so the same code fills one set or a
+    batch.
 ``torque(x, v, k)`` (smooth effects only)
     A compiled function: its angular acceleration (rad/s^2) in the swing frame and the partial
     derivatives of that by the angle and by the angular velocity, which
@@ -64,9 +68,9 @@ def squared(x):
     numpy's ``x**2`` multiplies, which differs from C's ``pow`` in the last bit for some x; a
     parameter set must give the same record whether it is built alone or in a batch.
     """
-    if np.ndim(x) == 0:
+    if not isinstance(x, np.ndarray):
         return float(x) ** 2
-    return np.array([v ** 2 for v in np.asarray(x, float).tolist()])
+    return np.array([v ** 2 for v in np.asarray(x, float).ravel().tolist()]).reshape(x.shape)
 
 
 @dataclass(frozen=True)

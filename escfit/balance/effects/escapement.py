@@ -108,13 +108,22 @@ class Escapement:
         params = [_magnitude(w, table, where, ctx, windows) for w, table, where in raw_x]
         return cls(tuple(windows)), params
 
+    def prepare(self, k: np.ndarray) -> None:
+        n = len(self.windows)
+        k["n_windows"] = n
+        k["w_lo"][:, :n] = [w.lo for w in self.windows]
+        k["w_hi"][:, :n] = [w.hi for w in self.windows]
+        k["w_dir"][:, :n] = [_SWINGS[w.swings] for w in self.windows]
+
     def fill(self, values: Mapping[str, float], k: np.ndarray) -> None:
-        k["n_windows"] = len(self.windows)
-        for i, w in enumerate(self.windows):
-            k["w_lo"][:, i] = w.lo
-            k["w_hi"][:, i] = w.hi
-            k["w_x"][:, i] = w.sign * values[w.name]
-            k["w_dir"][:, i] = _SWINGS[w.swings]
+        n = len(self.windows)
+        xs = [w.sign * values[w.name] for w in self.windows]
+        w_x = k["w_x"]
+        if not any(isinstance(x, np.ndarray) for x in xs):  # one parameter set (or the same values for all)
+            w_x[:, :n] = xs
+        else:
+            for i, x in enumerate(xs):
+                w_x[:, i] = x
 
 
 def _magnitude(w: Window, table: Mapping, where: str, ctx: ReadContext, windows: list[Window]) -> Param:

@@ -56,11 +56,14 @@ class Hairspring:
         ]
         return cls(ang), params
 
-    def fill(self, values: Mapping[str, float], k: np.ndarray) -> None:
+    def prepare(self, k: np.ndarray) -> None:
         n = len(self.angles) + 1
         k["n_pieces"] = n
+        k["sp_bp"][:, :n - 1] = self.angles
+
+    def fill(self, values: Mapping[str, float], k: np.ndarray) -> None:
+        n = len(self.angles) + 1
         bp = np.asarray(self.angles, float)
-        k["sp_bp"][:, :n - 1] = bp
         w2 = k["sp_w2"]
         for i in range(n):
             w2[:, i] = squared(values[f"hairspring.omega0[{i + 1}]"])

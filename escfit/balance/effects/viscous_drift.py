@@ -56,8 +56,11 @@ class ViscousDrift:
             raise SceneError(f"rates must exceed -1 (fractional change per cycle), got {rates!r}", f"{where}.rates")
         return cls(tuple(map(float, th)), tuple(map(float, rates))), []
 
-    def fill(self, values: Mapping[str, float], k: np.ndarray) -> None:
+    def prepare(self, k: np.ndarray) -> None:
         n = len(self.thresholds)
         k["n_bands"] = n
         k["drift_th"][:, :n] = self.thresholds
         k["drift_rate"][:, :n + 1] = self.rates
+
+    def fill(self, values: Mapping[str, float], k: np.ndarray) -> None:
+        pass  # structure only
