@@ -40,7 +40,7 @@ def test_static_friction_stops_pure_coulomb_at_the_predicted_half_swing(solver, 
     assert tr.status == "stopped"
     assert len(tr.amplitude) == n_stop
     expected = th0 - 2 * r * np.arange(1, n_stop + 1)
-    np.testing.assert_allclose(tr.amplitude, np.abs(expected), rtol=0, atol=1e-12 if solver == "exact" else 1e-9)
+    np.testing.assert_allclose(tr.amplitude, np.abs(expected), rtol=0, atol=1e-12 if solver == "exact" else 1e-10)
     if n_stop:  # it moved at every earlier turning point and stays at the last
         assert w0**2 * tr.amplitude[-1] <= R_static < w0**2 * (tr.amplitude[-2] if n_stop > 1 else th0)
 
@@ -57,7 +57,7 @@ def test_static_friction_with_viscous_damping_follows_the_recurrence_and_solve_i
     assert tr.status == "stopped"
     np.testing.assert_allclose(tr.amplitude, expected, rtol=0, atol=1e-12)
     ref, _ = reference_turns(w0, th0, 200, C=C, R=R, R_static=R_static)
-    np.testing.assert_allclose(tr.theta_turn, ref, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(tr.theta_turn, ref, rtol=0, atol=1e-10)  # measured: 4e-13 rad
 
 
 def test_static_friction_equal_to_the_sliding_one_changes_nothing():

@@ -40,7 +40,8 @@ def solve(scene: BalanceScene, solver: str | None = None, *, values: dict[str, f
         A balance scene.
     solver
         ``"exact"``, ``"dop853"``, ``"rk4"`` or ``"ivp"``; default :func:`default_solver`
-        (``"exact"``, or ``"dop853"`` for a pendulum).
+        (``"exact"``, or ``"dop853"`` where the scene has no closed form: a pendulum, air drag, a
+        stiffening spring).
     values
         Parameter values by name overriding the scene's (used by fits).
     swings
