@@ -1,114 +1,56 @@
-"""Speed of the exact solver's compiled kernels, against their previous implementation.
+"""Speed of the balance solvers' compiled kernels, against the previous version, in one run.
 
 Measures microseconds per half swing (CPU and wall clock, min and median over ``--repeat``
 repetitions) of
 
-- the single-set angle kernel :func:`escfit.balance.exact.run_angle` on the Monday-like unit
+- the exact solver's single-set angle kernel on the Monday-like unit
   (``datasets/scenes/monday_unit_angle_fit.toml``, 120 half swings);
-- the single-set phase kernel :func:`escfit.balance.exact.run_phase` on Monday's unit 3
-  (``datasets/monday1965/unit3_fit.toml``, 40 half swings);
-- the batch kernel :func:`escfit.balance.exact.run_angle_many` on 2048 parameter sets
-  (C, R and X spread +-30 % around the Monday-like unit's) x 120 half swings, on 1 and 2
-  numba threads (per half swing per set);
+- its single-set phase kernel on Monday's unit 3 (``datasets/monday1965/unit3_fit.toml``, 40);
+- its batch kernel on 2048 parameter sets (C, R and X spread +-30 % around the Monday-like
+  unit's) x 120 half swings, on 1 and 2 numba threads (per half swing per set);
+- the compiled DOP853 kernel on the Monday-like unit (rtol 1e-10);
+- the whole Python call ``solve(scene, "exact")`` on the Monday-like unit (scene values to
+  trajectory: building the coefficients, the checks, the kernel and the result).
 
-and the same kernels of the previous implementation, ``escfit/balance/exact.py`` at git
-revision ``--baseline`` (default ``2e7e582``), extracted with ``git show`` into a temporary
-module and timed the same way in the same process.  The single-set angle case is also timed
-with the compiled DOP853 peer (:func:`escfit.balance.dop853.run_dop853`, rtol 1e-10).
-Kernels are called with prepared arrays; the single-set kernels from a compiled loop, so
-neither Python-side set-up nor numba's dispatch (some microseconds a call) is counted.
-The machine's load average is printed before and after: the figures mean little on a busy
-machine.
+Kernels are called with prepared inputs from a compiled loop, so neither Python-side set-up
+nor numba's dispatch is counted, except in the last case.  The previous version (git revision
+``--baseline``, default ``main``; see ``benchmarks/previous.py``) and this checkout each run
+in a subprocess, alternately within each repetition so that they share the machine's load;
+each builds its inputs with its own interface (positional arrays before, coefficient records
+now).  The machine's load average is printed before and after: the figures mean little on a
+busy machine.
 
-Run:  python benchmarks/kernels.py [--repeat 3] [--json FILE] [--baseline REV]
+Run:  python benchmarks/kernels.py [--repeat 3] [--json FILE] [--baseline main]
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
 import math
 import os
 import statistics
-import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
-from types import ModuleType
 from typing import Callable
 
-import numba
-import numpy as np
+HERE = Path(__file__).resolve()
+sys.path.insert(0, str(HERE.parent))
 
-import escfit
-from escfit.balance import exact
-from escfit.balance.batch import SystemStack
-from escfit.balance.dop853 import kernel_inputs, run_dop853
-from escfit.balance.solvers import kernel_args
-from escfit.core.kernels import kernel
-
-ROOT = Path(__file__).resolve().parents[1]
-ANGLE_SCENE = ROOT / "datasets" / "scenes" / "monday_unit_angle_fit.toml"
-PHASE_SCENE = ROOT / "datasets" / "monday1965" / "unit3_fit.toml"
+ANGLE_SCENE = "datasets/scenes/monday_unit_angle_fit.toml"
+PHASE_SCENE = "datasets/monday1965/unit3_fit.toml"
+CASES = ("angle single, 120 swings", "phase single, 40 swings", "angle batch 2048 x 120, 1 thread",
+         "angle batch 2048 x 120, 2 threads", "dop853 single, 120 swings, rtol 1e-10",
+         "solve() call, 120 swings")
 
 
-def previous_exact(rev: str) -> ModuleType:
-    """``escfit/balance/exact.py`` at git revision ``rev`` as an importable module.
+# -- the worker: runs in a subprocess with one version of escfit on its path ------------------
 
-    Its relative imports are made absolute (``escfit.``); the file is written to a directory
-    named after the revision under the system's temporary directory, so numba's cache of its
-    kernels is reused by later runs.
-    """
-    text = subprocess.run(["git", "show", f"{rev}:escfit/balance/exact.py"], cwd=ROOT, check=True,
-                          capture_output=True, text=True).stdout
-    text = text.replace("from ..core.", "from escfit.core.").replace("from .", "from escfit.balance.")
-    folder = Path(tempfile.gettempdir()) / f"escfit-exact-{rev}"
-    folder.mkdir(exist_ok=True)
-    name = f"escfit_exact_{rev}"
-    path = folder / f"{name}.py"
-    if not path.is_file() or path.read_text() != text:
-        path.write_text(text)
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
-
-
-def timed(calls: dict[str, Callable[[int], object]], work: int, repeat: int, min_time: float) -> dict:
-    """Microseconds per unit of ``work`` of each ``calls[name](reps)`` (``reps`` runs).
-
-    CPU (process) and wall time, min and median over ``repeat`` repetitions; the
-    implementations are timed in turn within each repetition, so that they share the machine's
-    load.  ``reps`` is set once so that a repetition takes about ``min_time`` seconds.
-    """
-    reps = {}
-    for name, call in calls.items():
-        call(1)  # compile or load, and warm the caches
-        w0 = time.perf_counter()
-        call(1)
-        reps[name] = max(1, int(min_time / max(time.perf_counter() - w0, 1e-9)))
-    cpu = {name: [] for name in calls}
-    wall = {name: [] for name in calls}
-    for _ in range(repeat):
-        for name, call in calls.items():
-            c0, w0 = time.process_time(), time.perf_counter()
-            call(reps[name])
-            c1, w1 = time.process_time(), time.perf_counter()
-            cpu[name].append(1e6 * (c1 - c0) / (reps[name] * work))
-            wall[name].append(1e6 * (w1 - w0) / (reps[name] * work))
-    return {name: {"cpu_min": min(cpu[name]), "cpu_median": statistics.median(cpu[name]),
-                   "wall_min": min(wall[name]), "wall_median": statistics.median(wall[name])} for name in calls}
-
-
-def _outputs(*shape: int) -> tuple:
-    return (np.empty(shape), np.empty(shape), np.empty(shape), np.empty(shape), np.zeros(shape, np.int8))
-
-
-def in_kernel(func, args: tuple) -> Callable[[int], object]:
+def _in_kernel(func, args: tuple) -> Callable[[int], object]:
     """``reps`` calls of the compiled ``func(*args)`` from compiled code: no Python dispatch."""
+    from escfit.core.kernels import kernel
+
     @kernel(cache=False)
     def loop(reps, args):
         total = 0
@@ -119,105 +61,175 @@ def in_kernel(func, args: tuple) -> Callable[[int], object]:
     return lambda reps: loop(reps, args)
 
 
-def angle_call(module: ModuleType, swings: int = 120) -> Callable[[int], object]:
-    """Runs of ``module.run_angle`` on the Monday-like unit."""
-    args = kernel_args(escfit.load_scene(ANGLE_SCENE).build())
-    return in_kernel(module.run_angle, (*args, swings, 64 * swings + 1000, *_outputs(swings), np.zeros((0, 9))))
+def _outputs(*shape):
+    import numpy as np
+
+    return (np.empty(shape), np.empty(shape), np.empty(shape), np.empty(shape), np.zeros(shape, np.int8))
 
 
-def phase_call(module: ModuleType, swings: int = 40) -> Callable[[int], object]:
-    """Runs of ``module.run_phase`` on Monday's unit 3 (scene values)."""
-    sys_ = escfit.load_scene(PHASE_SCENE).build()
-    args = (float(sys_.theta0), float(sys_.c), float(sys_.r), sys_.omega0 ** 2, np.asarray(sys_.w_lo, float),
-            np.asarray(sys_.w_hi, float), np.asarray(sys_.w_x, float), np.asarray(sys_.w_dir, np.int64),
-            np.asarray(sys_.drift_thresholds, float), np.asarray(sys_.drift_rates, float))
-    return in_kernel(module.run_phase, (*args, swings, *_outputs(swings), np.zeros((0, 9))))
+def _calls_previous(root: Path, n_sets: int) -> dict:
+    """Each case's ``call(reps)`` with the previous interface (positional arrays)."""
+    import numpy as np
+    import numba
 
+    import escfit
+    from escfit.balance import exact, solve
+    from escfit.balance.batch import SystemStack
+    from escfit.balance.dop853 import kernel_inputs, run_dop853
+    from escfit.balance.solvers import kernel_args
 
-def dop853_call(swings: int = 120, rtol: float = 1e-10) -> Callable[[int], object]:
-    """Runs of the compiled DOP853 peer on the Monday-like unit."""
-    args, _ = kernel_inputs(escfit.load_scene(ANGLE_SCENE).build(), "angle", swings, rtol=rtol)
-    empty = np.zeros(0)
-    return in_kernel(run_dop853, (*args, empty, empty, *_outputs(swings)))
-
-
-def batch_stack(n_sets: int = 2048, seed: int = 0) -> SystemStack:
-    """Parameter sets spread +-30 % around the Monday-like unit's C, R and X."""
-    scene = escfit.load_scene(ANGLE_SCENE)
-    rng = np.random.default_rng(seed)
-    base = {n: scene.params[n].value for n in ("viscous.C", "coulomb.R", "escapement[2].X")}
-    return SystemStack.from_systems([scene.build({k: v * rng.uniform(0.7, 1.3) for k, v in base.items()})
-                                     for _ in range(n_sets)])
-
-
-def batch_call(module: ModuleType, stack: SystemStack, threads: int, swings: int = 120) -> Callable[[int], object]:
-    """Calls of ``module.run_angle_many`` on ``threads`` numba threads."""
+    scene = escfit.load_scene(root / ANGLE_SCENE)
+    sys_ = scene.build()
+    args = kernel_args(sys_)
+    ph = escfit.load_scene(root / PHASE_SCENE).build()
+    ph_args = (float(ph.theta0), float(ph.c), float(ph.r), ph.omega0 ** 2, np.asarray(ph.w_lo, float),
+               np.asarray(ph.w_hi, float), np.asarray(ph.w_x, float), np.asarray(ph.w_dir, np.int64),
+               np.asarray(ph.drift_thresholds, float), np.asarray(ph.drift_rates, float))
+    d_args, _ = kernel_inputs(sys_, "angle", 120, rtol=1e-10)
+    stack = SystemStack.from_systems(_spread(scene, n_sets))
     n = stack.size
-    amp, turn, half, tm, banked = _outputs(n, swings)
-    n_done, status, n_seg, final = np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n, np.int64), np.empty((n, 3))
+    b_out = _outputs(n, 120)
+    b_rest = (np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n, np.int64), np.empty((n, 3)))
     active = np.ones(n, np.bool_)
 
-    def call(reps):
-        previous = numba.get_num_threads()
-        numba.set_num_threads(threads)
-        try:
-            for _ in range(reps):
-                module.run_angle_many(stack.theta0, stack.c, stack.r, stack.sp_bp, stack.sp_w2, stack.sp_off,
-                                      stack.w_lo, stack.w_hi, stack.w_x, stack.w_dir, stack.bank, stack.restitution,
-                                      stack.drift_thresholds, stack.drift_rates, active, swings, 64 * swings + 1000,
-                                      amp, turn, half, tm, banked, n_done, status, n_seg, final)
-        finally:
-            numba.set_num_threads(previous)
+    def batch(threads):
+        def call(reps):
+            previous = numba.get_num_threads()
+            numba.set_num_threads(threads)
+            try:
+                for _ in range(reps):
+                    exact.run_angle_many(stack.theta0, stack.c, stack.r, stack.sp_bp, stack.sp_w2, stack.sp_off,
+                                         stack.w_lo, stack.w_hi, stack.w_x, stack.w_dir, stack.bank,
+                                         stack.restitution, stack.drift_thresholds, stack.drift_rates, active, 120,
+                                         64 * 120 + 1000, *b_out, *b_rest)
+            finally:
+                numba.set_num_threads(previous)
+        return call
 
-    return call
+    return {
+        CASES[0]: _in_kernel(exact.run_angle, (*args, 120, 64 * 120 + 1000, *_outputs(120), np.zeros((0, 9)))),
+        CASES[1]: _in_kernel(exact.run_phase, (*ph_args, 40, *_outputs(40), np.zeros((0, 9)))),
+        CASES[2]: batch(1), CASES[3]: batch(2),
+        CASES[4]: _in_kernel(run_dop853, (*d_args, np.zeros(0), np.zeros(0), *_outputs(120))),
+        CASES[5]: lambda reps: [solve(scene, "exact") for _ in range(reps)],
+    }
 
 
-def run(repeat: int = 3, baseline: str = "2e7e582", min_time: float = 0.3, n_sets: int = 2048) -> dict:
+def _calls_current(root: Path, n_sets: int) -> dict:
+    """Each case's ``call(reps)`` with the coefficient records."""
+    import numpy as np
+    import numba
+
+    import escfit
+    from escfit.balance import System, dop853, exact, solve
+    from escfit.balance.batch import SUMMARY
+    from escfit.balance.records import half_swings, run_options
+
+    scene = escfit.load_scene(root / ANGLE_SCENE)
+    k = scene.build().k
+    ph = escfit.load_scene(root / PHASE_SCENE).build().k
+    stack = System.stack(_spread(scene, n_sets))
+    n = len(stack)
+    b_out, summary, active = half_swings(n, 120), np.zeros(n, SUMMARY), np.ones(n, np.bool_)
+    run = run_options(120, max_segments=64 * 120 + 1000)
+
+    def batch(threads):
+        def call(reps):
+            previous = numba.get_num_threads()
+            numba.set_num_threads(threads)
+            try:
+                for _ in range(reps):
+                    exact.run_angle_many(stack.k, run, active, b_out, summary)
+            finally:
+                numba.set_num_threads(previous)
+        return call
+
+    d_run = run_options(120, max_segments=64 * 120 + 1000, max_steps=10_000 * 120 + 100_000, rtol=1e-10,
+                        atol_x=1e-12 * abs(float(k["theta0"][0])), atol_v=1e-12 * abs(float(k["theta0"][0])) *
+                        math.sqrt(float(k["sp_w2"][0, 0])))
+    return {
+        CASES[0]: _in_kernel(exact.run_one, (k, run, half_swings(120), np.zeros((0, 9)))),
+        CASES[1]: _in_kernel(exact.run_phase_one, (ph, run_options(40), half_swings(40), np.zeros((0, 9)))),
+        CASES[2]: batch(1), CASES[3]: batch(2),
+        CASES[4]: _in_kernel(dop853.run_one, (k, d_run, half_swings(120), np.zeros((0, 9)))),
+        CASES[5]: lambda reps: [solve(scene, "exact") for _ in range(reps)],
+    }
+
+
+def _spread(scene, n_sets: int, seed: int = 0) -> list:
+    """Parameter sets spread +-30 % around the Monday-like unit's C, R and X."""
+    import numpy as np
+
+    rng = np.random.default_rng(seed)
+    base = {name: scene.params[name].value for name in ("viscous.C", "coulomb.R", "escapement[2].X")}
+    return [scene.build({key: v * rng.uniform(0.7, 1.3) for key, v in base.items()}) for _ in range(n_sets)]
+
+
+def worker(min_time: float, n_sets: int, only: str = "") -> dict:
+    """One repetition of every case (whose name holds ``only``): microseconds per unit of work."""
+    import escfit.balance.solvers as solvers
+
+    root = Path(os.getcwd())
+    previous = hasattr(solvers, "kernel_args")
+    calls = (_calls_previous if previous else _calls_current)(root, n_sets)
+    work = {CASES[0]: 120, CASES[1]: 40, CASES[2]: n_sets * 120, CASES[3]: n_sets * 120, CASES[4]: 120,
+            CASES[5]: 120}
+    out = {}
+    for name, call in calls.items():
+        if only not in name:
+            continue
+        call(1)  # compile or load, and warm the caches
+        w0 = time.perf_counter()
+        call(1)
+        reps = max(1, int(min_time / max(time.perf_counter() - w0, 1e-9)))
+        c0, w0 = time.process_time(), time.perf_counter()
+        call(reps)
+        c1, w1 = time.process_time(), time.perf_counter()
+        out[name] = {"cpu": 1e6 * (c1 - c0) / (reps * work[name]), "wall": 1e6 * (w1 - w0) / (reps * work[name])}
+    return out
+
+
+# -- the driver --------------------------------------------------------------------------------
+
+def run(repeat: int, baseline: str, min_time: float, n_sets: int, only: str = "") -> dict:
     """All measurements, as a JSON-ready dictionary."""
-    try:
-        old = previous_exact(baseline)
-    except (OSError, subprocess.CalledProcessError) as err:
-        print(f"previous implementation unavailable ({err}); no ratios", file=sys.stderr)
-        old = None
-    stack = batch_stack(n_sets)
-    cases = [("angle single, 120 swings", lambda m: angle_call(m), 120),
-             ("phase single, 40 swings", lambda m: phase_call(m), 40)]
-    for k in (1, 2):
-        if k <= numba.config.NUMBA_NUM_THREADS:
-            cases.append((f"angle batch {n_sets} x 120, {k} thread{'s' if k > 1 else ''}",
-                          lambda m, k=k: batch_call(m, stack, k), n_sets * 120))
+    from previous import checkout, run_in
+
+    folders = {"previous": checkout(baseline), "new": None}
+    cases = [case for case in CASES if only in case]
+    samples = {impl: {case: {"cpu": [], "wall": []} for case in cases} for impl in folders}
+    args = ["--worker", "--min-time", str(min_time), "--sets", str(n_sets), "--only", only]
+    for _ in range(repeat):
+        for impl, folder in folders.items():
+            res = run_in(folder, HERE, args)
+            for case, m in res.items():
+                for clock in ("cpu", "wall"):
+                    samples[impl][case][clock].append(m[clock])
     records = []
-    for name, make, work in cases:
-        calls = {"new": make(exact)}
-        if old is not None:
-            calls["previous"] = make(old)
-        if name.startswith("angle single"):
-            calls["dop853 rtol 1e-10"] = dop853_call()
-        rec = {"case": name, **timed(calls, work, repeat, min_time)}
-        for other in ("previous", "dop853 rtol 1e-10"):
-            if other in rec:
-                rec[f"ratio {other}/new cpu_min"] = rec[other]["cpu_min"] / rec["new"]["cpu_min"]
-                rec[f"ratio {other}/new wall_min"] = rec[other]["wall_min"] / rec["new"]["wall_min"]
+    for case in cases:
+        rec = {"case": case}
+        for impl in folders:
+            s = samples[impl][case]
+            rec[impl] = {"cpu_min": min(s["cpu"]), "cpu_median": statistics.median(s["cpu"]),
+                         "wall_min": min(s["wall"]), "wall_median": statistics.median(s["wall"])}
+        rec["ratio previous/new cpu_min"] = rec["previous"]["cpu_min"] / rec["new"]["cpu_min"]
+        rec["ratio previous/new wall_min"] = rec["previous"]["wall_min"] / rec["new"]["wall_min"]
         records.append(rec)
-    return {"baseline": baseline, "repeat": repeat, "numba_threads": numba.config.NUMBA_NUM_THREADS,
-            "records": records}
+    return {"baseline": baseline, "repeat": repeat, "records": records}
 
 
 def table(result: dict) -> str:
     """The measurements as text: microseconds per half swing (per set for the batch)."""
     lines = [f"us per half swing (per set for the batch); min / median of {result['repeat']} repetitions; "
-             f"previous = exact.py at {result['baseline']}",
-             f"{'case':36s} {'implementation':18s} {'cpu min':>8s} {'cpu med':>8s} {'wall min':>8s} {'wall med':>8s}"]
+             f"previous = {result['baseline']}",
+             f"{'case':40s} {'version':9s} {'cpu min':>8s} {'cpu med':>8s} {'wall min':>8s} {'wall med':>8s}"]
     for rec in result["records"]:
-        for impl in ("new", "previous", "dop853 rtol 1e-10"):
-            if impl in rec:
-                m = rec[impl]
-                lines.append(f"{rec['case']:36s} {impl:18s} {m['cpu_min']:8.4f} {m['cpu_median']:8.4f} "
-                             f"{m['wall_min']:8.4f} {m['wall_median']:8.4f}")
-        for other in ("previous", "dop853 rtol 1e-10"):
-            if f"ratio {other}/new cpu_min" in rec:
-                lines.append(f"{'':36s} {other + '/new':18s} cpu {rec[f'ratio {other}/new cpu_min']:.2f}x, "
-                             f"wall {rec[f'ratio {other}/new wall_min']:.2f}x")
+        for impl in ("previous", "new"):
+            m = rec[impl]
+            lines.append(f"{rec['case']:40s} {impl:9s} {m['cpu_min']:8.4f} {m['cpu_median']:8.4f} "
+                         f"{m['wall_min']:8.4f} {m['wall_median']:8.4f}")
+        lines.append(f"{'':40s} {'prev/new':9s} cpu {rec['ratio previous/new cpu_min']:.2f}x, "
+                     f"wall {rec['ratio previous/new wall_min']:.2f}x")
     return "\n".join(lines)
 
 
@@ -225,19 +237,23 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repeat", type=int, default=3, help="repetitions per measurement (default 3)")
     parser.add_argument("--json", metavar="FILE", help="also write the measurements to FILE as JSON")
-    parser.add_argument("--baseline", default="2e7e582", help="git revision of the previous exact.py")
-    parser.add_argument("--min-time", type=float, default=0.3, help="seconds per repetition (default 0.3)")
-    parser.add_argument("--sets", type=int, default=2048, help="parameter sets of the batch case (default 2048)")
+    parser.add_argument("--baseline", default="main", help="git revision of the previous version (default main)")
+    parser.add_argument("--min-time", type=float, default=0.3, help="seconds per case and repetition (default 0.3)")
+    parser.add_argument("--sets", type=int, default=2048, help="parameter sets of the batch cases (default 2048)")
     parser.add_argument("--force", action="store_true", help="replace existing output files")
+    parser.add_argument("--only", default="", help="run only the cases whose name contains this text")
+    parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
-    for out in (args.json,):  # refused before the run, not after it
-        if out and Path(out).exists() and not args.force:
-            parser.error(f"{out} exists; pass --force to replace it")
+    if args.worker:
+        print(json.dumps(worker(args.min_time, args.sets, args.only)))
+        return 0
+    if args.json and Path(args.json).exists() and not args.force:  # refused before the run, not after it
+        parser.error(f"{args.json} exists; pass --force to replace it")
     if args.repeat < 1 or not math.isfinite(args.min_time) or args.min_time <= 0:
         parser.error("--repeat must be >= 1 and --min-time > 0")
     before = os.getloadavg()
     print(f"load average before: {before[0]:.2f} {before[1]:.2f} {before[2]:.2f} ({os.cpu_count()} cpus)")
-    result = run(args.repeat, args.baseline, args.min_time, args.sets)
+    result = run(args.repeat, args.baseline, args.min_time, args.sets, args.only)
     after = os.getloadavg()
     result["load_average_before"], result["load_average_after"] = before, after
     print(table(result))

@@ -83,8 +83,8 @@ doc = tomllib.loads(pathlib.Path(recipe).read_text())
 scene = load_scene(str((pathlib.Path(recipe).parent / doc["scene"]).resolve()))
 s = time.perf_counter()
 system = scene.system(scene.params.values())
-solve_system(system, 4, scene.switching, "exact")
-solve_batch([system, system], 4, scene.switching)
+solve_system(system, 4, "exact")
+solve_batch([system, system], 4)
 phases["compile"] = time.perf_counter() - s
 try:
     cli_main.cli.main(["fit", recipe, "--out", out, "--report", report, "--quiet"], standalone_mode=False)

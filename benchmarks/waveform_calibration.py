@@ -40,7 +40,7 @@ def record(seed: int) -> TimeSeries:
     scene = load_scene("truth.toml", text=SCENE)
     sys = scene.system({**scene.params.values(), **TRUTH, "oscillator.theta0": 0.5})
     t = np.arange(0.3, 6.3, 0.02)
-    theta, _ = sample_theta(sys, t, "angle", "exact")
+    theta, _ = sample_theta(sys, t, "exact")
     rng = np.random.default_rng(seed)
     return TimeSeries(t, theta + 0.02 - 0.004 * t + 0.01 * rng.standard_normal(t.size), source=f"synthetic-{seed}")
 

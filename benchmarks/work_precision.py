@@ -28,9 +28,10 @@ from typing import Callable
 import numpy as np
 
 import escfit
-from escfit.balance.batch import SystemStack, solve_batch
-from escfit.balance.effects.base import SystemBuilder
-from escfit.balance.solvers import solve_exact, solve_system
+from escfit.balance import System
+from escfit.balance.system import Structure
+from escfit.balance.batch import solve_batch
+from escfit.balance.solvers import solve_system
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "datasets" / "scenes"
@@ -72,7 +73,7 @@ class Record:
 
 # -- the reference ---------------------------------------------------------------------------
 
-def reference(sys: SystemBuilder, n_swings: int, digits: int = 40) -> tuple[list, list]:
+def reference(sys: System, n_swings: int, digits: int = 40) -> tuple[list, list]:
     """Half periods and amplitudes of the model to ``digits`` significant digits.
 
     The sequence of regions (which window edge ends each segment, or a turning point) is
@@ -83,13 +84,14 @@ def reference(sys: SystemBuilder, n_swings: int, digits: int = 40) -> tuple[list
     """
     import mpmath as mp
 
-    tr = solve_exact(sys, n_swings, "angle", log=True)
-    if tr.status not in ("ok", "banked") or tr.banked.any() or sys.spring_w2 or len(tr.amplitude) != n_swings:
+    tr = solve_system(sys, n_swings, "exact", dense=True)
+    if tr.status not in ("ok", "banked") or tr.banked.any() or sys.field("n_pieces") > 1 or \
+            len(tr.amplitude) != n_swings:
         raise RuntimeError("the reference handles unbanked runs with a linear hairspring only")
-    log = tr.log
+    log = tr.dense.segments
     with mp.workdps(digits):
         w2 = mp.mpf(sys.omega0) ** 2
-        h = mp.mpf(sys.c) / 2
+        h = mp.mpf(sys.field("c")) / 2
         wd = mp.sqrt(w2 - h * h)
         s = 1 if sys.theta0 < 0 else -1
         x, v, t, t_last = s * mp.mpf(sys.theta0), mp.mpf(0), mp.mpf(0), mp.mpf(0)
@@ -125,17 +127,18 @@ def reference(sys: SystemBuilder, n_swings: int, digits: int = 40) -> tuple[list
     return half, amp
 
 
-def _centre(sys: SystemBuilder, s: int, x0: float, x_end: float | None):
+def _centre(sys: System, s: int, x0: float, x_end: float | None):
     """Net constant acceleration (rad/s^2, swing frame) of the region a segment runs in."""
     import mpmath as mp
 
-    edges = sorted({e for lo, hi, d in zip(sys.w_lo, sys.w_hi, sys.w_dir) if d in (0, s) for e in (lo, hi)})
+    w_lo, w_hi, w_x, w_dir = (sys.field(n) for n in ("w_lo", "w_hi", "w_x", "w_dir"))
+    edges = sorted({e for lo, hi, d in zip(w_lo, w_hi, w_dir) if d in (0, s) for e in (lo, hi)})
     above = [e for e in edges if e > x0]
     mid = 0.5 * (x0 + above[0]) if above else x0 + 1.0
     if x_end is not None:
         mid = 0.5 * (x0 + x_end)
-    force = -mp.mpf(sys.r)
-    for lo, hi, xx, d in zip(sys.w_lo, sys.w_hi, sys.w_x, sys.w_dir):
+    force = -mp.mpf(sys.field("r"))
+    for lo, hi, xx, d in zip(w_lo, w_hi, w_x, w_dir):
         if d in (0, s) and lo <= mid < hi:
             force += mp.mpf(xx)
     return force
@@ -208,14 +211,18 @@ def run_case(case: Case, *, quick: bool = False, batch_sets: int = 1024,
         opts = dict(opts)
         solver = opts.pop("solver")
         run_sys, note = sys, ""
-        if method == "rk4 naive" and math.isfinite(sys.bank):
+        if method == "rk4 naive" and "impacts" in sys.needs:
             # naive RK4 cannot model banking; the reference run never reaches the pins
-            run_sys, note = replace(sys, bank=math.inf), "banking removed (never reached)"
-        solve_system(run_sys, 1, scene.switching, solver, **opts)  # compile / warm up on one swing
+            k = sys.k.copy()
+            k["bank"] = math.inf
+            run_sys = replace(sys, k=k, structure=Structure(tuple(e for e in sys.effects if e.key != "banking"),
+                                                            sys.restoring, sys.switching))
+            note = "banking removed (never reached)"
+        solve_system(run_sys, 1, solver, **opts)  # compile / warm up on one swing
         last = {}
 
         def one(run_sys=run_sys, solver=solver, opts=opts):
-            last["tr"] = solve_system(run_sys, case.swings, scene.switching, solver, **opts)
+            last["tr"] = solve_system(run_sys, case.swings, solver, **opts)
 
         sec = cpu_seconds(one, min_time)
         tr = last["tr"]
@@ -232,7 +239,7 @@ def run_case(case: Case, *, quick: bool = False, batch_sets: int = 1024,
                                   f"{us * case.swings / 1e6:.0f} s per run (10x h={RK4_H_FLOOR_LONG:g}); "
                                   "RK4 is at round-off already"))
     # the exact solver on many parameter sets per call (here copies of the case's own)
-    stack = SystemStack.from_systems([sys] * batch_sets)
+    stack = System.stack([sys] * batch_sets)
     solve_batch(stack, case.swings)
     keep = {}
 
@@ -259,7 +266,7 @@ def batch_throughput(n_sets: int = 2048, swings: int = 120, seed: int = 0, min_t
     rng = np.random.default_rng(seed)
     base = {n: scene.params[n].value for n in ("viscous.C", "coulomb.R", "escapement[2].X")}
     systems = [scene.build({k: v * rng.uniform(0.7, 1.3) for k, v in base.items()}) for _ in range(n_sets)]
-    stack = SystemStack.from_systems(systems)
+    stack = System.stack(systems)
     solve_batch(stack, swings)
     wall = wall_seconds(lambda: solve_batch(stack, swings), min_time)
     cpu = cpu_seconds(lambda: solve_batch(stack, swings), min_time)

@@ -57,8 +57,9 @@ def simulate(scene, solver: str | None = None, **options: Any):
     scene
         A scene object from :func:`load_scene`, or a path.
     solver
-        Model-specific solver name (balance: ``"exact"``, the default for springs, ``"dop853"``, the
-        default for pendulums, ``"rk4"``, ``"ivp"``).
+        Model-specific solver name (balance: ``"exact"``, the default where a closed form exists,
+        ``"dop853"``, the default otherwise -- pendulums, air drag, stiffening springs --, ``"rk4"``,
+        ``"ivp"``).
     **options
         Solver options; unknown ones are refused before any work.
 

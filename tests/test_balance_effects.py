@@ -51,7 +51,7 @@ def test_viscous_drift_follows_monday_bands():
 def test_dense_output_passes_through_the_turning_points():
     scene = escfit.load_scene("sample.toml", text=balance_toml(
         omega0=16.174, theta0=6.28, swings=6, effects="[effects.viscous]\nC = 0.833\n[effects.coulomb]\nR = 30.0\n"))
-    traj = solve(scene, log=True)
+    traj = solve(scene, dense=True)
     ds = dense_output(traj)
     for t, th in zip(traj.time, traj.theta_turn):
         i = int(np.argmin(np.abs(ds.t.values - t)))

@@ -76,24 +76,24 @@ def _potential(theta, spring, w0sq):
 def test_energy_balance_per_half_swing(case):
     text, spring = case
     scene = escfit.load_scene("prop.toml", text=text)
-    traj = solve(scene, log=True)
+    traj = solve(scene, dense=True)
     assert np.all(np.isfinite(traj.amplitude))
     sys = scene.build()
-    log = traj.log
+    log = traj.dense.segments
     w0sq = sys.omega0**2
     theta_prev = sys.theta0
     # positions are exact to rounding (~1e-16 of the angles involved), so an amplitude decaying to 1e-11 rad
     # cannot balance its own tiny energy to 1e-9: allow 1e-14 of the run's energy scale in absolute terms
-    e_ref = abs(_potential(sys.theta0, spring, w0sq)) + sum(abs(x) * (hi - lo) for lo, hi, x in zip(sys.w_lo, sys.w_hi, sys.w_x))
+    e_ref = abs(_potential(sys.theta0, spring, w0sq)) + sum(abs(x) * (hi - lo) for lo, hi, x in zip(sys.field("w_lo"), sys.field("w_hi"), sys.field("w_x")))
     for k, theta_end in enumerate(traj.theta_turn):
         rows = log[log[:, 8] == k]
         s = rows[0, 2]
         x_s, x_e = s * theta_prev, s * theta_end
         w_esc = 0.0
-        for lo, hi, xx, d in zip(sys.w_lo, sys.w_hi, sys.w_x, sys.w_dir):
+        for lo, hi, xx, d in zip(sys.field("w_lo"), sys.field("w_hi"), sys.field("w_x"), sys.field("w_dir")):
             if d == 0 or d == s:
                 w_esc += xx * max(0.0, min(hi, x_e) - max(lo, x_s))
-        w_coul = sys.r * (x_e - x_s)
+        w_coul = sys.field("r") * (x_e - x_s)
         w_visc = 0.0
         for t0, tau, _s, x0, v0, xc, w2, h, _ in rows:
             if tau <= 0:

@@ -1,7 +1,7 @@
 """The batch path: many parameter sets through the exact kernel, and the vectorised posterior.
 
 Batch results must be bit-for-bit those of the one-set solver (it is the same compiled
-kernel), whatever the number of threads; refusals and failures must come back as the
+kernel on the same coefficient records), whatever the number of threads; refusals and failures must come back as the
 one-set path reports them; the vectorised log posterior must equal ``log_prob`` row by row.
 """
 
@@ -13,8 +13,9 @@ import numpy as np
 import pytest
 
 import escfit
-from escfit.balance.batch import SystemStack, solve_batch
-from escfit.balance.solvers import solve_exact
+from escfit.balance import System
+from escfit.balance.batch import solve_batch
+from escfit.balance.solvers import solve_system
 from escfit.core.errors import SolverError
 from escfit.balance.problems.curves import FitProblem
 from escfit.inference import run_emcee
@@ -93,16 +94,16 @@ def _assert_same(single, batch_one):
 def test_batch_is_bit_for_bit_the_single_set_solver(text, switching, swings):
     scene = escfit.load_scene("batch.toml", text=text)
     systems = _perturbed(scene, 24)
-    batch = solve_batch(systems, swings, switching)
+    batch = solve_batch(systems, swings)
     assert len(batch) == 24
     for i, sys in enumerate(systems):
-        _assert_same(solve_exact(sys, swings, switching), batch[i])
+        _assert_same(solve_system(sys, swings, "exact"), batch[i])
         assert np.all(np.isnan(batch.amplitude[i, batch.n_done[i]:]))
 
 
 def test_thread_count_does_not_change_results():
     scene = escfit.load_scene(MONDAY)
-    stack = SystemStack.from_systems(_perturbed(scene, 33, seed=2))
+    stack = System.stack(_perturbed(scene, 33, seed=2))
     one = solve_batch(stack, 120, threads=1)
     two = solve_batch(stack, 120, threads=2)
     for f in FIELDS:
@@ -118,12 +119,12 @@ def test_stopped_and_banked_sets_report_their_status():
     assert batch.status[1] == "stopped" and batch.n_done[1] == 0
     assert batch.status[2] == "banked" and batch.banked[2].any()
     for i, sys in enumerate([scene.build(), dead, banks]):
-        _assert_same(solve_exact(sys, 40, "angle"), batch[i])
+        _assert_same(solve_system(sys, 40, "exact"), batch[i])
 
 
 @pytest.mark.parametrize("change, message", [
     ({"viscous.C": math.nan}, "parameter C = nan is not finite"),
-    ({"viscous.C": -1.0}, "C and R must be >= 0"),
+    ({"viscous.C": -1.0}, "C must be >= 0"),
     ({"escapement[2].X": math.inf}, "escapement magnitudes must be finite"),
 ])
 def test_refusals_match_the_single_set_solver(change, message):
@@ -132,7 +133,7 @@ def test_refusals_match_the_single_set_solver(change, message):
     with pytest.raises(SolverError, match="parameter set 1: .*" + message.replace("(", r"\(")):
         solve_batch([scene.build(), bad], 10)
     with pytest.raises(SolverError) as single:
-        solve_exact(bad, 10, "angle")
+        solve_system(bad, 10, "exact")
     batch = solve_batch([scene.build(), bad], 10, throw=False)
     assert list(batch.status) == ["ok", "failed"]
     assert batch[1].message == str(single.value)
@@ -142,22 +143,42 @@ def test_refusals_match_the_single_set_solver(change, message):
 def test_phase_batch_refuses_overdamping_like_the_single_solver():
     scene = escfit.load_scene("phase.toml", text=PHASE)
     bad = scene.build({"viscous.C": 40.0})
-    batch = solve_batch([bad, scene.build()], 10, "phase", throw=False)
+    batch = solve_batch([bad, scene.build()], 10, throw=False)
     assert list(batch.status) == ["failed", "ok"]
     assert "C < 2*omega0" in batch.message[0]
 
 
-def test_structure_mismatch_and_bad_requests_are_refused():
+def test_sets_of_any_structure_share_a_batch_and_bad_requests_are_refused():
+    """Every set carries its whole coefficient record, so sets of different scenes share a batch
+    and each gives its one-set result; what the batch cannot run is refused before any work."""
     a = escfit.load_scene(MONDAY).build()
     b = escfit.load_scene("rich.toml", text=RICH).build()
-    with pytest.raises(SolverError, match="parameter set 1 differs in structure"):
-        SystemStack.from_systems([a, b])
+    batch = solve_batch([a, b], 40)
+    for i, sys in enumerate([a, b]):
+        _assert_same(solve_system(sys, 40, "exact"), batch[i])
     with pytest.raises(SolverError, match="at least one parameter set"):
-        SystemStack.from_systems([])
+        System.stack([])
     with pytest.raises(SolverError, match="n_swings"):
         solve_batch([a], 0)
-    with pytest.raises(SolverError, match="switching"):
-        solve_batch([a], 3, "sideways")
+    with pytest.raises(SolverError, match="one switching law"):
+        solve_batch([a, escfit.load_scene("phase.toml", text=PHASE).build()], 3)
+
+
+def test_every_record_field_reaches_the_batch_path():
+    """A field the scene fills is never left out of the stacked records: the batch of one scene's
+    sets built in one pass (scene.system(values, n)) holds, field by field, what building each
+    set alone gives."""
+    scene = escfit.load_scene("rich.toml", text=RICH)
+    rng = np.random.default_rng(5)
+    free = [p for p in scene.params if p.tie is None and p.name != "oscillator.theta0"]
+    rows = [{p.name: p.value * (1 + 0.2 * rng.random()) for p in free} for _ in range(5)]
+    base = scene.params.values()
+    arrays = {**base, **{p.name: np.array([r[p.name] for r in rows]) for p in free}}
+    many = scene.system(arrays, 5)
+    for i, r in enumerate(rows):
+        one = scene.system({**base, **r})
+        for name in many.k.dtype.names:
+            np.testing.assert_array_equal(many.k[name][i], one.k[name][0], err_msg=name)
 
 
 # -- the vectorised posterior --------------------------------------------------------------

@@ -20,8 +20,7 @@ from pathlib import Path
 
 import pytest
 
-from escfit.balance import dense, dop853, exact, rk4, waveform
-from escfit.balance.observation import passage_times
+from escfit.balance import dop853, exact, regions, rk4, solution
 from escfit.core.kernels import kernel, kernel_sources
 
 DECORATORS = {
@@ -151,27 +150,29 @@ def test_plain_njit_cache_returns_the_stale_helper(experiments):
 
 
 @pytest.mark.parametrize("func", [exact.run_angle, exact.run_phase, exact.run_angle_many, exact.run_phase_many,
-                                  dense.log_states, dense.log_theta_at, waveform._ascending, rk4._run_located,
-                                  rk4._run_naive, dop853.run_dop853, passage_times._level_times],
+                                  solution._states_at, solution._level_times, solution._ascending,
+                                  rk4._run_located, rk4._run_naive, dop853.run_dop853],
                          ids=lambda f: f"{f.__module__}.{f.__name__}")
 def test_escfit_kernels_are_keyed_on_the_modules_compiled_into_them(func):
     balance = Path(exact.__file__).resolve().parent
     files = set(kernel_sources(func))
     assert Path(func.py_func.__code__.co_filename).resolve() in files
-    assert balance / "segment.py" in files
+    assert {balance / "segment.py", balance / "regions.py"} <= files or func.__module__.endswith("solution")
     if func in (rk4._run_located, rk4._run_naive, dop853.run_dop853):
-        assert {balance / "exact.py", balance / "solvers.py"} <= files  # region helpers, status codes
-    if func in (passage_times._level_times, dense.log_theta_at):
-        assert balance / "dense.py" in files
+        # region helpers, status codes, the shared torque and the smooth effects it adds up
+        assert {balance / "regions.py", balance / "torque.py", balance.parent / "core" / "status.py"} <= files
+    if func.__module__.endswith("solution"):
+        # the closed form, the integrators' steps and the torque they evaluate between stored states
+        assert {balance / "segment.py", balance / "steps.py", balance / "torque.py"} <= files
 
 
 def test_sources_adds_files_the_import_scan_cannot_see(tmp_path):
     table = tmp_path / "table.csv"  # e.g. data read into a constant at import time
     table.write_text("1,2\n")
-    src = exact._applies.py_func
+    src = regions.applies.py_func
     copy = types.FunctionType(src.__code__, src.__globals__, "_applies_copy")  # not compiled here
     files = set(kernel_sources(kernel(sources=[table])(copy)))
-    assert files == set(kernel_sources(exact._applies)) | {table.resolve()}
+    assert files == set(kernel_sources(regions.applies)) | {table.resolve()}
 
 
 def test_every_compiled_kernel_of_the_package_goes_through_kernel():

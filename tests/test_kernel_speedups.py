@@ -15,10 +15,11 @@ import numpy as np
 import pytest
 
 import escfit
-from escfit.balance import exact
-from escfit.balance.batch import SystemStack, solve_batch
+from escfit.balance import System, exact, regions
+from escfit.balance.batch import solve_batch
+from escfit.balance.records import blank, half_swings, run_options
 from escfit.balance.segment import cross_time, propagate, turn_time
-from escfit.balance.solvers import kernel_args, solve_exact
+from escfit.balance.solvers import solve_system
 
 from .conftest import DATASETS
 
@@ -72,7 +73,9 @@ def reference_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_
     status = n_done = n_seg = 0
     any_bank, at_start = False, True
     drift = any(rate != 0.0 for rate in dr_rate)
-    edge_tab, n_edge_tab, w2_tab, xc_tab = exact.region_tables(bank, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r)
+    k = angle_record(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, bank, restitution, dr_th,
+                     dr_rate)
+    edge_tab, n_edge_tab, w2_tab, xc_tab = regions.region_tables(k[0])
     d = 0 if s > 0.0 else 1
     while n_done < n_swings:
         if n_seg >= max_seg:
@@ -178,14 +181,43 @@ def random_angle_args(rng):
             float(rng.uniform(0.0, 1.0)), *_drift(rng))
 
 
-def _kernel_run(kernel, args, n_swings, *extra, log_rows=0):
-    out = (np.full(n_swings, np.nan), np.full(n_swings, np.nan), np.full(n_swings, np.nan),
-           np.full(n_swings, np.nan), np.zeros(n_swings, np.int8))
+def angle_record(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, bank, restitution, dr_th, dr_rate):
+    """The coefficient record of the previous kernels' positional arguments."""
+    k = blank(1)
+    k["theta0"], k["v0"], k["c"], k["r"], k["r_static"] = theta0, v0, c, r, r
+    n = len(sp_w2)
+    k["n_pieces"] = n
+    k["sp_bp"][0, :n - 1], k["sp_w2"][0, :n], k["sp_off"][0, :n] = sp_bp, sp_w2, sp_off
+    k["omega0"] = math.sqrt(sp_w2[0])
+    m = len(w_lo)
+    k["n_windows"] = m
+    k["w_lo"][0, :m], k["w_hi"][0, :m], k["w_x"][0, :m], k["w_dir"][0, :m] = w_lo, w_hi, w_x, w_dir
+    k["bank"], k["restitution"] = bank, restitution
+    k["n_bands"] = len(dr_th)
+    k["drift_th"][0, :len(dr_th)], k["drift_rate"][0, :len(dr_rate)] = dr_th, dr_rate
+    return k
+
+
+def phase_record(theta0, c, r, w2, w_lo, w_hi, w_x, w_dir, dr_th, dr_rate):
+    return angle_record(theta0, 0.0, c, r, np.zeros(0), np.array([w2]), np.zeros(1), w_lo, w_hi, w_x, w_dir,
+                        math.inf, 0.0, dr_th, dr_rate)
+
+
+def positional(system):
+    """The previous kernels' positional arguments of a system (for the references)."""
+    f = system.field
+    return (f("theta0"), f("v0"), f("c"), f("r"), f("sp_bp"), f("sp_w2"), f("sp_off"), f("w_lo"), f("w_hi"),
+            f("w_x"), f("w_dir"), f("bank"), f("restitution"), f("drift_th"), f("drift_rate"))
+
+
+def _kernel_run(kernel, k, n_swings, max_seg=0, log_rows=0):
+    out = half_swings(n_swings, nan=True)
+    run = run_options(n_swings, max_segments=max_seg, dense=log_rows > 0)
     log = np.zeros((log_rows, 9))
-    res = kernel(*args, n_swings, *extra, *out, log)
+    res = kernel(k, run, out, log)
     n = res[0]
-    fields = dict(zip(("amplitude", "theta_turn", "half_period", "time", "banked"), (a[:n] for a in out)))
-    return fields, res[0], res[1], res[2], tuple(res[3:]), log
+    fields = {f: out[f][:n] for f in ("amplitude", "theta_turn", "half_period", "time", "banked")}
+    return fields, res[0], res[1], res[2], tuple(res[3:6]), log[:res[2]]
 
 
 # -- the phase kernel ---------------------------------------------------------------------------
@@ -201,7 +233,7 @@ def test_phase_kernel_matches_the_per_segment_reference(seed):
     for _ in range(150):
         args = random_phase_args(rng)
         ref, n_ref, status_ref, nseg_ref, final_ref = reference_phase(*args, 40)
-        got, n_done, status, n_seg, final, _ = _kernel_run(exact.run_phase, args, 40)
+        got, n_done, status, n_seg, final, _ = _kernel_run(exact.run_phase_one, phase_record(*args), 40)
         assert (n_done, status, n_seg) == (n_ref, status_ref, nseg_ref), args
         theta0, c, r, w2, w_lo, w_hi, w_x = args[:7]
         scale = max([abs(theta0), (r + np.abs(w_x).sum()) / w2] + ref["amplitude"])
@@ -228,7 +260,7 @@ def test_phase_kernel_closed_forms():
     for c, big_r in [(0.0, 0.0), (0.8, 0.0), (0.0, 40.0), (1.7, 50.0), (0.3, 400.0)]:
         args = (th0, c, big_r, w0**2, np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0, np.int64), np.zeros(0),
                 np.zeros(1))
-        got, n_done, status, n_seg, final, _ = _kernel_run(exact.run_phase, args, 60)
+        got, n_done, status, n_seg, final, _ = _kernel_run(exact.run_phase_one, phase_record(*args), 60)
         r = big_r / w0**2
         w1 = math.sqrt(w0**2 - c**2 / 4)
         q = math.exp(-math.pi * c / (2 * w1))
@@ -247,8 +279,8 @@ def test_phase_log_does_not_change_the_results_and_chains_the_segments():
     rng = np.random.default_rng(7)
     for _ in range(30):
         args = random_phase_args(rng)
-        plain = _kernel_run(exact.run_phase, args, 30)
-        logged = _kernel_run(exact.run_phase, args, 30, log_rows=30 * 8)
+        plain = _kernel_run(exact.run_phase_one, phase_record(*args), 30)
+        logged = _kernel_run(exact.run_phase_one, phase_record(*args), 30, log_rows=30 * 8)
         for key in plain[0]:
             np.testing.assert_array_equal(plain[0][key], logged[0][key])
         assert plain[1:5] == logged[1:5]
@@ -269,9 +301,9 @@ def test_phase_batch_equals_single_set():
     rng = np.random.default_rng(3)
     systems = [scene.build({"viscous.C": rng.uniform(0.5, 3.0), "coulomb.R": rng.uniform(200.0, 3000.0)})
                for _ in range(12)]
-    batch = solve_batch(systems, 40, "phase")
+    batch = solve_batch(systems, 40)
     for i, sys in enumerate(systems):
-        one = solve_exact(sys, 40, "phase")
+        one = solve_system(sys, 40, "exact")
         np.testing.assert_array_equal(one.amplitude, batch[i].amplitude)
         np.testing.assert_array_equal(one.time, batch[i].time)
         assert one.status == batch[i].status and one.final == batch[i].final
@@ -286,7 +318,7 @@ def test_angle_kernel_is_bit_for_bit_the_per_segment_reference(seed):
     for _ in range(60):
         args = random_angle_args(rng)
         ref, n_ref, status_ref, nseg_ref, final_ref = reference_angle(*args, 40, 64 * 40 + 1000)
-        got, n_done, status, n_seg, final, _ = _kernel_run(exact.run_angle, args, 40, 64 * 40 + 1000)
+        got, n_done, status, n_seg, final, _ = _kernel_run(exact.run_one, angle_record(*args), 40, 64 * 40 + 1000)
         assert (n_done, status, n_seg) == (n_ref, status_ref, nseg_ref)
         for key in ref:
             np.testing.assert_array_equal(got[key], np.array(ref[key], got[key].dtype), err_msg=key)
@@ -297,9 +329,8 @@ def test_angle_kernel_is_bit_for_bit_the_per_segment_reference(seed):
 
 def test_angle_kernel_monday_case_is_bit_for_bit():
     sys = escfit.load_scene(DATASETS / "scenes" / "monday_unit_angle_fit.toml").build()
-    args = kernel_args(sys)
-    ref, n_ref, status_ref, nseg_ref, final_ref = reference_angle(*args, 120, 64 * 120 + 1000)
-    got, n_done, status, n_seg, final, _ = _kernel_run(exact.run_angle, args, 120, 64 * 120 + 1000)
+    ref, n_ref, status_ref, nseg_ref, final_ref = reference_angle(*positional(sys), 120, 64 * 120 + 1000)
+    got, n_done, status, n_seg, final, _ = _kernel_run(exact.run_one, sys.k, 120, 64 * 120 + 1000)
     assert (n_done, status, n_seg, final) == (n_ref, status_ref, nseg_ref, final_ref)
     for key in ref:
         np.testing.assert_array_equal(got[key], np.array(ref[key], got[key].dtype), err_msg=key)
@@ -339,7 +370,7 @@ def test_small_batches_give_the_same_numbers_on_any_thread_count():
     import numba
 
     scene = escfit.load_scene(DATASETS / "scenes" / "monday_unit_angle_fit.toml")
-    stack = SystemStack.from_systems([scene.build({"viscous.C": 0.5 + 0.05 * i}) for i in range(3)])
+    stack = System.stack([scene.build({"viscous.C": 0.5 + 0.05 * i}) for i in range(3)])
     before = numba.get_num_threads()
     small = solve_batch(stack, 20)
     assert numba.get_num_threads() == before

@@ -17,8 +17,7 @@ from escfit.balance import solve
 from escfit.balance.problems.curves import FitProblem
 from escfit.inference import least_squares, run_emcee
 from escfit.balance.problems.pulses import PulseFitProblem
-from escfit.balance.observation.passage_times import level_times
-from escfit.balance.synthetic.recorders import record_pulses, theta_at
+from escfit.balance.synthetic.recorders import record_pulses, swing_directions
 from escfit.balance.recordings.pulses import assign_pulses, pulses_to_unit_curve, read_pulses, write_pulses
 
 from .conftest import DATASETS
@@ -42,18 +41,18 @@ def train(scene, tmp_path_factory):
 
 def test_level_times_are_exact_crossings(scene):
     """theta at the predicted crossing time is the level, to rounding (closed form + root find)."""
-    tr = solve(scene, swings=10, log=True)
+    tr = solve(scene, swings=10, dense=True)
     m = np.repeat(np.arange(1, 11), 5)
     x = np.tile([-1.0, -0.3, 0.0, 0.5, 2.0], 10)
-    t = level_times(tr.log, m, x)
-    s = tr.log[np.searchsorted(tr.log[:, 8], m - 1), 2]
-    theta = theta_at(tr.log, np.sort(t))[np.argsort(np.argsort(t))]
+    t = tr.dense.crossings(m, x)
+    s = swing_directions(scene.params["oscillator.theta0"].value, 10)[m - 1]
+    theta = tr.dense.theta(t)
     np.testing.assert_allclose(s * theta, x, atol=1e-11)
 
 
 def test_unreached_levels_clamp_to_the_turning_points(scene):
-    tr = solve(scene, swings=4, log=True)
-    t = level_times(tr.log, np.array([2, 2]), np.array([10.0, -10.0]))
+    tr = solve(scene, swings=4, dense=True)
+    t = tr.dense.crossings(np.array([2, 2]), np.array([10.0, -10.0]))
     np.testing.assert_allclose(t, [tr.time[1], tr.time[0]], rtol=0, atol=1e-15)
 
 

@@ -32,8 +32,8 @@ def scene():
 def test_harmonic_reading_is_amplitude_over_lift():
     """For harmonic motion the instrument's formula is exact: reading = L_set * A / L_true."""
     sc = escfit.load_scene("h.toml", text=balance_toml(omega0=15.9, theta0=3.0, swings=20))
-    tr = solve(sc, swings=20, log=True)
-    tz, pulse = beat_events(tr.log, 20, math.radians(50.0))
+    tr = solve(sc, swings=20, dense=True)
+    tz, pulse = beat_events(tr.dense, 20, math.radians(50.0))
     frac = window_readings(tz, pulse, np.array([0.1, 1.0]), np.array([2.1, 3.0]))
     np.testing.assert_allclose(frac, 3.0 / math.radians(50.0), rtol=1e-10)
     np.testing.assert_allclose(tz[:3], (np.arange(3) + 0.5) * math.pi / 15.9, rtol=1e-12)
@@ -41,8 +41,8 @@ def test_harmonic_reading_is_amplitude_over_lift():
 
 def test_unreached_lift_reads_half_the_lift_angle():
     sc = escfit.load_scene("h.toml", text=balance_toml(omega0=15.9, theta0=0.2, swings=8))
-    tr = solve(sc, swings=8, log=True)
-    tz, pulse = beat_events(tr.log, 8, 1.0)
+    tr = solve(sc, swings=8, dense=True)
+    tz, pulse = beat_events(tr.dense, 8, 1.0)
     np.testing.assert_allclose(window_readings(tz, pulse, np.array([0.0]), np.array([1.5])), 0.5, rtol=1e-12)
 
 

@@ -11,7 +11,7 @@ import escfit
 from escfit.balance import solve
 from escfit.balance.problems.curves import FitProblem
 from escfit.inference import least_squares
-from escfit.balance.synthetic.recorders import record_timeseries, theta_at
+from escfit.balance.synthetic.recorders import record_timeseries
 from escfit.balance.recordings.detect import detect_format, read_recording
 from escfit.balance.recordings.timeseries import (TimeSeries, read_timeseries, timeseries_to_unit_curve, turning_points,
                                           write_timeseries)
@@ -33,9 +33,9 @@ def truth(scene):
 
 
 def test_dense_angle_matches_turning_points(scene, truth):
-    tr = solve(scene, swings=40, log=True)
-    np.testing.assert_allclose(theta_at(tr.log, tr.time[:10]), tr.theta_turn[:10], atol=1e-12)
-    assert theta_at(tr.log, np.array([0.0]))[0] == pytest.approx(6.28)
+    tr = solve(scene, swings=40, dense=True)
+    np.testing.assert_allclose(tr.dense.theta(tr.time[:10]), tr.theta_turn[:10], atol=1e-12)
+    assert tr.dense.theta(np.array([0.0]))[0] == pytest.approx(6.28)
 
 
 def test_noise_free_turning_points_are_unbiased(scene, truth):

@@ -42,7 +42,7 @@ def motion(t: np.ndarray, theta0: float = 0.5, *, restoring: str = "spring", t_r
     scene = load_scene("truth.toml", text=SCENE.format(recording="", w0=W0, observation="",
                                                        restoring=f'restoring = "{restoring}"\ntheta0 = {theta0!r}'))
     sys = scene.system({**scene.params.values(), "viscous.C": C_TRUE, "coulomb.R": R_TRUE})
-    theta, status = sample_theta(sys, t - t_release, "angle", "dop853" if restoring == "pendulum" else "exact")
+    theta, status = sample_theta(sys, t - t_release, "dop853" if restoring == "pendulum" else "exact")
     assert status in ("ok", "stopped")
     return theta
 

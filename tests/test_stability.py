@@ -136,8 +136,8 @@ def compiled():
     for switching in ("angle", "phase"):
         scene = escfit.load_scene("warm.toml", text=balance_toml(switching=switching, effects=(
             "[effects.viscous]\nC = 0.1\n")))
-        solve(scene, log=True)
-        solve_batch([scene.build()], 2, switching)
+        solve(scene, dense=True)
+        solve_batch([scene.build()], 2)
 
 
 def _load(text: str):
@@ -190,10 +190,10 @@ def _viscous_loss(x0, v0, xc, w2, h, tau) -> float:
 
 def check_energy(scene, traj) -> None:
     sys = scene.build()
-    bp, w2s, offs = sys.spring_arrays()
-    log = traj.log
+    bp, w2s, offs = (sys.field("sp_bp"), sys.field("sp_w2"), sys.field("sp_off"))
+    log = traj.dense.segments
     e_ref = abs(_potential(sys.theta0, bp, w2s, offs)) + sum(abs(x) * (hi - lo) for lo, hi, x in
-                                                              zip(sys.w_lo, sys.w_hi, sys.w_x))
+                                                              zip(sys.field("w_lo"), sys.field("w_hi"), sys.field("w_x")))
     for k, theta_end in enumerate(traj.theta_turn):
         rows = log[log[:, 8] == k]
         t0, tau0, s, x_s, v_s = rows[0, :5]
@@ -201,8 +201,8 @@ def check_energy(scene, traj) -> None:
         v_end = propagate(x_l - xc_l, v_l, tau_l, h_l, w2_l)[1] if traj.banked[k] else 0.0
         x_e = s * theta_end
         w_esc = sum(xx * max(0.0, min(hi, x_e) - max(lo, x_s))
-                    for lo, hi, xx, d in zip(sys.w_lo, sys.w_hi, sys.w_x, sys.w_dir) if d in (0, s))
-        w_coul = sys.r * (x_e - x_s)
+                    for lo, hi, xx, d in zip(sys.field("w_lo"), sys.field("w_hi"), sys.field("w_x"), sys.field("w_dir")) if d in (0, s))
+        w_coul = sys.field("r") * (x_e - x_s)
         w_visc = sum(_viscous_loss(x0, v0, xc, w2, h, tau) for _, tau, _, x0, v0, xc, w2, h, _ in rows)
         e_start = _potential(s * x_s, bp, w2s, offs) + 0.5 * v_s**2
         e_end = _potential(theta_end, bp, w2s, offs) + 0.5 * v_end**2
@@ -236,10 +236,10 @@ def same(a, b) -> None:
 @given(hard_scenes())
 def test_hard_scenes_finite_energy_balanced_and_deterministic(text):
     scene = _load(text)
-    traj = _timed_solve(scene, log=True)
+    traj = _timed_solve(scene, dense=True)
     check_finite(traj, scene.swings)
     check_energy(scene, traj)
-    same(traj, _timed_solve(scene, log=True))  # the same input twice
+    same(traj, _timed_solve(scene, dense=True))  # the same input twice
     sys = scene.build()
     same(traj, solve_batch([sys, sys], scene.swings)[1])  # and through the batch path
     for name in _features(sys, traj):
@@ -249,43 +249,45 @@ def test_hard_scenes_finite_energy_balanced_and_deterministic(text):
 def _features(sys, traj) -> set[str]:
     """Which hard cases a run met (for the coverage report)."""
     out = {f"status {traj.status}"}
-    ratio = sys.c / (2.0 * sys.omega0)
-    out.add("C = 0" if sys.c == 0 else "C < 2 omega0" if ratio < 1 - 1e-9 else "C ~ 2 omega0" if ratio < 1 + 1e-9
+    ratio = sys.field("c") / (2.0 * sys.omega0)
+    out.add("C = 0" if sys.field("c") == 0 else "C < 2 omega0" if ratio < 1 - 1e-9 else "C ~ 2 omega0" if ratio < 1 + 1e-9
             else "C > 2 omega0")
-    if sys.r == 0:
+    if sys.field("r") == 0:
         out.add("R = 0")
     if traj.banked.any():
         out.add("banked")
     prev = sys.theta0
     for k, th in enumerate(traj.theta_turn):
-        s = traj.log[traj.log[:, 8] == k][0, 2]
+        s = traj.dense.segments[traj.dense.segments[:, 8] == k][0, 2]
         if th * prev > 0 or th == 0:
             out.add("swing not crossing zero")
-        for lo, hi, d in zip(sys.w_lo, sys.w_hi, sys.w_dir):
+        for lo, hi, d in zip(sys.field("w_lo"), sys.field("w_hi"), sys.field("w_dir")):
             if d in (0, s) and min(abs(s * th - lo), abs(s * th - hi)) <= 1e-12 * abs(sys.theta0):
                 out.add("turning point within 1e-12 of a window edge")
             elif d in (0, s) and lo < s * th < hi:
                 out.add("turning point inside a window")
         prev = th
-    if traj.log is not None and np.any(traj.log[:, 7] ** 2 >= traj.log[:, 6]):
+    if traj.dense is not None and np.any(traj.dense.segments[:, 7] ** 2 >= traj.dense.segments[:, 6]):
         out.add("overdamped or critical segment")
     if sys.omega0 > 1e4:
         out.add("omega0 above 1e4 rad/s")
     if abs(sys.theta0) < 1e-9:
         out.add("angles near 1e-12 rad")
-    if sys.spring_w2:
+    if (sys.field("n_pieces") > 1):
         out.add("piecewise hairspring")
-    if any(sys.drift_rates):
+    if any(sys.field("drift_rate")):
         out.add("damping drift")
     return out
 
 
 def _scaled(sys, k: float, a: float):
     """The system with time scaled by 1/k and angles by a (both powers of two: exact in binary)."""
-    return replace(sys, theta0=a * sys.theta0, omega0=k * sys.omega0, c=k * sys.c, r=k * k * a * sys.r,
-                   spring_breaks=[a * b for b in sys.spring_breaks], spring_w2=[k * k * w for w in sys.spring_w2],
-                   w_lo=[a * x for x in sys.w_lo], w_hi=[a * x for x in sys.w_hi], w_x=[k * k * a * x for x in sys.w_x],
-                   bank=a * sys.bank)
+    rec = sys.k.copy()
+    for name, factor in [("theta0", a), ("omega0", k), ("c", k), ("r", k * k * a), ("r_static", k * k * a),
+                         ("sp_bp", a), ("sp_w2", k * k), ("sp_off", k * k * a), ("w_lo", a), ("w_hi", a),
+                         ("w_x", k * k * a), ("bank", a)]:
+        rec[name] *= factor
+    return replace(sys, k=rec)
 
 
 @budget(1500)
@@ -297,13 +299,11 @@ def test_scale_invariance(text, k, a):
     so the results must be too, bit for bit -- however ill-conditioned the scene."""
     scene = _load(text)
     sys = scene.build()
-    # the stiffness pieces as numbers, not omega0**2 (pow need not scale exactly)
-    bp, w2, _ = sys.spring_arrays()
-    sys = replace(sys, spring_breaks=list(bp), spring_w2=list(w2))
-    numbers = [sys.theta0, sys.c, sys.r, *bp, *w2, *sys.w_lo, *sys.w_hi, *sys.w_x]
+    bp, w2 = sys.field("sp_bp"), sys.field("sp_w2")  # the stiffness pieces are numbers, not omega0**2
+    numbers = [sys.theta0, sys.field("c"), sys.field("r"), *bp, *w2, *sys.field("w_lo"), *sys.field("w_hi"), *sys.field("w_x")]
     assume(all(v == 0.0 or abs(v) > 1e-250 for v in numbers))  # scaled by 2**-80 they must stay normal
-    base = solve_system(sys, scene.swings, "angle")
-    other = solve_system(_scaled(sys, k, a), scene.swings, "angle")
+    base = solve_system(sys, scene.swings)
+    other = solve_system(_scaled(sys, k, a), scene.swings)
     assert base.status == other.status
     np.testing.assert_array_equal(other.amplitude, a * base.amplitude)
     np.testing.assert_array_equal(other.half_period * k, base.half_period)
@@ -330,7 +330,7 @@ def test_exact_agrees_with_solve_ivp_on_well_conditioned_scenes(text):
     exact = _timed_solve(scene, swings=6)
     sys = scene.build()
     a0 = abs(sys.theta0)
-    assert np.all(exact.amplitude <= sys.bank)
+    assert np.all(exact.amplitude <= sys.field("bank"))
     # compare while the motion is well above solve_ivp's absolute tolerance
     n = int(np.argmin(np.append(exact.amplitude, 0.0) > 1e-4 * a0))
     assume(n > 0)
@@ -360,7 +360,7 @@ def test_phase_switching_finite_and_deterministic(text):
     check_finite(traj, scene.swings)
     same(traj, _timed_solve(scene))
     sys = scene.build()
-    same(traj, solve_batch([sys], scene.swings, "phase")[0])
+    same(traj, solve_batch([sys], scene.swings)[0])
 
 
 # -- pathological inputs with a bounded run time ------------------------------------------------
@@ -408,7 +408,7 @@ def test_pathological_inputs_finish_quickly_with_a_status(name):
     traj = _timed_solve(scene)
     check_finite(traj, scene.swings)
     if len(traj.amplitude) < 2000:
-        check_energy(scene, solve(scene, log=True))
+        check_energy(scene, solve(scene, dense=True))
     same(traj, solve(scene))
 
 
@@ -431,7 +431,7 @@ def test_compiled_kernel_is_current_with_the_segment_functions():
                  '[[effects.escapement]]\nkind = "unlock"\nfrom = -9.999999999979999e-13\nto = 0.0\nX = 1e-28\n'))]
     stale = "the compiled kernel disagrees with escfit.balance.segment (a stale numba cache?)"
     for text in texts:
-        log = solve(escfit.load_scene("cache.toml", text=text), swings=40, log=True).log
+        log = solve(escfit.load_scene("cache.toml", text=text), swings=40, dense=True).dense.segments
         for k, (t0, tau, s, x0, v0, xc, w2, h, swing) in enumerate(log):
             if not math.isfinite(tau) or tau == 0.0:
                 continue

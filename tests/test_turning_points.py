@@ -74,16 +74,15 @@ def truth_index(tp: TurningPoints, tt: np.ndarray, period: float) -> np.ndarray:
 def test_closed_form_truth_is_the_exact_solvers():
     import escfit
     from escfit.balance import solve
-    from escfit.balance.synthetic.recorders import theta_at
 
     text = ('model = "balance"\n[oscillator]\nomega0 = 6.283185307179586\ntheta0 = 1.0\n[run]\nswings = 12\n'
             '[effects.viscous]\nC = 0.3\n[effects.coulomb]\nR = 2.0\n')
-    traj = solve(escfit.load_scene("decay.toml", text=text), "exact", log=True)
+    traj = solve(escfit.load_scene("decay.toml", text=text), "exact", dense=True)
     t = np.linspace(0.0, 5.0, 777)
     y, tt, tv = decay(t, 1.0, c=0.3, r=2.0)
     np.testing.assert_allclose(tt[1:], traj.time, rtol=1e-12)
     np.testing.assert_allclose(tv[1:], traj.theta_turn, rtol=1e-12)
-    np.testing.assert_allclose(y, theta_at(traj.log, t), atol=1e-12)
+    np.testing.assert_allclose(y, traj.dense.theta(t), atol=1e-12)
 
 
 @pytest.mark.parametrize("rate, phase", [(50, 0.5), (60, 0.2), (80, 0.13), (100, 0.37)])

@@ -39,7 +39,7 @@ def synthetic_record(seed: int, *, duration: float = 6.0, rate: float = 50.0) ->
     """Released at rest at +0.5 rad at t = 0, sampled from t = 0.3 s on: the record starts mid-swing."""
     rng = np.random.default_rng(seed)
     t = np.arange(0.3, 0.3 + duration, 1.0 / rate)
-    theta, status = sample_theta(truth_system(), t, "angle", "exact")
+    theta, status = sample_theta(truth_system(), t, "exact")
     assert status in ("ok", "stopped")
     y = theta + OFFSET + DRIFT * t + SIGMA * rng.standard_normal(t.size)
     return TimeSeries(t, y, source=f"synthetic-{seed}")
@@ -78,7 +78,7 @@ def test_waveform_intervals_are_calibrated_over_24_records(waveform_fits):
 def test_waveform_finds_release_offset_and_drift(waveform_fits):
     from escfit.balance.solvers import solve_system
 
-    first = solve_system(truth_system(), 1, "angle", "exact")  # the reference: the first turning point
+    first = solve_system(truth_system(), 1, "exact")  # the reference: the first turning point
     for res in waveform_fits[:6]:
         vals = res.values
         assert abs(vals["observation.t_release"] - first.time[0]) < 0.01
@@ -102,7 +102,7 @@ def correlated_record(seed: int, rho: float = 0.8) -> TimeSeries:
     """As :func:`synthetic_record`, with AR(1) reading noise of marginal scale SIGMA (a tracker's)."""
     rng = np.random.default_rng(1000 + seed)
     t = np.arange(0.3, 6.3, 0.02)
-    theta, _ = sample_theta(truth_system(), t, "angle", "exact")
+    theta, _ = sample_theta(truth_system(), t, "exact")
     e = rng.standard_normal(t.size)
     for i in range(1, e.size):
         e[i] = rho * e[i - 1] + math.sqrt(1 - rho * rho) * e[i]

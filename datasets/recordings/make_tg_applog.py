@@ -61,8 +61,8 @@ def clock(seconds: float) -> str:
 def make_rows(scene, rng: np.random.Generator) -> list[str]:
     """The log's table rows (header first), the last one complete."""
     swings = int(RECORD_S * scene.params["oscillator.omega0"].value / math.pi) + 4
-    tr = solve(scene, "exact", swings=swings, log=True)
-    tz, pulse = beat_events(tr.log, tr.amplitude.size, math.radians(LIFT_DEG))
+    tr = solve(scene, "exact", swings=swings, dense=True)
+    tz, pulse = beat_events(tr.dense, tr.amplitude.size, math.radians(LIFT_DEG))
     ok = np.isfinite(tz)
     tz, pulse = tz[ok], pulse[ok]
     m = np.arange(1, tz.size + 1)  # half swing of each beat; odd = tic, even = toc (late)

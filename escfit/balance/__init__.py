@@ -2,13 +2,14 @@
 
 Per unit inertia::
 
-    theta'' + C theta' + g(theta) + R sgn(theta') + F_esc = 0
+    theta'' + C theta' + g(theta) + R sgn(theta') + F_esc + F_smooth = 0
 
 with ``g`` the hairspring (``omega0**2 * theta`` unless a piecewise hairspring is named) or,
 with ``[oscillator] restoring = "pendulum"``, gravity (``omega0**2 * sin(theta)``), ``C``
-viscous, ``R`` Coulomb and ``F_esc`` the escapement windows.  Only the effects a scene names
-are simulated.  A spring is solved in closed form by default, a pendulum by the compiled
-adaptive solver ``"dop853"`` (:func:`default_solver`).
+viscous, ``R`` Coulomb, ``F_esc`` the escapement windows and ``F_smooth`` the smooth torques
+without a closed form (air drag, a stiffening spring).  Only the effects a scene names are
+simulated.  A scene with a closed form is solved in closed form by default, any other by the
+compiled adaptive solver ``"dop853"`` (:func:`default_solver`); see docs/physics.md.
 """
 
 from __future__ import annotations
@@ -21,11 +22,12 @@ import xarray as xr
 from .dense import dense_output
 from .scene import BalanceScene, parse
 from .solvers import SOLVERS, default_solver, solve_system
+from .system import System
 from .trajectory import Trajectory
-from .waveform import sample_scene, sample_theta
+from .waveform import sample_scene, sample_state, sample_theta
 
 __all__ = ["BalanceScene", "parse", "simulate", "solve", "json_summary", "dense_output", "Trajectory", "SOLVERS",
-           "default_solver", "sample_theta", "sample_scene"]
+           "default_solver", "sample_theta", "sample_state", "sample_scene", "System"]
 
 
 def solve(scene: BalanceScene, solver: str | None = None, *, values: dict[str, float] | None = None,
@@ -38,16 +40,17 @@ def solve(scene: BalanceScene, solver: str | None = None, *, values: dict[str, f
         A balance scene.
     solver
         ``"exact"``, ``"dop853"``, ``"rk4"`` or ``"ivp"``; default :func:`default_solver`
-        (``"exact"``, or ``"dop853"`` for a pendulum).
+        (``"exact"``, or ``"dop853"`` where the scene has no closed form: a pendulum, air drag, a
+        stiffening spring).
     values
         Parameter values by name overriding the scene's (used by fits).
     swings
         Number of half swings (default: the scene's ``[run] swings``).
     **options
-        Solver options (see :data:`SOLVERS`).
+        Solver options (see :data:`SOLVERS`); ``dense=True`` keeps the dense solution
+        (:attr:`Trajectory.dense`: theta(t), theta'(t), level crossings, turning points).
     """
-    sys = scene.build(values)
-    return solve_system(sys, swings or scene.swings, scene.switching, solver or default_solver(scene), **options)
+    return solve_system(scene.build(values), swings or scene.swings, solver or default_solver(scene), **options)
 
 
 def simulate(scene: BalanceScene, solver: str | None = None, *, swings: int | None = None,

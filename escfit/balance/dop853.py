@@ -4,11 +4,14 @@ The piecewise structure is that of :mod:`escfit.balance.exact`: a half swing mov
 direction ``s`` is integrated in the swing frame ``x = s*theta`` (the balance runs from
 ``x = -A`` towards ``+A``), split into segments of frozen regime ended by a window edge, the
 banking pins or the turning point ``v = 0``.  Inside a region with constants ``(w2, xc)``
-(:func:`escfit.balance.exact._region_coefficients`; ``w2*xc`` gathers Coulomb friction, the
-windows and the hairspring offset) the equation is::
+(:mod:`escfit.balance.regions`; ``w2*xc`` gathers Coulomb friction, the windows and the
+hairspring offset) the equation is that of :func:`escfit.balance.torque.acceleration`::
 
-    x'' = -C x' - w2 (x - xc)          spring
-    x'' = -C x' - w2 (sin x - xc)      pendulum (w2 = omega0**2)
+    x'' = -C x' - w2 (x - xc) + smooth terms          spring
+    x'' = -C x' - w2 (sin x - xc) + smooth terms      pendulum (w2 = omega0**2)
+
+with the smooth torques of every effect that has one (air drag, a stiffening spring); this
+module has no code of any effect.
 
 Steps are those of scipy's ``DOP853`` (same coefficient tables, error norm and step-size
 controller), with separate absolute tolerances for theta and omega.  An event inside an
@@ -20,10 +23,11 @@ it is applied by a third-order Taylor expansion of the state (the equation gives
 derivatives), whose remainder lies below rounding, instead of one more step.  Events thus
 add no error of their own beyond the integrator's local error.
 
-The kernel also samples theta at requested times (steps are clipped to land on them); see
-:mod:`escfit.balance.waveform`.  Like :mod:`escfit.balance.rk4` it compiles functions of
-:mod:`escfit.balance.exact` into its kernels; their cache (:func:`escfit.core.kernels.kernel`)
-is keyed on that file too, so an edit there recompiles them.
+With ``dense=True`` the kernel keeps every accepted step (its start state and length) as a row
+of the dense solution (:class:`escfit.balance.solution.RowSolution`), which evaluates the motion
+anywhere by a step of the partial length: theta(t), theta'(t) and level crossings to the
+integrator's own accuracy.  A run may also end at a time (``t_end``) instead of a number of
+half swings, as sampling a waveform asks.
 """
 
 from __future__ import annotations
@@ -35,64 +39,35 @@ from scipy.integrate._ivp import dop853_coefficients as _coefficients
 
 from ..core.errors import SolverError
 from ..core.kernels import kernel
-from .effects.base import SystemBuilder
-from .exact import region_tables
+from ..core.status import Status
+from .records import ROWS_FULL, columns, half_swings, run_options, with_rows
+from .regions import region_tables
 from .segment import CREEP_OVERSHOOT, creep_horizon
-from .solvers import OVER_THE_TOP, STEP_BUDGET, STEP_UNDERFLOW, _check_system, static_args, status_of
+from .solution import ROW_DOP853, RowSolution
+from .steps import N_STAGES, dop853_step
+from .system import System
+from .torque import acceleration, jerk
 from .trajectory import Trajectory
 
-__all__ = ["solve_dop853", "run_dop853", "kernel_inputs"]
+__all__ = ["solve_dop853", "run_dop853"]
 
-_N = _coefficients.N_STAGES  # 12 stages, plus the first-same-as-last evaluation at the step end
-_A = np.ascontiguousarray(_coefficients.A[:_N, :_N])
-_B = np.ascontiguousarray(_coefficients.B)
 _E3 = np.ascontiguousarray(_coefficients.E3)
 _E5 = np.ascontiguousarray(_coefficients.E5)
 _SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
 _EXPONENT = -1.0 / 8.0  # the error estimate is of order 7 (scipy: -1/(error_estimator_order + 1))
-_STOPPED, _MAX_SEGMENTS = 1, 3
-
-
-@kernel(inline="always")
-def _acc(x, v, c, w2, xc, pend):
-    """Swing-frame acceleration (rad/s^2) of the frozen regime."""
-    if pend:
-        return -c * v - w2 * (math.sin(x) - xc)
-    return -c * v - w2 * (x - xc)
+_STOPPED, _BANKED, _MAX_SEGMENTS = int(Status.STOPPED), int(Status.BANKED), int(Status.MAX_SEGMENTS)
+_OVER_THE_TOP, _UNDERFLOW, _BUDGET = int(Status.OVER_THE_TOP), int(Status.STEP_UNDERFLOW), int(Status.STEP_BUDGET)
 
 
 @kernel
-def _rk_step(x, v, a, h, c, w2, xc, pend, kx, kv):
-    """One DOP853 step of length ``h`` from ``(x, v)`` with acceleration ``a``; stages in kx, kv."""
-    kx[0] = v
-    kv[0] = a
-    for i in range(1, _N):
-        dx = 0.0
-        dv = 0.0
-        for j in range(i):
-            dx += _A[i, j] * kx[j]
-            dv += _A[i, j] * kv[j]
-        vs = v + h * dv
-        kx[i] = vs
-        kv[i] = _acc(x + h * dx, vs, c, w2, xc, pend)
-    sx = 0.0
-    sv = 0.0
-    for j in range(_N):
-        sx += _B[j] * kx[j]
-        sv += _B[j] * kv[j]
-    x1 = x + h * sx
-    v1 = v + h * sv
-    a1 = _acc(x1, v1, c, w2, xc, pend)
-    kx[_N] = v1
-    kv[_N] = a1
-    return x1, v1, a1
-
-
-@kernel
-def _error_norm(x, v, x1, v1, h, kx, kv, rtol, atol_x, atol_v):
-    """scipy's DOP853 error norm of the last step (< 1: accept)."""
+def _error_norm(state, state1, h, stages, tol):
+    """scipy's DOP853 error norm of the last step (< 1: accept); ``tol = (rtol, atol_x, atol_v)``."""
+    x, v = state
+    x1, v1 = state1
+    kx, kv = stages
+    rtol, atol_x, atol_v = tol
     e5x = e5v = e3x = e3v = 0.0
-    for j in range(_N + 1):
+    for j in range(N_STAGES + 1):
         e5x += _E5[j] * kx[j]
         e5v += _E5[j] * kv[j]
         e3x += _E3[j] * kx[j]
@@ -107,8 +82,11 @@ def _error_norm(x, v, x1, v1, h, kx, kv, rtol, atol_x, atol_v):
 
 
 @kernel
-def _initial_step(x, v, a, c, w2, xc, pend, rtol, atol_x, atol_v):
+def _initial_step(state, regime, tol):
     """scipy's ``select_initial_step`` for the 2-d state (s)."""
+    x, v, a = state
+    w2, xc, k = regime
+    rtol, atol_x, atol_v = tol
     sx = atol_x + abs(x) * rtol
     sv = atol_v + abs(v) * rtol
     d0 = math.sqrt(((x / sx) ** 2 + (v / sv) ** 2) / 2.0)
@@ -116,7 +94,7 @@ def _initial_step(x, v, a, c, w2, xc, pend, rtol, atol_x, atol_v):
     h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
     x1 = x + h0 * v
     v1 = v + h0 * a
-    a1 = _acc(x1, v1, c, w2, xc, pend)
+    a1 = acceleration(x1, v1, w2, xc, k)
     d2 = math.sqrt((((v1 - v) / sx) ** 2 + ((a1 - a) / sv) ** 2) / 2.0) / h0
     if d1 <= 1e-15 and d2 <= 1e-15:
         h1 = max(1e-6, h0 * 1e-3)
@@ -126,12 +104,29 @@ def _initial_step(x, v, a, c, w2, xc, pend, rtol, atol_x, atol_v):
 
 
 @kernel
-def _locate(x, v, a, c, w2, xc, pend, which, target, hi, x_hi, v_hi, a_hi, kx, kv):
-    """Event inside a step: ``x`` rises to ``target`` (which=0) or ``v`` falls to 0 (which=1).
+def _locate(state, regime, event, end, stages):
+    """Event inside a step: ``x`` rises to ``target`` or ``v`` falls to 0.
 
-    ``g = x - target`` or ``-v`` changes sign on ``(0, hi]`` (``g(hi) >= 0``, state at ``hi``
-    given).  Returns ``(tau, x, v, a)`` at the located time, evaluated by a step of that length.
+    Parameters
+    ----------
+    state : tuple
+        ``(x, v, a)`` at the step start.
+    regime : tuple
+        ``(w2, xc, k)``.
+    event : tuple
+        ``(which, target)``: 0 for the edge ``x = target``, 1 for the turning point ``v = 0``.
+    end : tuple
+        ``(hi, x_hi, v_hi, a_hi)``: a time within the step at which ``g = x - target`` (or
+        ``-v``) is ``>= 0``, and the state there.
+    stages : tuple
+        Scratch ``(kx, kv)``.
+
+    Returns ``(tau, x, v, a)`` at the located time, evaluated by a step of that length.
     """
+    x, v, a = state
+    w2, xc, k = regime
+    which, target = event
+    hi, x_hi, v_hi, a_hi = end
     lo = 0.0
     g_lo = x - target if which == 0 else -v
     g_hi = x_hi - target if which == 0 else -v_hi
@@ -139,7 +134,7 @@ def _locate(x, v, a, c, w2, xc, pend, which, target, hi, x_hi, v_hi, a_hi, kx, k
         lo = hi
         for _ in range(200):
             lo *= 0.5
-            _, vl, _ = _rk_step(x, v, a, lo, c, w2, xc, pend, kx, kv)
+            _, vl, _ = dop853_step(state, lo, regime, stages)
             if vl > 0.0:
                 g_lo = -vl
                 break
@@ -170,10 +165,10 @@ def _locate(x, v, a, c, w2, xc, pend, which, target, hi, x_hi, v_hi, a_hi, kx, k
         u = new
     tau = min(max(u * hi, lo), hi)
     noise = 4.5e-16 * ((abs(x) + abs(target)) if which == 0 else (abs(v) + abs(v_hi) + abs(a) * hi))
-    rate = math.sqrt(w2) + c  # inverse time scale of the motion
+    rate = math.sqrt(w2) + k.c  # inverse time scale of the motion
     xe, ve, ae = x_hi, v_hi, a_hi
     for _ in range(60):
-        xe, ve, ae = _rk_step(x, v, a, tau, c, w2, xc, pend, kx, kv)
+        xe, ve, ae = dop853_step(state, tau, regime, stages)
         g = xe - target if which == 0 else -ve
         dg = ve if which == 0 else -ae
         if g == 0.0 or abs(g) <= noise:
@@ -194,48 +189,54 @@ def _locate(x, v, a, c, w2, xc, pend, which, target, hi, x_hi, v_hi, a_hi, kx, k
                     # so short a correction is finished by a Taylor expansion of the state at
                     # tau (the ODE gives the derivatives): its remainder, of order
                     # (rate*step)**3, lies below rounding, and a re-step is saved
-                    jerk = -c * ae - w2 * (math.cos(xe) if pend else 1.0) * ve
-                    xn = xe - step * (ve - step * (0.5 * ae - step * jerk / 6.0))
-                    vn = ve - step * (ae - 0.5 * step * jerk)
-                    return new, xn, vn, _acc(xn, vn, c, w2, xc, pend)
+                    jk = jerk(xe, ve, ae, w2, k)
+                    xn = xe - step * (ve - step * (0.5 * ae - step * jk / 6.0))
+                    vn = ve - step * (ae - 0.5 * step * jk)
+                    return new, xn, vn, acceleration(xn, vn, w2, xc, k)
         if hi - lo <= 4e-16 * hi:
             break
         tau = new
-    xe, ve, ae = _rk_step(x, v, a, tau, c, w2, xc, pend, kx, kv)
+    xe, ve, ae = dop853_step(state, tau, regime, stages)
     return tau, xe, ve, ae
 
 
 @kernel
-def run_dop853(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, bank, restitution, pend,
-               n_swings, rtol, atol_x, atol_v, max_seg, max_steps, sample_t, sample_theta,
-               amp, theta_turn, half_period, time, banked):
-    """Integrate half swings (angle switching) from ``theta0, v0``.
+def run_dop853(k, run, out, rows):
+    """Integrate half swings (angle switching) from ``k.theta0, k.v0``.
 
     Parameters
     ----------
-    theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, bank, restitution
-        As :func:`escfit.balance.exact.run_angle` (rad, rad/s, 1/s, rad/s^2, 1/s^2).
-    pend : bool
-        Pendulum: restoring acceleration ``sp_w2[0]*sin(theta)``.
-    n_swings, max_seg, max_steps : int
-        Half swings wanted, segment and step budgets.
-    rtol, atol_x, atol_v : float
-        Relative tolerance and absolute tolerances of the local error of theta (rad) and
-        omega (rad/s).
-    sample_t, sample_theta : ndarray
-        Times (s, ascending, >= 0) at which to record theta (rad) and where to put it; when
-        non-empty the run ends once they are all recorded.  After a stop theta stays at the
-        rest angle; after a failure the remaining samples are NaN.
-    amp, theta_turn, half_period, time, banked : ndarray
-        Per-half-swing outputs, filled while ``n_done`` is below their length.
+    k : record
+        The coefficient record (:mod:`escfit.balance.records`).
+    run : record
+        :data:`escfit.balance.records.RUN`: ``n_swings``, ``max_segments`` and ``max_steps``
+        budgets, ``t_end`` (s; the run ends at the first accepted step reaching it), ``rtol``,
+        ``atol_x`` (rad), ``atol_v`` (rad/s) and ``dense``.
+    out : ndarray of :data:`escfit.balance.records.HALF_SWING`
+        Per-half-swing results, filled while the count is below its length.
+    rows : ndarray, shape (n, 9)
+        The dense solution's rows (t0, tau, s, x0, v0, xc, w2, a0, swing), filled when
+        ``run.dense``; when it has no room left the run stops with status ``ROWS_FULL``.
 
     Returns
     -------
-    n_done, status, n_seg, n_steps, t, theta, omega : int, int, int, int, float, float, float
-        Half swings done, status code (:func:`escfit.balance.solvers.status_of`), segments and
-        steps (accepted and rejected) used, and the time (s), angle (rad) and angular velocity
-        (rad/s) where the run ended.
+    n_done, status, n_seg, n_steps, t, theta, omega, n_rows
+        Half swings done, :class:`~escfit.core.status.Status` code, segments and steps
+        (accepted and rejected) used, the time (s), angle (rad) and angular velocity (rad/s)
+        where the run ended, and the dense rows filled.
     """
+    theta0 = k.theta0
+    v0 = k.v0
+    hold = k.r_static - k.r  # static friction beyond the sliding one (rad/s^2)
+    bank = k.bank
+    restitution = k.restitution
+    n_swings = run.n_swings
+    max_seg = run.max_segments
+    max_steps = run.max_steps
+    t_end = run.t_end
+    tol = (run.rtol, run.atol_x, run.atol_v)
+    record = run.dense != 0
+    pend = k.pendulum != 0
     s = 1.0 if theta0 < 0.0 else -1.0
     if v0 != 0.0:
         s = 1.0 if v0 > 0.0 else -1.0
@@ -247,18 +248,17 @@ def run_dop853(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, b
     n_done = 0
     n_seg = 0
     n_steps = 0
+    n_rows = 0
     any_bank = False
-    n_samp = sample_t.shape[0]
-    k = 0
-    n_out = amp.shape[0]
-    kx = np.empty(_N + 1)
-    kv = np.empty(_N + 1)
-    edge_tab, n_edge_tab, w2_tab, xc_tab = region_tables(bank, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r)
+    reached = False  # t_end reached
+    n_out = out.shape[0]
+    stages = (np.empty(N_STAGES + 1), np.empty(N_STAGES + 1))
+    edge_tab, n_edge_tab, w2_tab, xc_tab = region_tables(k)
     d = 0 if s > 0.0 else 1
     h = -1.0
     rejected = False
     at_start = True
-    while n_done < n_swings and (n_samp == 0 or k < n_samp):
+    while n_done < n_swings and not reached:
         if n_seg >= max_seg:
             status = _MAX_SEGMENTS
             break
@@ -268,6 +268,7 @@ def run_dop853(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, b
             j += 1
         w2 = w2_tab[d, j]
         xc = xc_tab[d, j]
+        regime = (w2, xc, k)
         xb = edge_tab[d, j] if j < n_edges else math.inf
         n_seg += 1
         event = -1  # 0: edge, 1: turning point
@@ -276,44 +277,36 @@ def run_dop853(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, b
         ve = v
         if v <= 0.0:
             v = 0.0
-            a = _acc(x, 0.0, c, w2, xc, pend)
-            if a <= 0.0:
+            a = acceleration(x, 0.0, w2, xc, k)
+            if a <= 0.0 or (at_start and a <= hold):
                 if at_start:
                     status = _STOPPED  # at rest and the net torque cannot overcome static friction
                     break
                 event = 1  # came to rest exactly on an edge: a turning point there
         else:
-            a = _acc(x, v, c, w2, xc, pend)
+            a = acceleration(x, v, w2, xc, k)
         if h < 0.0:
-            h = _initial_step(x, v, a, c, w2, xc, pend, rtol, atol_x, atol_v)
+            h = _initial_step((x, v, a), regime, tol)
         # no turning point within many time constants: creeping to rest (overdamped)
-        horizon = creep_horizon(c, w2)
+        horizon = creep_horizon(k.c, w2)
         x_seg, v_seg = x, v
         t_seg = 0.0
         while event < 0:
-            while k < n_samp and sample_t[k] <= t:
-                sample_theta[k] = s * x
-                k += 1
-            if n_samp > 0 and k >= n_samp:
-                break
             if n_steps >= max_steps:
-                status = STEP_BUDGET
+                status = _BUDGET
                 break
             if t_seg > horizon:
                 status = _STOPPED
                 break
             h_try = h
-            clipped = k < n_samp and t + h_try >= sample_t[k]
-            if clipped:
-                h_try = sample_t[k] - t
-            x1, v1, a1 = _rk_step(x, v, a, h_try, c, w2, xc, pend, kx, kv)
+            x1, v1, a1 = dop853_step((x, v, a), h_try, regime, stages)
             n_steps += 1
-            err = _error_norm(x, v, x1, v1, h_try, kx, kv, rtol, atol_x, atol_v)
+            err = _error_norm((x, v), (x1, v1), h_try, stages, tol)
             if not err < 1.0:  # also NaN
                 h = h_try * max(_MIN_FACTOR, _SAFETY * err**_EXPONENT) if math.isfinite(err) else 0.5 * h_try
                 rejected = True
                 if h <= 1e-15 * (t + h_try):
-                    status = STEP_UNDERFLOW
+                    status = _UNDERFLOW
                     break
                 continue
             factor = _MAX_FACTOR if err == 0.0 else min(_MAX_FACTOR, _SAFETY * err**_EXPONENT)
@@ -321,31 +314,46 @@ def run_dop853(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, b
                 factor = min(1.0, factor)
             rejected = False
             h_next = h_try * factor
-            if clipped:  # a step shortened to land on a sample says nothing about the next one
-                h_next = max(h_next, h)
             if v1 <= 0.0:
-                tau, xe, ve, ae = _locate(x, v, a, c, w2, xc, pend, 1, 0.0, h_try, x1, v1, a1, kx, kv)
+                tau, xe, ve, ae = _locate((x, v, a), regime, (1, 0.0), (h_try, x1, v1, a1), stages)
                 event = 1
                 if xe > xb:  # passed the edge before turning within this step
-                    tau, xe, ve, ae = _locate(x, v, a, c, w2, xc, pend, 0, xb, tau, xe, ve, ae, kx, kv)
+                    tau, xe, ve, ae = _locate((x, v, a), regime, (0, xb), (tau, xe, ve, ae), stages)
                     event = 0
             elif x1 >= xb:
-                tau, xe, ve, ae = _locate(x, v, a, c, w2, xc, pend, 0, xb, h_try, x1, v1, a1, kx, kv)
+                tau, xe, ve, ae = _locate((x, v, a), regime, (0, xb), (h_try, x1, v1, a1), stages)
                 event = 0
             h = h_next
             if pend and (xe if event >= 0 else x1) >= math.pi:
-                status = OVER_THE_TOP
+                status = _OVER_THE_TOP
                 break
+            if record:
+                if n_rows >= rows.shape[0]:
+                    status = ROWS_FULL
+                    break
+                rows[n_rows, 0] = t
+                rows[n_rows, 1] = tau if event >= 0 else h_try
+                rows[n_rows, 2] = s
+                rows[n_rows, 3] = x
+                rows[n_rows, 4] = v
+                rows[n_rows, 5] = xc
+                rows[n_rows, 6] = w2
+                rows[n_rows, 7] = a
+                rows[n_rows, 8] = n_done
+                n_rows += 1
             if event >= 0:
                 break
             x, v, a = x1, v1, a1
-            t = sample_t[k] if clipped else t + h_try
+            t += h_try
             t_seg += h_try
             t_swing += h_try
-        if status != 0 or (n_samp > 0 and k >= n_samp):
+            if t >= t_end:
+                reached = True
+                break
+        if status != 0 or reached:
             break
-        if event == 1 and abs(_acc(xe, 0.0, c, w2, xc, pend)) <= CREEP_OVERSHOOT * math.sqrt(
-                _acc(x_seg, 0.0, c, w2, xc, pend) ** 2 + w2 * v_seg * v_seg):
+        if event == 1 and abs(acceleration(xe, 0.0, w2, xc, k)) <= CREEP_OVERSHOOT * math.sqrt(
+                acceleration(x_seg, 0.0, w2, xc, k) ** 2 + w2 * v_seg * v_seg):
             # the "turn" lies on the rest position to within rounding: a creep to rest, as the
             # exact solver decides it (segment.CREEP_OVERSHOOT), not a swing
             x = xe
@@ -366,11 +374,12 @@ def run_dop853(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, b
             v = 0.0
         # end of a half swing: a turning point or an impact on the banking pins
         if n_done < n_out:
-            amp[n_done] = abs(x)
-            theta_turn[n_done] = s * x
-            half_period[n_done] = t_swing
-            time[n_done] = t
-            banked[n_done] = 1 if is_bank else 0
+            rec = out[n_done]
+            rec.amplitude = abs(x)
+            rec.theta_turn = s * x
+            rec.half_period = t_swing
+            rec.time = t
+            rec.banked = 1 if is_bank else 0
         any_bank = any_bank or is_bank
         t_swing = 0.0
         n_done += 1
@@ -379,46 +388,30 @@ def run_dop853(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, b
         v = restitution * v if is_bank else 0.0
         at_start = v == 0.0
         d = 1 - d
-    rest = s * x if status == _STOPPED else math.nan
-    while k < n_samp:
-        sample_theta[k] = rest
-        k += 1
+        if t >= t_end:
+            reached = True
     if status == 0 and any_bank:
-        status = 2
-    return n_done, status, n_seg, n_steps, t, s * x, s * v
+        status = _BANKED
+    return n_done, status, n_seg, n_steps, t, s * x, s * v, n_rows
 
 
-def kernel_inputs(sys: SystemBuilder, switching: str, n_swings: int, *, budget_swings: int | None = None,
-                  rtol: float = 1e-10, atol: float | None = None, max_segments: int | None = None,
-                  max_steps: int | None = None) -> tuple[tuple, dict]:
-    """Arguments of :func:`run_dop853` up to ``max_steps``, and the options in force.
-
-    The default budgets are ``64*n + 1000`` segments and ``10_000*n + 100_000`` steps with
-    ``n = budget_swings`` (default ``n_swings``).  ``atol`` (rad) defaults to ``1e-2 * rtol * |theta0|``; the velocity's
-    absolute tolerance is ``atol`` times the highest natural frequency, so both carry the
-    motion's own scales.
-    """
-    _check_system(sys, switching)
-    args = static_args(sys, "dop853")
-    if atol is None:
-        atol = 1e-2 * rtol * abs(sys.theta0) or 1e-12
-    if not (1e-15 <= rtol < 1.0 and atol > 0.0 and math.isfinite(atol)):
-        raise SolverError(f"dop853 needs 1e-15 <= rtol < 1 and atol > 0, got rtol={rtol!r}, atol={atol!r}")
-    atol_v = atol * math.sqrt(float(np.max(args[5])))
-    n = budget_swings or n_swings
-    nseg = int(max_segments or 64 * n + 1000)
-    nsteps = int(max_steps or 10_000 * n + 100_000)
-    options = {"rtol": rtol, "atol": atol, "max_segments": nseg, "max_steps": nsteps}
-    return (*args, sys.restoring == "pendulum", n_swings, float(rtol), float(atol), atol_v, nseg, nsteps), options
+@kernel
+def run_one(ks, runs, out, rows):
+    """:func:`run_dop853` on ``ks[0]`` with options ``runs[0]`` (the front end's single call)."""
+    return run_dop853(ks[0], runs[0], out, rows)
 
 
-def solve_dop853(sys: SystemBuilder, n_swings: int, switching: str, *, rtol: float = 1e-10,
-                 atol: float | None = None, max_segments: int | None = None,
-                 max_steps: int | None = None) -> Trajectory:
-    """Integrate with the compiled DOP853 and located events (spring or pendulum).
+def solve_dop853(system: System, n_swings: int, *, rtol: float = 1e-10, atol: float | None = None,
+                 max_segments: int | None = None, max_steps: int | None = None, dense: bool = False,
+                 t_end: float = math.inf) -> Trajectory:
+    """Integrate with the compiled DOP853 and located events (spring or pendulum, any smooth torque).
 
     Parameters
     ----------
+    system
+        One parameter set (:class:`~escfit.balance.system.System`).
+    n_swings
+        Half swings wanted.
     rtol
         Relative tolerance of the local error of each step, as in
         :func:`scipy.integrate.solve_ivp`.
@@ -429,14 +422,31 @@ def solve_dop853(sys: SystemBuilder, n_swings: int, switching: str, *, rtol: flo
         Segment budget (default ``64*n_swings + 1000``).
     max_steps
         Step budget (default ``10_000*n_swings + 100_000``).
+    dense
+        Keep the dense solution (:attr:`Trajectory.dense`).
+    t_end
+        End the run at the first accepted step reaching this time (s), if it comes first.
     """
-    args, options = kernel_inputs(sys, switching, n_swings, rtol=rtol, atol=atol, max_segments=max_segments,
-                                  max_steps=max_steps)
-    out = (np.empty(n_swings), np.empty(n_swings), np.empty(n_swings), np.empty(n_swings), np.zeros(n_swings, np.int8))
-    empty = np.zeros(0)
-    n_done, status, n_seg, steps, t, th, om = run_dop853(*args, empty, empty, *out)
-    name, message = status_of(status)
-    return Trajectory(
-        *(a[:n_done].copy() for a in out[:4]), out[4][:n_done].astype(bool), name, sys.omega0, "dop853", options,
-        n_seg, steps, (t, th, om), message=message,
-    )
+    k = system.k
+    theta0 = float(k["theta0"][0])
+    if atol is None:
+        atol = 1e-2 * rtol * abs(theta0) or 1e-12
+    if not (1e-15 <= rtol < 1.0 and atol > 0.0 and math.isfinite(atol)):
+        raise SolverError(f"dop853 needs 1e-15 <= rtol < 1 and atol > 0, got rtol={rtol!r}, atol={atol!r}")
+    pieces = int(k["n_pieces"][0])
+    atol_v = atol * math.sqrt(float(np.max(k["sp_w2"][0, :pieces])))
+    nseg = int(max_segments or 64 * n_swings + 1000)
+    nsteps = int(max_steps or 10_000 * n_swings + 100_000)
+    options = {"rtol": rtol, "atol": atol, "max_segments": nseg, "max_steps": nsteps}
+    run = run_options(n_swings, max_segments=nseg, max_steps=nsteps, t_end=t_end, dense=dense, rtol=rtol,
+                      atol_x=atol, atol_v=atol_v)
+    out = half_swings(n_swings)
+    # room for ~64 steps per half swing; more is made when a run needs it
+    (n_done, status, n_seg, steps, t, th, om, n_rows), rows = with_rows(
+        lambda buf: run_one(k, run, out, buf), 64 * min(n_swings, 10_000) + 256, 9, dense)
+    traj = Trajectory(*columns(out, n_done), Status(status), system.omega0, "dop853", options, n_seg,
+                      steps, (t, th, om))
+    if dense:
+        traj.dense = RowSolution(rows[:n_rows].copy(), ROW_DOP853, k, traj)
+    return traj
+

@@ -24,12 +24,11 @@ sets in parallel (front end: :mod:`escfit.balance.batch`).  The functions of
 (:func:`escfit.core.kernels.kernel`) is keyed on that file and on this one, so an edit of
 either recompiles them.
 
-Status codes (see :data:`STATUS_NAMES`)
----------------------------------------
-0 ok, 1 stopped (friction holds the balance at rest, or it creeps to rest without a further
-turning point), 2 banked (the run completed but hit the banking pins), 3 max_segments
-(pathological input: segment budget exhausted), 4 phase_breakdown (phase switching: a half
-cycle ended on the side it started, so Monday's phase convention no longer describes the
+Every kernel takes the coefficient record of :mod:`escfit.balance.records` whole and returns a
+:class:`~escfit.core.status.Status` code: ``OK``, ``STOPPED`` (friction holds the balance at
+rest -- static friction ``r_static`` at the start of a half swing -- or it creeps to rest without
+a further turning point), ``BANKED``, ``MAX_SEGMENTS`` or ``PHASE_BREAKDOWN`` (phase switching: a
+half cycle ended on the side it started, so Monday's phase convention no longer describes the
 motion).
 """
 
@@ -41,12 +40,16 @@ import numpy as np
 from numba import prange
 
 from ..core.kernels import kernel
+from ..core.status import Status
+from .records import ROWS_FULL
+from .regions import applies, region_tables
 from .segment import CREEP_OVERSHOOT, cross_time, propagate, turn_time
 
-__all__ = ["run_angle", "run_phase", "run_angle_many", "run_phase_many", "STATUS_NAMES"]
+__all__ = ["run_angle", "run_phase", "run_angle_many", "run_phase_many", "run_one", "run_phase_one", "N_LOG"]
 
-STATUS_NAMES = ("ok", "stopped", "banked", "max_segments", "phase_breakdown")
 N_LOG = 9  # fields of a segment-log row: t0, tau, s, x0, v0, xc, w2, h, swing
+_STOPPED, _BANKED, _MAX_SEGMENTS, _BREAKDOWN = (int(Status.STOPPED), int(Status.BANKED), int(Status.MAX_SEGMENTS),
+                                               int(Status.PHASE_BREAKDOWN))
 
 
 @kernel
@@ -57,74 +60,6 @@ def _drift_factor(integral_c, th, rate):
         if env > th[i]:
             return 1.0 + rate[i]
     return 1.0 + rate[th.shape[0]]
-
-
-@kernel
-def _applies(wdir, s):
-    return wdir == 0 or wdir == s
-
-
-@kernel
-def _region_coefficients(j, s, edges, n_edges, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r):
-    """``(w2, xc)`` of region ``j``: between edges ``j-1`` and ``j`` of a swing in direction ``s``."""
-    if j == 0:
-        mid = edges[0] - 1.0 if n_edges > 0 else 0.0
-    elif j == n_edges:
-        mid = edges[n_edges - 1] + 1.0
-    else:
-        mid = 0.5 * (edges[j - 1] + edges[j])
-    force = -r
-    for k in range(w_lo.shape[0]):
-        if _applies(w_dir[k], s) and w_lo[k] <= mid < w_hi[k]:
-            force += w_x[k]
-    theta_mid = s * mid
-    i = 0
-    while i < sp_bp.shape[0] and sp_bp[i] <= theta_mid:
-        i += 1
-    w2 = sp_w2[i]
-    xc = (force - s * sp_off[i]) / w2
-    return w2, xc
-
-
-@kernel
-def _region(x, s, edges, n_edges, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r):
-    """Index of the next edge above ``x`` and the region's (w2, xc)."""
-    j = 0
-    while j < n_edges and edges[j] <= x:
-        j += 1
-    w2, xc = _region_coefficients(j, s, edges, n_edges, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r)
-    return j, w2, xc
-
-
-@kernel
-def _swing_edges(s, bank, sp_bp, w_lo, w_hi, w_dir, edges):
-    """Sorted distinct switch points of a swing in the swing frame, banking last."""
-    n = 0
-    for k in range(w_lo.shape[0]):
-        if _applies(w_dir[k], s):
-            edges[n] = w_lo[k]
-            edges[n + 1] = w_hi[k]
-            n += 2
-    for i in range(sp_bp.shape[0]):
-        edges[n] = s * sp_bp[i]
-        n += 1
-    for i in range(1, n):  # insertion sort: a handful of values, no allocation
-        v = edges[i]
-        k = i - 1
-        while k >= 0 and edges[k] > v:
-            edges[k + 1] = edges[k]
-            k -= 1
-        edges[k + 1] = v
-    m = 0
-    for i in range(n):
-        v = edges[i]
-        if v < bank and (m == 0 or v > edges[m - 1]):
-            edges[m] = v
-            m += 1
-    if math.isfinite(bank):
-        edges[m] = bank
-        m += 1
-    return m
 
 
 @kernel(inline="always")
@@ -167,68 +102,51 @@ def _surely_crosses(y0, v0, h, w2, tau_turn, xc, xb):
 
 
 @kernel
-def region_tables(bank, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r):
-    """Switch points and region coefficients of both swing directions (row 0: s = +1, row 1: s = -1).
-
-    They are fixed for a run, so solvers tabulate them once.  Returns ``(edges, n_edges, w2, xc)``:
-    the edges of each direction in order, how many, and each region's stiffness and centre.
-    """
-    n_max = 2 * w_lo.shape[0] + sp_bp.shape[0] + 1
-    edge_tab = np.empty((2, n_max))
-    n_edge_tab = np.zeros(2, np.int64)
-    w2_tab = np.empty((2, n_max + 1))
-    xc_tab = np.empty((2, n_max + 1))
-    for d in range(2):
-        sd = 1.0 if d == 0 else -1.0
-        n_edge_tab[d] = _swing_edges(sd, bank, sp_bp, w_lo, w_hi, w_dir, edge_tab[d])
-        for j in range(n_edge_tab[d] + 1):
-            w2_tab[d, j], xc_tab[d, j] = _region_coefficients(j, sd, edge_tab[d], n_edge_tab[d], sp_bp, sp_w2,
-                                                              sp_off, w_lo, w_hi, w_x, w_dir, r)
-    return edge_tab, n_edge_tab, w2_tab, xc_tab
-
-
-@kernel
-def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
-              bank, restitution, dr_th, dr_rate, n_swings, max_seg,
-              amp, theta_turn, half_period, time, banked, log):
+def run_angle(k, run, out, log):
     """Integrate half swings with angle switching (the physical escapement).
 
     Parameters
     ----------
-    theta0, v0 : float
-        Initial angle (rad) and angular velocity (rad/s); released at rest when v0 == 0.
-    c0 : float
-        Initial viscous coefficient C = c/I (1/s).
-    r : float
-        Coulomb friction torque per inertia R (rad/s^2), >= 0.
-    sp_bp, sp_w2, sp_off : ndarray
-        Hairspring: breakpoint angles (rad, sorted), stiffness per inertia of each piece
-        (1/s^2) and offsets so the restoring acceleration is ``w2[i]*theta + off[i]``.
-    w_lo, w_hi, w_x, w_dir : ndarray
-        Escapement windows in the swing frame (rad), signed magnitude (rad/s^2, >0
-        drives, <0 opposes) and the swings they act on (0 both, +1 positive, -1 negative).
-    bank, restitution : float
-        Banking angle (rad, inf for none) and coefficient of restitution of the impact.
-    dr_th, dr_rate : ndarray
-        Damping drift: envelope thresholds (descending) and per-cycle growth rates
-        (one more rate than thresholds); all-zero rates disable it.
-    n_swings, max_seg : int
-        Half swings wanted and the segment budget.
-    amp, theta_turn, half_period, time, banked : ndarray
-        Outputs per half swing (filled up to the returned count).
-    log : ndarray, shape (max_seg, 9) or (0, 9)
-        Segment log (t0, tau, s, x0, v0, xc, w2, h, swing) when it has rows.
+    k : record
+        Coefficients (:data:`escfit.balance.records.COEFFICIENTS`): release ``theta0, v0``
+        (rad, rad/s; released at rest when v0 == 0), viscous ``c`` (1/s), sliding and static
+        friction ``r, r_static`` (rad/s^2), the restoring torque's pieces, the escapement
+        windows, banking ``bank, restitution`` and the damping drift.
+    run : record
+        :data:`escfit.balance.records.RUN`: ``n_swings`` half swings wanted, the segment budget
+        ``max_segments``, ``t_end`` (s; the run ends with the first half swing ending at or
+        after it) and ``dense`` (keep the segment log).
+    out : ndarray of :data:`escfit.balance.records.HALF_SWING`
+        Per-half-swing results, filled up to the returned count.
+    log : ndarray, shape (rows, 9)
+        The segment log (t0, tau, s, x0, v0, xc, w2, h, swing), filled when ``run.dense``; when
+        it has no room left the run stops with status ``ROWS_FULL``
+        (:func:`escfit.balance.records.with_rows` runs it again with more).
 
     Returns
     -------
-    n_done, status, n_seg, t, theta, omega : int, int, int, float, float, float
+    n_done, status, n_seg, t, theta, omega
+        Half swings done, :class:`~escfit.core.status.Status` code, segments used (the log's
+        filled rows when dense) and where the run ended (s, rad, rad/s).
     """
+    theta0 = k.theta0
+    v0 = k.v0
+    r = k.r
+    hold = k.r_static - r  # static friction beyond the sliding one (rad/s^2)
+    bank = k.bank
+    restitution = k.restitution
+    dr_th = k.drift_th[:k.n_bands]
+    dr_rate = k.drift_rate[:k.n_bands + 1]
+    n_swings = run.n_swings
+    max_seg = run.max_segments
+    t_end = run.t_end
+    record = run.dense != 0
     s = 1.0 if theta0 < 0.0 else -1.0
     if v0 != 0.0:
         s = 1.0 if v0 > 0.0 else -1.0
     x = s * theta0
     v = s * v0
-    c = c0
+    c = k.c
     t = 0.0
     t_swing = 0.0  # duration of the current half swing, summed apart from t to keep its precision
     int_c = 0.0
@@ -240,17 +158,16 @@ def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
     for i in range(dr_rate.shape[0]):
         if dr_rate[i] != 0.0:
             drift = True
-    edge_tab, n_edge_tab, w2_tab, xc_tab = region_tables(bank, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r)
+    edge_tab, n_edge_tab, w2_tab, xc_tab = region_tables(k)
     d = 0 if s > 0.0 else 1
     edges = edge_tab[d]
     n_edges = n_edge_tab[d]
-    record = log.shape[0] > 0
     at_start = True
     at_edge = False  # the state sits on edge j after a crossing
     j = 0
     while n_done < n_swings:
         if n_seg >= max_seg:
-            status = 3
+            status = _MAX_SEGMENTS
             break
         if at_edge:
             j += 1  # just crossed edge j: the edges are distinct, so the region above is the next
@@ -264,13 +181,16 @@ def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
         h = 0.5 * c
         xb = edges[j] if j < n_edges else math.inf
         grazed = False
-        if v <= 0.0 and y0 >= 0.0:
+        if v <= 0.0 and (y0 >= 0.0 or (at_start and hold > 0.0 and w2 * y0 + hold >= 0.0)):
             v = 0.0
             if at_start:
-                status = 1  # at rest and the net torque cannot overcome static friction
+                status = _STOPPED  # at rest and the net torque cannot overcome static friction
                 break
             grazed = True  # came to rest exactly on an edge: a turning point there
         if record:
+            if n_seg >= log.shape[0]:
+                status = ROWS_FULL
+                break
             log[n_seg, 0] = t
             log[n_seg, 2] = s
             log[n_seg, 3] = x
@@ -314,7 +234,7 @@ def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
                 x = xc
                 v = 0.0
                 t = math.inf
-                status = 1
+                status = _STOPPED
                 break
         if record:
             log[n_seg, 1] = tau
@@ -328,11 +248,12 @@ def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
         if at_edge:
             continue
         # end of a half swing: a turning point or an impact on the banking pins
-        amp[n_done] = abs(x)
-        theta_turn[n_done] = s * x
-        half_period[n_done] = t_swing
-        time[n_done] = t
-        banked[n_done] = 1 if is_bank else 0
+        rec = out[n_done]
+        rec.amplitude = abs(x)
+        rec.theta_turn = s * x
+        rec.half_period = t_swing
+        rec.time = t
+        rec.banked = 1 if is_bank else 0
         any_bank = any_bank or is_bank
         t_swing = 0.0
         n_done += 1
@@ -345,27 +266,31 @@ def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
         d = 1 - d
         edges = edge_tab[d]
         n_edges = n_edge_tab[d]
+        if t >= t_end:
+            break
     if status == 0 and any_bank:
-        status = 2
+        status = _BANKED
     return n_done, status, n_seg, t, s * x, s * v
 
 
 @kernel
-def _phase_segments(s, w2, w1, r, w_lo, w_hi, w_x, w_dir, pts, seg_xc, seg_tau):
+def _phase_segments(s, w1, k, pts, seg_xc, seg_tau):
     """Segments of a phase-switched half cycle in direction ``s``; returns their number.
 
     The half cycle runs from phase 0 to pi; window limits are phase offsets from pi/2.  Fills
     ``seg_xc`` (centre of each segment in the swing frame, rad) and ``seg_tau`` (its
     duration, s, for the damped frequency ``w1``), in order; empty segments are left out.
     """
+    w2 = k.sp_w2[0]
+    n_win = k.n_windows
     half_pi = 0.5 * math.pi
     n = 0
     pts[n] = 0.0
     n += 1
-    for k in range(w_lo.shape[0]):
-        if _applies(w_dir[k], s):
-            pts[n] = half_pi + w_lo[k]
-            pts[n + 1] = half_pi + w_hi[k]
+    for i in range(n_win):
+        if applies(k.w_dir[i], s):
+            pts[n] = half_pi + k.w_lo[i]
+            pts[n + 1] = half_pi + k.w_hi[i]
             n += 2
     pts[n] = math.pi
     n += 1
@@ -377,10 +302,10 @@ def _phase_segments(s, w2, w1, r, w_lo, w_hi, w_x, w_dir, pts, seg_xc, seg_tau):
         if hi <= lo:
             continue
         mid = 0.5 * (lo + hi) - half_pi
-        force = -r
-        for k in range(w_lo.shape[0]):
-            if _applies(w_dir[k], s) and w_lo[k] <= mid < w_hi[k]:
-                force += w_x[k]
+        force = -k.r
+        for i in range(n_win):
+            if applies(k.w_dir[i], s) and k.w_lo[i] <= mid < k.w_hi[i]:
+                force += k.w_x[i]
         seg_xc[m_seg] = force / w2
         seg_tau[m_seg] = (hi - lo) / w1
         m_seg += 1
@@ -388,11 +313,12 @@ def _phase_segments(s, w2, w1, r, w_lo, w_hi, w_x, w_dir, pts, seg_xc, seg_tau):
 
 
 @kernel
-def _phase_sweep(x, v, h, w2, seg_xc, seg_tau, n, forced):
-    """State ``(x, v)`` (swing frame, rad and rad/s) after the ``n`` segments of a half cycle.
+def _phase_sweep(x, v, h, w2, segments, forced):
+    """State ``(x, v)`` (swing frame, rad and rad/s) after the segments ``(xc, tau, n)`` of a half cycle.
 
     With ``forced`` False every centre is taken as 0: the homogeneous (linear) part alone.
     """
+    seg_xc, seg_tau, n = segments
     for m in range(n):
         xc = seg_xc[m] if forced else 0.0
         y, v = propagate(x - xc, v, seg_tau[m], h, w2)
@@ -401,7 +327,7 @@ def _phase_sweep(x, v, h, w2, seg_xc, seg_tau, n, forced):
 
 
 @kernel
-def _phase_map(h, w2, seg_xc, seg_tau, n, out):
+def _phase_map(h, w2, segments, out):
     """The affine map of a phase-switched half cycle, in the swing frame.
 
     Every half cycle of a direction has the same segments, so its end state is an affine
@@ -413,22 +339,25 @@ def _phase_map(h, w2, seg_xc, seg_tau, n, out):
     and the windows.  The 2x2 form, composed from the same closed form segment by segment,
     also carries that velocity, for the final state and the next half cycle.
     """
-    out[0], out[2] = _phase_sweep(1.0, 0.0, h, w2, seg_xc, seg_tau, n, False)
-    out[1], out[3] = _phase_sweep(0.0, 1.0, h, w2, seg_xc, seg_tau, n, False)
-    out[4], out[5] = _phase_sweep(0.0, 0.0, h, w2, seg_xc, seg_tau, n, True)
+    out[0], out[2] = _phase_sweep(1.0, 0.0, h, w2, segments, False)
+    out[1], out[3] = _phase_sweep(0.0, 1.0, h, w2, segments, False)
+    out[4], out[5] = _phase_sweep(0.0, 0.0, h, w2, segments, True)
 
 
 @kernel
-def _phase_tables(c, r, w2, w_lo, w_hi, w_x, w_dir, pts, seg_xc, seg_tau, n_seg_d, maps, t_half):
+def _phase_tables(c, k, tables):
     """Segments, affine maps (:func:`_phase_map`) and durations of both directions' half cycles
-    for viscous coefficient ``c`` (row 0: s = +1, row 1: s = -1)."""
+    for viscous coefficient ``c`` (row 0: s = +1, row 1: s = -1), into ``tables`` =
+    ``(pts, seg_xc, seg_tau, n_seg_d, maps, t_half)``."""
+    pts, seg_xc, seg_tau, n_seg_d, maps, t_half = tables
+    w2 = k.sp_w2[0]
     h = 0.5 * c
     w1 = math.sqrt(w2 - h * h)
     for d in range(2):
         sd = 1.0 if d == 0 else -1.0
-        n = _phase_segments(sd, w2, w1, r, w_lo, w_hi, w_x, w_dir, pts, seg_xc[d], seg_tau[d])
+        n = _phase_segments(sd, w1, k, pts, seg_xc[d], seg_tau[d])
         n_seg_d[d] = n
-        _phase_map(h, w2, seg_xc[d], seg_tau[d], n, maps[d])
+        _phase_map(h, w2, (seg_xc[d], seg_tau[d], n), maps[d])
         total = 0.0
         for m in range(n):
             total += seg_tau[d, m]
@@ -436,17 +365,18 @@ def _phase_tables(c, r, w2, w_lo, w_hi, w_x, w_dir, pts, seg_xc, seg_tau, n_seg_
 
 
 @kernel
-def _phase_log(x, v, t, n_seg, s, c, w2, seg_xc, seg_tau, n, swing, log):
-    """Log the ``n`` segments of a half cycle starting from ``(x, v)`` at time ``t`` (rows from
-    ``n_seg`` on, as far as ``log`` reaches; columns as :func:`run_angle` logs them).
+def _phase_log(x, v, t, s, c, w2, segments, where, log):
+    """Log the segments ``(xc, tau, n)`` of a half cycle starting from ``(x, v)`` at time ``t``
+    in direction ``s``; ``where = (first row, half swing)``.  Columns as :func:`run_angle`
+    logs them.
 
     The states are swept segment by segment with the closed form; the half cycle's end state
     itself comes from the affine map, so a run gives the same numbers with a log as without.
     """
+    seg_xc, seg_tau, n = segments
+    n_seg, swing = where
     h = 0.5 * c
     for m in range(n):
-        if n_seg + m >= log.shape[0]:
-            break
         xc = seg_xc[m]
         tau = seg_tau[m]
         log[n_seg + m, 0] = t
@@ -464,14 +394,13 @@ def _phase_log(x, v, t, n_seg, s, c, w2, seg_xc, seg_tau, n, swing, log):
 
 
 @kernel
-def run_phase(theta0, c0, r, w2, w_lo, w_hi, w_x, w_dir, dr_th, dr_rate, n_swings,
-              amp, theta_turn, half_period, time, banked, log):
+def run_phase(k, run, out, log):
     """Integrate half cycles with Monday's phase switching.
 
-    Each half cycle lasts ``pi/omega1`` (``omega1 = sqrt(w2 - C**2/4)``); window limits
-    ``w_lo, w_hi`` are phase offsets (rad) from the zero crossing in the middle of the
-    half cycle, and the Coulomb sign flips at every half-cycle boundary.  A half swing
-    ends at phase ``k*pi`` and its amplitude is ``|theta|`` there (the velocity there is
+    Each half cycle lasts ``pi/omega1`` (``omega1 = sqrt(w2 - C**2/4)``, ``w2 = k.sp_w2[0]``);
+    window limits ``k.w_lo, k.w_hi`` are phase offsets (rad) from the zero crossing in the
+    middle of the half cycle, and the Coulomb sign flips at every half-cycle boundary.  A half
+    swing ends at phase ``j*pi`` and its amplitude is ``|theta|`` there (the velocity there is
     not exactly zero when forcing acts).  Requires ``C < 2*sqrt(w2)``.  When a half cycle
     ends on the side it started the run continues, as Monday's programs did, with status
     4 (phase_breakdown) to say the numbers no longer describe a swinging balance.
@@ -481,14 +410,19 @@ def run_phase(theta0, c0, r, w2, w_lo, w_hi, w_x, w_dir, dr_th, dr_rate, n_swing
     and again whenever damping drift changes C: four multiply-adds per half swing.  A segment
     log is filled by sweeping each half cycle segment by segment from the same states.
 
-    Returns
-    -------
-    n_done, status, n_seg, t, theta, omega : as :func:`run_angle`
+    Parameters and returns as :func:`run_angle`.
     """
+    theta0 = k.theta0
+    w2 = k.sp_w2[0]
+    dr_th = k.drift_th[:k.n_bands]
+    dr_rate = k.drift_rate[:k.n_bands + 1]
+    n_swings = run.n_swings
+    t_end = run.t_end
+    record = run.dense != 0
     s = 1.0 if theta0 < 0.0 else -1.0
     x = s * theta0
     v = 0.0
-    c = c0
+    c = k.c
     t = 0.0
     int_c = 0.0
     status = 0
@@ -498,77 +432,88 @@ def run_phase(theta0, c0, r, w2, w_lo, w_hi, w_x, w_dir, dr_th, dr_rate, n_swing
     for i in range(dr_rate.shape[0]):
         if dr_rate[i] != 0.0:
             drift = True
-    n_max = 2 * w_lo.shape[0] + 1
-    pts = np.empty(n_max + 1)
-    seg_xc = np.empty((2, n_max))
-    seg_tau = np.empty((2, n_max))
-    n_seg_d = np.zeros(2, np.int64)
-    maps = np.empty((2, 6))
-    t_half = np.empty(2)
-    _phase_tables(c, r, w2, w_lo, w_hi, w_x, w_dir, pts, seg_xc, seg_tau, n_seg_d, maps, t_half)
+    n_max = 2 * k.n_windows + 1
+    tables = (np.empty(n_max + 1), np.empty((2, n_max)), np.empty((2, n_max)), np.zeros(2, np.int64),
+              np.empty((2, 6)), np.empty(2))
+    _, seg_xc, seg_tau, n_seg_d, maps, t_half = tables
+    _phase_tables(c, k, tables)
     half = math.pi / math.sqrt(w2 - (0.5 * c) * (0.5 * c))
-    record = log.shape[0] > 0
     while n_done < n_swings:
         d = 0 if s > 0.0 else 1
         if record:
-            _phase_log(x, v, t, n_seg, s, c, w2, seg_xc[d], seg_tau[d], n_seg_d[d], n_done, log)
+            if n_seg + n_seg_d[d] > log.shape[0]:
+                status = ROWS_FULL
+                break
+            _phase_log(x, v, t, s, c, w2, (seg_xc[d], seg_tau[d], n_seg_d[d]), (n_seg, n_done), log)
         mp = maps[d]
         x, v = mp[0] * x + mp[1] * v + mp[4], mp[2] * x + mp[3] * v + mp[5]
         t += t_half[d]
         int_c += c * t_half[d]
         n_seg += n_seg_d[d]
-        amp[n_done] = abs(x)
-        theta_turn[n_done] = s * x
-        half_period[n_done] = half
-        time[n_done] = t
-        banked[n_done] = 0
+        rec = out[n_done]
+        rec.amplitude = abs(x)
+        rec.theta_turn = s * x
+        rec.half_period = half
+        rec.time = t
+        rec.banked = 0
         n_done += 1
         if x <= 0.0:
-            status = 4  # keep going, as Monday's programs did, but say so
+            status = _BREAKDOWN  # keep going, as Monday's programs did, but say so
         if drift and n_done % 2 == 0:
             c_old = c
             c *= _drift_factor(int_c, dr_th, dr_rate)
             if c >= 2.0 * math.sqrt(w2):
-                status = 4
+                status = _BREAKDOWN
                 break
             if c != c_old:
-                _phase_tables(c, r, w2, w_lo, w_hi, w_x, w_dir, pts, seg_xc, seg_tau, n_seg_d, maps, t_half)
+                _phase_tables(c, k, tables)
                 half = math.pi / math.sqrt(w2 - (0.5 * c) * (0.5 * c))
         s = -s
         x = -x
         v = -v
+        if t >= t_end:
+            break
     return n_done, status, n_seg, t, s * x, s * v
 
 
-@kernel(parallel=True)
-def run_angle_many(theta0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, bank, restitution, dr_th, dr_rate,
-                active, n_swings, max_seg, amp, theta_turn, half_period, time, banked, n_done, status, n_seg, final):
-    """:func:`run_angle` on each parameter set ``i`` with ``active[i]``, in parallel.
+@kernel
+def run_one(ks, runs, out, log):
+    """:func:`run_angle` on ``ks[0]`` with options ``runs[0]`` (the front end's single call: arrays of
+    one record reach a compiled function faster than records)."""
+    return run_angle(ks[0], runs[0], out, log)
 
-    Per-set inputs are rows of ``theta0, c0, r, restitution`` (n,) and ``sp_w2, sp_off,
-    w_x`` (n, .); the structure is shared.  Outputs are rows of ``(n, n_swings)`` arrays
-    and ``n_done, status, n_seg`` (n,), ``final`` (n, 3).
+
+@kernel
+def run_phase_one(ks, runs, out, log):
+    """:func:`run_phase` on ``ks[0]`` (the front end's single call)."""
+    return run_phase(ks[0], runs[0], out, log)
+
+
+@kernel(parallel=True)
+def run_angle_many(ks, runs, active, out, summary):
+    """:func:`run_angle` on each record ``ks[i]`` with ``active[i]``, in parallel.
+
+    ``out`` has shape ``(sets, n_swings)``; ``summary[i]`` receives ``n_done, status, n_seg``
+    and the final ``t, theta, omega`` (:data:`escfit.balance.batch.SUMMARY`).
     """
-    no_log = np.zeros((0, 9))
-    for i in prange(theta0.shape[0]):
+    # (records are indexed inside the parallel loop: numba 0.68 cannot pass one into it)
+    for i in prange(ks.shape[0]):
         if not active[i]:
             continue
-        res = run_angle(theta0[i], 0.0, c0[i], r[i], sp_bp, sp_w2[i], sp_off[i], w_lo, w_hi, w_x[i], w_dir, bank,
-                        restitution[i], dr_th, dr_rate, n_swings, max_seg, amp[i], theta_turn[i], half_period[i],
-                        time[i], banked[i], no_log)
-        n_done[i], status[i], n_seg[i] = res[0], res[1], res[2]
-        final[i, 0], final[i, 1], final[i, 2] = res[3], res[4], res[5]
+        res = run_angle(ks[i], runs[0], out[i], np.zeros((0, 9)))
+        row = summary[i]
+        row.n_done, row.status, row.n_seg = res[0], res[1], res[2]
+        row.t, row.theta, row.omega = res[3], res[4], res[5]
 
 
 @kernel(parallel=True)
-def run_phase_many(theta0, c0, r, w2, w_lo, w_hi, w_x, w_dir, dr_th, dr_rate, active, n_swings,
-                amp, theta_turn, half_period, time, banked, n_done, status, n_seg, final):
-    """:func:`run_phase` on each active parameter set, in parallel (as :func:`run_angle_many`)."""
-    no_log = np.zeros((0, 9))
-    for i in prange(theta0.shape[0]):
+def run_phase_many(ks, runs, active, out, summary):
+    """:func:`run_phase` on each active record, in parallel (as :func:`run_angle_many`)."""
+    # (records are indexed inside the parallel loop: numba 0.68 cannot pass one into it)
+    for i in prange(ks.shape[0]):
         if not active[i]:
             continue
-        res = run_phase(theta0[i], c0[i], r[i], w2[i], w_lo, w_hi, w_x[i], w_dir, dr_th, dr_rate, n_swings,
-                        amp[i], theta_turn[i], half_period[i], time[i], banked[i], no_log)
-        n_done[i], status[i], n_seg[i] = res[0], res[1], res[2]
-        final[i, 0], final[i, 1], final[i, 2] = res[3], res[4], res[5]
+        res = run_phase(ks[i], runs[0], out[i], np.zeros((0, 9)))
+        row = summary[i]
+        row.n_done, row.status, row.n_seg = res[0], res[1], res[2]
+        row.t, row.theta, row.omega = res[3], res[4], res[5]

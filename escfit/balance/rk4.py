@@ -10,8 +10,12 @@ Two modes show what event handling is worth:
   at every stage and steps straight over switches; turning points are only interpolated for
   the output.  Its error is first order in ``h`` whenever a switch falls inside a step.
 
-Both modes handle a spring and a pendulum (``pend``: restoring acceleration
-``w2*sin(theta)`` instead of ``w2*theta + off``).
+Both modes integrate :func:`escfit.balance.torque.acceleration`, so they handle a spring, a
+pendulum and every smooth torque an effect defines, with no code of any effect here.  With
+``dense=True`` the located mode keeps a row every 64 steps and at every event; the dense
+solution (:class:`escfit.balance.solution.RowSolution`) re-steps from the row, which reproduces
+the run's own steps.  The naive mode keeps none: it steps over the switches, so its motion
+between steps is not a solution of any one regime (``dense`` is refused there).
 """
 
 from __future__ import annotations
@@ -22,57 +26,39 @@ import numpy as np
 
 from ..core.errors import SolverError
 from ..core.kernels import kernel
-from .effects.base import SystemBuilder
-from .exact import _applies, _region, _swing_edges
+from ..core.status import Status
+from .records import ROWS_FULL, columns, half_swings, run_options, with_rows
+from .regions import region_at, swing_edges
 from .segment import CREEP_OVERSHOOT, creep_horizon
-from .solvers import OVER_THE_TOP, static_args, status_of
+from .solution import ROW_RK4, RowSolution
+from .steps import rk4_step
+from .system import System
+from .torque import acceleration
 from .trajectory import Trajectory
 
 __all__ = ["solve_rk4"]
 
-
-@kernel(inline="always")
-def _acc(x, v, c, w2, xc, pend):
-    """Swing-frame acceleration: ``-c v - w2 (x - xc)``, or ``-c v - w2 (sin x - xc)`` (pendulum)."""
-    if pend:
-        return -c * v - w2 * (math.sin(x) - xc)
-    return -c * v - w2 * (x - xc)
-
-
-@kernel(inline="always")
-def _step(x, v, dt, c, w2, xc, pend):
-    k1x = v
-    k1v = _acc(x, v, c, w2, xc, pend)
-    x2 = x + 0.5 * dt * k1x
-    v2 = v + 0.5 * dt * k1v
-    k2x = v2
-    k2v = _acc(x2, v2, c, w2, xc, pend)
-    x3 = x + 0.5 * dt * k2x
-    v3 = v + 0.5 * dt * k2v
-    k3x = v3
-    k3v = _acc(x3, v3, c, w2, xc, pend)
-    x4 = x + dt * k3x
-    v4 = v + dt * k3v
-    k4x = v4
-    k4v = _acc(x4, v4, c, w2, xc, pend)
-    return (x + dt / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
-            v + dt / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v))
+_STOPPED, _BANKED, _MAX_SEGMENTS = int(Status.STOPPED), int(Status.BANKED), int(Status.MAX_SEGMENTS)
+_OVER_THE_TOP = int(Status.OVER_THE_TOP)
+ROW_STEPS = 64  # whole steps per row of the dense solution
 
 
 @kernel
-def _locate(x, v, dt, c, w2, xc, pend, which, target):
-    """Partial step in (0, dt] at which x reaches target (which=0) or v reaches 0 (which=1)."""
+def _locate(x, v, dt, regime, event):
+    """Partial step in (0, dt] at which x reaches ``target`` (``event = (0, target)``) or v reaches 0
+    (``event = (1, 0.0)``), by regula falsi (Illinois) on the RK4 step itself."""
+    which, target = event
     lo = 0.0
     hi = dt
     if which == 1 and v <= 0.0:  # starting from rest: move lo off the trivial root
         lo = dt
         for _ in range(80):
             lo *= 0.5
-            _, vl = _step(x, v, lo, c, w2, xc, pend)
+            _, vl = rk4_step(x, v, lo, regime)
             if vl > 0.0:
                 break
-    xl, vl = _step(x, v, lo, c, w2, xc, pend) if lo > 0.0 else (x, v)
-    xh, vh = _step(x, v, hi, c, w2, xc, pend)
+    xl, vl = rk4_step(x, v, lo, regime) if lo > 0.0 else (x, v)
+    xh, vh = rk4_step(x, v, hi, regime)
     gl = xl - target if which == 0 else -vl
     gh = xh - target if which == 0 else -vh
     side = 0
@@ -81,7 +67,7 @@ def _locate(x, v, dt, c, w2, xc, pend, which, target):
         tau = (lo * gh - hi * gl) / (gh - gl) if gh != gl else 0.5 * (lo + hi)
         if not (lo < tau < hi):
             tau = 0.5 * (lo + hi)
-        xm, vm = _step(x, v, tau, c, w2, xc, pend)
+        xm, vm = rk4_step(x, v, tau, regime)
         gm = xm - target if which == 0 else -vm
         if gm == 0.0 or hi - lo <= 1e-15 * dt:
             break
@@ -99,8 +85,40 @@ def _locate(x, v, dt, c, w2, xc, pend, which, target):
 
 
 @kernel
-def _run_located(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, bank, restitution, pend,
-                 n_swings, h, max_steps, amp, theta_turn, half_period, time, banked):
+def _row(rows, n_rows, state, where, regime):
+    """Write dense row ``n_rows`` starting at ``state = (t0, x, v)``; ``where = (s, swing, h)``.
+    Returns whether there was room."""
+    if n_rows >= rows.shape[0]:
+        return False
+    t0, x, v = state
+    s, swing, h = where
+    w2, xc, _ = regime
+    rows[n_rows, 0] = t0
+    rows[n_rows, 1] = 0.0
+    rows[n_rows, 2] = s
+    rows[n_rows, 3] = x
+    rows[n_rows, 4] = v
+    rows[n_rows, 5] = xc
+    rows[n_rows, 6] = w2
+    rows[n_rows, 7] = h
+    rows[n_rows, 8] = swing
+    rows[n_rows, 9] = 0.0
+    return True
+
+
+@kernel
+def _run_located(k, run, out, rows):
+    """Fixed steps with events located on the step map; returns ``(n_done, status, steps, t, theta,
+    omega, rows)``."""
+    theta0 = k.theta0
+    hold = k.r_static - k.r  # static friction beyond the sliding one (rad/s^2)
+    bank = k.bank
+    restitution = k.restitution
+    pend = k.pendulum != 0
+    h = run.h
+    max_steps = run.max_steps
+    t_end = run.t_end
+    record = run.dense != 0
     s = 1.0 if theta0 < 0.0 else -1.0
     x = s * theta0
     v = 0.0
@@ -109,67 +127,92 @@ def _run_located(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
     n_done = 0
     steps = 0
     status = 0
+    n_rows = 0
     any_bank = False
-    edges = np.empty(2 * w_lo.shape[0] + sp_bp.shape[0] + 1)
-    n_edges = _swing_edges(s, bank, sp_bp, w_lo, w_hi, w_dir, edges)
+    edges = np.empty(2 * k.n_windows + k.n_pieces)
+    n_edges = swing_edges(s, k, edges)
     at_start = True
-    while n_done < n_swings:
-        j, w2, xc = _region(x, s, edges, n_edges, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r)
-        if at_start and v <= 0.0 and _acc(x, 0.0, c, w2, xc, pend) <= 0.0:
-            status = 1
+    while n_done < run.n_swings:
+        j, w2, xc = region_at(x, s, edges, n_edges, k)
+        regime = (w2, xc, k)
+        if at_start and v <= 0.0 and acceleration(x, 0.0, w2, xc, k) <= max(hold, 0.0):
+            status = _STOPPED
             break
         xb = edges[j] if j < n_edges else math.inf
         t0 = t
-        k = 0
+        n = 0
         event = -1
         x_seg, v_seg = x, v
-        horizon = creep_horizon(c, w2)
+        horizon = creep_horizon(k.c, w2)
+        row_start = 0
+        if record:
+            if not _row(rows, n_rows, (t0, x, v), (s, n_done, h), regime):
+                status = ROWS_FULL
+                break
+            n_rows += 1
         while True:
             if steps >= max_steps:
-                status = 3
+                status = _MAX_SEGMENTS
                 break
-            if k * h > horizon:
-                status = 1  # no event within many time constants: creeping to rest
+            if n * h > horizon:
+                status = _STOPPED  # no event within many time constants: creeping to rest
                 break
-            xn, vn = _step(x, v, h, c, w2, xc, pend)
+            xn, vn = rk4_step(x, v, h, regime)
             steps += 1
             if pend and xn >= math.pi:
-                status = OVER_THE_TOP
+                status = _OVER_THE_TOP
                 break
             hit_edge = xn >= xb
             hit_turn = vn <= 0.0
             if hit_edge or hit_turn:
-                te = _locate(x, v, h, c, w2, xc, pend, 0, xb) if hit_edge else math.inf
-                tt = _locate(x, v, h, c, w2, xc, pend, 1, 0.0) if hit_turn else math.inf
+                te = _locate(x, v, h, regime, (0, xb)) if hit_edge else math.inf
+                tt = _locate(x, v, h, regime, (1, 0.0)) if hit_turn else math.inf
+                tau = min(te, tt)
+                x, v = rk4_step(x, v, tau, regime)
                 if te <= tt:
-                    x, v = _step(x, v, te, c, w2, xc, pend)
                     x = xb
-                    t = t0 + k * h + te
                     event = 0
                 else:
-                    x, v = _step(x, v, tt, c, w2, xc, pend)
                     v = 0.0
-                    t = t0 + k * h + tt
                     event = 1
+                t = t0 + n * h + tau
+                if record:
+                    rows[n_rows - 1, 1] = t - rows[n_rows - 1, 0]
+                    rows[n_rows - 1, 9] = n - row_start
                 break
             x, v = xn, vn
-            k += 1
-            t = t0 + k * h
-        if status != 0:
+            n += 1
+            t = t0 + n * h
+            if record and n - row_start == ROW_STEPS:
+                rows[n_rows - 1, 1] = t - rows[n_rows - 1, 0]
+                rows[n_rows - 1, 9] = ROW_STEPS
+                if not _row(rows, n_rows, (t, x, v), (s, n_done, h), regime):
+                    status = ROWS_FULL
+                    break
+                n_rows += 1
+                row_start = n
+            if t >= t_end:
+                break
+        if record:
+            rows[n_rows - 1, 1] = t - rows[n_rows - 1, 0]
+            if event < 0:
+                rows[n_rows - 1, 9] = n - row_start
+        if status != 0 or event < 0:
             break
-        if event == 1 and abs(_acc(x, 0.0, c, w2, xc, pend)) <= CREEP_OVERSHOOT * math.sqrt(
-                _acc(x_seg, 0.0, c, w2, xc, pend) ** 2 + w2 * v_seg * v_seg):
-            status = 1  # a turn on the rest position to within rounding: a creep to rest
+        if event == 1 and abs(acceleration(x, 0.0, w2, xc, k)) <= CREEP_OVERSHOOT * math.sqrt(
+                acceleration(x_seg, 0.0, w2, xc, k) ** 2 + w2 * v_seg * v_seg):
+            status = _STOPPED  # a turn on the rest position to within rounding: a creep to rest
             break
         at_start = False
         is_bank = event == 0 and j == n_edges - 1 and math.isfinite(bank)
         if event == 0 and not is_bank:
             continue
-        amp[n_done] = abs(x)
-        theta_turn[n_done] = s * x
-        half_period[n_done] = t - t_last
-        time[n_done] = t
-        banked[n_done] = 1 if is_bank else 0
+        rec = out[n_done]
+        rec.amplitude = abs(x)
+        rec.theta_turn = s * x
+        rec.half_period = t - t_last
+        rec.time = t
+        rec.banked = 1 if is_bank else 0
         any_bank = any_bank or is_bank
         t_last = t
         n_done += 1
@@ -177,60 +220,67 @@ def _run_located(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
         x = -x
         v = restitution * v if is_bank else 0.0
         at_start = v == 0.0
-        n_edges = _swing_edges(s, bank, sp_bp, w_lo, w_hi, w_dir, edges)
+        n_edges = swing_edges(s, k, edges)
+        if t >= t_end:
+            break
     if status == 0 and any_bank:
-        status = 2
-    return n_done, status, steps, t, s * x, s * v
+        status = _BANKED
+    return n_done, status, steps, t, s * x, s * v, n_rows
 
 
 @kernel(inline="always")
-def _accel(th, om, s, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, pend):
-    i = 0
-    while i < sp_bp.shape[0] and sp_bp[i] <= th:
-        i += 1
-    spring = sp_w2[i] * math.sin(th) if pend else sp_w2[i] * th + sp_off[i]
-    a = -c * om - spring - s * r
+def _accel(th, om, s_prev, k, tables):
+    """Balance-frame acceleration in the regime of the direction of ``om`` (``s_prev`` at rest):
+    the naive stepping's right-hand side, discontinuous at every switch.  ``tables`` holds the
+    switch points of both directions, ``(edges_plus, n_plus, edges_minus, n_minus)``."""
+    s = s_prev if om == 0.0 else math.copysign(1.0, om)
+    edges_p, n_p, edges_m, n_m = tables
     x = s * th
-    for k in range(w_lo.shape[0]):
-        if _applies(w_dir[k], s) and w_lo[k] <= x < w_hi[k]:
-            a += s * w_x[k]
-    return a
+    if s > 0.0:
+        _, w2, xc = region_at(x, s, edges_p, n_p, k)
+    else:
+        _, w2, xc = region_at(x, s, edges_m, n_m, k)
+    return s * acceleration(x, s * om, w2, xc, k)
 
 
 @kernel
-def _run_naive(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, bank, restitution, pend,
-               n_swings, h, max_steps, amp, theta_turn, half_period, time, banked):
+def _run_naive(k, run, out):
     """Steps over every switch; friction and window sign follow the sign of the stage velocity."""
+    theta0 = k.theta0
+    hold = max(k.r_static - k.r, 0.0)
+    h = run.h
+    max_steps = run.max_steps
     th = theta0
     om = 0.0
     s_prev = 1.0 if theta0 < 0.0 else -1.0
+    edges_p = np.empty(2 * k.n_windows + k.n_pieces)
+    edges_m = np.empty(2 * k.n_windows + k.n_pieces)
+    tables = (edges_p, swing_edges(1.0, k, edges_p), edges_m, swing_edges(-1.0, k, edges_m))
     t_last = 0.0
     n_done = 0
     status = 0
-    k = 0
-    horizon = creep_horizon(c, sp_w2.min())  # the softest piece: the longest horizon, never a stop too early
-    while n_done < n_swings:
-        if k >= max_steps:
-            status = 3
+    n = 0
+    soft = k.sp_w2[0]
+    for i in range(k.n_pieces):
+        soft = min(soft, k.sp_w2[i])
+    horizon = creep_horizon(k.c, soft)  # the softest piece: the longest horizon, never a stop too early
+    while n_done < run.n_swings:
+        if n >= max_steps:
+            status = _MAX_SEGMENTS
             break
-        if k * h - t_last > horizon:
-            status = 1  # no turning point within many time constants: creeping to rest
+        if n * h - t_last > horizon:
+            status = _STOPPED  # no turning point within many time constants: creeping to rest
             break
-        sv = s_prev
-        a1 = _accel(th, om, sv if om == 0.0 else math.copysign(1.0, om),
-                    c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, pend)
+        a1 = _accel(th, om, s_prev, k, tables)
         o2 = om + 0.5 * h * a1
-        a2 = _accel(th + 0.5 * h * om, o2, sv if o2 == 0.0 else math.copysign(1.0, o2),
-                    c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, pend)
+        a2 = _accel(th + 0.5 * h * om, o2, s_prev, k, tables)
         o3 = om + 0.5 * h * a2
-        a3 = _accel(th + 0.5 * h * o2, o3, sv if o3 == 0.0 else math.copysign(1.0, o3),
-                    c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, pend)
+        a3 = _accel(th + 0.5 * h * o2, o3, s_prev, k, tables)
         o4 = om + h * a3
-        a4 = _accel(th + h * o3, o4, sv if o4 == 0.0 else math.copysign(1.0, o4),
-                    c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, pend)
+        a4 = _accel(th + h * o3, o4, s_prev, k, tables)
         thn = th + h / 6.0 * (om + 2.0 * o2 + 2.0 * o3 + o4)
         omn = om + h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
-        k += 1
+        n += 1
         if omn * s_prev < 0.0 or omn == 0.0:
             # velocity changed sign in this step: interpolate the turning point (cubic Hermite)
             d0 = om * h
@@ -253,28 +303,39 @@ def _run_naive(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, b
             h01 = -2 * u**3 + 3 * u**2
             h11 = u**3 - u**2
             th_turn = h00 * th + h10 * d0 + h01 * thn + h11 * d1
-            t_turn = (k - 1 + u) * h
-            amp[n_done] = abs(th_turn)
-            theta_turn[n_done] = th_turn
-            half_period[n_done] = t_turn - t_last
-            time[n_done] = t_turn
-            banked[n_done] = 0
+            t_turn = (n - 1 + u) * h
+            rec = out[n_done]
+            rec.amplitude = abs(th_turn)
+            rec.theta_turn = th_turn
+            rec.half_period = t_turn - t_last
+            rec.time = t_turn
+            rec.banked = 0
             t_last = t_turn
             n_done += 1
             s_new = -s_prev
-            a_rest = _accel(th_turn, 0.0, s_new, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, pend)
-            if a_rest * s_new <= 0.0:
-                status = 1
+            a_rest = _accel(th_turn, 0.0, s_new, k, tables)
+            if a_rest * s_new <= hold:
+                status = _STOPPED
                 th = th_turn
                 om = 0.0
                 break
             s_prev = s_new
         th, om = thn, omn
-    return n_done, status, k, k * h, th, om
+    return n_done, status, n, n * h, th, om
 
 
-def solve_rk4(sys: SystemBuilder, n_swings: int, switching: str, *, h: float = 1e-6,
-              locate_events: bool = True, max_steps: int | None = None) -> Trajectory:
+@kernel
+def _run_one(ks, runs, out, rows):
+    """The front end's single call: located (``rows`` returned) or naive (no rows)."""
+    run = runs[0]
+    if run.mode == 1:
+        res = _run_naive(ks[0], run, out)
+        return res[0], res[1], res[2], res[3], res[4], res[5], 0
+    return _run_located(ks[0], run, out, rows)
+
+
+def solve_rk4(system: System, n_swings: int, *, h: float = 1e-6, locate_events: bool = True,
+              max_steps: int | None = None, dense: bool = False, t_end: float = math.inf) -> Trajectory:
     """Integrate with fixed-step RK4.
 
     Parameters
@@ -285,23 +346,30 @@ def solve_rk4(sys: SystemBuilder, n_swings: int, switching: str, *, h: float = 1
         Cut steps at switches and turning points (fourth order) or step over them.
     max_steps
         Step budget; default covers half swings up to 50 times the nominal pi/omega0.
+    dense
+        Keep the dense solution (located events only).
+    t_end
+        End the run at the first step reaching this time (s), if it comes first (located events only).
     """
-    from .solvers import _check_system
-
-    _check_system(sys, switching)
     if not (h > 0 and math.isfinite(h)):
         raise SolverError(f"RK4 step h must be a positive number of seconds, got {h!r}")
-    if sys.bank != math.inf and not locate_events:
-        raise SolverError("banking needs locate_events=True with rk4")
+    if not locate_events:
+        if "impacts" in system.needs:
+            raise SolverError("banking needs locate_events=True with rk4")
+        if dense or math.isfinite(t_end):
+            raise SolverError("rk4 with locate_events=False steps over the switches and has no dense solution; "
+                              "use locate_events=True")
     if max_steps is None:
-        max_steps = int(min(50.0 * n_swings * math.pi / (sys.omega0 * h) + 10_000, 2**62))
-    out = (np.empty(n_swings), np.empty(n_swings), np.empty(n_swings), np.empty(n_swings), np.zeros(n_swings, np.int8))
-    run = _run_located if locate_events else _run_naive
-    pend = sys.restoring == "pendulum"
-    n_done, status, steps, t, th, om = run(*static_args(sys, "rk4"), pend, n_swings, float(h), int(max_steps), *out)
-    name, message = status_of(status)
-    return Trajectory(
-        *(a[:n_done].copy() for a in out[:4]), out[4][:n_done].astype(bool), name, sys.omega0,
-        "rk4", {"h": h, "locate_events": locate_events, "max_steps": max_steps}, 0, steps, (t, th, om),
-        message=message,
-    )
+        max_steps = int(min(50.0 * n_swings * math.pi / (system.omega0 * h) + 10_000, 2**62))
+    out = half_swings(n_swings)
+    run = run_options(n_swings, max_steps=int(max_steps), t_end=t_end, dense=dense, h=h,
+                      mode=0 if locate_events else 1)
+    # room for the rows of ~4 regions and 10_000 steps per half swing; more is made when needed
+    rows_per_swing = 4 + int(min(math.pi / (system.omega0 * h), 1e7)) // ROW_STEPS
+    (n_done, status, steps, t, th, om, n_rows), rows = with_rows(
+        lambda buf: _run_one(system.k, run, out, buf), rows_per_swing * min(n_swings, 1000) + 64, 10, dense)
+    traj = Trajectory(*columns(out, n_done), Status(status), system.omega0, "rk4",
+                      {"h": h, "locate_events": locate_events, "max_steps": max_steps}, 0, steps, (t, th, om))
+    if dense:
+        traj.dense = RowSolution(rows[:n_rows].copy(), ROW_RK4, system.k, traj)
+    return traj

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Any, Mapping
@@ -11,7 +12,8 @@ from ..core.params import Param, ParamSet, read_param
 from ..core.scene import check_keys
 from ..core.units import BARE_ANGLE_LIMIT, to_canonical
 from .effects import EFFECTS
-from .effects.base import OMEGA0_RANGE, ReadContext, SystemBuilder
+from .effects.base import OMEGA0_RANGE, ReadContext, squared
+from .system import Structure, System
 
 __all__ = ["BalanceScene", "parse", "TOP_KEYS"]
 
@@ -57,11 +59,16 @@ class BalanceScene:
     model: str = "balance"
     restoring: str = "spring"
 
+    @functools.cached_property
+    def structure(self) -> Structure:
+        """What the scene's effects fix for all its parameter sets (needs, prepared record)."""
+        return Structure(self.effects, self.restoring, self.switching)
+
     def effect(self, key: str):
         """The effect named ``key`` or ``None``."""
         return next((e for e in self.effects if e.key == key), None)
 
-    def build(self, values: Mapping[str, float] | None = None) -> SystemBuilder:
+    def build(self, values: Mapping[str, float] | None = None) -> System:
         """Assemble the numeric system for a parameter set (defaults: the scene's values).
 
         Parameters
@@ -72,13 +79,24 @@ class BalanceScene:
         vals = self.params.values() if values is None else self.params.with_values(values).values()
         return self.system(vals)
 
-    def system(self, vals: Mapping[str, float]) -> SystemBuilder:
-        """Assemble the numeric system from a complete name -> value mapping (ties resolved)."""
-        sys = SystemBuilder(theta0=vals["oscillator.theta0"], omega0=vals.get("oscillator.omega0", math.nan),
-                            restoring=self.restoring)
+    def system(self, vals: Mapping[str, float], n: int = 1) -> System:
+        """Assemble the coefficient records from a complete name -> value mapping (ties resolved).
+
+        Parameters
+        ----------
+        vals
+            Every parameter by name: numbers, or arrays of ``n`` entries (one per parameter set).
+        n
+            Number of parameter sets.
+        """
+        k = self.structure.records(n)
+        omega0 = vals.get("oscillator.omega0", math.nan)
+        k["theta0"] = vals["oscillator.theta0"]
+        k["omega0"] = omega0
+        k["sp_w2"][:, 0] = squared(omega0)  # the linear spring (or gravity), unless a hairspring's pieces replace it
         for eff in self.effects:
-            eff.apply(vals, sys)
-        return sys
+            eff.fill(vals, k)
+        return System(k, self.structure)
 
     def with_values(self, values: Mapping[str, float]) -> "BalanceScene":
         """A copy whose parameters take the given values."""

@@ -1,123 +1,83 @@
-"""Solver front-ends: one function per solver, all returning a :class:`Trajectory`.
+"""Solver registry: what each solver handles, the one check before any work, and the dispatch.
 
-Each solver declares the options it takes, the switching laws and the restoring torques it
-can handle (:class:`SolverSpec`); anything else is refused with
-:class:`~escfit.core.errors.SolverError` before any work is done.  :func:`default_solver` picks the
-solver used when the caller names none: ``"exact"`` for a spring, ``"dop853"`` for a pendulum.
+Each solver declares (:class:`SolverSpec`) the options it takes and the needs it handles
+(:data:`escfit.balance.effects.base.NEEDS`); a scene's :class:`~escfit.balance.system.System`
+knows what its effects need.  :func:`check` compares the two before any work and refuses a
+mismatch naming what asks for it and the solvers that handle everything the scene needs;
+:func:`default_solver` picks the first of those (``"exact"`` when a closed form exists, else
+``"dop853"``).  Every solver returns a :class:`~escfit.balance.trajectory.Trajectory` with a
+:class:`~escfit.core.status.Status`, and with ``dense=True`` its dense solution.
+
+==========  ===================================================  ==================================
+solver      method                                               handles
+==========  ===================================================  ==================================
+``exact``   closed form per segment of constant coefficients      linear, windows, stop rule,
+                                                                  impacts, drift, phase switching
+``dop853``  compiled adaptive Dormand-Prince 8(5,3), events       linear, windows, smooth, stop
+            located on the step map                               rule, impacts
+``rk4``     fixed-step classical Runge-Kutta                      as dop853
+``ivp``     scipy ``solve_ivp`` per segment, events               as dop853
+==========  ===================================================  ==================================
 """
 
 from __future__ import annotations
 
+import functools
+import importlib
 import math
 from typing import Any, Callable, NamedTuple
 
 import numpy as np
 
 from ..core.errors import SolverError
-from .effects.base import SystemBuilder
-from .exact import STATUS_NAMES, run_angle, run_phase
+from ..core.status import Status
+from .effects.base import NEEDS
+from .exact import run_one, run_phase_one
+from .records import COEFFICIENTS, columns, half_swings, run_options, with_rows
+from .solution import ROW_EXACT, RowSolution
+from .system import Structure, System
 from .trajectory import Trajectory
 
-__all__ = ["SOLVERS", "SolverSpec", "solve_system", "default_solver", "check_capability", "kernel_args",
-           "static_args", "status_of"]
+__all__ = ["SOLVERS", "SolverSpec", "solve_system", "default_solver", "check", "capability", "check_scene",
+           "solve_exact"]
 
-# Status codes of the compiled kernels beyond exact.STATUS_NAMES (shared by rk4 and dop853).
-OVER_THE_TOP = 5
-STEP_UNDERFLOW = 6
-STEP_BUDGET = 7
-_EXTRA_STATUS = {
-    OVER_THE_TOP: ("failed", "the pendulum went over the top (|theta| reached pi) and has no further turning point"),
-    STEP_UNDERFLOW: ("failed", "the step size fell below the rounding of the time (the equation is too stiff or "
-                               "the tolerances too tight)"),
-    STEP_BUDGET: ("max_segments", "step budget exhausted before the requested swings (stiff or pathological input, "
-                                  "e.g. an overdamped creep to rest: use the exact solver)"),
-}
+_CLOSED_FORM = frozenset({"linear", "windows", "stop_rule", "impacts", "drift", "phase_switching"})
+_INTEGRATED = frozenset({"linear", "windows", "smooth", "stop_rule", "impacts"})
 
 
-def status_of(code: int) -> tuple[str, str]:
-    """Status name and message (``""``: the standard one) of a kernel status code."""
-    if code in _EXTRA_STATUS:
-        return _EXTRA_STATUS[code]
-    return STATUS_NAMES[code], ""
-
-
-def kernel_args(sys: SystemBuilder) -> tuple:
-    """Arrays in the order the compiled kernels take them (angle switching)."""
-    bp, w2, off = sys.spring_arrays()
-    return (
-        float(sys.theta0), 0.0, float(sys.c), float(sys.r), bp, w2, off,
-        np.asarray(sys.w_lo, float), np.asarray(sys.w_hi, float), np.asarray(sys.w_x, float),
-        np.asarray(sys.w_dir, np.int64), float(sys.bank), float(sys.restitution),
-        np.asarray(sys.drift_thresholds, float), np.asarray(sys.drift_rates, float),
-    )
-
-
-def static_args(sys: SystemBuilder, solver: str) -> tuple:
-    """Kernel arguments without the damping drift, which only the exact solver models."""
-    if any(rate != 0.0 for rate in sys.drift_rates):
-        raise SolverError(f"solver {solver!r} does not model viscous_drift; use the exact solver")
-    return kernel_args(sys)[:13]
-
-
-def _outputs(n: int):
-    return np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.zeros(n, np.int8)
-
-
-def _check_system(sys: SystemBuilder, switching: str) -> None:
-    if math.isnan(sys.theta0):
-        raise SolverError("theta0 is not given: the scene takes its release from a recording; give "
-                          "[oscillator] theta0 to simulate it")
-    values = {"C": sys.c, "R": sys.r, "theta0": sys.theta0, "omega0": sys.omega0}
-    for name, v in values.items():
-        if not math.isfinite(v):
-            raise SolverError(f"parameter {name} = {v!r} is not finite")
-    if sys.restoring == "pendulum" and not abs(sys.theta0) < math.pi:
-        raise SolverError(f"a pendulum needs |theta0| < pi, got theta0 = {sys.theta0!r} rad")
-    if sys.c < 0 or sys.r < 0:
-        raise SolverError(f"C and R must be >= 0, got C={sys.c!r}, R={sys.r!r}")
-    if any(not (math.isfinite(x)) for x in sys.w_x):
-        raise SolverError(f"escapement magnitudes must be finite, got {sys.w_x!r}")
-    if switching == "phase" and not sys.c < 2.0 * sys.omega0:
-        raise SolverError(
-            f"phase switching needs an underdamped balance, C < 2*omega0; got C={sys.c:g}, omega0={sys.omega0:g}"
-        )
-
-
-def solve_exact(sys: SystemBuilder, n_swings: int, switching: str, *, log: bool = False,
-                max_segments: int | None = None) -> Trajectory:
+def solve_exact(system: System, n_swings: int, *, max_segments: int | None = None, dense: bool = False,
+                t_end: float = math.inf) -> Trajectory:
     """Piecewise closed-form solution (see :mod:`escfit.balance.exact`).
 
     Parameters
     ----------
-    log
-        Keep the segment log (needed for dense output and energy checks).
+    system
+        One parameter set, already checked (:func:`solve_system` checks).
+    n_swings
+        Half swings wanted.
     max_segments
         Segment budget; default ``64*n_swings + 1000``.
+    dense
+        Keep the closed-form segments as the dense solution (:attr:`Trajectory.dense`).
+    t_end
+        End the run with the first half swing ending at or after this time (s), if it comes first.
     """
-    _check_system(sys, switching)
     nseg = int(max_segments or 64 * n_swings + 1000)
-    out = _outputs(n_swings)
-    logarr = np.zeros((nseg if log else 0, 9))
-    if switching == "phase":
-        w2 = sys.omega0**2
-        res = run_phase(float(sys.theta0), float(sys.c), float(sys.r), w2, np.asarray(sys.w_lo, float),
-                        np.asarray(sys.w_hi, float), np.asarray(sys.w_x, float), np.asarray(sys.w_dir, np.int64),
-                        np.asarray(sys.drift_thresholds, float), np.asarray(sys.drift_rates, float), n_swings,
-                        *out, logarr)
-    else:
-        res = run_angle(*kernel_args(sys), n_swings, nseg, *out, logarr)
-    n_done, status, n_seg, t, theta, omega = res
-    return Trajectory(
-        *(a[:n_done].copy() for a in out[:4]), out[4][:n_done].astype(bool), STATUS_NAMES[status], sys.omega0,
-        "exact", {"log": log, "max_segments": nseg}, n_seg, 0, (t, theta, omega),
-        logarr[:n_seg].copy() if log else None,
-    )
+    out = half_swings(n_swings)
+    run = run_options(n_swings, max_segments=nseg, t_end=t_end, dense=dense)
+    kernel = run_phase_one if system.switching == "phase" else run_one
+    # room for the segments of ~4 regions per half swing; more is made when a run needs it
+    (n_done, status, n_seg, t, theta, omega), log = with_rows(
+        lambda rows: kernel(system.k, run, out, rows), min(nseg, 4 * n_swings + 64), 9, dense)
+    traj = Trajectory(*columns(out, n_done), Status(status), system.omega0, "exact",
+                      {"max_segments": nseg}, n_seg, 0, (t, theta, omega))
+    if dense:
+        traj.dense = RowSolution(log[:n_seg].copy(), ROW_EXACT, system.k, traj)
+    return traj
 
 
 def _lazy(module: str, name: str) -> Callable[..., Trajectory]:
     def call(*args, **kwargs):
-        import importlib
-
         return getattr(importlib.import_module(module, __package__), name)(*args, **kwargs)
 
     return call
@@ -129,84 +89,127 @@ class SolverSpec(NamedTuple):
     Attributes
     ----------
     function
-        ``function(sys, n_swings, switching, **options) -> Trajectory``.
+        ``function(system, n_swings, **options) -> Trajectory``.
     options
-        Keyword options it accepts.
-    switching
-        Switching laws it handles (``"angle"``, ``"phase"``).
-    restoring
-        Restoring torques it handles (``"spring"``: linear or piecewise-linear hairspring;
-        ``"pendulum"``: ``omega0**2 * sin(theta)``).
+        Keyword options it accepts (every solver takes ``dense`` and ``t_end``).
+    handles
+        The needs (:data:`escfit.balance.effects.base.NEEDS`) it can meet.
+    batch
+        Whether :func:`escfit.balance.batch.solve_batch` runs it on many parameter sets at once.
     """
 
     function: Callable[..., Trajectory]
     options: frozenset[str]
-    switching: frozenset[str]
-    restoring: frozenset[str]
+    handles: frozenset[str]
+    batch: bool = False
 
 
-def _spec(function, options, switching, restoring) -> SolverSpec:
-    return SolverSpec(function, frozenset(options), frozenset(switching), frozenset(restoring))
+def _spec(function, options, handles, batch=False) -> SolverSpec:
+    return SolverSpec(function, frozenset(options) | {"dense", "t_end"}, frozenset(handles), batch)
 
 
 SOLVERS: dict[str, SolverSpec] = {
-    "exact": _spec(solve_exact, {"log", "max_segments"}, {"angle", "phase"}, {"spring"}),
-    "rk4": _spec(_lazy(".rk4", "solve_rk4"), {"h", "locate_events", "max_steps"}, {"angle"}, {"spring", "pendulum"}),
-    "ivp": _spec(_lazy(".ivp", "solve_ivp_events"), {"method", "rtol", "atol", "max_segments"}, {"angle"},
-                 {"spring", "pendulum"}),
-    "dop853": _spec(_lazy(".dop853", "solve_dop853"), {"rtol", "atol", "max_segments", "max_steps"}, {"angle"},
-                    {"spring", "pendulum"}),
+    "exact": _spec(solve_exact, {"max_segments"}, _CLOSED_FORM, batch=True),
+    "dop853": _spec(_lazy(".dop853", "solve_dop853"), {"rtol", "atol", "max_segments", "max_steps"}, _INTEGRATED),
+    "rk4": _spec(_lazy(".rk4", "solve_rk4"), {"h", "locate_events", "max_steps"}, _INTEGRATED),
+    "ivp": _spec(_lazy(".ivp", "solve_ivp_events"), {"method", "rtol", "atol", "max_segments"}, _INTEGRATED),
 }
 
-_RESTORING_WORDS = {"spring": "a linear or piecewise-linear spring", "pendulum": "a pendulum (omega0**2 * sin(theta))"}
+#: Preference when the caller names no solver: no integration error first.
+_PREFERENCE = ("exact", "dop853", "ivp", "rk4")
 
 
 def default_solver(scene_or_system: Any) -> str:
-    """The solver used when the caller names none.
-
-    ``"exact"`` (closed form, no integration error) for a spring; ``"dop853"`` (compiled
-    adaptive Runge-Kutta, the closed form not existing) for ``restoring = "pendulum"``.
+    """The solver used when the caller names none: the first of ``exact``, ``dop853`` that
+    handles everything the scene needs (``exact`` whenever a closed form exists).
 
     Parameters
     ----------
     scene_or_system
-        A :class:`~escfit.balance.scene.BalanceScene` or a
-        :class:`~escfit.balance.effects.base.SystemBuilder` (anything with ``restoring``).
+        A :class:`~escfit.balance.scene.BalanceScene` or a :class:`~escfit.balance.system.System`.
     """
-    return "dop853" if getattr(scene_or_system, "restoring", "spring") == "pendulum" else "exact"
+    return _default_for(_needs_of(scene_or_system))
 
 
-def check_capability(solver: str, switching: str, restoring: str, options: Any = ()) -> SolverSpec:
-    """The solver's :class:`SolverSpec`, after refusing what it cannot do.
+@functools.lru_cache(maxsize=64)
+def _default_for(needs: frozenset[str]) -> str:
+    return next((name for name in _PREFERENCE if needs <= SOLVERS[name].handles), "dop853")
+
+
+def _structure(scene: Any) -> System:
+    """A system with the scene's structure and no parameter sets (what capability checks read)."""
+    structure = getattr(scene, "structure", None)
+    if not isinstance(structure, Structure):
+        structure = Structure(tuple(getattr(scene, "effects", ())), getattr(scene, "restoring", "spring"),
+                              getattr(scene, "switching", "angle"))
+    return System(np.zeros(0, COEFFICIENTS), structure)
+
+
+def _needs_of(obj: Any) -> frozenset[str]:
+    return (obj if isinstance(obj, System) else _structure(obj)).needs
+
+
+def check_scene(scene: Any, solver: str, options: Any = ()) -> SolverSpec:
+    """:func:`capability` for a whole scene, before any parameter set exists (a fit's set-up)."""
+    return capability(_structure(scene), solver, options)
+
+
+def check(system: System, solver: str, options: Any = ()) -> SolverSpec:
+    """The solver's :class:`SolverSpec`, after refusing what it cannot do; then the parameters.
 
     Raises
     ------
     SolverError
-        Unknown solver, an option it does not take, or a switching law or restoring torque
-        it does not handle (the message names the solvers that do).
+        Unknown solver, an option it does not take, a need of the scene it does not handle (the
+        message names what asks for it and the solvers that handle the whole scene), or parameter
+        values no solver can run (:meth:`~escfit.balance.system.System.check`).
     """
+    spec = capability(system, solver, options)
+    system.check()
+    return spec
+
+
+def capability(system: System, solver: str, options: Any = ()) -> SolverSpec:
+    """:func:`check` without the parameter values: whether ``solver`` can run this structure at all."""
     if solver not in SOLVERS:
         raise SolverError(f"unknown solver {solver!r}; choose one of {sorted(SOLVERS)}")
     spec = SOLVERS[solver]
     bad = sorted(set(options) - spec.options)
     if bad:
         raise SolverError(f"solver {solver!r} takes options {sorted(spec.options)}, not {bad}")
-    if switching not in spec.switching:
-        raise SolverError(f"solver {solver!r} handles switching {sorted(spec.switching)}, not {switching!r}")
-    if restoring not in spec.restoring:
-        handles = " or ".join(_RESTORING_WORDS[k] for k in sorted(spec.restoring))
-        others = sorted(k for k, s in SOLVERS.items() if restoring in s.restoring and switching in s.switching)
-        default = default_solver(SystemBuilder(restoring=restoring))
-        alternatives = " or ".join(f"{k!r}" + (f" (default for {restoring} scenes)" if k == default else "")
-                                   for k in sorted(others, key=lambda k: k != default))
-        raise SolverError(f"solver {solver!r} handles {handles}; restoring = {restoring!r} needs solver "
-                          f"{alternatives}")
+    missing = _missing(system.structure, spec.handles)
+    if missing:
+        need, who = missing[0]
+        what = "has no closed form for" if need == "smooth" else "does not handle"
+        others = [name for name in _PREFERENCE if system.needs <= SOLVERS[name].handles]
+        use = ("use solver " + ", ".join(f"{name!r}" for name in others)) if others else \
+            "no solver handles this combination"
+        raise SolverError(f"solver {solver!r} {what} {who} ({NEEDS[need]}); {use}")
     return spec
 
 
-def solve_system(sys: SystemBuilder, n_swings: int, switching: str, solver: str | None = None,
-                 **options: Any) -> Trajectory:
-    """Dispatch to a solver (default :func:`default_solver`) after checking it can handle the request."""
-    solver = solver or default_solver(sys)
-    spec = check_capability(solver, switching, sys.restoring, options)
-    return spec.function(sys, n_swings, switching, **options)
+@functools.lru_cache(maxsize=256)
+def _missing(structure: Structure, handles: frozenset[str]) -> tuple:
+    return tuple((need, who) for need, who in structure.demands if need not in handles)
+
+
+def solve_system(system: System, n_swings: int, solver: str | None = None, **options: Any) -> Trajectory:
+    """Run one parameter set with a solver (default :func:`default_solver`) after :func:`check`.
+
+    Parameters
+    ----------
+    system
+        One parameter set (``scene.system(values)``).
+    n_swings
+        Half swings wanted.
+    solver
+        ``"exact"``, ``"dop853"``, ``"rk4"`` or ``"ivp"``.
+    **options
+        The solver's options (:attr:`SolverSpec.options`); every solver takes ``dense`` (keep the
+        dense solution) and ``t_end`` (s: end with the first half swing ending at or after it).
+    """
+    if len(system) != 1:
+        raise SolverError(f"solve_system runs one parameter set, got {len(system)}; use solve_batch for many")
+    solver = solver or default_solver(system)
+    spec = check(system, solver, options)
+    return spec.function(system, n_swings, **options)

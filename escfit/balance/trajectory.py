@@ -1,4 +1,10 @@
-"""The result every balance solver returns, and its conversion to xarray."""
+"""The result every balance solver returns, and its conversion to xarray.
+
+A :class:`Trajectory` holds the per-half-swing results every solver computes, the run's
+:class:`~escfit.core.status.Status` and, when the run was asked for it (``dense=True``), its
+dense solution (:class:`escfit.balance.solution.DenseSolution`): theta(t), theta'(t), level
+crossings and turning points, from whichever solver ran.
+"""
 
 from __future__ import annotations
 
@@ -9,17 +15,9 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-__all__ = ["Trajectory", "STATUS_MESSAGES"]
+from ..core.status import Status
 
-STATUS_MESSAGES = {
-    "ok": "all requested half swings computed",
-    "stopped": "friction holds the balance at rest (or it creeps to rest without another turning point)",
-    "banked": "run complete; at least one half swing ended on the banking pins",
-    "max_segments": "segment budget exhausted before the requested swings (pathological input)",
-    "phase_breakdown": "phase switching: some half cycle ended on the side it started (or C reached 2*omega0); "
-    "the numbers are what Monday's programs compute, but they no longer describe a swinging balance",
-    "failed": "the solver failed",
-}
+__all__ = ["Trajectory"]
 
 
 @dataclass
@@ -38,8 +36,8 @@ class Trajectory:
         Time at the end of each half swing since release, s.
     banked : ndarray of bool
         Whether the half swing ended on the banking pins.
-    status : str
-        One of :data:`STATUS_MESSAGES`.
+    code : Status
+        How the run ended; :attr:`status` is its label (``"ok"``, ``"stopped"`` ...).
     omega0 : float
         Reference natural frequency (rad/s) for the rate.
     solver, options : str, dict
@@ -48,8 +46,11 @@ class Trajectory:
         Closed-form segments (exact) or integration steps (rk4, ivp) used.
     final : tuple
         ``(t, theta, omega)`` where the run ended.
-    log : ndarray or None
-        Segment log of the exact solver (rows t0, tau, s, x0, v0, xc, w2, h, swing).
+    dense : DenseSolution or None
+        The dense solution, when the run was asked for one (``dense=True``).
+    detail : str
+        Why the run ended, when more is known than the status's own message (a refusal);
+        :attr:`message` gives it, else the status's message.
     """
 
     amplitude: np.ndarray
@@ -57,15 +58,26 @@ class Trajectory:
     half_period: np.ndarray
     time: np.ndarray
     banked: np.ndarray
-    status: str
+    code: Status
     omega0: float
     solver: str
     options: dict[str, Any] = field(default_factory=dict)
     n_segments: int = 0
     n_steps: int = 0
     final: tuple[float, float, float] = (math.nan, math.nan, math.nan)
-    log: np.ndarray | None = None
-    message: str = ""
+    dense: Any = None
+    detail: str = ""
+
+    @property
+    def message(self) -> str:
+        """Why the run ended, in one sentence."""
+        return self.detail or Status(self.code).message
+
+    @property
+    def status(self) -> str:
+        """The status label: ``"ok"``, ``"stopped"``, ``"banked"``, ``"max_segments"``,
+        ``"phase_breakdown"`` or ``"failed"``."""
+        return Status(self.code).label
 
     @property
     def rate(self) -> np.ndarray:
@@ -89,7 +101,7 @@ class Trajectory:
         )
         ds.attrs.update(
             status=self.status,
-            status_message=self.message or STATUS_MESSAGES.get(self.status, ""),
+            status_message=self.message,
             solver=self.solver,
             solver_options=repr(self.options),
             n_segments=int(self.n_segments),

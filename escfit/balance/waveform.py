@@ -1,15 +1,12 @@
 """theta(t) at given times, for fits to a sampled waveform (an angle recorded against time).
 
-Two routes, both compiled, with O(1) Python work per call:
-
-- ``"exact"``: one closed-form run with the segment log, long enough to pass the last time,
-  evaluated per segment (:func:`escfit.balance.dense.log_theta_at`); no integration error.
-- ``"dop853"``: the compiled adaptive integrator of :mod:`escfit.balance.dop853`, its steps
-  clipped to land on the requested times; needed for a pendulum.
-
-Times are seconds since the release at rest from ``theta0``; theta is in rad, positive in the
-sense of ``theta0`` (the scene's frame).  Once friction holds the balance, theta stays at the
-rest angle; past a failed run the values are NaN.
+One run of any solver with its dense solution (:mod:`escfit.balance.solution`), long enough to
+pass the last time, then the dense solution at every time: the closed form of the exact solver
+(no integration error), or a step of the compiled integrator from its stored steps (dop853; a
+pendulum or a smooth torque needs one).  Times are seconds since the release at rest from
+``theta0``; theta is in rad, positive in the sense of ``theta0`` (the scene's frame).  Once
+friction holds the balance, theta stays at the rest angle; past a failed run the values are NaN.
+:func:`sample_state` also gives theta'(t).
 """
 
 from __future__ import annotations
@@ -20,132 +17,95 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..core.errors import SolverError
-from ..core.kernels import kernel
-from .dense import log_theta_at
-from .effects.base import SystemBuilder
-from .solvers import check_capability, default_solver, solve_system, status_of
+from .solvers import default_solver, solve_system
+from .system import System
 
-__all__ = ["sample_theta", "sample_scene"]
-
-# options each sampling route accepts
-SAMPLE_OPTIONS = {"exact": frozenset({"max_swings", "max_segments"}),
-                  "dop853": frozenset({"rtol", "atol", "max_segments", "max_steps"})}
-_EMPTY = np.zeros(0)
-_EMPTY_FLAGS = np.zeros(0, np.int8)
+__all__ = ["sample_theta", "sample_state", "sample_scene"]
 
 
-def _swings_for(sys: SystemBuilder, t_end: float) -> int:
+def _swings_for(system: System, t_end: float) -> int:
     """Half swings that probably cover ``t_end`` s (each lasts about pi/omega0)."""
-    return int(min(t_end * sys.omega0 / math.pi * 1.1, 1e7)) + 2
-
-
-@kernel
-def _ascending(t):
-    for i in range(1, t.shape[0]):
-        if not t[i] >= t[i - 1]:
-            return False
-    return True
+    return int(min(t_end * system.omega0 / math.pi * 1.1, 1e7)) + 2
 
 
 def _times(times: Any) -> np.ndarray:
     t = np.ascontiguousarray(times, dtype=float)
     if t.ndim != 1:
         raise SolverError(f"sample times must be a 1-d array, got shape {t.shape}")
-    if t.size and not (t[0] >= 0.0 and math.isfinite(t[-1]) and _ascending(t)):
+    if t.size and not (t[0] >= 0.0 and math.isfinite(t[-1]) and np.all(np.diff(t) >= 0.0)):
         raise SolverError("sample times must be finite, >= 0 and sorted ascending (s since release)")
     return t
 
 
-def sample_theta(sys: SystemBuilder, times: np.ndarray, switching: str = "angle", solver: str = "exact",
-                 **options: Any) -> tuple[np.ndarray, str]:
-    """theta (rad) at the given times (s since release, sorted ascending, >= 0); status string.
+def sample_state(system: System, times: np.ndarray, solver: str | None = None, *, max_swings: int = 10_000_000,
+                 **options: Any) -> tuple[np.ndarray, np.ndarray, str]:
+    """theta (rad) and theta' (rad/s) at the given times (s since release, ascending, >= 0), and a status.
 
     Parameters
     ----------
-    sys
-        The numeric system (``scene.system(values)`` or ``scene.build(values)``).
+    system
+        One parameter set (``scene.system(values)`` or ``scene.build(values)``).
     times
         Sample times, s since the release at rest.
-    switching
-        ``"angle"`` or ``"phase"`` (phase: exact solver only).
     solver
-        ``"exact"`` (closed form; spring only) or ``"dop853"`` (spring or pendulum).
+        Any solver (default :func:`~escfit.balance.solvers.default_solver`).
+    max_swings
+        Bound on the half swings run to reach the last time.
     **options
-        ``exact``: ``max_swings`` (bound on the half swings run to reach the last time,
-        default 1e7) and ``max_segments`` (segment budget of a run, default from the half
-        swings needed).  ``dop853``: ``rtol``, ``atol``, ``max_segments``, ``max_steps``
-        (see :func:`escfit.balance.dop853.solve_dop853`).
+        The solver's options (``dense`` and ``t_end`` are set here).
 
     Returns
     -------
-    theta : ndarray
-        Angle at each time (rad); the rest angle after a stop, NaN after a failure or
-        beyond the budget.
+    theta, omega : ndarray
+        State at each time; the rest angle (and 0) after a stop, NaN after a failure or beyond
+        the budget.
     status : str
-        As :attr:`escfit.balance.trajectory.Trajectory.status`; ``"max_segments"`` also when
-        ``max_swings`` ended the run before the last time.
+        The run's status label up to the last time; ``"max_segments"`` also when ``max_swings``
+        ended the run before the last time.
 
     Raises
     ------
     SolverError
-        For a solver that cannot sample or cannot handle the system, unknown options, bad
-        times or parameters.
+        For a solver that cannot handle the system, unknown options, bad times or parameters.
     """
-    if solver not in SAMPLE_OPTIONS:
-        raise SolverError(f"sample_theta runs solvers {sorted(SAMPLE_OPTIONS)}, not {solver!r}")
-    check_capability(solver, switching, sys.restoring)
-    bad = sorted(set(options) - SAMPLE_OPTIONS[solver])
+    solver = solver or default_solver(system)
+    bad = sorted({"dense", "t_end"} & set(options))
     if bad:
-        raise SolverError(f"sample_theta with solver {solver!r} takes options {sorted(SAMPLE_OPTIONS[solver])}, "
-                          f"not {bad}")
+        raise SolverError(f"sampling sets {bad} itself")
     t = _times(times)
-    theta = np.empty(t.size)
     if not t.size:
-        return theta, "ok"
-    if solver == "exact":
-        return theta, _sample_exact(sys, t, switching, theta, int(options.get("max_swings", 10_000_000)),
-                                    options.get("max_segments"))
-    return theta, _sample_dop853(sys, t, switching, theta, **options)
-
-
-def _sample_exact(sys: SystemBuilder, t: np.ndarray, switching: str, theta: np.ndarray, max_swings: int,
-                  max_segments: int | None) -> str:
+        return np.empty(0), np.empty(0), "ok"
     t_end = float(t[-1])
-    n = min(_swings_for(sys, t_end), max_swings)
-    # segments per half swing: one per region between switch points, one more for a grazing turn
-    per_swing = 2 * len(sys.w_lo) + len(sys.spring_breaks) + 3
+    n = min(_swings_for(system, t_end), max_swings)
     while True:
-        tr = solve_system(sys, n, switching, "exact", log=True, max_segments=max_segments or per_swing * n + 1000)
+        tr = solve_system(system, n, solver, dense=True, t_end=t_end, **options)
         reached = tr.final[0] >= t_end
         if reached or len(tr.amplitude) < n or n >= max_swings:  # done, or ended for another reason
             break
         # the half swings were longer than pi/omega0: scale by the time covered
         n = min(max_swings, max(2 * n, int(n * t_end / max(tr.final[0], 1e-300) * 1.1) + 2))
+    theta, omega = tr.dense.state(t)
     status = tr.status
-    beyond = tr.final[1] if status == "stopped" else math.nan
-    log_theta_at(tr.log, t, beyond, theta)
-    if not reached and status not in ("stopped", "max_segments"):
-        return "max_segments"
-    # a creep to rest (final time inf) counts as stopped from the start of its segment
-    t_stop = tr.final[0] if math.isfinite(tr.final[0]) or not len(tr.log) else tr.log[-1, 0]
+    if not reached and status not in ("stopped", "max_segments", "failed"):
+        return theta, omega, "max_segments"
+    # a creep to rest (final time inf) counts as stopped from the start of its last piece
+    knots = tr.dense.knots()
+    t_stop = tr.final[0] if math.isfinite(tr.final[0]) or knots.size < 2 else float(knots[-2])
     if status in ("ok", "banked") or (status == "stopped" and t_stop > t_end):
-        # the run went past the last time: report what happened up to it, as dop853 does
-        return "banked" if tr.banked.any() and tr.time[tr.banked.argmax()] <= t_end else "ok"
-    return status
+        # the run went past the last time: report what happened up to it
+        return theta, omega, "banked" if tr.banked.any() and tr.time[tr.banked.argmax()] <= t_end else "ok"
+    return theta, omega, status
 
 
-def _sample_dop853(sys: SystemBuilder, t: np.ndarray, switching: str, theta: np.ndarray, **options: Any) -> str:
-    from .dop853 import kernel_inputs, run_dop853
-
-    # no swing limit: the run ends at the last sample
-    args, _ = kernel_inputs(sys, switching, 2**62, budget_swings=_swings_for(sys, float(t[-1])), **options)
-    res = run_dop853(*args, t, theta, _EMPTY, _EMPTY, _EMPTY, _EMPTY, _EMPTY_FLAGS)
-    return status_of(res[1])[0]
+def sample_theta(system: System, times: np.ndarray, solver: str | None = None, **options: Any) -> tuple[np.ndarray, str]:
+    """theta (rad) at the given times and the run's status; see :func:`sample_state`."""
+    theta, _, status = sample_state(system, times, solver, **options)
+    return theta, status
 
 
 def sample_scene(scene: Any, times: np.ndarray, values: Mapping[str, float] | None = None,
                  solver: str | None = None, **options: Any) -> tuple[np.ndarray, str]:
-    """theta (rad) of a whole scene at the given times; see :func:`sample_theta`.
+    """theta (rad) of a whole scene at the given times; see :func:`sample_state`.
 
     Parameters
     ----------
@@ -158,5 +118,4 @@ def sample_scene(scene: Any, times: np.ndarray, values: Mapping[str, float] | No
     solver
         Default :func:`~escfit.balance.solvers.default_solver` (exact, dop853 for a pendulum).
     """
-    sys = scene.build(values)
-    return sample_theta(sys, times, scene.switching, solver or default_solver(scene), **options)
+    return sample_theta(scene.build(values), times, solver or default_solver(scene), **options)

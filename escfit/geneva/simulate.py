@@ -15,6 +15,7 @@ import numpy as np
 import xarray as xr
 
 from ..core.errors import SolverError
+from ..core.status import Status
 from .dynamics import acceleration
 from .engines import ENGINES
 from .geometry import Geometry, follower_angle, speed_ratio, speed_ratio_slope
@@ -121,7 +122,7 @@ def forward(geometry: Geometry, values: Mapping[str, float], *, duration: float,
     elif term.status == "locked" or (with_terminal and math.isnan(rt)):
         status = "not_settled"
     else:
-        status = "ok"
+        status = Status.OK.label  # the word every family's solvers use for a complete run
     return Prediction(traj, term, rt, status)
 
 

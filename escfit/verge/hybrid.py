@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..core.status import Status
 from .dynamics import side_alpha
 from .geometry import Constants
 from .impact import impact_map, normal_speeds
@@ -41,6 +42,8 @@ DEFAULT_STEP = 0.01
 
 IMPACT_FIELDS = ("time", "side", "phi", "psi", "phidot_before", "psidot_before", "phidot_after",
                  "psidot_after", "closing_speed")
+
+_FAILED = Status.FAILED.label  # the word every family's solvers use for a failed model
 
 
 @dataclass(frozen=True)
@@ -193,7 +196,7 @@ def run_hybrid(k: Constants, phase, *, phi_start: float, t_max: float, record: b
     off = -phi_start
     side, regime, t = 1.0, COUPLED, 0.0
     if not _kinematic_verge(k, side, y):
-        return _finish("failed", "bad_state", "the tooth cannot touch the entrance face at phi_start", k, t, y, off,
+        return _finish(_FAILED, "bad_state", "the tooth cannot touch the entrance face at phi_start", k, t, y, off,
                        None, 0, [], [], np.zeros(6), 0)
     buf = np.empty((capacity, N_COLS))
     n = 0
@@ -218,7 +221,7 @@ def run_hybrid(k: Constants, phase, *, phi_start: float, t_max: float, record: b
         idle = idle + 1 if t == t0 else 0
         trace = buf[:n] if record else None
         if idle > 50:
-            return _finish("failed", "chatter", "regime switching without progress in time (chattering contact)",
+            return _finish(_FAILED, "chatter", "regime switching without progress in time (chattering contact)",
                            k, t, y, off, trace, n, impacts, phases, mx, reversals)
         if code == R_ARMED:
             return _finish("armed", "armed", "the escape wheel reached the cut-off angle", k, t, y, off, trace, n,
@@ -233,7 +236,7 @@ def run_hybrid(k: Constants, phase, *, phi_start: float, t_max: float, record: b
         if code in (R_BAD, R_CHATTER):
             what = ("the state left the model's domain (no contact geometry or non-finite values)"
                     if code == R_BAD else "too many friction-sign changes in one phase (chattering)")
-            return _finish("failed", REASONS[code], what, k, t, y, off, trace, n, impacts, phases, mx, reversals)
+            return _finish(_FAILED, REASONS[code], what, k, t, y, off, trace, n, impacts, phases, mx, reversals)
         if code == R_TIP:
             side, off = side_change(k, side, y, off)
             regime = FREE
@@ -250,7 +253,7 @@ def run_hybrid(k: Constants, phase, *, phi_start: float, t_max: float, record: b
                 if before[0] * y[1] < 0.0:
                     reversals += 1
             if regime == COUPLED and not _kinematic_verge(k, side, y):
-                return _finish("failed", "bad_state", "contact found where the coupled kinematics has no solution",
+                return _finish(_FAILED, "bad_state", "contact found where the coupled kinematics has no solution",
                                k, t, y, off, trace, n, impacts, phases, mx, reversals)
 
 

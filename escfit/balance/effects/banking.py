@@ -7,14 +7,17 @@ swing ends at the impact, its amplitude is the banking angle and it is flagged `
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Mapping
+
+import numpy as np
 
 from ...core.errors import SceneError
 from ...core.params import Param, read_param
 from ...core.scene import check_keys
 from ...core.units import BARE_ANGLE_LIMIT, to_canonical
-from .base import ReadContext, SystemBuilder
+from .base import ReadContext, Slot
 
 __all__ = ["Banking"]
 
@@ -25,6 +28,11 @@ class Banking:
 
     angle: float
     key = "banking"
+    needs = frozenset({"impacts"})
+    SLOTS = (
+        Slot("bank", math.inf, "banking angle", "rad", "banking angle (inf: no pins)", finite=False),
+        Slot("restitution", 0.0, "e", "", "coefficient of restitution at the banking pins", lower=0.0),
+    )
 
     @classmethod
     def read(cls, table: Mapping, ctx: ReadContext) -> tuple["Banking", list[Param]]:
@@ -39,6 +47,8 @@ class Banking:
                        meaning="coefficient of restitution at the banking pins", where=f"{where}.restitution")
         return cls(angle), [e]
 
-    def apply(self, values: Mapping[str, float], sys: SystemBuilder) -> None:
-        sys.bank = self.angle
-        sys.restitution = values["banking.e"]
+    def prepare(self, k: np.ndarray) -> None:
+        k["bank"] = self.angle
+
+    def fill(self, values: Mapping[str, float], k: np.ndarray) -> None:
+        k["restitution"] = values["banking.e"]

@@ -1,26 +1,116 @@
-"""What every balance effect shares: the reading context and the system builder.
+"""What every balance effect shares: the reading context, record slots and solver needs.
 
 An effect is a small frozen dataclass holding structure only (window angles, which
 swings); its numeric parameters are declared as :class:`escfit.core.params.Param` when the
-scene is read and their values are passed to :meth:`apply` at compile time, so effects are
-cheap to send to worker processes and a fit never mutates them.
+scene is read.  Each effect module says, in one place, everything the solvers need of it:
+
+``key``
+    Its table name in the scene, ``[effects.<key>]``.
+``SLOTS``
+    The fields it owns in the coefficient record (:mod:`escfit.balance.records`), with their
+    defaults (the value that makes the effect absent), units, meanings and lower bounds; the
+    record every kernel receives is assembled from the slots of every registered effect, so a
+    new effect's numbers reach every solver, the batch path included, without being listed
+    anywhere else.
+``needs``
+    What it asks of a solver (a subset of :data:`NEEDS`); a solver that does not handle one of
+    them is refused before any work, naming the solvers that do.
+``read(table, ctx)``
+    Reads its table into the effect and its parameters.
+``prepare(k)`` (optional)
+    Writes the slots fixed by the scene's structure (window edges, break angles), once per
+    scene: the scene keeps the prepared record and copies it for every parameter set.
+``fill(values, k)``
+    Writes its slots that depend on parameter values into the record array ``k``; ``values``
+    holds numbers or arrays of one entry per parameter set, so the same code fills one set or a
+    batch.
+``torque(x, v, k)`` (smooth effects only)
+    A compiled function: its angular acceleration (rad/s^2) in the swing frame and the partial
+    derivatives of that by the angle and by the angular velocity, which
+    :mod:`escfit.balance.torque` adds up for every integrating solver.
+``refusals(k)`` (optional)
+    Relations between its parameters a parameter set must satisfy (vectorised).
+
+Values are passed in, never stored, so effects are cheap to send to worker processes and a fit
+never mutates them.
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Mapping
 
 import numpy as np
 
 from ...core.errors import SceneError
 
-__all__ = ["ReadContext", "SystemBuilder", "per_inertia"]
+__all__ = ["ReadContext", "Slot", "NEEDS", "per_inertia", "read_either", "OMEGA0_RANGE", "squared"]
 
 #: omega0 (rad/s) the solvers handle: a period between about 6 nanoseconds and 200 years.
 #: Outside, the solvers' arithmetic (omega0**2, half periods) would overflow or divide by zero.
 OMEGA0_RANGE = (1e-9, 1e9)
+
+#: What an effect may ask of a solver.
+NEEDS = {
+    "linear": "torques constant or linear in theta and theta' between switch points (closed form exists)",
+    "windows": "torques switched on and off at angles of the swing (escapement windows)",
+    "smooth": "a smooth torque nonlinear in theta or theta' (no closed form: integrated numerically)",
+    "stop_rule": "static friction holding the balance at rest at a turning point",
+    "impacts": "impacts on the banking pins",
+    "drift": "coefficients changed between cycles (damping drift)",
+    "phase_switching": "Monday's phase convention (torques switched at phases of each half cycle)",
+}
+
+
+def squared(x):
+    """``x**2`` as Python's float power computes it, for a number or an array of one per set.
+
+    numpy's ``x**2`` multiplies, which differs from C's ``pow`` in the last bit for some x; a
+    parameter set must give the same record whether it is built alone or in a batch.
+    """
+    if not isinstance(x, np.ndarray):
+        return float(x) ** 2
+    return np.array([v ** 2 for v in np.asarray(x, float).ravel().tolist()]).reshape(x.shape)
+
+
+@dataclass(frozen=True)
+class Slot:
+    """One field of the coefficient record.
+
+    Attributes
+    ----------
+    name
+        Field name in the record (what kernels read as ``k.<name>``).
+    default
+        Value when the effect is absent (or when it leaves the field alone).
+    label
+        Short name in messages (``"C"``, ``"R"``).
+    unit, meaning
+        Unit of the stored value and what it is.
+    lower
+        Values below it are refused before any work (``None``: no bound).
+    size
+        0 for a number; else the capacity of an array field, of which ``count`` entries are used.
+    count, extra
+        An array field uses its first ``k.<count> + extra`` entries.
+    dtype
+        ``"f8"`` (default) or ``"i8"``; every field is 8 bytes wide, so a record array views as
+        a float table for the finiteness check.
+    finite
+        Whether the value must be finite (the banking angle may be infinite: no pins).
+    """
+
+    name: str
+    default: float
+    label: str
+    unit: str
+    meaning: str
+    lower: float | None = None
+    size: int = 0
+    count: str | None = None
+    extra: int = 0
+    dtype: str = "f8"
+    finite: bool = True
 
 
 @dataclass(frozen=True)
@@ -53,54 +143,6 @@ def per_inertia(ctx: ReadContext, key: str, where: str):
         )
     inertia = ctx.inertia
     return lambda v: v / inertia
-
-
-@dataclass
-class SystemBuilder:
-    """Numeric description of one parameter set, assembled by the effects in turn.
-
-    All values are per unit inertia: ``c`` (1/s), ``r`` (rad/s^2), window magnitudes
-    (rad/s^2, positive drives the motion, negative opposes it), stiffness pieces
-    (1/s^2).  ``restoring`` is ``"spring"`` (restoring acceleration ``omega0**2 * theta``,
-    or the hairspring's pieces) or ``"pendulum"`` (``omega0**2 * sin(theta)``, gravity
-    with ``omega0 = sqrt(g/L)``; no hairspring pieces).
-    """
-
-    theta0: float = 0.0
-    omega0: float = 1.0
-    restoring: str = "spring"
-    c: float = 0.0
-    r: float = 0.0
-    spring_breaks: list[float] = field(default_factory=list)
-    spring_w2: list[float] = field(default_factory=list)
-    w_lo: list[float] = field(default_factory=list)
-    w_hi: list[float] = field(default_factory=list)
-    w_x: list[float] = field(default_factory=list)
-    w_dir: list[int] = field(default_factory=list)
-    bank: float = math.inf
-    restitution: float = 0.0
-    drift_thresholds: list[float] = field(default_factory=list)
-    drift_rates: list[float] = field(default_factory=lambda: [0.0])
-
-    def spring_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Breakpoints, stiffness pieces and offsets of a continuous restoring torque.
-
-        The restoring acceleration is ``w2[i]*theta + off[i]`` on piece ``i``; offsets
-        are chosen so the torque is continuous and zero at theta = 0.
-        """
-        if not self.spring_w2:
-            return np.zeros(0), np.array([self.omega0**2]), np.zeros(1)
-        bp = np.asarray(self.spring_breaks, float)
-        w2 = np.asarray(self.spring_w2, float)
-        off = np.zeros_like(w2)
-        zero_piece = int(np.searchsorted(bp, 0.0, side="right"))
-        for i in range(zero_piece + 1, len(w2)):  # pieces above zero
-            b = bp[i - 1]
-            off[i] = (w2[i - 1] * b + off[i - 1]) - w2[i] * b
-        for i in range(zero_piece - 1, -1, -1):  # pieces below zero
-            b = bp[i]
-            off[i] = (w2[i + 1] * b + off[i + 1]) - w2[i] * b
-        return bp, w2, off
 
 
 def table_of(doc: Mapping, key: str, where: str) -> Mapping:

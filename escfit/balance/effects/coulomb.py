@@ -1,8 +1,14 @@
-"""Coulomb (pivot / sliding) friction: a torque of constant size opposing the motion.
+"""Coulomb (pivot / sliding) friction, and static friction at rest.
 
-Per inertia it is ``-R * sgn(theta')`` with ``R >= 0`` in rad/s^2.  At rest, friction holds
-the balance as long as the other torques do not exceed ``R`` (for a bare hairspring:
-``omega0**2 * |theta| <= R``), which ends a run with status ``stopped``.
+While the balance moves, friction is a torque of constant size opposing the motion: per
+inertia ``-R * sgn(theta')`` with ``R >= 0`` in rad/s^2.  It takes ``2*R/omega0**2`` (rad) off
+every half swing of a linear spring, whatever the amplitude.
+
+At a turning point the balance is at rest, and static friction holds it there as long as the
+other torques do not exceed ``R_static`` (rad/s^2, ``>= R``; default ``R``): for a bare
+hairspring, while ``omega0**2 * |theta| <= R_static``.  A static friction above the sliding
+one stops the motion earlier, at the first turning point where that holds, and the run ends
+with status ``stopped``.  Every solver applies the rule at the start of each half swing.
 """
 
 from __future__ import annotations
@@ -10,27 +16,69 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Mapping
 
+import numpy as np
+
 from ...core.params import Param
 from ...core.scene import check_keys
-from .base import ReadContext, SystemBuilder, read_either
+from .base import ReadContext, Slot, read_either
 
 __all__ = ["Coulomb"]
 
 
 @dataclass(frozen=True)
 class Coulomb:
-    """Coulomb friction; parameter ``coulomb.R`` = torque/I in rad/s^2 (>= 0)."""
+    """Coulomb friction; parameters ``coulomb.R`` and, if named, ``coulomb.R_static`` (rad/s^2, >= 0).
 
+    Attributes
+    ----------
+    static
+        Whether the scene names a static friction ``R_static`` (``static_torque``) apart from ``R``.
+    """
+
+    static: bool = False
     key = "coulomb"
+    SLOTS = (
+        Slot("r", 0.0, "R", "rad/s**2", "Coulomb (sliding) friction torque per inertia", lower=0.0),
+        Slot("r_static", 0.0, "R_static", "rad/s**2",
+             "static friction torque per inertia: holds the balance at rest at a turning point", lower=0.0),
+    )
+
+    @property
+    def needs(self) -> frozenset[str]:
+        return frozenset({"linear", "stop_rule"} if self.static else {"linear"})
 
     @classmethod
     def read(cls, table: Mapping, ctx: ReadContext) -> tuple["Coulomb", list[Param]]:
         where = f"{ctx.where} [effects.coulomb]"
-        check_keys(table, {"R", "torque"}, where)
-        p = read_either(table, ctx, where, name="coulomb.R", unit="1/s**2",
+        check_keys(table, {"R", "torque", "R_static", "static_torque"}, where)
+        sliding = {k: table[k] for k in ("R", "torque") if k in table}
+        p = read_either(sliding, ctx, where, name="coulomb.R", unit="1/s**2",
                         meaning="Coulomb friction torque per inertia R (rad/s^2), opposes the motion",
                         direct=("R", "angular_acceleration"), physical=("torque", "torque"))
-        return cls(), [p]
+        static = {k: table[k] for k in ("R_static", "static_torque") if k in table}
+        if not static:
+            return cls(), [p]
+        if ctx.switching == "phase":
+            from ...core.errors import SceneError
 
-    def apply(self, values: Mapping[str, float], sys: SystemBuilder) -> None:
-        sys.r = values["coulomb.R"]
+            raise SceneError("static friction needs switching = 'angle' (phase switching has no turning points at "
+                             "rest)", f"{where}.R_static")
+        q = read_either(static, ctx, where, name="coulomb.R_static", unit="1/s**2",
+                        meaning="static friction torque per inertia (rad/s^2, >= R): holds the balance at rest",
+                        direct=("R_static", "angular_acceleration"), physical=("static_torque", "torque"))
+        if q.value < p.value:
+            from ...core.errors import SceneError
+
+            raise SceneError(f"static friction R_static = {q.value:g} rad/s^2 is below the sliding friction "
+                             f"R = {p.value:g} rad/s^2; it must be at least R", f"{where}.R_static")
+        return cls(static=True), [p, q]
+
+    def fill(self, values: Mapping[str, float], k: np.ndarray) -> None:
+        k["r"] = values["coulomb.R"]
+        k["r_static"] = values["coulomb.R_static"] if self.static else values["coulomb.R"]
+
+    def refusals(self, k: np.ndarray) -> list[tuple[np.ndarray, str]]:
+        """A static friction below the sliding one is refused (vectorised over the records)."""
+        if not self.static:
+            return []
+        return [(k["r_static"] < k["r"], "R_static must be >= R, got R_static={r_static!r}, R={r!r}")]

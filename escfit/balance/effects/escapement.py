@@ -18,15 +18,20 @@ import math
 from dataclasses import dataclass
 from typing import Mapping, Sequence
 
+import numpy as np
+
 from ...core.errors import SceneError
 from ...core.params import Param, read_param
 from ...core.scene import check_keys
 from ...core.units import BARE_ANGLE_LIMIT, to_canonical
-from .base import ReadContext, SystemBuilder, read_either
+from .base import ReadContext, Slot, read_either
 
-__all__ = ["Window", "Escapement"]
+__all__ = ["Window", "Escapement", "MAX_WINDOWS"]
 
 _SWINGS = {"both": 0, "positive": 1, "negative": -1}
+
+#: Most windows a scene may name (the record's capacity).
+MAX_WINDOWS = 12
 
 
 @dataclass(frozen=True)
@@ -54,11 +59,27 @@ class Escapement:
 
     windows: tuple[Window, ...]
     key = "escapement"
+    needs = frozenset({"windows"})
+    SLOTS = (
+        Slot("n_windows", 0, "windows", "", "number of escapement windows", dtype="i8"),
+        Slot("w_lo", 0.0, "window starts", "rad", "window starts in the swing frame (or phase offsets)",
+             size=MAX_WINDOWS, count="n_windows"),
+        Slot("w_hi", 0.0, "window ends", "rad", "window ends in the swing frame (or phase offsets)",
+             size=MAX_WINDOWS, count="n_windows"),
+        Slot("w_x", 0.0, "escapement magnitudes", "rad/s**2",
+             "signed window torques per inertia (> 0 drives the motion, < 0 opposes it)",
+             size=MAX_WINDOWS, count="n_windows"),
+        Slot("w_dir", 0, "window swings", "", "swings a window acts on: 0 both, +1 positive, -1 negative",
+             size=MAX_WINDOWS, count="n_windows", dtype="i8"),
+    )
 
     @classmethod
     def read(cls, tables: Sequence, ctx: ReadContext) -> tuple["Escapement", list[Param]]:
         if isinstance(tables, Mapping):
             tables = [tables]
+        if len(tables) > MAX_WINDOWS:
+            raise SceneError(f"{len(tables)} escapement windows; at most {MAX_WINDOWS} are supported",
+                             f"{ctx.where} [effects.escapement]")
         windows: list[Window] = []
         raw_x: list[tuple[Window, Mapping, str]] = []
         for i, table in enumerate(tables, start=1):
@@ -87,12 +108,22 @@ class Escapement:
         params = [_magnitude(w, table, where, ctx, windows) for w, table, where in raw_x]
         return cls(tuple(windows)), params
 
-    def apply(self, values: Mapping[str, float], sys: SystemBuilder) -> None:
-        for w in self.windows:
-            sys.w_lo.append(w.lo)
-            sys.w_hi.append(w.hi)
-            sys.w_x.append(w.sign * values[w.name])
-            sys.w_dir.append(_SWINGS[w.swings])
+    def prepare(self, k: np.ndarray) -> None:
+        n = len(self.windows)
+        k["n_windows"] = n
+        k["w_lo"][:, :n] = [w.lo for w in self.windows]
+        k["w_hi"][:, :n] = [w.hi for w in self.windows]
+        k["w_dir"][:, :n] = [_SWINGS[w.swings] for w in self.windows]
+
+    def fill(self, values: Mapping[str, float], k: np.ndarray) -> None:
+        n = len(self.windows)
+        xs = [w.sign * values[w.name] for w in self.windows]
+        w_x = k["w_x"]
+        if not any(isinstance(x, np.ndarray) for x in xs):  # one parameter set (or the same values for all)
+            w_x[:, :n] = xs
+        else:
+            for i, x in enumerate(xs):
+                w_x[:, i] = x
 
 
 def _magnitude(w: Window, table: Mapping, where: str, ctx: ReadContext, windows: list[Window]) -> Param:

@@ -11,13 +11,18 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Mapping
 
+import numpy as np
+
 from ...core.errors import SceneError
 from ...core.params import Param, read_param
 from ...core.scene import check_keys
 from ...core.units import BARE_ANGLE_LIMIT, to_canonical
-from .base import OMEGA0_RANGE, ReadContext, SystemBuilder
+from .base import OMEGA0_RANGE, ReadContext, squared
 
-__all__ = ["Hairspring"]
+__all__ = ["Hairspring", "MAX_PIECES"]
+
+#: Most pieces a restoring torque may have (the record's capacity).
+MAX_PIECES = 8
 
 
 @dataclass(frozen=True)
@@ -26,6 +31,8 @@ class Hairspring:
 
     angles: tuple[float, ...]
     key = "hairspring"
+    needs = frozenset({"linear"})
+    SLOTS = ()  # it fills the oscillator's restoring-torque pieces (escfit.balance.records.OSCILLATOR_SLOTS)
 
     @classmethod
     def read(cls, table: Mapping, ctx: ReadContext) -> tuple["Hairspring", list[Param]]:
@@ -38,6 +45,8 @@ class Hairspring:
             raise SceneError("'angles' must be a non-empty list and 'omega0' a list one entry longer", where)
         ang = tuple(to_canonical(a, "angle", f"{where}.angles[{i}]", bare_limit=BARE_ANGLE_LIMIT)
                     for i, a in enumerate(angles, 1))
+        if len(omegas) > MAX_PIECES:
+            raise SceneError(f"{len(omegas)} hairspring pieces; at most {MAX_PIECES} are supported", where)
         if any(b <= a for a, b in zip(ang, ang[1:])):
             raise SceneError(f"'angles' must increase strictly, got {angles!r}", f"{where}.angles")
         params = [
@@ -47,8 +56,25 @@ class Hairspring:
         ]
         return cls(ang), params
 
-    def apply(self, values: Mapping[str, float], sys: SystemBuilder) -> None:
-        sys.spring_breaks = list(self.angles)
-        sys.spring_w2 = [values[f"hairspring.omega0[{i}]"] ** 2 for i in range(1, len(self.angles) + 2)]
-        zero_piece = sum(1 for a in self.angles if a <= 0.0)
-        sys.omega0 = values[f"hairspring.omega0[{zero_piece + 1}]"]
+    def prepare(self, k: np.ndarray) -> None:
+        n = len(self.angles) + 1
+        k["n_pieces"] = n
+        k["sp_bp"][:, :n - 1] = self.angles
+
+    def fill(self, values: Mapping[str, float], k: np.ndarray) -> None:
+        n = len(self.angles) + 1
+        bp = np.asarray(self.angles, float)
+        w2 = k["sp_w2"]
+        for i in range(n):
+            w2[:, i] = squared(values[f"hairspring.omega0[{i + 1}]"])
+        # offsets that make the restoring torque continuous and zero at theta = 0
+        off = k["sp_off"]
+        off[:, :n] = 0.0
+        zero_piece = int(np.searchsorted(bp, 0.0, side="right"))
+        for i in range(zero_piece + 1, n):  # pieces above zero
+            b = bp[i - 1]
+            off[:, i] = (w2[:, i - 1] * b + off[:, i - 1]) - w2[:, i] * b
+        for i in range(zero_piece - 1, -1, -1):  # pieces below zero
+            b = bp[i]
+            off[:, i] = (w2[:, i + 1] * b + off[:, i + 1]) - w2[:, i] * b
+        k["omega0"] = values[f"hairspring.omega0[{zero_piece + 1}]"]

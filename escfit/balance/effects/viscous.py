@@ -5,18 +5,26 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Mapping
 
+import numpy as np
+
 from ...core.params import Param
 from ...core.scene import check_keys
-from .base import ReadContext, SystemBuilder, read_either
+from .base import ReadContext, Slot, read_either
 
 __all__ = ["Viscous"]
 
 
 @dataclass(frozen=True)
 class Viscous:
-    """Linear viscous damping; parameter ``viscous.C`` = c/I in 1/s (>= 0)."""
+    """Linear viscous damping; parameter ``viscous.C`` = c/I in 1/s (>= 0).
+
+    The decrement per half swing at small damping is about ``pi*C*A/(2*omega0)`` (rad): it
+    grows in proportion to the amplitude ``A``.
+    """
 
     key = "viscous"
+    needs = frozenset({"linear"})
+    SLOTS = (Slot("c", 0.0, "C", "1/s", "viscous damping per inertia C = c/I", lower=0.0),)
 
     @classmethod
     def read(cls, table: Mapping, ctx: ReadContext) -> tuple["Viscous", list[Param]]:
@@ -27,5 +35,5 @@ class Viscous:
                         direct=("C", "rate_per_s"), physical=("c", "damping"))
         return cls(), [p]
 
-    def apply(self, values: Mapping[str, float], sys: SystemBuilder) -> None:
-        sys.c = values["viscous.C"]
+    def fill(self, values: Mapping[str, float], k: np.ndarray) -> None:
+        k["c"] = values["viscous.C"]

@@ -11,12 +11,17 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Mapping
 
+import numpy as np
+
 from ...core.errors import SceneError
 from ...core.params import Param
 from ...core.scene import check_keys
-from .base import ReadContext, SystemBuilder
+from .base import ReadContext, Slot
 
-__all__ = ["ViscousDrift"]
+__all__ = ["ViscousDrift", "MAX_BANDS"]
+
+#: Most envelope thresholds a drift may have (the record's capacity).
+MAX_BANDS = 8
 
 
 @dataclass(frozen=True)
@@ -26,6 +31,14 @@ class ViscousDrift:
     thresholds: tuple[float, ...]
     rates: tuple[float, ...]
     key = "viscous_drift"
+    needs = frozenset({"drift"})
+    SLOTS = (
+        Slot("n_bands", 0, "drift thresholds", "", "number of envelope thresholds", dtype="i8"),
+        Slot("drift_th", 0.0, "drift thresholds", "", "envelope thresholds, descending", size=MAX_BANDS,
+             count="n_bands"),
+        Slot("drift_rate", 0.0, "drift rates", "", "fractional growth of C per cycle in each band (one more than "
+             "thresholds; all zero: no drift)", size=MAX_BANDS + 1, count="n_bands", extra=1),
+    )
 
     @classmethod
     def read(cls, table: Mapping, ctx: ReadContext) -> tuple["ViscousDrift", list[Param]]:
@@ -37,10 +50,17 @@ class ViscousDrift:
             raise SceneError("'thresholds' and 'rates' must be lists of numbers, rates one longer", where)
         if any(not 0 < t < 1 for t in th) or any(b >= a for a, b in zip(th, th[1:])):
             raise SceneError(f"thresholds must lie in (0, 1) and decrease, got {th!r}", f"{where}.thresholds")
+        if len(th) > MAX_BANDS:
+            raise SceneError(f"{len(th)} thresholds; at most {MAX_BANDS} are supported", f"{where}.thresholds")
         if any(r <= -1 for r in rates):
             raise SceneError(f"rates must exceed -1 (fractional change per cycle), got {rates!r}", f"{where}.rates")
         return cls(tuple(map(float, th)), tuple(map(float, rates))), []
 
-    def apply(self, values: Mapping[str, float], sys: SystemBuilder) -> None:
-        sys.drift_thresholds = list(self.thresholds)
-        sys.drift_rates = list(self.rates)
+    def prepare(self, k: np.ndarray) -> None:
+        n = len(self.thresholds)
+        k["n_bands"] = n
+        k["drift_th"][:, :n] = self.thresholds
+        k["drift_rate"][:, :n + 1] = self.rates
+
+    def fill(self, values: Mapping[str, float], k: np.ndarray) -> None:
+        pass  # structure only

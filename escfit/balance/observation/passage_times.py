@@ -7,10 +7,10 @@ edges of the lift.  Each reading is
 
     t_obs = t0 + t_cross(level) + noise,   noise ~ Normal(0, sigma)
 
-with ``t_cross`` the exact crossing time computed from the exact solver's segment log: the
-row holding the level is found from the rows' end states (:func:`escfit.balance.dense.row_state`,
-the one evaluation of a log row) and the crossing inside it is root-found on the closed form
-to a few ulps (:func:`escfit.balance.segment.cross_time`).
+with ``t_cross`` the crossing time read from the run's dense solution
+(:meth:`escfit.balance.solution.DenseSolution.crossings`), whichever solver made it: with the
+exact solver the crossing is root-found on the closed form to a few ulps, with an integrating
+solver on its own steps.
 
 Levels and frames
 -----------------
@@ -40,104 +40,10 @@ from typing import Mapping
 import numpy as np
 
 from ...core.errors import SceneError
-from ...core.kernels import kernel
 from ...core.params import Param, read_param
 from ...core.units import BARE_ANGLE_LIMIT
-from ..dense import row_state
-from ..segment import cross_time
 
-__all__ = ["PassageTimeObservation", "level_times", "swing_starts"]
-
-
-def swing_starts(log: np.ndarray, n_swings: int) -> np.ndarray:
-    """Index of the first segment-log row of each half swing (length ``n_swings + 1``).
-
-    Parameters
-    ----------
-    log
-        Segment log of the exact solver (rows t0, tau, s, x0, v0, xc, w2, h, swing).
-    n_swings
-        Number of half swings wanted; half swings the run did not reach get empty ranges.
-    """
-    return np.searchsorted(log[:, 8], np.arange(n_swings + 1, dtype=float), side="left").astype(np.int64)
-
-
-@kernel
-def _level_times(log, starts, swing, x_base, offset, out):
-    n_avail = starts.shape[0] - 1
-    for q in range(swing.shape[0]):
-        m = swing[q]
-        if m < 1 or m > n_avail or starts[m - 1] >= starts[m]:
-            out[q] = math.nan
-            continue
-        r0 = starts[m - 1]
-        r1 = starts[m]
-        s = log[r0, 2]
-        x = x_base[q] + s * offset
-        if x <= log[r0, 3]:
-            out[q] = log[r0, 0]  # behind the start of the half swing: its first turning point
-            continue
-        found = False
-        for r in range(r0, r1):
-            t0 = log[r, 0]
-            tau = log[r, 1]
-            x0 = log[r, 3]
-            v0 = log[r, 4]
-            xc = log[r, 5]
-            w2 = log[r, 6]
-            h = log[r, 7]
-            if not math.isfinite(tau):
-                # creeps towards the centre xc without turning: crosses only levels below it
-                if x < xc:
-                    out[q] = t0 + cross_time(x0 - xc, v0, h, w2, x - xc, math.inf)[0]
-                else:
-                    out[q] = math.inf
-                found = True
-                break
-            theta_end, _ = row_state(log, r, tau)
-            if x <= log[r, 2] * theta_end:  # the row's end in the swing frame (exact: s = +-1)
-                if tau == 0.0 or x <= x0:
-                    out[q] = t0
-                else:
-                    out[q] = t0 + cross_time(x0 - xc, v0, h, w2, x - xc, tau)[0]
-                found = True
-                break
-        if not found:
-            out[q] = log[r1 - 1, 0] + log[r1 - 1, 1]  # beyond the turning point: clamp to it
-
-
-def level_times(log: np.ndarray, swing: np.ndarray, x_base: np.ndarray, offset: float = 0.0,
-                starts: np.ndarray | None = None) -> np.ndarray:
-    """Times (s since release) at which the balance crosses given levels.
-
-    Parameters
-    ----------
-    log
-        Segment log of the exact solver.
-    swing
-        Half swing of each query, 1-based (1 starts at the release).
-    x_base
-        Level in the swing frame of that half swing, rad (the balance runs from ``-A`` to
-        ``+A`` there).
-    offset
-        Zero offset in theta, rad: the level actually used is ``x_base + s*offset``.
-    starts
-        Output of :func:`swing_starts` (computed when omitted).
-
-    Returns
-    -------
-    ndarray
-        Crossing times; a level not reached is clamped to the nearest turning point of its
-        half swing; ``nan`` for half swings the run never reached; ``inf`` for a level the
-        balance only approaches asymptotically.
-    """
-    swing = np.ascontiguousarray(swing, dtype=np.int64)
-    x_base = np.ascontiguousarray(x_base, dtype=float)
-    if starts is None:
-        starts = swing_starts(log, int(swing.max()) if swing.size else 0)
-    out = np.empty(swing.size)
-    _level_times(np.ascontiguousarray(log), starts, swing, x_base, float(offset), out)
-    return out
+__all__ = ["PassageTimeObservation"]
 
 
 @dataclass(frozen=True)

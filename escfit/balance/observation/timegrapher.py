@@ -27,7 +27,7 @@ expected reading is that number; the reading is it plus Gaussian noise ``observa
   divided by ``Phi((hi - mu)/s) - Phi((lo - mu)/s)``.
 
 A lift edge the balance does not reach is clamped to the turning point (see
-:mod:`escfit.balance.observation.passage_times`), so ``t -> T/2`` and the reading tends continuously to
+:meth:`escfit.balance.solution.DenseSolution.crossings`), so ``t -> T/2`` and the reading tends continuously to
 ``L_set/2``.  The harmonic formula makes the reading ``L_set/L`` times an amplitude that is
 itself only approximately the true one; that error is part of the model, not of the noise.
 """
@@ -45,18 +45,17 @@ from ...core.errors import SceneError
 from ...core.params import Param, read_param
 from ...core.units import BARE_ANGLE_LIMIT
 from .notches import log_interval_mass
-from .passage_times import level_times, swing_starts
 
 __all__ = ["TimegrapherObservation", "beat_events", "window_readings"]
 
 
-def beat_events(log: np.ndarray, n_swings: int, lift: float) -> tuple[np.ndarray, np.ndarray]:
+def beat_events(dense, n_swings: int, lift: float) -> tuple[np.ndarray, np.ndarray]:
     """Zero-crossing time and sound-pulse duration of half swings ``1 .. n_swings``.
 
     Parameters
     ----------
-    log
-        Segment log of the exact solver.
+    dense
+        The run's dense solution (:class:`escfit.balance.solution.DenseSolution`).
     n_swings
         Half swings wanted (``nan`` for those the run did not reach).
     lift
@@ -68,10 +67,8 @@ def beat_events(log: np.ndarray, n_swings: int, lift: float) -> tuple[np.ndarray
         Seconds since release, and seconds.
     """
     m = np.arange(1, n_swings + 1, dtype=np.int64)
-    starts = swing_starts(log, n_swings)
-    tz = level_times(log, m, np.zeros(n_swings), 0.0, starts)
-    lo = level_times(log, m, np.full(n_swings, -0.5 * lift), 0.0, starts)
-    hi = level_times(log, m, np.full(n_swings, 0.5 * lift), 0.0, starts)
+    t = dense.crossings(np.concatenate([m, m, m]), np.repeat([0.0, -0.5 * lift, 0.5 * lift], n_swings))
+    tz, lo, hi = t[:n_swings], t[n_swings:2 * n_swings], t[2 * n_swings:]
     return tz, hi - lo
 
 

@@ -35,9 +35,10 @@ def monday_k(problem, vals: Mapping[str, float]) -> float:
     """Monday's combined K of a parameter set (phase convention, symmetric windows only)."""
     sys = problem.scene.system(vals)
     w0sq = sys.omega0**2
-    pulses = [Pulse(-math.pi / 2, math.pi / 2, -sys.r / w0sq)]
-    pulses += [Pulse(lo, hi, x / w0sq) for lo, hi, x, d in zip(sys.w_lo, sys.w_hi, sys.w_x, sys.w_dir) if d == 0]
-    return k_value(sys.c / sys.omega0, pulses)
+    pulses = [Pulse(-math.pi / 2, math.pi / 2, -sys.field("r") / w0sq)]
+    windows = zip(sys.field("w_lo"), sys.field("w_hi"), sys.field("w_x"), sys.field("w_dir"))
+    pulses += [Pulse(lo, hi, x / w0sq) for lo, hi, x, d in windows if d == 0]
+    return k_value(sys.field("c") / sys.omega0, pulses)
 
 
 def end_of_motion(problem, best: Mapping[str, float]) -> list[str]:

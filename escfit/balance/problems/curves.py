@@ -30,6 +30,15 @@ __all__ = ["FitProblem", "Curve"]
 
 
 
+def _column(x, n: int) -> np.ndarray:
+    """``x`` (a number or an array of ``n``) as a float array of shape (n,)."""
+    if isinstance(x, np.ndarray) and x.shape == (n,) and x.dtype == np.float64:
+        return x
+    if np.ndim(x) == 0:
+        return np.full(n, float(x))
+    return np.array(np.broadcast_to(np.asarray(x, float), (n,)))
+
+
 def _at_recorded_swings(curve: "Curve", theta0: float, theta_turn: np.ndarray) -> np.ndarray:
     """Signed angle ending each recorded half swing (swing 0: the release angle).
 
@@ -65,7 +74,8 @@ class FitProblem(FreeParameters, BalanceProblem):
     data
         The recording (one unit; several loads allowed).
     solver, solver_options
-        Forward solver and its options (default: exact).
+        Forward solver and its options (default: the scene's, see
+        :func:`escfit.balance.default_solver`).
 
     Attributes
     ----------
@@ -81,7 +91,7 @@ class FitProblem(FreeParameters, BalanceProblem):
 
     scene: BalanceScene
     data: UnitCurve
-    solver: str = "exact"
+    solver: str | None = None
     solver_options: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -110,8 +120,11 @@ class FitProblem(FreeParameters, BalanceProblem):
         self.load_rule = LoadRule.read(fit_table.get("loads"), self.scene, self.data, self.curves, params)
         self._set_free(params, self.scene.where)
         self.failures: Counter = Counter()
-        # the exact solver runs a whole ensemble in one parallel call (log_prob_many)
-        self.vectorized = self.solver == "exact"
+        from ..solvers import check_scene, default_solver
+
+        self.solver = self.solver or default_solver(self.scene)
+        # a solver with a batch path runs a whole ensemble in one parallel call (log_prob_many)
+        self.vectorized = check_scene(self.scene, self.solver, self.solver_options).batch
 
     def _check_release(self, params: ParamSet) -> None:
         """Refuse a fixed release angle that the recording's release reading contradicts.
@@ -161,7 +174,7 @@ class FitProblem(FreeParameters, BalanceProblem):
             if n > 0:
                 from ..solvers import solve_system
 
-                tr = solve_system(sys, n, self.scene.switching, self.solver, **self.solver_options)
+                tr = solve_system(sys, n, self.solver, **self.solver_options)
                 if tr.status == "max_segments":
                     raise FitError("solver ran out of segments")
                 theta_turn = tr.theta_turn
@@ -198,12 +211,12 @@ class FitProblem(FreeParameters, BalanceProblem):
 
         The same numbers as :meth:`log_prob` row by row (and the same failure counts), but
         with the exact solver the whole ensemble is one array computation: priors, parameter
-        values and the load rule on arrays, the systems assembled in one pass
-        (:func:`escfit.balance.arraysystem.stack_from_values`), the forward runs in one call
+        values and the load rule on arrays, the coefficient records of every set assembled in one
+        pass (``scene.system(values, n)``), the forward runs in one call
         of :func:`escfit.balance.batch.solve_batch` per curve and the observation model on a
         (sets, readings) array.  Sets the batch refuses or cannot finish go through
-        :meth:`log_likelihood` one at a time, which records why.  Other solvers are evaluated
-        row by row.
+        :meth:`log_likelihood` one at a time, which records why.  Solvers without a batch path are
+        evaluated row by row.
         """
         vecs = np.atleast_2d(np.asarray(vecs, float))
         out = np.full(vecs.shape[0], -math.inf)
@@ -211,7 +224,7 @@ class FitProblem(FreeParameters, BalanceProblem):
         rows = np.flatnonzero(np.isfinite(lp))
         if rows.size == 0:
             return out
-        if self.solver != "exact":
+        if not self.vectorized:
             out[rows] = lp[rows] + np.array([self.log_likelihood(self.values(vecs[i])) for i in rows])
             return out
         out[rows] = lp[rows] + self._log_likelihood_many(vecs[rows])
@@ -286,7 +299,6 @@ class FitProblem(FreeParameters, BalanceProblem):
         failed : ndarray of bool, shape (curves, sets)
             Refused by the batch or out of segments (to be evaluated one at a time).
         """
-        from ..arraysystem import _column, stack_from_values
         from ..batch import solve_batch
 
         n_curves = len(self.curves)
@@ -306,13 +318,12 @@ class FitProblem(FreeParameters, BalanceProblem):
                 merged[k] = fixed[(k, n_sets)]
             else:
                 merged[k] = np.concatenate([_column(p, n_sets) for p in parts])
-        stack = stack_from_values(self.scene, merged, n_sets * n_curves)
+        stack = self.scene.system(merged, n_sets * n_curves)
         n = max(int(c.swing.max()) for c in self.curves)
         turns = np.full((n_sets * n_curves, 1 + n), np.nan)
-        turns[:, 0] = stack.theta0
+        turns[:, 0] = stack.k["theta0"]
         if n > 0:
-            batch = solve_batch(stack, n, self.scene.switching, throw=False,
-                                max_segments=self.solver_options.get("max_segments"))
+            batch = solve_batch(stack, n, throw=False, max_segments=self.solver_options.get("max_segments"))
             turns[:, 1:] = batch.theta_turn
             n_done, failed = batch.n_done, (batch.status == "failed") | (batch.status == "max_segments")
             if self.solver_options.get("max_segments") is None:

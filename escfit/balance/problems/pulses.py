@@ -5,8 +5,9 @@
 ``bounds``, ``initial``, ``values``, ``log_prob``, ``residuals``, ``loglike_pointwise``,
 ``expected``, ``observed``, ``n_data``, ``curves``, ``failures`` ...) for recordings whose
 readings are not turning-point amplitudes: the data flow is parameter vector -> values ->
-balance system -> exact solver *with its segment log* -> predicted readings -> observation
-model -> log-likelihood.  A failed solve or a non-finite number becomes ``-inf`` (or large
+balance system -> solver *with its dense solution* -> predicted readings -> observation
+model -> log-likelihood.  Any solver serves (the exact one by default, dop853 where the scene
+has a smooth torque): readings come from the dense solution's crossings and samples.  A failed solve or a non-finite number becomes ``-inf`` (or large
 residuals) with the reason counted in ``failures``.
 
 Least squares (:mod:`escfit.inference.lsq`) adds a residual per Gaussian prior, so a
@@ -28,10 +29,10 @@ from typing import Mapping
 import numpy as np
 
 from .. import BalanceScene
-from ..solvers import solve_system
+from ..solvers import check_scene, default_solver, solve_system
 from ..trajectory import Trajectory
-from ...core.errors import DataError, EscfitError, FitError, SolverError
-from ..observation.passage_times import PassageTimeObservation, level_times
+from ...core.errors import DataError, EscfitError, FitError
+from ..observation.passage_times import PassageTimeObservation
 from ...core.params import ParamSet
 from ..recordings.pulses import PulseTrain, assign_pulses
 from ...likelihood.freeparams import FreeParameters
@@ -54,13 +55,12 @@ class RecordingProblem(FreeParameters, BalanceProblem, ABC):
     data
         The recording.
     solver, solver_options
-        Only the exact solver keeps the segment log passage times are read from.
+        Any solver and its options (checked against the scene here, before any work).
     """
 
     reading_units = "s"
-    needs_segment_log = True  # readings come from the exact solver's segment log
 
-    def __init__(self, scene: BalanceScene, data, solver: str = "exact", solver_options: dict | None = None):
+    def __init__(self, scene: BalanceScene, data, solver: str | None = None, solver_options: dict | None = None):
         if getattr(scene, "model", None) != "balance":
             raise FitError(f"fitting recordings needs a balance scene, got model {getattr(scene, 'model', None)!r}",
                            getattr(scene, "where", None))
@@ -68,13 +68,8 @@ class RecordingProblem(FreeParameters, BalanceProblem, ABC):
             raise FitError("passage times need angle switching (a physical escapement): with phase switching the "
                            "balance is not tied to angles", scene.where)
         options = dict(solver_options or {})
-        if self.needs_segment_log:
-            if solver != "exact":
-                raise SolverError(f"passage times are read from the exact solver's segment log; solver {solver!r} "
-                                  "has none")
-            bad = sorted(set(options) - {"max_segments"})
-            if bad:
-                raise SolverError(f"fits on passage times take solver option max_segments only, not {bad}")
+        solver = solver or default_solver(scene)
+        check_scene(scene, solver, {**options, "dense": True})
         self.scene, self.data, self.solver, self.solver_options = scene, data, solver, options
         self.failures: Counter = Counter()
 
@@ -86,16 +81,17 @@ class RecordingProblem(FreeParameters, BalanceProblem, ABC):
 
     # -- forward model -----------------------------------------------------------------------
     def trajectory(self, vals: Mapping[str, float], n_swings: int) -> Trajectory:
-        """Exact solution with its segment log for ``n_swings`` half swings.
+        """The solution of ``n_swings`` half swings with its dense solution.
 
         Raises
         ------
         EscfitError
-            When the solver refuses the parameters or runs out of segments.
+            When the solver refuses the parameters, runs out of its budget or fails.
         """
-        tr = solve_system(self.scene.system(vals), n_swings, "angle", "exact", log=True, **self.solver_options)
-        if tr.status == "max_segments":
-            raise FitError("solver ran out of segments")
+        tr = solve_system(self.scene.system(vals), n_swings, self.solver, dense=True, **self.solver_options)
+        if tr.status in ("max_segments", "failed"):
+            raise FitError("solver ran out of segments" if tr.status == "max_segments" else
+                           f"solver failed: {tr.message}")
         return tr
 
     def predict(self, vals: Mapping[str, float]):
@@ -167,7 +163,7 @@ class PulseFitProblem(RecordingProblem):
     data
         The pulse train.
     solver, solver_options
-        ``"exact"`` (the only one with a segment log) and its ``max_segments``.
+        Any solver (default exact) and its options.
 
     Raises
     ------
@@ -177,7 +173,7 @@ class PulseFitProblem(RecordingProblem):
 
     reading_units = "s"
 
-    def __init__(self, scene: BalanceScene, data: PulseTrain, solver: str = "exact",
+    def __init__(self, scene: BalanceScene, data: PulseTrain, solver: str | None = None,
                  solver_options: dict | None = None):
         if not isinstance(data, PulseTrain):
             raise FitError(f"PulseFitProblem needs a PulseTrain, got {type(data).__name__}",
@@ -235,7 +231,7 @@ class PulseFitProblem(RecordingProblem):
         if tr.amplitude.size < self.n_swings:
             raise FitError(f"the model balance stops after {tr.amplitude.size} half swings; the pulses run to half "
                            f"swing {self.n_swings}")
-        t = level_times(tr.log, self.assignment.swing, self._x, vals["observation.offset"])
+        t = tr.dense.crossings(self.assignment.swing, self._x, vals["observation.offset"])
         if not np.all(np.isfinite(t)):
             raise FitError("a notch the data crossed is only approached asymptotically by the model")
         return t

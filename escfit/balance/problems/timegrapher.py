@@ -48,7 +48,7 @@ class TimegrapherFitProblem(RecordingProblem):
     data
         The recording (needs its release instant).
     solver, solver_options
-        ``"exact"`` and its ``max_segments``.
+        Any solver (default exact) and its options.
 
     Raises
     ------
@@ -59,7 +59,7 @@ class TimegrapherFitProblem(RecordingProblem):
     reading_units = "deg (amplitude) and s (beats)"
     mixed_readings = True  # amplitudes and beat times: one covariance rescale, not one profiled scale
 
-    def __init__(self, scene: BalanceScene, data: TimegrapherRecording, solver: str = "exact",
+    def __init__(self, scene: BalanceScene, data: TimegrapherRecording, solver: str | None = None,
                  solver_options: dict | None = None):
         if not isinstance(data, TimegrapherRecording):
             raise FitError(f"TimegrapherFitProblem needs a TimegrapherRecording, got {type(data).__name__}",
@@ -117,7 +117,7 @@ class TimegrapherFitProblem(RecordingProblem):
     def _predict(self, vals: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray]:
         """Expected amplitude readings (deg) and model beat times (s since release)."""
         tr = self.trajectory(vals, self.n_swings)
-        tz, pulse = beat_events(tr.log, self.n_swings, vals["observation.lift_angle"])
+        tz, pulse = beat_events(tr.dense, self.n_swings, vals["observation.lift_angle"])
         t0 = vals["observation.t0"]
         mu = self._lift_set_deg * window_readings(t0 + tz, pulse, self._start, self._end)
         beats = tz[self.beat_swing - 1]

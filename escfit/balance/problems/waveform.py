@@ -57,13 +57,12 @@ class WaveformProblem(RecordingProblem):
         The record's turning-point analysis (:class:`~escfit.balance.recordings.timeseries.TurningPoints`):
         reference instant and angle, period, offset and drift estimates, end of motion.
     solver, solver_options
-        Any solver :func:`~escfit.balance.waveform.sample_theta` handles (default: the scene's).
+        Any solver (default: the scene's) and its options.
     """
 
     reading_units = "rad"
-    needs_segment_log = False
 
-    def __init__(self, scene: BalanceScene, series, reference, solver: str = "exact",
+    def __init__(self, scene: BalanceScene, series, reference, solver: str | None = None,
                  solver_options: dict | None = None):
         scene = replace(scene, params=ParamSet(dict(scene.params.params)))  # the release is set on a copy
         super().__init__(scene, series, solver, solver_options)
@@ -107,8 +106,7 @@ class WaveformProblem(RecordingProblem):
         t = self.sample_time - vals["observation.t_release"]
         if t[0] < 0.0:
             raise FitError("the release instant falls after the first sample used")
-        theta, status = sample_theta(self.scene.system(vals), t, self.scene.switching, self.solver,
-                                     **self.solver_options)
+        theta, status = sample_theta(self.scene.system(vals), t, self.solver, **self.solver_options)
         if status in ("max_segments", "failed"):
             raise FitError(f"solver status {status}")
         return theta

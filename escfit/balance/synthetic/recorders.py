@@ -1,7 +1,8 @@
 """Synthetic recordings in the pulse, timegrapher and time-series formats (known truth).
 
-Each recorder solves the scene exactly (with the segment log), measures what the instrument
-would measure and adds its noise; each format's reader reads the files back, so every format
+Each recorder solves the scene (with its dense solution, by the scene's default solver: the
+closed form, or dop853 where the scene has a smooth torque), measures what the instrument would
+measure and adds its noise; each format's reader reads the files back, so every format
 has a round trip: simulate -> write -> read -> fit -> recover the scene's values.
 :func:`record` is the one entry point a command line needs.
 """
@@ -16,14 +17,13 @@ import numpy as np
 from .. import BalanceScene, solve
 from ..trajectory import Trajectory
 from ...core.errors import SceneError
-from ..observation.passage_times import level_times, swing_starts
 from ..observation.timegrapher import TimegrapherObservation, beat_events, window_readings
 from ..recordings.pulses import PulseTrain, write_pulses
 from ..recordings.timegrapher import TimegrapherRecording, write_tg_json, write_timegrapher_csv
 from ..recordings.timeseries import TimeSeries, write_timeseries
 
-__all__ = ["record_pulses", "record_timegrapher", "record_timeseries", "record", "theta_at", "RECORDERS",
-           "TG_PRESET_BPH"]
+__all__ = ["record_pulses", "record_timegrapher", "record_timeseries", "record", "RECORDERS", "TG_PRESET_BPH",
+           "swing_directions"]
 
 TG_PRESET_BPH = (12000, 14400, 17280, 18000, 19800, 21600, 25200, 28800, 36000, 43200, 72000)  # tg's presets
 RECORDERS = ("unit-curve", "pulses", "timegrapher", "timeseries")
@@ -32,7 +32,14 @@ RECORDERS = ("unit-curve", "pulses", "timegrapher", "timeseries")
 def _solve(scene: BalanceScene, swings: int | None) -> Trajectory:
     if scene.switching != "angle":
         raise SceneError("recorders of passage times need angle switching (a physical escapement)", scene.where)
-    return solve(scene, "exact", swings=swings or scene.swings, log=True)
+    return solve(scene, swings=swings or scene.swings, dense=True)
+
+
+def swing_directions(theta0: float, n: int) -> np.ndarray:
+    """Direction ``s`` (+1: theta increasing) of half swings ``1 .. n`` of a release at rest from
+    ``theta0``: towards zero first, then alternating (as every solver counts them)."""
+    s1 = 1.0 if theta0 < 0.0 else -1.0
+    return s1 * np.where(np.arange(n) % 2 == 0, 1.0, -1.0)
 
 
 def _provenance(scene: BalanceScene, recorder: str, seed: int, **settings) -> dict:
@@ -66,15 +73,13 @@ def record_pulses(scene: BalanceScene, *, notches: int = 60, sigma_t: float = 1e
     if notches < 4:
         raise SceneError(f"notches must be at least 4, got {notches}")
     tr = _solve(scene, swings)
-    log = tr.log
     notch = 2 * math.pi / notches
     n = tr.amplitude.size
-    starts = swing_starts(log, n)
+    theta0 = scene.params["oscillator.theta0"].value
+    starts = np.concatenate([[theta0], tr.theta_turn[:-1]])  # each half swing starts where the last ended
     m_all, x_all, zero_all = [], [], []
-    for m in range(1, n + 1):
-        r0 = starts[m - 1]
-        s = log[r0, 2]
-        x_start, x_end = log[r0, 3], s * tr.theta_turn[m - 1]
+    for m, s in enumerate(swing_directions(theta0, n), start=1):
+        x_start, x_end = s * starts[m - 1], s * tr.theta_turn[m - 1]
         # teeth k with x = s*(k*notch + offset) strictly inside (x_start, x_end), in crossing order
         lo, hi = sorted((s * x_start - offset, s * x_end - offset))
         k = np.arange(math.floor(lo / notch) + 1, math.ceil(hi / notch))
@@ -85,7 +90,7 @@ def record_pulses(scene: BalanceScene, *, notches: int = 60, sigma_t: float = 1e
         x_all.append(x[order])
         zero_all.append((k[order] % notches) == 0)
     m_arr, x_arr, zero = np.concatenate(m_all), np.concatenate(x_all), np.concatenate(zero_all)
-    t = level_times(log, m_arr, x_arr, 0.0, starts)
+    t = tr.dense.crossings(m_arr, x_arr)
     rng = np.random.default_rng(seed)
     t_obs = release_s + t + sigma_t * rng.standard_normal(t.size)
     keep = np.isfinite(t_obs)
@@ -96,20 +101,6 @@ def record_pulses(scene: BalanceScene, *, notches: int = 60, sigma_t: float = 1e
                        swings=swings or scene.swings, duration=duration)
     return PulseTrain(t_obs[keep][order], zero[keep][order], notches, release_s, np.zeros(0, dtype=np.int64),
                       f"<synthetic from {scene.where}>", "", meta)
-
-
-def theta_at(log: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """The exact angle (rad) at increasing times ``t`` (s since release) from a segment log;
-    after the last segment the balance stays where it ended (see :mod:`escfit.balance.dense`)."""
-    from ..dense import log_theta_at
-
-    log = np.ascontiguousarray(log, dtype=float)
-    end = np.array([log[-1, 0] + log[-1, 1]]) if log.shape[0] else np.zeros(1)
-    last = np.empty(1)
-    log_theta_at(log, end, math.nan, last)
-    out = np.empty(np.size(t))
-    log_theta_at(log, np.ascontiguousarray(t, dtype=float), float(last[0]), out)
-    return out
 
 
 def record_timeseries(scene: BalanceScene, *, rate_hz: float = 500.0, swings: int | None = None,
@@ -184,7 +175,7 @@ def record_timegrapher(scene: BalanceScene, *, fmt: str = "json", lift_angle_deg
     tr = _solve(scene, swings)
     n = tr.amplitude.size
     lift_true = math.radians(true_lift_deg if true_lift_deg is not None else lift_angle_deg)
-    tz, pulse = beat_events(tr.log, n, lift_true)
+    tz, pulse = beat_events(tr.dense, n, lift_true)
     if duration is not None:
         pulse, tz = pulse[tz <= duration], tz[tz <= duration]
     if bph is None:

@@ -22,7 +22,7 @@ __all__ = ["record_unit_curve"]
 def record_unit_curve(scene: BalanceScene, *, every: int = 4, duration: float | None = None,
                       swings: int | None = None, notch_deg: float | None = None, sigma: float = 0.0,
                       offset: float = 0.0, seed: int = 0, include_release: bool = True,
-                      solver: str = "exact", notch_reading: str = "counted") -> UnitCurve:
+                      solver: str | None = None, notch_reading: str = "counted") -> UnitCurve:
     """Simulate amplitude readings of a unit curve.
 
     Parameters
@@ -45,7 +45,8 @@ def record_unit_curve(scene: BalanceScene, *, every: int = 4, duration: float | 
     include_release
         Also record the release amplitude as swing 0.
     solver
-        Solver giving the true turning points.
+        Solver giving the true turning points (default: the scene's, see
+        :func:`escfit.balance.default_solver`).
     notch_reading
         How notch readings are taken (with ``notch_deg``): ``"counted"``, the marks passed,
         ``floor(A/notch)``, or ``"nearest"``, the mark nearest the turning point,

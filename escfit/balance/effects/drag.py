@@ -1,0 +1,63 @@
+"""Quadratic air drag: a torque growing with the square of the angular velocity.
+
+Per inertia the torque is ``-D |theta'| theta'`` with ``D >= 0`` in 1/rad: the drag of a body
+moving through air at a Reynolds number high enough for the pressure drag to dominate (a
+pendulum bob or a balance's arms at large amplitude), as opposed to the viscous ``-C theta'`` of
+a slow, laminar flow.  At small damping it takes ``4 D A**2 / 3`` (rad) off a half swing of
+amplitude ``A`` -- the energy lost, ``D * integral |theta'|**3 dt = (4/3) D omega0**2 A**3``, over
+the energy's slope ``omega0**2 A`` -- so the decrement grows with the square of the amplitude,
+where Coulomb friction's is constant and viscous damping's proportional to ``A``: the
+signature that tells the three apart in a free decay.  The torque has no closed form with the
+exact solver's pieces, so a scene that names it is solved by the integrating solvers (dop853
+by default).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Mapping
+
+import numpy as np
+
+from ...core.errors import SceneError
+from ...core.kernels import kernel
+from ...core.params import Param, read_param
+from ...core.scene import check_keys
+from .base import ReadContext, Slot
+
+__all__ = ["Drag", "torque"]
+
+
+@dataclass(frozen=True)
+class Drag:
+    """Quadratic air drag; parameter ``drag.D`` (1/rad, >= 0)."""
+
+    key = "drag"
+    needs = frozenset({"smooth"})
+    SLOTS = (Slot("drag", 0.0, "D", "1/rad", "quadratic air drag per inertia: torque -D |theta'| theta'", lower=0.0),)
+
+    @classmethod
+    def read(cls, table: Mapping, ctx: ReadContext) -> tuple["Drag", list[Param]]:
+        where = f"{ctx.where} [effects.drag]"
+        check_keys(table, {"D"}, where, {"D"})
+        if ctx.switching == "phase":
+            raise SceneError("air drag needs switching = 'angle' (phase switching assumes the fixed half period of a "
+                             "linear oscillator)", where)
+        p = read_param(table["D"], name="drag.D", kind="dimensionless", lower=0.0, unit="1/rad",
+                       meaning="quadratic air drag per inertia D (1/rad): torque -D |theta'| theta'",
+                       where=f"{where}.D")
+        return cls(), [p]
+
+    def fill(self, values: Mapping[str, float], k: np.ndarray) -> None:
+        k["drag"] = values["drag.D"]
+
+
+@kernel(inline="always")
+def torque(x, v, k):
+    """Swing-frame acceleration of the drag (rad/s^2), and its derivatives by x and by v.
+
+    ``-D |theta'| theta'`` is odd in the velocity, so in the swing frame (``v = s*theta'``) it
+    reads ``-D |v| v`` whichever way the balance swings.
+    """
+    d = k.drag
+    return -d * abs(v) * v, 0.0, -2.0 * d * abs(v)

@@ -1,0 +1,95 @@
+"""One step of the integrators, as pure functions of the state: DOP853 and classical RK4.
+
+A step of length ``h`` from the state ``(x, v)`` (swing frame, rad and rad/s) in a region with
+constants ``regime = (w2, xc, k)`` (see :mod:`escfit.balance.torque`) is a smooth map of ``h``:
+the solvers locate events by iterating on it, and the dense solutions of the integrating solvers
+(:mod:`escfit.balance.solution`) evaluate the motion between two stored states by a step of the
+partial length, which carries the integrator's own accuracy there.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.integrate._ivp import dop853_coefficients as _coefficients
+
+from ..core.kernels import kernel
+from .torque import acceleration
+
+__all__ = ["dop853_step", "rk4_step", "N_STAGES", "stage_arrays"]
+
+N_STAGES = _coefficients.N_STAGES  # 12 stages, plus the first-same-as-last evaluation at the step end
+_A = np.ascontiguousarray(_coefficients.A[:N_STAGES, :N_STAGES])
+_B = np.ascontiguousarray(_coefficients.B)
+
+
+def stage_arrays() -> tuple[np.ndarray, np.ndarray]:
+    """Scratch arrays for the DOP853 stages of ``x`` and ``v``."""
+    return np.empty(N_STAGES + 1), np.empty(N_STAGES + 1)
+
+
+@kernel
+def dop853_step(state, h, regime, stages):
+    """One DOP853 step (scipy's coefficient tables) of length ``h`` (s).
+
+    Parameters
+    ----------
+    state : tuple
+        ``(x, v, a)``: angle, velocity and acceleration at the step start (swing frame).
+    regime : tuple
+        ``(w2, xc, k)``: the region's stiffness and centre and the coefficient record.
+    stages : tuple
+        ``(kx, kv)``: arrays of length ``N_STAGES + 1`` that receive the stages (the error
+        estimate reads them).
+
+    Returns
+    -------
+    x, v, a : float
+        State and acceleration at the step end.
+    """
+    x, v, a = state
+    w2, xc, k = regime
+    kx, kv = stages
+    kx[0] = v
+    kv[0] = a
+    for i in range(1, N_STAGES):
+        dx = 0.0
+        dv = 0.0
+        for j in range(i):
+            dx += _A[i, j] * kx[j]
+            dv += _A[i, j] * kv[j]
+        vs = v + h * dv
+        kx[i] = vs
+        kv[i] = acceleration(x + h * dx, vs, w2, xc, k)
+    sx = 0.0
+    sv = 0.0
+    for j in range(N_STAGES):
+        sx += _B[j] * kx[j]
+        sv += _B[j] * kv[j]
+    x1 = x + h * sx
+    v1 = v + h * sv
+    a1 = acceleration(x1, v1, w2, xc, k)
+    kx[N_STAGES] = v1
+    kv[N_STAGES] = a1
+    return x1, v1, a1
+
+
+@kernel(inline="always")
+def rk4_step(x, v, dt, regime):
+    """One classical Runge-Kutta step of length ``dt`` (s) from ``(x, v)``; ``regime = (w2, xc, k)``."""
+    w2, xc, k = regime
+    k1x = v
+    k1v = acceleration(x, v, w2, xc, k)
+    x2 = x + 0.5 * dt * k1x
+    v2 = v + 0.5 * dt * k1v
+    k2x = v2
+    k2v = acceleration(x2, v2, w2, xc, k)
+    x3 = x + 0.5 * dt * k2x
+    v3 = v + 0.5 * dt * k2v
+    k3x = v3
+    k3v = acceleration(x3, v3, w2, xc, k)
+    x4 = x + dt * k3x
+    v4 = v + dt * k3v
+    k4x = v4
+    k4v = acceleration(x4, v4, w2, xc, k)
+    return (x + dt / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
+            v + dt / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v))
