@@ -100,7 +100,7 @@ def balance_motion(t: np.ndarray, theta0: float, release: float, c: float, r: fl
     """The exact solver's angle (rad) of a balance released at rest at theta0 at ``release``."""
     scene = load_scene("truth.toml", text=f'model = "balance"\n[oscillator]\nomega0 = {w0!r}\ntheta0 = {theta0!r}\n'
                                           f"[effects.viscous]\nC = {c!r}\n[effects.coulomb]\nR = {r!r}\n")
-    theta, status = sample_theta(scene.system(scene.params.values()), np.maximum(t - release, 0.0), "angle", "exact")
+    theta, status = sample_theta(scene.system(scene.params.values()), np.maximum(t - release, 0.0), "exact")
     assert status in ("ok", "stopped")
     return np.where(t < release, theta0, theta)
 
@@ -154,7 +154,7 @@ def pendulum_record(theta0_deg: float, seed: int, c: float = 0.1, r: float = 0.3
                                                                   f"theta0 = {math.radians(theta0_deg)!r}"))
     sys = truth.system({**truth.params.values(), "viscous.C": c, "coulomb.R": r})
     t = np.arange(0.2, 12.2, 0.005)
-    theta, status = sample_theta(sys, t, "angle", "dop853")
+    theta, status = sample_theta(sys, t, "dop853")
     assert status in ("ok", "stopped")
     y = theta + 0.003 * np.random.default_rng(seed).standard_normal(t.size)
     return "".join(f"{a:.4f} {b:.6f}\n" for a, b in zip(t, y))

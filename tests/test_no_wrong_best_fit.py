@@ -44,7 +44,7 @@ def student_csv(path, seed: int = 8):
     scene = load_scene("truth.toml", text=f'model = "balance"\n[oscillator]\nomega0 = {W0!r}\ntheta0 = 0.436\n'
                                           f"[effects.viscous]\nC = {C_TRUE!r}\n[effects.coulomb]\nR = {R_TRUE!r}\n")
     t = np.arange(0.37, 12.0, 0.02)
-    theta, status = sample_theta(scene.system(scene.params.values()), t, "angle", "exact")
+    theta, status = sample_theta(scene.system(scene.params.values()), t, "exact")
     assert status in ("ok", "stopped")
     y = np.degrees(theta) + 0.2 * np.random.default_rng(seed).standard_normal(t.size)
     path.write_text("Time (s),Angle (deg)\n" + "".join(f"{a:.2f},{b:.3f}\n" for a, b in zip(t - 0.37, y)))

@@ -163,7 +163,7 @@ def model_period(problem, values) -> float:
     if n < 2:
         return math.nan
     sys = problem.scene.system(values)
-    tr = solve_system(sys, n, problem.scene.switching, problem.solver, **dict(problem.solver_options or {}))
+    tr = solve_system(sys, n, problem.solver, **dict(problem.solver_options or {}))
     times = np.r_[0.0, np.asarray(tr.time, float)]
     amps = np.r_[abs(sys.theta0), np.asarray(tr.amplitude, float)]
     if times.size <= n:
