@@ -196,15 +196,17 @@ def test_an_interrupted_auto_run_resumes_to_the_same_length_and_draws(tmp_path):
         np.testing.assert_array_equal(again.chain, whole.chain)
 
 
-def test_resume_refuses_other_moves_and_a_shorter_fixed_length(tmp_path):
+def test_resume_refuses_other_moves_another_seed_and_a_shorter_fixed_length(tmp_path):
     ck = tmp_path / "c.emcee"
     run_emcee(Gaussian2D(), walkers=8, steps=100, seed=0, checkpoint=ck, moves="de")  # saved when sampling ends
     with pytest.raises(ResultsError, match="moves 'de'"):
         run_emcee(Gaussian2D(), walkers=8, steps=200, seed=0, checkpoint=ck, resume=True, moves="stretch")
     with pytest.raises(ResultsError, match="already holds 100 steps"):
         run_emcee(Gaussian2D(), walkers=8, steps=50, seed=0, checkpoint=ck, resume=True, moves="de")
-    done = run_emcee(Gaussian2D(), walkers=8, steps=100, seed=9, checkpoint=ck, resume=True, moves="de")
-    assert done.steps == 100 and done.seed == 0  # the random state, hence the seed, is the checkpoint's
+    with pytest.raises(ResultsError, match="its seed is '0', this run's is '9'"):  # another run's draws
+        run_emcee(Gaussian2D(), walkers=8, steps=100, seed=9, checkpoint=ck, resume=True, moves="de")
+    done = run_emcee(Gaussian2D(), walkers=8, steps=100, seed=0, checkpoint=ck, resume=True, moves="de")
+    assert done.steps == 100 and done.seed == 0
 
 
 def test_bad_run_lengths_are_refused():

@@ -23,7 +23,7 @@ from ..likelihood.problem import Problem
 from ..results import SCHEMA_VERSION, FitResult, clean_attrs, write_fit
 from .identifiability import bound_warnings, correlation_warnings, ridge_warnings, sloppy_directions
 from .lsq import LeastSquaresResult, least_squares
-from .mcmc import McmcResult, run_emcee
+from .mcmc import McmcResult, resumable, run_emcee
 from .misfit import misfit_report
 from .registry import family
 
@@ -86,6 +86,9 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
 
     if method not in ("leastsq", "emcee"):
         raise FitError(f"method must be 'leastsq' or 'emcee', got {method!r}")
+    if resume and method != "emcee":
+        raise FitError("--resume continues an interrupted emcee run; a least-squares fit has nothing to resume "
+                       "(use --method emcee, or leave out --resume)")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2**32:
         raise FitError(f"seed must be a whole number in [0, 2**32 - 1], got {seed!r}")
     if checkpoint is None and out is not None and method == "emcee":
@@ -111,7 +114,8 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
                        steps=pick(steps, "steps"), burn=pick(burn, "burn"), n_starts=pick(n_starts, "n_starts"),
                        n_refine=defaults["n_refine"], resume=resume, progress=progress, checkpoint=checkpoint,
                        predictive_draws=pick(predictive_draws, "predictive_draws"), moves=pick(moves, "moves"),
-                       max_steps=pick(max_steps, "max_steps"), checkpoint_every=checkpoint_every, title=title)
+                       max_steps=pick(max_steps, "max_steps"), checkpoint_every=checkpoint_every, title=title,
+                       fit_options=options)
 
 
 def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | None = None, force: bool = False,
@@ -119,14 +123,21 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
                 n_starts: int = 8, n_refine: int | None = None, resume: bool = False, progress: bool = False,
                 checkpoint: str | Path | None = None, predictive_draws: int = 400,
                 moves: str = "stretch", max_steps: int = 20000, checkpoint_every: float = 10.0,
-                title: str | None = None) -> FitResult:
+                title: str | None = None, fit_options: dict | None = None) -> FitResult:
     """:func:`fit` of a prepared problem (any family).
 
-    The result's ``timings`` attribute holds the seconds spent in each phase (least squares,
-    sampling, checkpoint saves, diagnostics and predictive draws, writing).
+    ``fit_options`` are the options the problem was built with; with the problem's provenance
+    they identify the run, so that a checkpoint resumes only its own run.  The result's
+    ``timings`` attribute holds the seconds spent in each phase (least squares, sampling,
+    checkpoint saves, diagnostics and predictive draws, writing).
     """
     if predictive_draws < 1:
         raise FitError(f"predictive_draws must be at least 1, got {predictive_draws}")
+    if method == "emcee" and resume:  # a checkpoint of another run is refused before any work
+        if checkpoint is None:
+            raise FitError("resume needs the checkpoint of the run to continue (give out or checkpoint)")
+        resumable(problem, checkpoint, walkers=walkers, moves=moves, seed=seed,
+                  target=None if steps == "auto" else steps, provenance=problem.provenance(), fit_options=fit_options)
     started = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
     clock = time.perf_counter()
     lsq = least_squares(problem, n_starts=n_starts, n_refine=n_refine, seed=seed, priors_count=method == "emcee")
@@ -135,7 +146,7 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
     if method == "emcee":
         mc = run_emcee(problem, lsq, walkers=walkers, steps=steps, burn=burn, seed=seed, checkpoint=checkpoint,
                        resume=resume, progress=progress, moves=moves, max_steps=max_steps,
-                       checkpoint_every=checkpoint_every)
+                       checkpoint_every=checkpoint_every, provenance=problem.provenance(), fit_options=fit_options)
         timings.update(mc.timings)
     clock = time.perf_counter()
     tree = build_tree(problem, lsq, mc, method=method, seed=seed, started=started, predictive_draws=predictive_draws)
