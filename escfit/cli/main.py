@@ -29,7 +29,7 @@ import click
 from ..core.version import __version__
 from ..core.errors import EscfitError
 from .options import STEPS_MAX, WALKERS_MAX, FiniteFloat, StepsType
-from .signals import interrupting_signals
+from ..core.interrupts import interrupting_signals
 
 __all__ = ["main", "cli"]
 

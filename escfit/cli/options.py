@@ -12,12 +12,9 @@ import math
 
 import click
 
-__all__ = ["FiniteFloat", "StepsType", "WALKERS_MAX", "STEPS_MAX"]
+from ..core.limits import STEPS_MAX, WALKERS_MAX
 
-# Sizes beyond any run this program is for, refused before work (a typo of a few zeros would
-# otherwise fill the memory: 1e8 walkers are 6.9 GB before the first step)
-WALKERS_MAX = 100_000
-STEPS_MAX = 10_000_000
+__all__ = ["FiniteFloat", "StepsType", "WALKERS_MAX", "STEPS_MAX"]
 
 
 class FiniteFloat(click.ParamType):

@@ -17,6 +17,7 @@ import numpy as np
 import xarray as xr
 
 from ..core.errors import FitError
+from ..core.limits import check_sampler_size
 from ..core.provenance import dependency_versions
 from ..core.scene import load_scene
 from ..likelihood.problem import Problem
@@ -133,6 +134,8 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
     """
     if predictive_draws < 1:
         raise FitError(f"predictive_draws must be at least 1, got {predictive_draws}")
+    if method == "emcee":  # too large a run is refused before any work
+        check_sampler_size(walkers, max_steps if steps == "auto" else int(steps), len(problem.names))
     if method == "emcee" and resume:  # a checkpoint of another run is refused before any work
         if checkpoint is None:
             raise FitError("resume needs the checkpoint of the run to continue (give out or checkpoint)")

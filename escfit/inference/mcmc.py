@@ -25,6 +25,7 @@ import emcee
 import numpy as np
 
 from ..core.errors import FitError, ResultsError
+from ..core.limits import check_sampler_size
 from ..likelihood.problem import Problem
 from .checkpoint import Checkpoint, check_identity, load_checkpoint, run_identity, save_checkpoint
 from .convergence import Assessment, assess, autocorr_time
@@ -226,6 +227,7 @@ def run_emcee(problem: Problem, lsq: LeastSquaresResult | None = None, *, walker
         raise FitError(f"emcee needs at least {2 * ndim} walkers for {ndim} free parameters, got {walkers}")
     if target < 10:
         raise FitError(f"{'max_steps' if auto else 'steps'} must be at least 10, got {target}")
+    check_sampler_size(walkers, int(target), ndim)
     if burn is not None and not 0 <= int(burn) < target:
         raise FitError(f"burn must lie in [0, {'max_steps' if auto else 'steps'}), got {burn}")
     if moves not in MOVES:

@@ -57,7 +57,9 @@ def record_unit_curve(scene: BalanceScene, *, every: int = 4, duration: float | 
     if notch_reading not in NOTCH_READINGS:
         raise SceneError(f"notch_reading must be one of {', '.join(map(repr, NOTCH_READINGS))}, got {notch_reading!r}")
     n = swings or scene.swings
-    tr = solve(scene, solver, swings=n)
+    from .recorders import complete
+
+    tr = complete(solve(scene, solver, swings=n), scene)
     k = np.arange(every, tr.amplitude.size + 1, every)
     if duration is not None:
         k = k[tr.time[k - 1] <= duration]
