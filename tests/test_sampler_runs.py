@@ -66,7 +66,7 @@ def test_interrupted_run_saves_its_completed_steps_and_resumes_to_identical_draw
     np.testing.assert_allclose(again.acceptance, whole.acceptance)
 
 
-@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT"])
 def test_a_signal_during_a_step_finishes_the_step_saves_and_resumes_exactly(tmp_path, sig):
     import os
     import signal

@@ -9,6 +9,7 @@ the model fits, and returns a :class:`~escfit.results.FitResult` laid out as Arv
 
 from __future__ import annotations
 
+import contextlib
 import datetime as _dt
 import time
 from pathlib import Path
@@ -84,6 +85,8 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
         Also written to ``out`` when given.
     """
     from ..core.atomic import check_output_folder, refuse_clobbering_inputs, refuse_existing
+    from ..core.inputs import check_input_file
+    from ..core.outlock import output_lock
 
     if method not in ("leastsq", "emcee"):
         raise FitError(f"method must be 'leastsq' or 'emcee', got {method!r}")
@@ -100,23 +103,26 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
                                  {"data": paths(data), "scene": paths(scene)})
         refuse_existing(out, force)
         check_output_folder(out, "out")
-    if method == "emcee" and checkpoint is not None:
-        _check_checkpoint(checkpoint, resume=resume, force=force)
-    sc = load_scene(scene) if not hasattr(scene, "model") else scene
-    fam = family(sc.model)
-    defaults = {**GENERIC_DEFAULTS, **dict(getattr(fam, "fit_defaults", {}))}
-    pick = lambda value, key: defaults[key] if value is None else value  # noqa: E731
-    problem = fam.problem(sc, data, **options)
-    if out is not None:
-        _remove_stale_temporaries(out, checkpoint)
-    if method == "emcee" and checkpoint is not None and force and not resume:
-        Path(checkpoint).unlink(missing_ok=True)  # a forced fresh run must not leave the old run resumable
-    return fit_problem(problem, method=method, out=out, force=force, seed=seed, walkers=pick(walkers, "walkers"),
-                       steps=pick(steps, "steps"), burn=pick(burn, "burn"), n_starts=pick(n_starts, "n_starts"),
-                       n_refine=defaults["n_refine"], resume=resume, progress=progress, checkpoint=checkpoint,
-                       predictive_draws=pick(predictive_draws, "predictive_draws"), moves=pick(moves, "moves"),
-                       max_steps=pick(max_steps, "max_steps"), checkpoint_every=checkpoint_every, title=title,
-                       fit_options=options)
+        if isinstance(data, (str, Path)):
+            check_input_file(data, "data")
+    with output_lock(out) if out is not None else contextlib.nullcontext():  # one run per results file
+        if method == "emcee" and checkpoint is not None:
+            _check_checkpoint(checkpoint, resume=resume, force=force)
+        sc = load_scene(scene) if not hasattr(scene, "model") else scene
+        fam = family(sc.model)
+        defaults = {**GENERIC_DEFAULTS, **dict(getattr(fam, "fit_defaults", {}))}
+        pick = lambda value, key: defaults[key] if value is None else value  # noqa: E731
+        problem = fam.problem(sc, data, **options)
+        if out is not None:
+            _remove_stale_temporaries(out, checkpoint)
+        if method == "emcee" and checkpoint is not None and force and not resume:
+            Path(checkpoint).unlink(missing_ok=True)  # a forced fresh run must not leave the old run resumable
+        return fit_problem(problem, method=method, out=out, force=force, seed=seed, walkers=pick(walkers, "walkers"),
+                           steps=pick(steps, "steps"), burn=pick(burn, "burn"), n_starts=pick(n_starts, "n_starts"),
+                           n_refine=defaults["n_refine"], resume=resume, progress=progress, checkpoint=checkpoint,
+                           predictive_draws=pick(predictive_draws, "predictive_draws"), moves=pick(moves, "moves"),
+                           max_steps=pick(max_steps, "max_steps"), checkpoint_every=checkpoint_every, title=title,
+                           fit_options=options)
 
 
 def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | None = None, force: bool = False,
@@ -178,7 +184,10 @@ def _check_checkpoint(checkpoint: str | Path, *, resume: bool, force: bool) -> N
     from ..core.errors import ResultsError
     from .checkpoint import FORMAT
 
+    from ..core.atomic import refuse_existing
+
     path = Path(checkpoint)
+    refuse_existing(path, force=True)  # a device, FIFO, socket or link there is never replaced
     if not resume:
         if path.exists() and not force:
             raise FitError("an interrupted run's checkpoint exists; pass --resume to continue it or --force to "
