@@ -37,7 +37,7 @@ from ..core.errors import SolverError
 from ..core.kernels import kernel
 from .effects.base import SystemBuilder
 from .exact import region_tables
-from .segment import CREEP_OVERSHOOT, creep_horizon
+from .segment import creep_horizon, creeps_to_rest
 from .solvers import OVER_THE_TOP, STEP_BUDGET, STEP_UNDERFLOW, _check_system, static_args, status_of
 from .trajectory import Trajectory
 
@@ -258,6 +258,7 @@ def run_dop853(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, b
     h = -1.0
     rejected = False
     at_start = True
+    scale = -1.0
     while n_done < n_swings and (n_samp == 0 or k < n_samp):
         if n_seg >= max_seg:
             status = _MAX_SEGMENTS
@@ -289,6 +290,8 @@ def run_dop853(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, b
         # no turning point within many time constants: creeping to rest (overdamped)
         horizon = creep_horizon(c, w2)
         x_seg, v_seg = x, v
+        if scale < 0.0:  # the run's scale: the release's offset from its rest position (rad)
+            scale = math.sqrt(_acc(x, 0.0, c, w2, xc, pend) ** 2 + w2 * v * v) / w2
         t_seg = 0.0
         while event < 0:
             while k < n_samp and sample_t[k] <= t:
@@ -344,8 +347,8 @@ def run_dop853(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, b
             t_swing += h_try
         if status != 0 or (n_samp > 0 and k >= n_samp):
             break
-        if event == 1 and abs(_acc(xe, 0.0, c, w2, xc, pend)) <= CREEP_OVERSHOOT * math.sqrt(
-                _acc(x_seg, 0.0, c, w2, xc, pend) ** 2 + w2 * v_seg * v_seg):
+        if event == 1 and creeps_to_rest(_acc(xe, 0.0, c, w2, xc, pend) / w2, math.sqrt(
+                _acc(x_seg, 0.0, c, w2, xc, pend) ** 2 + w2 * v_seg * v_seg) / w2, scale):
             # the "turn" lies on the rest position to within rounding: a creep to rest, as the
             # exact solver decides it (segment.CREEP_OVERSHOOT), not a swing
             x = xe

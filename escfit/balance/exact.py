@@ -41,7 +41,7 @@ import numpy as np
 from numba import prange
 
 from ..core.kernels import kernel
-from .segment import CREEP_OVERSHOOT, cross_time, propagate, turn_time
+from .segment import creeps_to_rest, cross_time, propagate, turn_time
 
 __all__ = ["run_angle", "run_phase", "run_angle_many", "run_phase_many", "STATUS_NAMES"]
 
@@ -248,6 +248,7 @@ def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
     at_start = True
     at_edge = False  # the state sits on edge j after a crossing
     j = 0
+    scale = -1.0
     while n_done < n_swings:
         if n_seg >= max_seg:
             status = 3
@@ -261,6 +262,8 @@ def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
         w2 = w2_tab[d, j]
         xc = xc_tab[d, j]
         y0 = x - xc
+        if scale < 0.0:  # the run's scale: the release's offset from its rest position
+            scale = math.sqrt(y0 * y0 + v * v / w2)
         h = 0.5 * c
         xb = edges[j] if j < n_edges else math.inf
         grazed = False
@@ -294,8 +297,8 @@ def run_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
                 if math.isfinite(tau_turn):
                     y_turn, _ = propagate(y0, v, tau_turn, h, w2)
                     x_turn = xc + y_turn
-                    # a turn that overshoots the rest position by a rounding-level amount is a creep
-                    creep = abs(y_turn) <= CREEP_OVERSHOOT * math.sqrt(y0 * y0 + v * v / w2)
+                    # a turn that overshoots the rest position by a negligible amount is a creep
+                    creep = creeps_to_rest(y_turn, math.sqrt(y0 * y0 + v * v / w2), scale)
                 crosses = x_turn > xb
             if crosses:
                 tau, v_new = cross_time(y0, v, h, w2, xb - xc, tau_turn)

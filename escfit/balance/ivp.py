@@ -21,7 +21,7 @@ from scipy.special import ellipk
 from ..core.errors import SolverError
 from .effects.base import SystemBuilder
 from .exact import _region, _swing_edges
-from .segment import CREEP_OVERSHOOT
+from .segment import creeps_to_rest
 from .solvers import OVER_THE_TOP, _check_system, static_args, status_of
 from .trajectory import Trajectory
 
@@ -61,6 +61,7 @@ def solve_ivp_events(sys: SystemBuilder, n_swings: int, switching: str, *, metho
     horizon = 4.0 * math.pi / sys.omega0 + 8.0 / max(c, 1e-300)
     if pend:  # a pendulum's half swing lasts 2 K(sin^2(A/2)) / omega0, long near A = pi
         horizon += 4.0 * float(ellipk(math.sin(0.5 * theta0) ** 2)) / sys.omega0
+    scale = -1.0
     while len(amp) < n_swings:
         if n_seg >= nseg:
             status = "max_segments"
@@ -70,6 +71,8 @@ def solve_ivp_events(sys: SystemBuilder, n_swings: int, switching: str, *, metho
             status = "stopped"  # the net acceleration at rest, -w2 (spring(x) - xc), cannot start it
             break
         xb = edges[j] if j < n_edges else math.inf
+        if scale < 0.0:  # the run's scale: the release's offset from its rest position (rad)
+            scale = math.hypot(spring(x) - xc, v / math.sqrt(w2))
 
         def rhs(_t, y, w2=w2, xc=xc):
             return (y[1], -c * y[1] - w2 * (spring(y[0]) - xc))
@@ -121,7 +124,7 @@ def solve_ivp_events(sys: SystemBuilder, n_swings: int, switching: str, *, metho
                 continue
         else:
             x, v, is_bank = float(ye[0]), 0.0, False
-            if abs(spring(x) - xc) <= CREEP_OVERSHOOT * math.hypot(spring(y0[0]) - xc, y0[1] / math.sqrt(w2)):
+            if creeps_to_rest(spring(x) - xc, math.hypot(spring(y0[0]) - xc, y0[1] / math.sqrt(w2)), scale):
                 status = "stopped"  # a turn on the rest position to within rounding: a creep to rest
                 break
         amp.append(abs(x))

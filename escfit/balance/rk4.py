@@ -24,7 +24,7 @@ from ..core.errors import SolverError
 from ..core.kernels import kernel
 from .effects.base import SystemBuilder
 from .exact import _applies, _region, _swing_edges
-from .segment import CREEP_OVERSHOOT, creep_horizon
+from .segment import creep_horizon, creeps_to_rest
 from .solvers import OVER_THE_TOP, static_args, status_of
 from .trajectory import Trajectory
 
@@ -113,6 +113,7 @@ def _run_located(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
     edges = np.empty(2 * w_lo.shape[0] + sp_bp.shape[0] + 1)
     n_edges = _swing_edges(s, bank, sp_bp, w_lo, w_hi, w_dir, edges)
     at_start = True
+    scale = -1.0
     while n_done < n_swings:
         j, w2, xc = _region(x, s, edges, n_edges, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, r)
         if at_start and v <= 0.0 and _acc(x, 0.0, c, w2, xc, pend) <= 0.0:
@@ -123,6 +124,8 @@ def _run_located(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
         k = 0
         event = -1
         x_seg, v_seg = x, v
+        if scale < 0.0:  # the run's scale: the release's offset from its rest position (rad)
+            scale = math.sqrt(_acc(x, 0.0, c, w2, xc, pend) ** 2 + w2 * v * v) / w2
         horizon = creep_horizon(c, w2)
         while True:
             if steps >= max_steps:
@@ -157,8 +160,8 @@ def _run_located(theta0, v0, c, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir,
             t = t0 + k * h
         if status != 0:
             break
-        if event == 1 and abs(_acc(x, 0.0, c, w2, xc, pend)) <= CREEP_OVERSHOOT * math.sqrt(
-                _acc(x_seg, 0.0, c, w2, xc, pend) ** 2 + w2 * v_seg * v_seg):
+        if event == 1 and creeps_to_rest(_acc(x, 0.0, c, w2, xc, pend) / w2, math.sqrt(
+                _acc(x_seg, 0.0, c, w2, xc, pend) ** 2 + w2 * v_seg * v_seg) / w2, scale):
             status = 1  # a turn on the rest position to within rounding: a creep to rest
             break
         at_start = False

@@ -329,8 +329,8 @@ def _check_recipe_values(doc: dict, where: str) -> None:
     if "unit" in doc and (isinstance(doc["unit"], bool) or not isinstance(doc["unit"], (str, int))):
         refuse("unit", "a unit's name or number")
     if "notch_deg" in doc and (isinstance(doc["notch_deg"], bool) or not isinstance(doc["notch_deg"], (int, float))
-                               or not 0 < doc["notch_deg"] < float("inf")):
-        refuse("notch_deg", "a positive number of degrees")
+                               or not NOTCH_MIN_DEG <= doc["notch_deg"] < 360):
+        refuse("notch_deg", f"a number of degrees in [{NOTCH_MIN_DEG:g}, 360)")
 
 
 def _read_recipe(path: Path) -> dict:
