@@ -11,7 +11,7 @@ fix (a longer run, or a check whose margin is measured: see docs/testing.md).
 
 Usage (from the repository root)::
 
-    python benchmarks/false_failures.py [--shifts 20] [--workers 2] [--json out.json] [TEST ...]
+    python benchmarks/false_failures.py [--shifts 20] [--workers 2] [--select EXPR] [--json out.json] [TEST ...]
 """
 
 from __future__ import annotations
@@ -38,12 +38,14 @@ SAMPLING_TESTS = [
 ]
 
 
-def run_once(tests: list[str], shift: int, workers: int) -> tuple[dict[str, str], float]:
+def run_once(tests: list[str], shift: int, workers: int, select: str | None = None) -> tuple[dict[str, str], float]:
     """One pytest run with the seeds shifted by ``shift``: outcome per test id, and seconds."""
     with tempfile.TemporaryDirectory() as tmp:
         report = Path(tmp) / "junit.xml"
         env = {**os.environ, "ESCFIT_TEST_SEED_SHIFT": str(shift), "PYTHONPATH": str(ROOT)}
         cmd = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", f"--junitxml={report}", *tests]
+        if select:
+            cmd += ["-k", select]
         if workers > 1:
             cmd[4:4] = ["-n", str(workers)]
         t0 = time.perf_counter()
@@ -64,13 +66,16 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--shifts", type=int, default=20, help="runs, with seed shifts 1..N")
     ap.add_argument("--first", type=int, default=1, help="the first shift")
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--select", default="not interrupted and not resume",
+                    help="pytest -k expression (default: leave out the resume tests, whose draws are compared with "
+                         "their own uninterrupted runs, not judged)")
     ap.add_argument("--json", default=None)
     args = ap.parse_args(argv)
     runs: Counter = Counter()
     failures: Counter = Counter()
     failed_at: dict[str, list[int]] = {}
     for shift in range(args.first, args.first + args.shifts):
-        outcomes, seconds = run_once(args.tests, shift, args.workers)
+        outcomes, seconds = run_once(args.tests, shift, args.workers, args.select)
         bad = sorted(n for n, o in outcomes.items() if o == "failed")
         for name, outcome in outcomes.items():
             if outcome != "skipped":
