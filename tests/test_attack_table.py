@@ -164,6 +164,10 @@ ATTACKS = [
      ["rig.toml [friction.mu].prior", "1e-300"]),
     ("negative-inertia", lambda w: (w / "unit.toml").write_text((w / "unit.toml").read_text().replace(
         "[oscillator]\n", '[oscillator]\ninertia = "-1 g*cm^2"\n', 1)), ["simulate", "unit.toml"], ["unit.toml"]),
+    ("hairspring-of-a-million-pieces", lambda w: (w / "unit.toml").write_text(
+        'model = "balance"\n[oscillator]\ntheta0 = 1.0\n[effects.hairspring]\nangles = ['
+        + ", ".join(f"{k * 1e-6:.6f}" for k in range(1, 1_000_000)) + "]\nomega0 = [" + ", ".join(["15.0"] * 1_000_000)
+        + "]\n"), ["simulate", "unit.toml"], ["unit.toml", "MB"]),
     ("nested-3000-deep", lambda w: (w / "rig.toml").write_text(DEEP), FIT, ["rig.toml", "nested"]),
     ("recipe-naming-itself-as-data", recipe('data = "recipe.toml"\nscene = "rig.toml"\nout = "r.h5"\n'),
      ["fit", "recipe.toml"], ["recipe.toml"]),
@@ -251,3 +255,25 @@ def test_an_attack_is_refused_in_one_line_and_changes_nothing(work, name, setup,
 
 def test_the_attack_has_at_least_forty_classes():
     assert len({a[0] for a in ATTACKS}) == len(ATTACKS) >= 40
+
+
+def test_the_console_shows_escfit_lines_only(work):
+    """Third-party warnings (arviz, h5netcdf, matplotlib) and log records stay off the console of
+    a short sampler run (too short for ArviZ's liking) with a Markdown report, and a summary of
+    it: every stderr line is escfit's own."""
+    import subprocess
+    import sys
+
+    from .conftest import ROOT
+
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    env.pop("PYTHONWARNINGS", None)
+    main = "from escfit.cli.main import main; main()"
+    for args in (["fit", "data.csv", "--scene", "rig.toml", "--method", "emcee", "--walkers", "10", "--steps", "10",
+                  "--out", "e.h5", "--report", "e.md", "--quiet"], ["summary", "e.h5"]):
+        r = subprocess.run([sys.executable, "-c", main, *args], capture_output=True, text=True, env=env, cwd=work,
+                           timeout=600)
+        assert r.returncode == 0, r.stderr
+        foreign = [line for line in r.stderr.splitlines()
+                   if line.strip() and not line.startswith(("escfit", "warning:", "note:", "emcee:"))]
+        assert not foreign, foreign

@@ -15,12 +15,15 @@ from typing import Any, Mapping, Protocol
 from .errors import SceneError
 from .params import ParamSet
 
-__all__ = ["Scene", "load_scene", "parse_toml", "MODELS", "check_keys", "MAX_DEPTH"]
+__all__ = ["Scene", "load_scene", "parse_toml", "MODELS", "check_keys", "MAX_DEPTH", "MAX_SCENE_BYTES"]
 
 # Deepest nesting of tables and arrays a scene or recipe may have: real ones use 3 or 4
 # (effects.escapement[1].X.prior); tomllib recurses once per level and fails with a bare
 # RecursionError near 1000
 MAX_DEPTH = 16
+# Largest scene or recipe text, bytes: real ones are a few kB (a 1000-piece hairspring is 20 kB);
+# a million-piece spring (20 MB) would run for hours before any error could be reported
+MAX_SCENE_BYTES = 1_000_000
 
 # model name -> module that provides ``parse(doc, where, text) -> Scene`` and
 # ``simulate(scene, solver=..., **options) -> xarray.Dataset``.
@@ -54,8 +57,12 @@ def check_keys(table: Mapping[str, Any], allowed: set[str], where: str, required
 
 
 def parse_toml(text: str, where: str) -> dict:
-    """Parse TOML ``text``; a syntax error or nesting deeper than :data:`MAX_DEPTH` is a
-    :class:`SceneError` naming ``where`` (the line, for syntax errors)."""
+    """Parse TOML ``text``; a syntax error, nesting deeper than :data:`MAX_DEPTH` or a text
+    longer than :data:`MAX_SCENE_BYTES` is a :class:`SceneError` naming ``where`` (the line,
+    for syntax errors)."""
+    if len(text) > MAX_SCENE_BYTES:
+        raise SceneError(f"{len(text) / 1e6:.3g} MB of text; a scene or recipe is a few kB, at most "
+                         f"{MAX_SCENE_BYTES / 1e6:g} MB", where)
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

@@ -16,26 +16,18 @@ import numpy as np
 from .. import BalanceScene, solve
 from ..trajectory import Trajectory
 from ...core.errors import SceneError
+from .runs import complete
 from ..observation.passage_times import level_times, swing_starts
 from ..observation.timegrapher import TimegrapherObservation, beat_events, window_readings
 from ..recordings.pulses import PulseTrain, write_pulses
 from ..recordings.timegrapher import TimegrapherRecording, write_tg_json, write_timegrapher_csv
 from ..recordings.timeseries import TimeSeries, write_timeseries
 
-__all__ = ["complete", "record_pulses", "record_timegrapher", "record_timeseries", "record", "theta_at", "RECORDERS",
+__all__ = ["record_pulses", "record_timegrapher", "record_timeseries", "record", "theta_at", "RECORDERS",
            "TG_PRESET_BPH"]
 
 TG_PRESET_BPH = (12000, 14400, 17280, 18000, 19800, 21600, 25200, 28800, 36000, 43200, 72000)  # tg's presets
 RECORDERS = ("unit-curve", "pulses", "timegrapher", "timeseries")
-
-
-def complete(tr: Trajectory, scene: BalanceScene) -> Trajectory:
-    """``tr`` if the solver finished the run; a run cut short (out of segments, failed) would be
-    recorded as a shorter recording of another balance, so it is refused."""
-    if tr.status in ("max_segments", "failed"):
-        raise SceneError(f"the scene's run ends with status {tr.status!r} after {tr.amplitude.size} half swing(s) "
-                         f"({tr.message or 'the solver did not finish it'}): nothing to record", scene.where)
-    return tr
 
 
 def _solve(scene: BalanceScene, swings: int | None) -> Trajectory:
