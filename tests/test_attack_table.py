@@ -277,3 +277,32 @@ def test_the_console_shows_escfit_lines_only(work):
         foreign = [line for line in r.stderr.splitlines()
                    if line.strip() and not line.startswith(("escfit", "warning:", "note:", "emcee:"))]
         assert not foreign, foreign
+
+
+def test_control_characters_of_a_scene_title_are_shown_not_sent(work):
+    """A scene title holding an escape sequence and a NUL reaches the Markdown report as visible
+    escapes, never as raw control characters (a terminal or renderer would act on them)."""
+    text = (work / "ts.toml").read_text()
+    title = text[text.index("title = "):].splitlines()[0]
+    (work / "ts.toml").write_text(text.replace(title, 'title = "bad\\u001b[31mred\\u0000end"', 1))
+    shutil.copy(TS, work / "ts.csv")
+    r = run("fit", "ts.csv", "--scene", "ts.toml", "--out", "r.h5", "--report", "r.md")
+    assert r.exit_code == 0, r.output
+    text = (work / "r.md").read_text()
+    assert "bad\\x1b[31mred\\x00end" in text
+    assert not any(ord(c) < 32 and c not in "\n\t" for c in text)
+
+
+def test_a_full_standard_output_is_one_line_and_exit_2(work):
+    """``escfit simulate ... > /dev/full``: one line naming the cause, not an internal error."""
+    import subprocess
+    import sys
+
+    from .conftest import ROOT
+
+    with open("/dev/full", "w") as full:
+        r = subprocess.run([sys.executable, "-c", "from escfit.cli.main import main; main()", "simulate", "sim.toml"],
+                           stdout=full, stderr=subprocess.PIPE, text=True, cwd=work,
+                           env={**os.environ, "PYTHONPATH": str(ROOT)}, timeout=300)
+    assert r.returncode == 2, r.stderr
+    assert r.stderr.strip().splitlines() == ["escfit: error: cannot write the command's output (No space left on device)"]

@@ -103,8 +103,8 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
                                  {"data": paths(data), "scene": paths(scene)})
         refuse_existing(out, force)
         check_output_folder(out, "out")
-        if isinstance(data, (str, Path)):
-            check_input_file(data, "data")
+    if isinstance(data, (str, Path)):
+        check_input_file(data, "data")
     with output_lock(out) if out is not None else contextlib.nullcontext():  # one run per results file
         if method == "emcee" and checkpoint is not None:
             _check_checkpoint(checkpoint, resume=resume, force=force)
