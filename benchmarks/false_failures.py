@@ -49,9 +49,12 @@ def run_once(tests: list[str], shift: int, workers: int, select: str | None = No
         if workers > 1:
             cmd[4:4] = ["-n", str(workers)]
         t0 = time.perf_counter()
-        subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True)
+        done = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True)
         seconds = time.perf_counter() - t0
         outcomes = {}
+        if not report.exists():  # pytest itself died: say so, count nothing
+            print(f"shift {shift}: no report (exit {done.returncode}): {done.stdout[-500:]} {done.stderr[-500:]}")
+            return outcomes, seconds
         for case in ET.parse(report).getroot().iter("testcase"):
             name = f"{case.get('classname', '')}::{case.get('name')}"
             kinds = {child.tag for child in case}
