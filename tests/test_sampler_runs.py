@@ -175,16 +175,38 @@ def test_walkers_that_disagree_are_not_converged():
     assert "max R-hat" in a.verdict()
 
 
+def closed_form_z(res) -> np.ndarray:
+    """Errors of a run's mean, sd and correlation against the Gaussian's, in units of their Monte
+    Carlo standard errors (each from the effective sample size of the quantity it averages:
+    the draws, their squared deviations, the product of the standardised deviations)."""
+    chain = res.chain  # (walkers, draws, 2)
+    dev = chain - chain.mean(axis=(0, 1))
+    sd_true = np.sqrt(np.diag(Gaussian2D.cov))
+    prod = (dev[..., :1] / sd_true[0]) * (dev[..., 1:] / sd_true[1])
+    ess = lambda x: assess(x.transpose(1, 0, 2), burn=0).ess_bulk  # noqa: E731
+    draws = chain.reshape(-1, 2)
+    z_mean = (draws.mean(axis=0) - Gaussian2D.mean) / (sd_true / np.sqrt(ess(chain)))
+    # a Gaussian's sample sd has relative standard error 1/sqrt(2 n), its correlation (1 - r^2)/sqrt(n)
+    z_sd = (np.sqrt(np.diag(np.cov(draws.T))) / sd_true - 1.0) * np.sqrt(2.0 * ess(dev**2))
+    z_r = (np.corrcoef(draws.T)[0, 1] - 0.8) / ((1 - 0.8**2) / np.sqrt(ess(prod)[0]))
+    return np.concatenate([z_mean, z_sd, [z_r]])
+
+
 def test_auto_run_stops_when_converged_and_gets_the_closed_form_moments():
+    """The moments of the draws agree with the Gaussian's within 4.5 Monte Carlo standard errors.
+
+    Fixed tolerances (6 % on the sds, 0.03 on r) were 1.7 standard errors at the run's effective
+    sample size and failed for about one seed in ten (another library version is another seed).
+    The z-scores of these five checks, measured over seeds 0-199, have sds of 0.98 to 1.13 and
+    their largest |z| of the 1000 was 3.7; at sd 1.13 the limit 4.5 is 4.0 sd, a two-sided
+    normal tail of 6e-5 per check, 3e-4 for the five.
+    """
     res = run_emcee(Gaussian2D(), walkers=16, steps="auto", seed=3, moves="de", max_steps=20000)
     assert res.auto and res.converged and res.steps < 20000
     final = assess(np.concatenate([res.chain.transpose(1, 0, 2)]), burn=0)
     assert np.all(final.rhat <= 1.011) and np.all(final.ess_bulk >= 390)
-    draws = res.chain.reshape(-1, 2)
-    se = np.sqrt(np.diag(Gaussian2D.cov) / final.ess_bulk)
-    assert np.all(np.abs(draws.mean(axis=0) - Gaussian2D.mean) < 4 * se)
-    assert np.corrcoef(draws.T)[0, 1] == pytest.approx(0.8, abs=0.03)
-    assert np.sqrt(np.diag(np.cov(draws.T))) == pytest.approx([0.5, 2.0], rel=0.06)
+    z = closed_form_z(res)
+    assert np.all(np.abs(z) < 4.5), z
 
 
 def test_auto_run_stopped_by_its_cap_says_so():
