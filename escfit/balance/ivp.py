@@ -21,7 +21,7 @@ from scipy.special import ellipk
 from ..core.errors import SolverError
 from .effects.base import SystemBuilder
 from .exact import _region, _swing_edges
-from .segment import creeps_to_rest
+from .segment import creep_horizon, creeps_to_rest
 from .solvers import OVER_THE_TOP, _check_system, static_args, status_of
 from .trajectory import Trajectory
 
@@ -58,9 +58,11 @@ def solve_ivp_events(sys: SystemBuilder, n_swings: int, switching: str, *, metho
     message = ""
     pend = sys.restoring == "pendulum"
     spring = math.sin if pend else (lambda x: x)
-    horizon = 4.0 * math.pi / sys.omega0 + 8.0 / max(c, 1e-300)
+    # no event within this long a segment: a creep to rest, on the horizon every solver uses
+    # (segment.creep_horizon) so that they agree on when a balance has stopped
+    horizon = 0.0
     if pend:  # a pendulum's half swing lasts 2 K(sin^2(A/2)) / omega0, long near A = pi
-        horizon += 4.0 * float(ellipk(math.sin(0.5 * theta0) ** 2)) / sys.omega0
+        horizon = 4.0 * float(ellipk(math.sin(0.5 * theta0) ** 2)) / sys.omega0
     scale = -1.0
     while len(amp) < n_swings:
         if n_seg >= nseg:
@@ -95,7 +97,7 @@ def solve_ivp_events(sys: SystemBuilder, n_swings: int, switching: str, *, metho
         y0 = [x, v if v > 0 else 0.0]
         if y0[1] == 0.0:  # start from rest: nudge past the trivial root of the turning event
             y0[1] = 1e-300
-        sol = solve_ivp(rhs, (0.0, horizon), y0, method=method, rtol=rtol, atol=atol, events=events,
+        sol = solve_ivp(rhs, (0.0, horizon + creep_horizon(c, w2)), y0, method=method, rtol=rtol, atol=atol, events=events,
                         dense_output=math.isfinite(xb))
         nsteps += int(sol.t.size)
         n_seg += 1
