@@ -75,9 +75,6 @@ def make_problem(scene, data, *, solver: str | None = None, solver_options: dict
         raise FitError("--unit selects a unit of a unit-curve file; this recording holds one unit",
                        getattr(data, "source", None))
     if isinstance(data, TimeSeries):
-        from .recordings.series import refuse_unless_angle
-
-        refuse_unless_angle(data)
         readings = spec.readings if spec is not None else "samples"
         problem = problem_from_series(sc, data, solver=solver, solver_options=options, readings=readings)
         problem.notes += _override_notes(sc, recording)

@@ -238,9 +238,6 @@ def survey(path: str | Path, *, restoring: str = "spring", recording: dict | Non
     data, table, why = read_with_help(path, recording, fmt=fmt, notch_deg=notch_deg)
     s = Survey(kind="", path=str(path), recording=table, why=why, data=data)
     if isinstance(data, TimeSeries):
-        from .recordings.series import refuse_unless_angle
-
-        refuse_unless_angle(data)  # velocities and displacements are read, not fitted yet
         if table.get("readings") == "amplitudes":
             _survey_amplitude_rows(s, data)
         else:
