@@ -162,7 +162,8 @@ def _hint_other_quantities(cols: Columns, roles: list[str | None]) -> str:
     volts = [i for i in range(cols.ncols) if (cols.unit(i) or "").strip() in ("V", "mV", "volt", "volts")]
     if volts:
         return (f" (column {cols.label(volts[0])!r} holds a sensor's volts: with angle_column set angle_unit and scale, "
-                "the angle per volt)")
+                "the angle per volt; a rate or a position: velocity_column or displacement_column with its unit and "
+                "scale)")
     for role, key in (("angular_velocity", "velocity_column"), ("displacement", "displacement_column")):
         hits = [i for i, r in enumerate(roles) if r == role]
         if hits:
@@ -303,15 +304,17 @@ def _si_factor(cols: Columns, col: int, spec: RecordingSpec, opts: dict, reader:
         if unit is None:
             raise DataError(f"column {name!r} gives no unit: set [recording] {key}", at)
         target = "rad/s" if quantity == "angular_velocity" else "m"
+        volts = False
         try:
             q = ureg.parse_expression(unit.strip().replace("°", "deg")) if safe_unit_text(unit) else None
-            if q is not None and q.dimensionality == ureg.volt.dimensionality:
-                factor = 1.0  # the sensor's volts: scale is the SI value per volt
-            else:
-                factor = float(q.to(target).magnitude)
+            volts = q is not None and q.dimensionality == ureg.volt.dimensionality
+            factor = 1.0 if volts else float(q.to(target).magnitude)  # volts: scale is the SI value per volt
         except Exception:
             raise DataError(f"column {name!r}: {unit!r} is not a unit of {quantity.replace('_', ' ')}; set "
                             f"[recording] {key} (and scale)", at) from None
+        if volts and spec.scale is None and "scale" not in opts:
+            raise DataError(f"column {name!r} holds a sensor's volts: set [recording] scale, its "
+                            f"{target} per volt", at)
         reader[key] = unit
         if scale != 1.0:
             reader["scale"] = f"{scale:g}"

@@ -36,7 +36,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ...core.errors import DataError
-from .centre import Centre, measure_centre
+from .centre import Centre, centre_estimates, measure_centre
 from .extrema import alternating_extrema
 from .series import TimeSeries
 from .turning_points import TurningPoints, prepare, reduce_series, resting_tail
@@ -93,7 +93,7 @@ def reduce_rate(series: TimeSeries) -> RateAnalysis:
     rec = prepare(t, v, None, 4, where, "angular_velocity")
     i_rest, rest = resting_tail(rec)
     moving = slice(0, i_rest)
-    bias0 = rest if i_rest < t.size else float(np.median(v[moving]))
+    bias0 = rest if i_rest < t.size else _extrema_centre(rec, i_rest)
     # where the smoothed rate rests within its noise of the bias (a hold, the end), nothing moves:
     # counting only motion keeps a held oscillator's angle flat instead of a random walk of the noise
     at_rest = np.abs(rec.xs[moving] - bias0) <= rec.band
@@ -107,8 +107,8 @@ def reduce_rate(series: TimeSeries) -> RateAnalysis:
         # offset only: removing a drift too would tilt a hold)
         turns = reduce_series(_path(series, t[moving], angle - first.offset), strict=False, min_noise=wander)
     except DataError as exc:
-        raise DataError(f"{exc.args[0] if exc.args else exc} (the angle's turning points are the zeros of the "
-                        "angular velocity, found on its running integral)", where) from None
+        raise DataError(f"{getattr(exc, 'message', exc)} (the angle's turning points are the zeros of the "
+                        "angular velocity, found on its running integral)", exc.where) from None
     stop = float(t[i_rest]) if i_rest < t.size else math.nan
     turns = replace(turns, stop_time=stop, rest_theta=math.nan, notes=list(turns.notes))
     centre = _bias(rec, turns.release_time, i_rest, bias0)
@@ -122,10 +122,21 @@ def reduce_rate(series: TimeSeries) -> RateAnalysis:
     notes += [n for n in rec.notes if n not in turns.notes]
     if centre.note:
         notes.append(centre.note.replace("the centre", "the rate's zero"))
-    # the integral's own end of motion is superseded by the rate's (above)
-    notes += [n for n in turns.notes if not n.startswith(("motion stopped at", "the swing faded below"))]
+    # the integral's own end of motion is superseded by the rate's, its drifting centre by the rate's zero
+    notes += [n for n in turns.notes
+              if not n.startswith(("motion stopped at", "the swing faded below", "the centre drifts"))]
     return RateAnalysis(turns, at_ref, centre.offset_stderr, centre.rate, centre.rate_stderr, centre.measured_rate,
                         rec.sigma, notes)
+
+
+def _extrema_centre(rec, stop: int) -> float:
+    """A first estimate of the rate's zero: the median midpoint of its smoothed extrema (the median of
+    the samples when it has fewer than three).  The samples' own median or mean is off by a good part
+    of the swing when the record holds a few periods of a decay."""
+    ext = alternating_extrema(rec.xs, rec.step, 0, stop)
+    if len(ext) < 3:
+        return float(np.median(rec.x[:stop]))
+    return float(np.median(centre_estimates(np.array([rec.xs[a] for a, _, _ in ext]))))
 
 
 def _path(series: TimeSeries, t: np.ndarray, angle: np.ndarray) -> TimeSeries:
