@@ -147,10 +147,13 @@ def read_cassy_text(path: str | Path, spec: RecordingSpec | None = None) -> Time
     settings = {s.split("=", 1)[0]: s.split("=", 1)[1] for n, s in lines if re.match(r"^[A-Z]+=", s)}
     body = [(n, s) for n, s in lines if n > head_line and not re.match(r"^[A-Z]+=", s)]
     rows = [split_fields(s, "\t") for _, s in body]
-    if rows and len(rows[-1]) < len(names):
+    if rows and len(rows[-1]) < len(names) and (len(rows) < 2 or len(rows[-1]) < len(rows[-2])):
         notes.append(f"the last row (line {body[-1][0]}) has {len(rows[-1])} of {len(names)} fields and was dropped as "
                      "truncated")
         rows, body = rows[:-1], body[:-1]
+    # a channel shorter than the time (an FFT's axis and spectrum, a derivative) ends in empty cells,
+    # or, last in the row, in no cells at all
+    rows = [r + [""] * (len(names) - len(r)) if len(r) < len(names) else r for r in rows]
     for r, (n, _) in zip(rows, body):
         if len(r) != len(names):
             raise DataError(f"expected {len(names)} fields ({', '.join(names)}), found {len(r)}", f"{where}:{n}")

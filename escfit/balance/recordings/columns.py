@@ -208,6 +208,8 @@ def _choose(cols: Columns, spec: RecordingSpec, rate: float | None) -> tuple[int
             hits = [i for i, r in enumerate(roles) if r == quantity and i != t]
             if n == 1 and roles[0] != "time":
                 hits = [0]
+            if len(hits) > 1:
+                hits = _measured_candidates(cols, hits)
             if len(hits) != 1:
                 what = "no column looks like" if not hits else "several columns could be"
                 other = _hint_other_quantities(cols, roles) if quantity == "angle" and not hits else ""
@@ -233,6 +235,53 @@ def _choose(cols: Columns, spec: RecordingSpec, rate: float | None) -> tuple[int
     if cols.kind(a) in _TEXT_KINDS + ("clock", "datetime"):
         raise DataError(f"column {cols.label(a)!r} holds {cols.kind(a)}s, not numbers; {hint}", where)
     return t, a
+
+
+_SPECTRUM_WORDS = ("fft", "fourier", "spektrum", "spectrum", "spectra", "psd", "frequenz", "frequency", "periodogram")
+_DERIVED_WORDS = ("mittel", "mean", "average", "avg", "smooth", "glätt", "glaett", "filter", "fit", "model", "theor",
+                  "energie", "energy", "ableitung", "derivative", "diff", "delta", "integral", "berechnet", "calc",
+                  "residu", "error", "fehler", "sigma", "std")
+_MEASURED_WORDS = {"weg", "s", "x", "y", "winkel", "alpha", "α", "phi", "φ", "theta", "θ", "angle", "position", "pos",
+                   "displacement", "auslenkung", "elongation", "encoder"}
+
+
+def _measured_candidates(cols: Columns, hits: list[int]) -> list[int]:
+    """Of several columns that could hold the signal, those that are the measured one (a note says why
+    the others were passed over): a column with fewer readings than the table's longest (an FFT's
+    axis or spectrum, a derivative's or a fit's column padded with empty cells) or named as a
+    spectrum is no candidate; of the rest, a plainly named measured quantity (CASSY's ``Winkel``,
+    ``Weg``, ``s``, ``x``, ``alpha``) is preferred over derived ones (a mean, a fit, an energy)."""
+    counts = {i: _readings(cols, i) for i in range(cols.ncols) if cols.kind(i) not in _TEXT_KINDS}
+    longest = max(counts.values(), default=0)
+    passed = []
+    kept = []
+    for i in hits:
+        low = cols.label(i).lower()
+        if any(w in low for w in _SPECTRUM_WORDS):
+            passed.append(f"{cols.label(i)!r} (a spectrum)")
+        elif counts.get(i, 0) < 0.95 * longest - 2:
+            passed.append(f"{cols.label(i)!r} ({counts.get(i, 0)} readings of {longest})")
+        else:
+            kept.append(i)
+    if len(kept) > 1:
+        words = {i: set(re.findall(r"[^\W\d_]+", re.sub(r"\s*[(\[/].*$", "", cols.label(i).lower()))) for i in kept}
+        plain = [i for i in kept if words[i] & _MEASURED_WORDS and not any(d in w for w in words[i] for d in _DERIVED_WORDS)]
+        if len(plain) == 1:
+            passed += [f"{cols.label(i)!r} (derived)" for i in kept if i != plain[0]]
+            kept = plain
+    if len(kept) == 1 and passed:
+        cols.notes.append(f"column {cols.label(kept[0])!r} is the measured one; passed over: {', '.join(passed)}; "
+                          "set [recording] angle_column (or velocity_/displacement_column) to choose another")
+    return kept or hits
+
+
+def _readings(cols: Columns, i: int) -> int:
+    """How many cells of column i hold a reading (not empty, not NaN)."""
+    if i in cols.values:
+        return int(np.isfinite(np.asarray(cols.values[i], dtype=float)).sum())
+    if i >= len(cols.cells):
+        return 0
+    return sum(1 for c in cols.cells[i] if c.strip() and c.strip().strip('"').lower() not in ("nan", "-nan", "na"))
 
 
 def _shown(cols: Columns) -> list[str]:

@@ -1,0 +1,92 @@
+"""Real instruments' exports that put more in a file than the recording: a CASSY table with an FFT
+and derived columns, Vernier/Logger Pro runs side by side, files escfit cannot read, a column of
+angles without a clock, escfit's own text formats through the shared tokenizer.
+
+Each layout is written here as its program writes it (the program and the real file it was built
+from are named in docs/recordings.md, "Exports with more than the recording"); the signal is a known
+damped cosine and every reader must return it to the written precision.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from escfit.core.errors import DataError
+from escfit.balance.recordings.detect import read_with_spec
+from escfit.balance.recordings.recording_spec import RecordingSpec
+
+
+def decay(n=800, rate=100.0, amp=0.8):
+    t = np.arange(n) / rate
+    return t, amp * np.exp(-0.2 * t) * np.cos(2 * math.pi * 1.3 * t)
+
+
+def write(tmp_path, name, data):
+    p = tmp_path / name
+    p.write_bytes(data if isinstance(data, bytes) else data.encode("utf-8"))
+    return p
+
+
+def _comma(v: float) -> str:
+    return "" if not np.isfinite(v) else repr(float(v)).replace(".", ",")
+
+
+def _cassy_columns(t, a):
+    """The channels of a CASSY Lab 2 torsion-pendulum measurement (PhyPraKit's Drehpendel.labx):
+    time, the FFT's frequency axis and the angle's spectrum (shorter than the time: 2^k + 1 bins),
+    the angle, a running mean of it and its derivative, angles in degrees."""
+    deg = np.degrees(a)
+    nfft = 2 ** int(math.log2(t.size)) // 2 + 1
+    f = np.arange(nfft) / (t[1] - t[0]) / (2 * (nfft - 1))
+    spec = np.abs(np.fft.rfft(deg, 2 * (nfft - 1)))[:nfft] * 2 / deg.size
+    mean = np.convolve(deg, np.ones(5) / 5, mode="same")
+    rate = np.r_[np.nan, np.diff(deg) / np.diff(t)]
+    return [("Zeit", "t", "s", t), ("Frequenz", "f", "Hz", f), ("Fourier-Transformation von α", "F_α", "°", spec),
+            ("Winkel", "α", "°", deg), ("Winkel gemittelt", "α_m", "°", mean),
+            ("Winkelgeschwindigkeit", "ω", "°/s", rate)]
+
+
+def _cassy_text(cols) -> str:
+    """CASSY Lab 2's text export (as PhyPraKit's Cassy.txt): BOM, MIN=/DEF= lines, tabs, decimal
+    commas, CR CR LF; a channel shorter than the time leaves its cells empty."""
+    n = max(v.size for *_, v in cols)
+    lines = ["MIN=" + "\t".join("0" for _ in cols), "MAX=" + "\t".join("1" for _ in cols),
+             "DEF=" + "\t".join(f'"{q}" {s} / {u}' for q, s, u, _ in cols)]
+    lines += ["\t".join(_comma(v[i]) if i < v.size else "" for *_, v in cols) for i in range(n)]
+    return "\ufeff" + "\r\r\n".join(lines) + "\r\r\n"
+
+
+def test_cassy_text_export_with_fft_and_derived_columns_reads_the_angle(tmp_path):
+    t, a = decay()
+    p = write(tmp_path, "drehpendel.txt", _cassy_text(_cassy_columns(t, a)))
+    ts = read_with_spec(p, None)
+    np.testing.assert_allclose(ts.theta, a, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(ts.time, t, atol=1e-12)
+    notes = ts.meta["notes"]
+    assert "column 'Winkel' is the measured one" in notes
+    assert "'Fourier-Transformation von α' (a spectrum)" in notes and "'Winkel gemittelt' (derived)" in notes
+
+
+def test_cassy_csv_with_symbol_headers_passes_over_short_columns(tmp_path):
+    """The same table saved as CSV from a spreadsheet (semicolons, decimal commas, ``symbol / unit``
+    headers): the spectrum is known only by being shorter than the time."""
+    t, a = decay()
+    cols = [c for c in _cassy_columns(t, a) if c[0] != "Winkel gemittelt"]
+    head = ";".join(f"{s} / {u}" for _, s, u, _ in cols)
+    rows = [";".join(_comma(v[i]) if i < v.size else "" for *_, v in cols) for i in range(t.size)]
+    p = write(tmp_path, "drehpendel.csv", head + "\r\n" + "\r\n".join(rows) + "\r\n")
+    ts = read_with_spec(p, None)
+    np.testing.assert_allclose(ts.theta, a, rtol=1e-12, atol=1e-15)
+    assert f"'F_α / °' ({2 ** int(math.log2(t.size)) // 2 + 1} readings of {t.size})" in ts.meta["notes"]
+
+
+def test_two_measured_angles_are_still_refused_with_the_candidates(tmp_path):
+    t, a = decay(n=200)
+    p = write(tmp_path, "two.csv", "t / s;Winkel 1 / °;Winkel 2 / °\n" + "".join(
+        f"{ti};{math.degrees(ai)};{2 * math.degrees(ai)}\n" for ti, ai in zip(t, a)))
+    with pytest.raises(DataError, match=r"several columns could be the angle in the header .*Winkel 1.*Winkel 2"):
+        read_with_spec(p, None)
+    np.testing.assert_allclose(read_with_spec(p, RecordingSpec(angle_column="Winkel 2 / °")).theta, 2 * a, rtol=1e-12)
