@@ -90,3 +90,32 @@ def test_two_measured_angles_are_still_refused_with_the_candidates(tmp_path):
     with pytest.raises(DataError, match=r"several columns could be the angle in the header .*Winkel 1.*Winkel 2"):
         read_with_spec(p, None)
     np.testing.assert_allclose(read_with_spec(p, RecordingSpec(angle_column="Winkel 2 / °")).theta, 2 * a, rtol=1e-12)
+
+
+# -- Vernier / Logger Pro runs side by side ---------------------------------------------------------------
+@pytest.mark.parametrize("names", [
+    ['"Run 1: Time (s)"', '"Run 1: Position (m)"', '"Run 2: Time (s)"', '"Run 2: Position (m)"'],  # Graphical Analysis
+    ['"Data Set 1:Time(s)"', '"Data Set 1:Position(m)"', '"Data Set 2:Time(s)"', '"Data Set 2:Position(m)"'],
+    ["Time 1 (s)", "Position 1 (m)", "Time 2 (s)", "Position 2 (m)"],  # Logger Pro's numbered columns
+])
+def test_motion_detector_runs_side_by_side(tmp_path, names):
+    t, x = decay(n=300, amp=0.05)
+    short = 200  # the second run stopped earlier: its cells end empty
+    rows = "".join(f"{ti},{xi},{ti if i < short else ''},{-xi if i < short else ''}\n"
+                   for i, (ti, xi) in enumerate(zip(t, x)))
+    p = write(tmp_path, "motion.csv", ",".join(names) + "\n" + rows)
+    with pytest.raises(DataError, match=r"motion.csv:1: 2 runs side by side \((Run|Data Set) 1, (Run|Data Set) 2\); "
+                                        r"set \[recording\] run \(1-based\)") as info:
+        read_with_spec(p, RecordingSpec(displacement_column=2))
+    assert "\n" not in str(info.value)
+    ts = read_with_spec(p, RecordingSpec(run=2, displacement_column=2))
+    assert ts.quantity == "displacement" and ts.time.size == short
+    np.testing.assert_allclose(ts.theta, -x[:short], rtol=1e-12)
+    np.testing.assert_allclose(read_with_spec(p, RecordingSpec(run=1, displacement_column=2)).theta, x, rtol=1e-12)
+
+
+def test_numbered_angle_columns_under_one_clock_are_not_runs(tmp_path):
+    t, a = decay(n=200)
+    p = write(tmp_path, "two.csv", "Time (s),Angle 1 (deg),Angle 2 (deg)\n" + "".join(
+        f"{ti},{math.degrees(ai)},{-math.degrees(ai)}\n" for ti, ai in zip(t, a)))
+    np.testing.assert_allclose(read_with_spec(p, RecordingSpec(angle_column=3)).theta, -a, rtol=1e-12)
