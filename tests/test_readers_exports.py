@@ -10,6 +10,7 @@ damped cosine and every reader must return it to the written precision.
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -119,3 +120,52 @@ def test_numbered_angle_columns_under_one_clock_are_not_runs(tmp_path):
     p = write(tmp_path, "two.csv", "Time (s),Angle 1 (deg),Angle 2 (deg)\n" + "".join(
         f"{ti},{math.degrees(ai)},{-math.degrees(ai)}\n" for ti, ai in zip(t, a)))
     np.testing.assert_allclose(read_with_spec(p, RecordingSpec(angle_column=3)).theta, -a, rtol=1e-12)
+
+
+# -- files escfit cannot read: one line, exit 2 --------------------------------------------------------------
+def _zip(path, members):
+    import zipfile
+
+    with zipfile.ZipFile(path, "w") as zf:
+        for name, data in members.items():
+            zf.writestr(name, data)
+    return path
+
+
+def _foreign_files(tmp_path):
+    """The first bytes of each kind as its program writes them (the formats' magic numbers)."""
+    import gzip
+
+    ole2 = b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1" + bytes(504)  # a compound document's header sector
+    return [
+        (write(tmp_path, "run.xls", ole2), r"an Excel 97-2003 workbook \(.xls.*save the sheet as CSV"),
+        (_zip(tmp_path / "run.xlsx", {"[Content_Types].xml": "<Types/>", "xl/workbook.xml": "<workbook/>"}),
+         r"an Excel workbook \(.xlsx\): export it as CSV"),
+        (_zip(tmp_path / "run.ods", {"mimetype": "application/vnd.oasis.opendocument.spreadsheet",
+                                     "content.xml": "<x/>"}), r"an OpenDocument file \(.ods\): save the sheet as CSV"),
+        (_zip(tmp_path / "pendel.labx", {"pendel.labx": "<cassylab/>"}),
+         r"a CASSY Lab file in a zip archive \(pendel.labx\): extract the .labx"),
+        (_zip(tmp_path / "run.gambl", {"data.json": "{}"}), r"a Vernier Graphical Analysis file \(.gambl\): export"),
+        (write(tmp_path, "run.cmbl", gzip.compress(b'<?xml version="1.0"?><Document/>')),
+         r"a compressed Logger Pro file \(.cmbl\): open it in Logger Pro and File > Export As > CSV"),
+        (write(tmp_path, "beats.wav", b"RIFF\x24\x08\x00\x00WAVEfmt " + bytes(64)),
+         r"a sound recording \(WAV\): escfit does not read audio"),
+        (write(tmp_path, "seiko.dat", bytes(range(256)) * 2),
+         r"a binary file of unknown layout .*save it as CSV \(or text\) from the program that wrote it"),
+    ]
+
+
+def test_files_escfit_cannot_read_get_one_line_and_exit_2(tmp_path):
+    from click.testing import CliRunner
+
+    from escfit.cli.main import cli
+
+    scene = write(tmp_path, "s.toml", 'model = "balance"\n[oscillator]\nomega0 = 5.0\n[effects.viscous]\nC = 0.1\n')
+    for path, message in _foreign_files(tmp_path):
+        for extra in ([], ["--format", "raw"]):
+            out = tmp_path / "out.h5"
+            result = CliRunner().invoke(cli, ["fit", str(path), "--scene", str(scene), "--out", str(out), *extra])
+            lines = [s for s in result.output.splitlines() if s.strip()]
+            assert result.exit_code == 2 and len(lines) == 1, (path.name, extra, result.output)
+            assert lines[0].startswith(f"escfit: error: {path}: ") and re.search(message, lines[0]), lines
+            assert not out.exists()
