@@ -169,3 +169,34 @@ def test_files_escfit_cannot_read_get_one_line_and_exit_2(tmp_path):
             assert result.exit_code == 2 and len(lines) == 1, (path.name, extra, result.output)
             assert lines[0].startswith(f"escfit: error: {path}: ") and re.search(message, lines[0]), lines
             assert not out.exists()
+
+
+# -- one column of angles -----------------------------------------------------------------------------------
+@pytest.mark.parametrize("head", ["", "Angle (deg)\n"])
+def test_a_column_of_angles_asks_for_the_sample_rate_and_reads_with_it(tmp_path, head):
+    from click.testing import CliRunner
+
+    from escfit.cli.main import cli
+
+    t, a = decay(n=500, rate=50.0)
+    p = write(tmp_path, "angles.txt", head + "".join(f"{math.degrees(ai):.6f}\n" for ai in a))
+    with pytest.raises(DataError, match=r"angles.txt:\d: a single column .*and no time: set the samples per second "
+                                        r"with \[recording\] sample_rate \(e.g. sample_rate = \"50 Hz\"\) or "
+                                        r"--sample-rate 50$"):
+        read_with_spec(p, RecordingSpec(angle_unit="deg"))
+    ts = read_with_spec(p, RecordingSpec(angle_unit="deg", sample_rate=50.0))
+    np.testing.assert_allclose(ts.time, t, atol=1e-12)
+    np.testing.assert_allclose(ts.theta, a, atol=math.radians(1e-6))
+    scene = write(tmp_path, "s.toml", 'model = "balance"\n[oscillator]\nomega0 = 8.0\n[effects.viscous]\nC = 0.4\n')
+    result = CliRunner().invoke(cli, ["fit", str(p), "--scene", str(scene), "--out", str(tmp_path / "o.h5")])
+    assert result.exit_code == 2 and "--sample-rate 50" in result.output and len(result.output.strip().splitlines()) == 1
+    # with the rate given the fit recovers the written decay: amplitude e^(-0.2 t) is C = 0.4 1/s, and
+    # the period 1/1.3 s (the turning-point fit holds omega0 at the measured period)
+    scene = write(tmp_path, "free.toml", 'model = "balance"\n[oscillator]\nomega0 = { value = 8.0, vary = true, '
+                  'min = 5, max = 11 }\n[effects.viscous]\nC = { value = 0.3, vary = true, min = 0, max = 2 }\n')
+    from escfit.inference import fit
+
+    res = fit(scene, str(p), n_starts=1, recording={"sample_rate": "50 Hz", "angle_unit": "deg"})
+    assert res.summary()["viscous.C"]["estimate"] == pytest.approx(0.4, rel=1e-3)
+    period = float(re.search(r"period ([0-9.]+) s", " ".join(res.notes)).group(1))
+    assert period == pytest.approx(1 / 1.3, rel=1e-3)

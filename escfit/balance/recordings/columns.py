@@ -221,6 +221,8 @@ def _choose(cols: Columns, spec: RecordingSpec, rate: float | None) -> tuple[int
             hits = hits or [i for i in clocks if i != a]
             if len(hits) > 1:
                 hits = _finest_clock(cols, hits)
+            if not hits and numeric == [a]:
+                raise DataError(_NO_CLOCK.format(what=f"a single column ({cols.label(a)!r})"), first)
             if len(hits) != 1:
                 what = "no column looks like" if not hits else "several columns could be"
                 raise DataError(f"{what} the time in the header {cols.names}; set [recording] time_column "
@@ -228,8 +230,10 @@ def _choose(cols: Columns, spec: RecordingSpec, rate: float | None) -> tuple[int
                                 f"{where}:{cols.header_line}" if cols.header_line else where)
             t = hits[0]
     if t is None and not uniform:
-        what = "a single column of angles" if n == 1 else f"{quantity.replace('_', ' ')} column {a + 1}"
-        raise DataError(f"no clock for {what}: set [recording] sample_rate or time_column", first)
+        if numeric == [a]:
+            raise DataError(_NO_CLOCK.format(what="a single column of numbers"), first)
+        raise DataError(f"no clock for {quantity.replace('_', ' ')} column {a + 1}: set [recording] sample_rate "
+                        "or time_column", first)
     if t == a:
         raise DataError(f"the time and the {quantity.replace('_', ' ')} are the same column ({a + 1})", where)
     if cols.kind(a) in _TEXT_KINDS + ("clock", "datetime"):
@@ -282,6 +286,10 @@ def _readings(cols: Columns, i: int) -> int:
     if i >= len(cols.cells):
         return 0
     return sum(1 for c in cols.cells[i] if c.strip() and c.strip().strip('"').lower() not in ("nan", "-nan", "na"))
+
+
+_NO_CLOCK = ("{what} and no time: set the samples per second with [recording] sample_rate (e.g. "
+             "sample_rate = \"50 Hz\") or --sample-rate 50")
 
 
 def _shown(cols: Columns) -> list[str]:
