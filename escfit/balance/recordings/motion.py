@@ -108,7 +108,10 @@ def faded_end(rec, times: np.ndarray, values: np.ndarray) -> int:
     amp = _amplitudes(values)
     big = float(np.max(amp))
     for i in bad:
-        if amp[i] <= max(0.1 * big, 3.0 * rec.band) and amp[i] < 0.5 * np.max(amp[:i + 1]):
+        # faded: small against what came before and nothing large after (a hand's jitter while the
+        # oscillator is held before its release is small too, but the swing follows it)
+        if amp[i] <= max(0.1 * big, 3.0 * rec.band) and amp[i] < 0.5 * np.max(amp[:i + 1]) \
+                and np.max(amp[i + 1:], initial=0.0) < 0.5 * np.max(amp[:i + 1]):
             rec.notes.append(f"turning points from t = {times[i + 1]:.4g} s on left out: the swing had faded to "
                              f"{rec.show(amp[i], 2)} and their spacing is irregular (noise, not motion)")
             return int(i) + 1
