@@ -263,3 +263,37 @@ def test_tracker_track_held_before_the_release(tmp_path, hanging_first):
     for name, value in truth.items():
         row = summary[name]
         assert row["lo95"] <= value <= row["hi95"], (name, value, row["lo95"], row["hi95"])
+
+
+# -- escfit's own text formats through the shared tokenizer ------------------------------------------------------
+@pytest.mark.parametrize("end", ["\r\n", "\r", "\r\r\n"])
+def test_escfit_formats_read_any_line_end_and_name_the_editors_line(tmp_path, end):
+    """A unit curve and a pulse train saved with Windows, old-Mac or CASSY-style line ends read as
+    with LF, and an error names the line an editor shows (the tokenizer's lines)."""
+    from escfit.balance.recordings.pulses import read_pulses
+    from escfit.balance.recordings.unit_curve import read_unit_curve
+
+    curve = ["# notch_deg: 6", "swing,amplitude_deg", *(f"{k},{200 * math.exp(-0.05 * k):.4f}" for k in range(12))]
+    ref = read_unit_curve(write(tmp_path, "lf.csv", "\n".join(curve) + "\n"))
+    got = read_unit_curve(write(tmp_path, "ends.csv", end.join(curve) + end))
+    np.testing.assert_array_equal(got.value, ref.value)
+    np.testing.assert_allclose(np.degrees(got.value[:2]), [200.0, 200 * math.exp(-0.05)], atol=1e-4)
+    np.testing.assert_array_equal(got.swing, ref.swing)
+    pulses = ["# notches: 60", "time_s,kind", '0.0702,"notch"', "0.1087,zero", "0.1501,notch"]
+    train = read_pulses(write(tmp_path, "p.csv", end.join(pulses) + end))
+    np.testing.assert_allclose(train.time, [0.0702, 0.1087, 0.1501])
+    assert train.zero.tolist() == [False, True, False]
+    bad = curve[:5] + ["5,1,2e"] + curve[6:]
+    with pytest.raises(DataError, match=r"bad.csv:6"):
+        read_unit_curve(write(tmp_path, "bad.csv", end.join(bad) + end))
+
+
+def test_escfit_formats_still_refuse_what_they_refused(tmp_path):
+    """The tokenizer does not widen what escfit's own formats accept: numbers are plain (no decimal
+    comma), the text UTF-8, the fields comma-separated."""
+    from escfit.balance.recordings.unit_curve import read_unit_curve
+
+    with pytest.raises(DataError, match=r"dc.csv:3: expected 1 fields \(swing;amplitude_deg\), found 2"):
+        read_unit_curve(write(tmp_path, "dc.csv", "# notch_deg: 6\nswing;amplitude_deg\n0;199,5\n1;190,2\n"))
+    with pytest.raises(DataError, match=r"latin.csv:2: not UTF-8 text"):
+        read_unit_curve(write(tmp_path, "latin.csv", "swing,amplitude_deg\n# \xb0\n0,1\n".encode("latin-1")))
