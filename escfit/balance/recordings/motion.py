@@ -280,7 +280,7 @@ def envelope(rec) -> tuple[np.ndarray, np.ndarray]:
     """
     t, xs = rec.t, rec.xs
     width = 1.5 * rec.period
-    starts = np.arange(t[0], t[-1] - width + 1e-12, 0.25 * rec.period)
+    starts = np.arange(t[0], t[-1] - width + 1e-9 * width, 0.25 * rec.period)
     lo = np.searchsorted(t, starts)
     hi = np.searchsorted(t, starts + width)
     return starts, np.array([0.5 * float(np.ptp(xs[a:b])) if b > a else 0.0 for a, b in zip(lo, hi)])
