@@ -143,8 +143,8 @@ def _foreign_files(tmp_path):
          r"an Excel workbook \(.xlsx\): export it as CSV"),
         (_zip(tmp_path / "run.ods", {"mimetype": "application/vnd.oasis.opendocument.spreadsheet",
                                      "content.xml": "<x/>"}), r"an OpenDocument file \(.ods\): save the sheet as CSV"),
-        (_zip(tmp_path / "pendel.labx", {"pendel.labx": "<cassylab/>"}),
-         r"a CASSY Lab file in a zip archive \(pendel.labx\): extract the .labx"),
+        (_zip(tmp_path / "pendel.labx", {"a.labx": "<cassylab/>", "b.labx": "<cassylab/>"}),
+         r"a zip archive holding no single CASSY Lab data file \(a.labx, b.labx\): extract the .labx"),
         (_zip(tmp_path / "run.gambl", {"data.json": "{}"}), r"a Vernier Graphical Analysis file \(.gambl\): export"),
         (write(tmp_path, "run.cmbl", gzip.compress(b'<?xml version="1.0"?><Document/>')),
          r"a compressed Logger Pro file \(.cmbl\): open it in Logger Pro and File > Export As > CSV"),
@@ -297,3 +297,19 @@ def test_escfit_formats_still_refuse_what_they_refused(tmp_path):
         read_unit_curve(write(tmp_path, "dc.csv", "# notch_deg: 6\nswing;amplitude_deg\n0;199,5\n1;190,2\n"))
     with pytest.raises(DataError, match=r"latin.csv:2: not UTF-8 text"):
         read_unit_curve(write(tmp_path, "latin.csv", "swing,amplitude_deg\n# \xb0\n0,1\n".encode("latin-1")))
+
+
+def test_a_compressed_cassy_labx_reads_as_the_plain_one(tmp_path):
+    """CASSY Lab 2 saves a .labx compressed as a zip whose data.xml is the XML."""
+    from escfit.balance.recordings.detect import detect_format
+
+    from .test_readers_formats import _labx
+
+    t, a = decay(n=300)
+    plain = write(tmp_path, "plain.labx", _labx(t, a))
+    packed = _zip(tmp_path / "packed.labx", {"data.xml": _labx(t, a)})
+    assert detect_format(packed) == "cassy"
+    got, ref = read_with_spec(packed, None), read_with_spec(plain, None)
+    np.testing.assert_array_equal(got.theta, ref.theta)
+    np.testing.assert_allclose(got.theta, a, rtol=1e-15)
+    assert "compressed, data.xml" in got.meta["source_format"]

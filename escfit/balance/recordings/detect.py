@@ -18,7 +18,7 @@ from ...core.csvtable import refuses_unreadable
 from ...core.errors import DataError
 from ...core.tabletext import decode_lenient, numbered_lines, split_fields
 from .cassy import read_cassy_labx, read_cassy_text, sniff_cassy_text
-from .foreign import refuse_foreign
+from .foreign import cassy_member, refuse_foreign, zip_names
 from .formats_list import ESCFIT_FORMATS, FORMAT_NAMES, TIMEGRAPHER_FORMATS, TIMESERIES_FORMATS
 from .labfiles import read_arduino_log, read_cmbl, read_run_csv, sniff_arduino_log, sniff_run_csv
 from .lvm import read_lvm, sniff_lvm
@@ -63,8 +63,8 @@ def candidates(path: str | Path) -> list[str]:
         raise DataError("empty file (no header and no rows)", str(path))
     raw = p.read_bytes()[:8]
     refuse_foreign(p)  # workbooks, compressed or zipped instrument files, audio, unknown binaries
-    if raw.startswith(b"PK\x03\x04"):
-        return ["phyphox"]  # a zip that passed holds CSV files
+    if raw.startswith(b"PK\x03\x04"):  # a zip that passed: a compressed CASSY file or phyphox's CSV files
+        return ["cassy"] if cassy_member(zip_names(p), p.suffix.lower()) is not None else ["phyphox"]
     if raw.startswith(b"MATLAB") or p.suffix.lower() == ".mat":
         return ["raw"]
     if kind == "binary" and not raw.startswith((b"\xff\xfe", b"\xfe\xff")):

@@ -3,13 +3,14 @@ the file is and what to export instead.
 
 A spreadsheet workbook (Excel ``.xlsx`` and ``.xls``, OpenDocument ``.ods``), a compressed or
 zipped instrument file (Logger Pro ``.cmbl`` saved compressed, Graphical Analysis ``.gambl``, a
-CASSY ``.labx`` in a zip), a sound file, a PDF and any other binary layout (a timegrapher's or a
+zip without a single CASSY data file), a sound file, a PDF and any other binary layout (a timegrapher's or a
 logger's own format) are not tables of numbers; no well-kept reader for the workbooks is
 installed (openpyxl is not a dependency), so the user is told to save the data as CSV from the
 program.  The signatures are the formats' own magic numbers: zip ``PK\\x03\\x04`` (with
 ``[Content_Types].xml`` and ``xl/`` for Office Open XML, ``mimetype`` for OpenDocument), OLE2
 ``D0 CF 11 E0 A1 B1 1A E1`` (Excel 97-2003), gzip ``1F 8B``, xz ``FD 37 7A 58 5A 00``, RIFF/WAVE,
-``%PDF``, HDF5 ``\\x89HDF``.  MATLAB files and phyphox's zip are readable and pass.
+``%PDF``, HDF5 ``\\x89HDF``.  MATLAB files, phyphox's zip and a compressed CASSY ``.labx`` (a zip
+whose ``data.xml`` is the XML) are readable and pass.
 
 This module imports nothing of the readers; :mod:`escfit.balance.recordings.detect` and
 :mod:`escfit.balance.recordings.rawseries` call :func:`refuse_foreign` first.
@@ -22,7 +23,7 @@ from pathlib import Path
 
 from ...core.errors import DataError
 
-__all__ = ["refuse_foreign"]
+__all__ = ["refuse_foreign", "cassy_member", "zip_names"]
 
 _AS_CSV = "save it as CSV (or text) from the program that wrote it and read that file"
 _OLE2 = b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1"
@@ -75,6 +76,24 @@ def refuse_foreign(path: str | Path) -> None:
         raise DataError(why, str(path))
 
 
+def zip_names(path: str | Path) -> list[str]:
+    """The members of a zip archive (a damaged one is refused in one line)."""
+    try:
+        with zipfile.ZipFile(path) as zf:
+            return zf.namelist()
+    except (zipfile.BadZipFile, OSError):
+        raise DataError("a damaged .zip file (cut short?): copy or export it again", str(path)) from None
+
+
+def cassy_member(names: list[str], suffix: str) -> str | None:
+    """The member of a zip holding a compressed CASSY Lab 2 ``.labx`` (its XML is ``data.xml``), or
+    the zip's only ``.labx``; None when there is none or several."""
+    if "data.xml" in names and suffix == ".labx":
+        return "data.xml"
+    labx = [n for n in names if n.lower().endswith(".labx")]
+    return labx[0] if len(labx) == 1 else None
+
+
 _LOGGER_PRO = "open it in Logger Pro and File > Export As > CSV (or save it uncompressed), then read that"
 
 
@@ -95,11 +114,13 @@ def _zip(p: Path, suffix: str) -> str | None:
     if suffix == ".gambl":
         return ("a Vernier Graphical Analysis file (.gambl): export the data from Graphical Analysis as CSV "
                 "(File > Export > CSV) and read that")
+    if cassy_member(names, suffix) is not None:
+        return None  # a compressed .labx: read by the CASSY reader
     labx = [n for n in names if n.lower().endswith((".labx", ".lab"))]
     if labx or suffix == ".labx":
-        inner = f" ({labx[0]})" if labx else ""
-        return (f"a CASSY Lab file in a zip archive{inner}: extract the .labx from it, or in CASSY Lab 2 save it "
-                "uncompressed or export the table as text, and read that")
+        inner = f" ({', '.join(labx[:3])})" if labx else f" ({', '.join(names[:3])})"
+        return (f"a zip archive holding no single CASSY Lab data file{inner}: extract the .labx from it, or in "
+                "CASSY Lab 2 export the table as text, and read that")
     if any(n.endswith(".csv") for n in lower):
         return None  # phyphox's export: read by its reader
     shown = ", ".join(names[:4]) + (", ..." if len(names) > 4 else "")
