@@ -313,3 +313,26 @@ def test_a_compressed_cassy_labx_reads_as_the_plain_one(tmp_path):
     np.testing.assert_array_equal(got.theta, ref.theta)
     np.testing.assert_allclose(got.theta, a, rtol=1e-15)
     assert "compressed, data.xml" in got.meta["source_format"]
+
+
+def test_init_picks_a_run_with_run_and_refuses_without(tmp_path):
+    import tomllib
+
+    from click.testing import CliRunner
+
+    from escfit.cli.main import cli
+
+    t, x = decay(n=400, rate=50.0, amp=0.05)
+    p = write(tmp_path, "motion.csv", "Time 1 (s),Position 1 (m),Time 2 (s),Position 2 (m)\n" + "".join(
+        f"{ti},{xi},{ti},{2 * xi}\n" for ti, xi in zip(t, x)))
+    runner = CliRunner()
+    refused = runner.invoke(cli, ["init", str(p), "--out", str(tmp_path / "a.toml")])
+    assert refused.exit_code == 2 and len(refused.output.strip().splitlines()) == 1
+    assert "2 runs side by side (Run 1, Run 2); set [recording] run (1-based)" in refused.output
+    assert not (tmp_path / "a.toml").exists()
+    done = runner.invoke(cli, ["init", str(p), "--run", "2", "--out", str(tmp_path / "b.toml")])
+    assert done.exit_code == 0, done.output
+    doc = tomllib.loads((tmp_path / "b.toml").read_text())
+    assert doc["recording"]["run"] == 2 and doc["recording"]["displacement_column"] == "Position (m)"
+    assert doc["oscillator"]["coordinate"] == "linear"
+    assert "amplitude about the centre 0.1 m at the release" in done.output  # run 2 is twice run 1

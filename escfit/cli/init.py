@@ -21,7 +21,7 @@ import click
 __all__ = ["init", "offer_starter", "write_starter", "interactive"]
 
 RECORDING_OPTIONS = ("time_column", "sample_rate", "angle_column", "angle_unit", "counts_per_turn", "scale", "start",
-                     "stop", "velocity_column", "velocity_unit", "displacement_column", "displacement_unit")
+                     "stop", "velocity_column", "velocity_unit", "displacement_column", "displacement_unit", "run")
 
 
 def interactive() -> bool:
@@ -134,6 +134,8 @@ def next_command(data: str, scene: Path) -> str:
 @click.option("--displacement-column", default=None,
               help="[recording] displacement_column: the column of a linear displacement (a motion detector).")
 @click.option("--displacement-unit", default=None, help="[recording] displacement_unit: m, cm, mm, or V with --scale.")
+@click.option("--run", type=click.IntRange(min=1), default=None,
+              help="[recording] run: which run (from 1) of a file holding several side by side (Vernier, PASCO, CASSY).")
 def init(data, out, kind, force, fmt, **options):
     """Write a starter scene that fits DATA (a recording of your own), and say what to run next.
 
