@@ -115,6 +115,27 @@ def test_motion_detector_runs_side_by_side(tmp_path, names):
     np.testing.assert_allclose(read_with_spec(p, RecordingSpec(run=1, displacement_column=2)).theta, x, rtol=1e-12)
 
 
+def test_motion_detector_export_with_velocity_and_acceleration(tmp_path):
+    """A Vernier motion detector's CSV as a real export shows it (20 Hz, six decimals, unquoted
+    ``Run 1: Time (s),Run 1: Position (m),Run 1: Velocity (m/s),Run 1: Acceleration (m/s^2)``): the
+    linear velocity is not an angular one; with displacement_column the position is read in m."""
+    t, x = decay(n=300, rate=20.0, amp=0.05)
+    x = 0.18 + x  # the detector measures the distance to the mass
+    v, acc = np.gradient(x, t), np.gradient(np.gradient(x, t), t)
+    head = ",".join(f"Run {r}: {q}" for r in (1, 2) for q in ("Time (s)", "Position (m)", "Velocity (m/s)",
+                                                             "Acceleration (m/s^2)"))
+    rows = "".join(",".join(f"{c:.6f}" for c in (ti, xi, vi, ai, ti, xi, vi, ai)) + "\n"
+                   for ti, xi, vi, ai in zip(t, x, v, acc))
+    p = write(tmp_path, "detector.csv", head + "\n" + rows)
+    with pytest.raises(DataError, match=r"2 runs side by side \(Run 1, Run 2\)"):
+        read_with_spec(p, None)
+    with pytest.raises(DataError, match=r"no column looks like the angle .*'Position \(m\)' looks like displacement: "
+                                        r"set \[recording\] displacement_column"):
+        read_with_spec(p, RecordingSpec(run=1))
+    ts = read_with_spec(p, RecordingSpec(run=1, displacement_column="Position (m)"))
+    np.testing.assert_allclose(ts.theta, x, atol=5e-7)
+
+
 def test_numbered_angle_columns_under_one_clock_are_not_runs(tmp_path):
     t, a = decay(n=200)
     p = write(tmp_path, "two.csv", "Time (s),Angle 1 (deg),Angle 2 (deg)\n" + "".join(
