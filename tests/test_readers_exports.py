@@ -357,3 +357,17 @@ def test_init_picks_a_run_with_run_and_refuses_without(tmp_path):
     assert doc["recording"]["run"] == 2 and doc["recording"]["displacement_column"] == "Position (m)"
     assert doc["oscillator"]["coordinate"] == "linear"
     assert "amplitude about the centre 0.1 m at the release" in done.output  # run 2 is twice run 1
+
+
+def test_cassy_path_symbol_s_is_a_length_not_the_time(tmp_path):
+    """CASSY names the path sensor's reading ``s`` (``s / m``): a length, never a second clock."""
+    t, a = decay(n=300)
+    s = 0.0919 * a  # the path over the wheel's radius is the angle (Drehpendel.labx's formula)
+    p = write(tmp_path, "weg.csv", "t / s;s / m;α / °\n" + "".join(
+        f"{_comma(ti)};{_comma(si)};{_comma(math.degrees(ai))}\n" for ti, si, ai in zip(t, s, a)))
+    ts = read_with_spec(p, None)
+    np.testing.assert_allclose(ts.time, t, atol=1e-15)
+    np.testing.assert_allclose(ts.theta, a, rtol=1e-12, atol=1e-15)
+    d = read_with_spec(p, RecordingSpec(displacement_column="s / m"))
+    assert d.quantity == "displacement"
+    np.testing.assert_allclose(d.theta, s, rtol=1e-12, atol=1e-15)

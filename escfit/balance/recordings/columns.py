@@ -32,7 +32,7 @@ __all__ = ["Columns", "series_from_columns", "signal_role"]
 
 _VELOCITY_WORDS = ("gyro", "omega", "angular velocity", "angular_velocity", "angularvelocity", "rotation rate",
                    "rate gyro", "angular speed", "winkelgeschwindigkeit", "rotation x", "rotation y", "rotation z")
-_DISPLACEMENT_WORDS = ("displacement", "position", "distance", "weg", "x", "y", "z")
+_DISPLACEMENT_WORDS = ("displacement", "position", "distance", "weg", "s", "x", "y", "z", "auslenkung", "elongation")
 _TEXT_KINDS = ("text", "flag", "date")
 
 
@@ -113,14 +113,15 @@ def signal_role(name: str, unit: str | None) -> str | None:
     dim = _dimension(unit)
     if dim == "angular_velocity":
         return "angular_velocity"
-    low = re.sub(r"\s*[(\[].*$", "", name.strip().lower())
+    low = re.sub(r"\s*([(\[].*|/.*)$", "", name.strip().lower())
     if any(w in low for w in _VELOCITY_WORDS) and dim in (None, "angular_velocity"):
         return "angular_velocity"
-    if role is not None and not (role == "angle" and dim == "length"):
+    # CASSY's path symbol s (``s / m``, ``Weg s_A1 / m``) is a length, not the time
+    if role is not None and not (role in ("angle", "time") and dim == "length"):
         return role
-    if dim == "length" and low in _DISPLACEMENT_WORDS:
+    if dim == "length" and (low in _DISPLACEMENT_WORDS or set(re.split(r"[\s_]+", low)) & set(_DISPLACEMENT_WORDS)):
         return "displacement"
-    return role
+    return None if role == "time" and dim == "length" else role
 
 
 def _dimension(unit: str | None) -> str | None:
