@@ -275,8 +275,8 @@ def _measured_candidates(cols: Columns, hits: list[int]) -> list[int]:
             passed += [f"{cols.label(i)!r} (derived)" for i in kept if i != plain[0]]
             kept = plain
     if len(kept) == 1 and passed:
-        cols.notes.append(f"column {cols.label(kept[0])!r} is the measured one; passed over: {', '.join(passed)}; "
-                          "set [recording] angle_column (or velocity_/displacement_column) to choose another")
+        cols.notes.append(f"column {cols.label(kept[0])!r} is the measured one, passing over {', '.join(passed)} "
+                          "([recording] angle_column, velocity_column or displacement_column chooses another)")
     return kept or hits
 
 
