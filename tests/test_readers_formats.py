@@ -140,9 +140,6 @@ def test_phyphox_zip_with_meta_and_a_pause(tmp_path):
     np.testing.assert_allclose(ts.theta, w, rtol=1e-9, atol=1e-12)
     assert ts.meta["phyphox_set"] == "Raw Data" and ts.meta["start_time"].startswith("2024-05-03 16:04:31.273")
     assert "paused and resumed 1 time(s) (t = 2.5 s" in ts.meta["notes"]
-    with pytest.raises(FitError, match="an angular velocity .* does not fit such an observation yet"):
-        from escfit.balance.recordings.series import refuse_unless_angle
-        refuse_unless_angle(ts)
 
 
 def test_xlsx_is_refused_with_what_to_do(tmp_path):

@@ -81,7 +81,12 @@ def _units_note(units: list[str], res=None) -> str:
     text = ("Display units: " + ", ".join(said) + "; the results file and its JSON and CSV summaries keep SI units "
             "(angles in radians).") if said else ""
     names = res.parameter_names if res is not None else []
-    if "observation.offset" in names or "observation.offset_rate" in names:
+    obs = res.group("observed_data") if res is not None else None
+    rate = obs is not None and obs["reading"].attrs.get("units") == "rad/s"
+    if rate and ("observation.offset" in names or "observation.offset_rate" in names):
+        text += (" The rate's zero (the sensor's bias) is what the sensor reads when the oscillator is still, and its "
+                 "drift how fast that moves; the files store the zero offset, observation.offset, which is minus it.")
+    elif "observation.offset" in names or "observation.offset_rate" in names:
         text += (" The centre of the swing is where the sensor reads when the oscillator is at its centre, and its "
                  "drift is how fast that moves, positive towards larger readings, as in the notes; the files store "
                  "the scale's zero offset, observation.offset, which is minus the centre.")

@@ -12,6 +12,12 @@ its drift, the end of motion.  Then, by the scene's ``[observation] model``:
 
 Either way the release angle comes from the record (:func:`~escfit.balance.problems.release.release_from_record`)
 and what was done is kept as plain-sentence ``notes``.
+
+A record of what was measured other than an angle (the series' ``quantity``) is fitted sample
+by sample: an angular velocity (a gyroscope, a velocity pickup) as theta'(t) of the scene's
+oscillator, its turning points the rate's zeros (:func:`~escfit.balance.recordings.rate.reduce_rate`),
+its sensor zero the bias measured from the rate's extrema; a displacement as the x(t) of a linear
+oscillator scene (``[oscillator] coordinate = "linear"``), analysed as an angle is, in m.
 """
 
 from __future__ import annotations
@@ -109,6 +115,10 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
     """
     scene = replace(scene, params=ParamSet(dict(scene.params.params)))  # the release is set on a copy
     notes = notes_of(series.meta)
+    quantity = getattr(series, "quantity", "angle")
+    _check_quantity(scene, quantity, series.source)
+    if quantity != "angle":
+        return _sampled_problem(scene, series, notes, solver, solver_options)
     model = dict(scene.extra.get("observation", {})).get("model", "amplitude")
     if readings == "amplitudes":
         curve = amplitude_readings_curve(series)
@@ -145,9 +155,63 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
     return problem
 
 
-def _count_note(tp) -> str:
-    return (f"{tp.swing.size} turning points after the reference one at t = {tp.release_time:.4g} s "
-            f"({math.degrees(tp.release_theta - tp.offset):+.2f} deg from the centre); period {tp.period:.5g} s")
+def _count_note(tp, quantity: str = "angle") -> str:
+    where = tp.release_theta - tp.offset
+    shown = f"{where:+.4g} m" if quantity == "displacement" else f"{math.degrees(where):+.2f} deg"
+    how = " (zeros of the angular velocity)" if quantity == "angular_velocity" else ""
+    return (f"{tp.swing.size} turning points{how} after the reference one at t = {tp.release_time:.4g} s "
+            f"({shown} from the centre); period {tp.period:.5g} s")
+
+
+WHAT = {"angular_velocity": "an angular velocity (rad/s)", "displacement": "a linear displacement (m)"}
+
+
+def _check_quantity(scene: BalanceScene, quantity: str, source: str) -> None:
+    """A displacement goes with a linear oscillator scene and an angle or a rate with a balance's: else refused."""
+    from ...core.errors import FitError
+
+    if scene.linear and quantity != "displacement":
+        raise FitError(f"the scene is a linear oscillator (coordinate = 'linear', x in m) but the recording is "
+                       f"{WHAT.get(quantity, 'an angle (rad)')}: record its displacement ([recording] "
+                       "displacement_column), or write the scene for a balance or pendulum", source)
+    if quantity == "displacement" and not scene.linear:
+        raise FitError("the recording is a linear displacement (m), so the scene must be a linear oscillator: "
+                       "[oscillator] coordinate = \"linear\", its release x0 in m, Coulomb friction R in m/s^2 "
+                       "(or read an angle column with [recording] angle_column)", scene.where)
+    model = dict(scene.extra.get("observation", {})).get("model", "waveform")
+    if quantity != "angle" and model != "waveform":
+        raise FitError(f"the recording is {WHAT[quantity]}: it is fitted sample by sample, as a waveform; set "
+                       "[observation] model = \"waveform\" (or leave model out)", scene.where)
+
+
+def _sampled_problem(scene: BalanceScene, series, notes: list, solver, solver_options):
+    """The waveform problem of an angular velocity or a displacement (see the module docstring)."""
+    from .waveform import WaveformProblem
+
+    obs = dict(scene.extra.get("observation", {}))
+    if "model" not in obs:
+        obs["model"] = "waveform"
+        scene = replace(scene, extra={**scene.extra, "observation": obs})
+    if series.quantity == "angular_velocity":
+        from ..recordings.rate import reduce_rate
+
+        rate = reduce_rate(series)
+        tp, centre, noise = rate.turns, rate, rate.noise
+        notes += rate.notes
+    else:
+        from ..recordings.turning_points import reduce_series
+
+        tp = reduce_series(series, strict=False)
+        centre, noise = tp, None
+        notes += list(tp.notes)
+    _refuse_sustained(scene, tp, series.source)
+    mp = measured_period(tp, series.source)
+    check_scene_omega0(scene, mp)
+    notes += start_omega0(scene, mp)
+    problem = WaveformProblem(scene, series, tp, solver, solver_options, centre=centre, noise=noise)
+    problem.notes = notes + [_count_note(tp, series.quantity)] + problem.notes
+    problem.measured_period = mp
+    return problem
 
 
 def _refuse_sustained(scene: BalanceScene, tp, source: str) -> None:
