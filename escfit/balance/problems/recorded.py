@@ -31,6 +31,7 @@ from .. import BalanceScene
 from ...core.params import ParamSet
 from ..recordings import UnitCurve
 from ..recordings.rawseries import notes_of
+from .amplitude_rows import amplitude_readings_curve
 from .curves import FitProblem
 from .nuisance import centre_priors
 from .period import check_scene_omega0, hold_omega0, measured_period, start_omega0
@@ -57,31 +58,6 @@ def turning_point_curve(series, tp) -> UnitCurve:
                 release_time_s=repr(float(tp.release_time)), release_theta_rad=repr(float(tp.release_theta)))
     return UnitCurve(swing, amp, "amplitude", unit=np.full(amp.size, "", dtype=str), time=time,
                      source=series.source, sha256=series.sha256, meta=meta)
-
-
-def amplitude_readings_curve(series) -> UnitCurve:
-    """Rows that are already amplitude readings, one per half swing (reading 0: the release).
-
-    For records such as a pointer read at every turning point: the angle column holds
-    amplitudes, the time column the reading times.  Swings are numbered by row order; the
-    spacing of the times is checked to be even within 40 % of its median.
-    """
-    from ...core.errors import DataError
-
-    t = np.asarray(series.time, float)
-    if t.size >= 3:
-        gaps = np.diff(t)
-        med = float(np.median(gaps))
-        bad = np.flatnonzero(np.abs(gaps - med) > 0.4 * med)
-        if bad.size:
-            raise DataError(f"readings {bad[0] + 1} and {bad[0] + 2} are {gaps[bad[0]]:.4g} s apart where the others are "
-                            f"~{med:.4g} s: a half swing missed or repeated; amplitude rows must follow one per half swing",
-                            series.source)
-    value = np.abs(np.asarray(series.theta, float))
-    meta = dict(series.meta)
-    meta.update(derived_from="amplitude readings, one per half swing in row order")
-    return UnitCurve(np.arange(value.size, dtype=np.int64), value, "amplitude", unit=np.full(value.size, "", dtype=str),
-                     time=t - t[0], source=series.source, sha256=series.sha256, meta=meta)
 
 
 def _free_centre(scene: BalanceScene, curve: UnitCurve, tp) -> BalanceScene:
@@ -121,11 +97,7 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
         return _sampled_problem(scene, series, notes, solver, solver_options)
     model = dict(scene.extra.get("observation", {})).get("model", "amplitude")
     if readings == "amplitudes":
-        curve = amplitude_readings_curve(series)
-        notes += release_from_record(scene.params, float(curve.value[0]), series.source, scene.restoring)
-        problem = FitProblem(scene, curve, solver, dict(solver_options or {}))
-        problem.notes = notes
-        return problem
+        return _amplitude_rows_problem(scene, series, notes, solver, solver_options)
     from ..recordings.turning_points import reduce_series
 
     # a waveform fit uses the turning points only for its start (reference, period, centre): an
@@ -152,6 +124,27 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
     problem.notes = notes
     problem.measured_period = mp
     problem.held = ("oscillator.omega0",) if held else ()
+    return problem
+
+
+def _amplitude_rows_problem(scene: BalanceScene, series, notes: list[str], solver: str, solver_options):
+    """Rows that are amplitude readings; omega0 held at the scene's value when the rows are
+    numbered by their times (amplitudes alone cannot determine it)."""
+    p = scene.params.params.get("oscillator.omega0")
+    curve, by_time = amplitude_readings_curve(series, omega0=None if p is None else float(p.value),
+                                              restoring=scene.restoring)
+    held: tuple[str, ...] = ()
+    if by_time:
+        notes.append(curve.meta["derived_from"])
+        if p.vary:
+            scene.params.params[p.name] = replace(p, vary=False, prior=None)
+            held = (p.name,)
+            notes.append(f"omega0 held at the scene's {p.value:.5g} rad/s: amplitudes depend on it only through "
+                         "C/omega0 and R/omega0^2 and their times were numbered with it")
+    notes += release_from_record(scene.params, float(curve.value[0]), series.source, scene.restoring)
+    problem = FitProblem(scene, curve, solver, dict(solver_options or {}))
+    problem.notes = notes
+    problem.held = held
     return problem
 
 
