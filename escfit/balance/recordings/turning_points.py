@@ -315,7 +315,7 @@ def reduce_series(series: TimeSeries, *, window: float | None = None, degree: in
         raise DataError(f"only {all_t.size} turning point(s) from the reference at t = {t_ref:.4g} s on stand above "
                         f"the noise ({rec.show(rec.band, 2)}); a decay needs at least {MIN_TURNS} (one whole "
                         "period)", where)
-    _check_intervals(rec, all_t, strict)
+    _check_intervals(rec, all_t, all_v, strict)
     centre = measure_centre(all_t, all_v, rec.band, rec.quantity)
     if centre.note:
         rec.notes.append(centre.note)
@@ -522,13 +522,37 @@ def _final_turn(rec: _Record, i_rest: int, rest: float, t_ref: float, theta_ref:
     return float(t[i_rest])
 
 
-def _check_intervals(rec: _Record, times: np.ndarray, strict: bool) -> None:
-    """Each interval between turning points within :data:`INTERVAL_RANGE` local half periods."""
-    d = np.diff(times)
+def _local_ratios(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each interval over the median of its neighbours (three each side), and that median."""
     half = 3
     local = np.array([np.median(d[max(0, i - half):i + half + 1]) for i in range(d.size)])
-    ratio = d / local
-    bad = np.flatnonzero((ratio < INTERVAL_RANGE[0]) | (ratio > INTERVAL_RANGE[1]))
+    return d / local, local
+
+
+def _pendulum_stretch(values: np.ndarray) -> np.ndarray:
+    """How much longer a pendulum's half swing between these turning points is than a small
+    one's: K(sin^2(A/2)) / (pi/2), A half the swing between them (rad, below pi)."""
+    from scipy.special import ellipk
+
+    amp = np.minimum(0.5 * np.abs(np.diff(values)), math.pi - 1e-6)
+    return ellipk(np.sin(0.5 * amp) ** 2) / (0.5 * math.pi)
+
+
+def _check_intervals(rec: _Record, times: np.ndarray, values: np.ndarray, strict: bool) -> None:
+    """Each interval between turning points within :data:`INTERVAL_RANGE` local half periods.
+
+    An angle record's interval also passes when it is regular once each half swing is scaled by
+    a pendulum's lengthening at its amplitude: a pendulum let fall from near the top swings its
+    first half swings far slower than the next (a spring's or balance's neighbours have like
+    amplitudes, so the scaling excuses nothing there).
+    """
+    d = np.diff(times)
+    ratio, local = _local_ratios(d)
+    out = (ratio < INTERVAL_RANGE[0]) | (ratio > INTERVAL_RANGE[1])
+    if out.any() and rec.quantity == "angle":
+        scaled, _ = _local_ratios(d / _pendulum_stretch(np.asarray(values, float)))
+        out &= (scaled < INTERVAL_RANGE[0]) | (scaled > INTERVAL_RANGE[1])
+    bad = np.flatnonzero(out)
     if not bad.size:
         return
     i = int(bad[0])
