@@ -96,7 +96,7 @@ def candidates(path: str | Path) -> list[str]:
         found.append("timeseries")
     if sniff_tg_applog(path) and "timegrapher" not in found:
         found.append("tg-applog")
-    runs = sniff_run_csv(header)
+    runs = sniff_run_csv(_header_above_numbers(stripped))
     if runs:
         found.append(runs)
     if sniff_phyphox_csv(stripped):
@@ -108,13 +108,35 @@ def candidates(path: str | Path) -> list[str]:
     return found
 
 
+def _fields(line: str) -> list[str]:
+    s = line.strip()
+    delim = max((",", ";", "\t"), key=s.count) if any(d in s for d in ",;\t") else None
+    return split_fields(s, delim)
+
+
 def _first_header(text: str) -> list[str]:
     for _, line in numbered_lines(text):
         s = line.strip()
         if s and not s.startswith("#"):
-            delim = max((",", ";", "\t"), key=s.count) if any(d in s for d in ",;\t") else None
-            return split_fields(s, delim)
+            return _fields(s)
     return []
+
+
+_NUMBER = re.compile(r"^\s*[-+]?(\d|\.\d)")
+
+
+def _header_above_numbers(text: str) -> list[str]:
+    """The line right above the first line that starts with a number (a table's header; a
+    title line above it, such as DataStudio's ``Output Voltage, Run #16``, is not one)."""
+    previous = None
+    for _, line in numbered_lines(text):
+        s = line.strip()
+        if not s or s.startswith("#"):
+            continue
+        if _NUMBER.match(s):
+            return _fields(previous) if previous is not None else []
+        previous = s
+    return _first_header(text)
 
 
 @refuses_unreadable
