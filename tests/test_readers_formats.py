@@ -354,3 +354,22 @@ def test_a_title_line_naming_one_run_is_not_a_header_of_runs(tmp_path):
     assert found != "pasco-csv"
     ts = read_raw_series(path, RecordingSpec(time_column=1, angle_column=2, angle_unit="rad"))
     assert ts.time.size == t.size and ts.theta[0] == pytest.approx(0.2, abs=1e-3)
+
+
+def test_a_stalled_clock_at_the_end_is_named_and_cut_by_stop(tmp_path):
+    """An encoder log whose time column stops advancing for its last rows (the logger's clock
+    stalled while the angle went on): refused naming the row and the `stop` that reads the rest,
+    which then reads."""
+    from escfit.balance.recordings.rawseries import read_raw_series
+    from escfit.balance.recordings.recording_spec import RecordingSpec
+
+    t = np.arange(0, 30, 0.02)
+    x = 1.2 * np.exp(-0.05 * t) * np.cos(4.8 * t)
+    t[1200:] = t[1200]
+    path = tmp_path / "enc.csv"
+    path.write_text("time, angle\n" + "\n".join(f"{a:.3f}, {b:.5f}" for a, b in zip(t, x)))
+    spec = dict(time_column=1, angle_column=2, angle_unit="rad")
+    with pytest.raises(DataError, match=r"enc.csv:1203 .*last 300 rows.*stop = \"23.98 s\""):
+        read_raw_series(path, RecordingSpec(**spec))
+    ts = read_raw_series(path, RecordingSpec(**spec, stop=23.98))
+    assert ts.time.size == 1200 and ts.time[-1] == pytest.approx(23.98)
