@@ -13,23 +13,30 @@ import contextlib
 import datetime as _dt
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import xarray as xr
 
 from ..core.errors import FitError
 from ..core.limits import check_sampler_size
 from ..core.provenance import dependency_versions
 from ..core.scene import load_scene
 from ..likelihood.problem import Problem
-from ..results import SCHEMA_VERSION, FitResult, clean_attrs, write_fit
 from .information import information_attrs
 from .identifiability import bound_warnings, correlation_warnings, ridge_warnings, sloppy_directions
 from .lsq import LeastSquaresResult, least_squares
-from .mcmc import McmcResult, resumable, run_emcee
 from .misfit import misfit_report
 from .reconcile import reconcile, verdict, with_held_uncertainty
 from .registry import family
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from ..results import FitResult
+    from .mcmc import McmcResult
+
+# xarray, the results schema and the sampler (emcee, scipy.stats) are imported where they are
+# used: a least-squares fit reaches its first model evaluation without them
 
 __all__ = ["fit", "fit_problem", "build_tree"]
 
@@ -140,6 +147,9 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
     ``timings`` attribute holds the seconds spent in each phase (least squares, sampling,
     checkpoint saves, diagnostics and predictive draws, writing).
     """
+    from ..results import FitResult, clean_attrs, write_fit
+    from .mcmc import resumable, run_emcee
+
     if predictive_draws < 1:
         raise FitError(f"predictive_draws must be at least 1, got {predictive_draws}")
     if method == "emcee":  # too large a run is refused before any work
@@ -238,6 +248,10 @@ def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None,
     ``fixes`` and ``unresolved`` come from :func:`~escfit.inference.reconcile.reconcile`: what was
     refitted to agree with the recording's direct measurements, and what still disagrees.
     """
+    import xarray as xr
+
+    from ..results import SCHEMA_VERSION, clean_attrs
+
     names = list(problem.names)
     units, meanings = dict(problem.units), dict(problem.meanings)
     obs_coords = problem.obs_coords()
@@ -381,6 +395,7 @@ def _derived(problem: Problem, mc: McmcResult, units: dict, meanings: dict) -> d
 
 def _diagnostics(post: xr.Dataset, names: list[str], mc: McmcResult) -> xr.Dataset:
     import arviz as az
+    import xarray as xr
 
     sub = post[names]
     rhat = az.rhat(sub)
@@ -398,6 +413,8 @@ def _diagnostics(post: xr.Dataset, names: list[str], mc: McmcResult) -> xr.Datas
 def _predictive(problem: Problem, mc: McmcResult, obs_coords: dict, reading_units: str,
                 draws: int) -> tuple[xr.Dataset, xr.Dataset]:
     """Expected readings and pointwise log-likelihood for a thinned set of draws."""
+    import xarray as xr
+
     per_chain = max(1, draws // mc.walkers)
     idx = np.unique(np.linspace(0, mc.chain.shape[1] - 1, per_chain).astype(int))
     exp = np.full((mc.walkers, idx.size, problem.n_data), np.nan)
