@@ -147,12 +147,11 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
     ``timings`` attribute holds the seconds spent in each phase (least squares, sampling,
     checkpoint saves, diagnostics and predictive draws, writing).
     """
-    from ..results import FitResult, clean_attrs, write_fit
-    from .mcmc import resumable, run_emcee
-
     if predictive_draws < 1:
         raise FitError(f"predictive_draws must be at least 1, got {predictive_draws}")
     if method == "emcee":  # too large a run is refused before any work
+        from .mcmc import resumable, run_emcee
+
         check_sampler_size(walkers, max_steps if steps == "auto" else int(steps), len(problem.names))
     if method == "emcee" and resume:  # a checkpoint of another run is refused before any work
         if checkpoint is None:
@@ -175,6 +174,8 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
                        resume=resume, progress=progress, moves=moves, max_steps=max_steps,
                        checkpoint_every=checkpoint_every, provenance=problem.provenance(), fit_options=fit_options)
         timings.update(mc.timings)
+    from ..results import FitResult, clean_attrs, write_fit  # xarray: only once there is a result to hold
+
     clock = time.perf_counter()
     tree = build_tree(problem, lsq, mc, method=method, seed=seed, started=started, predictive_draws=predictive_draws,
                       fixes=fixes, unresolved=unresolved)
