@@ -60,7 +60,7 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
     data
         A recording object of the family, or the path of a recording file.
     method
-        ``"leastsq"`` (lmfit, multistart) or ``"emcee"`` (least squares, then MCMC).
+        ``"leastsq"`` (scipy trust-region, multistart) or ``"emcee"`` (least squares, then MCMC).
     out
         Results file (HDF5); written atomically and never replacing a file without ``force``.
         Refused before any work when it or its checkpoint is the data or scene file, or when
