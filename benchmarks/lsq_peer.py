@@ -44,7 +44,8 @@ def fit(path: Path = DATA) -> dict:
     seconds, cpu = time.perf_counter() - clock, time.process_time() - cpu
     jac = res.jac
     cov = np.linalg.pinv(jac.T @ jac) * float(res.fun @ res.fun) / (t.size - len(x0))
-    return {"seconds": seconds, "cpu_seconds": cpu, "rms_rad": float(np.sqrt(np.mean(res.fun**2))), "evaluations": calls[0], "samples": int(t.size), "names": NAMES,
+    return {"seconds": seconds, "cpu_seconds": cpu, "rms_rad": float(np.sqrt(np.mean(res.fun**2))),
+            "evaluations": calls[0], "samples": int(t.size), "names": NAMES,
             "value": res.x.tolist(), "stderr": np.sqrt(np.abs(np.diag(cov))).tolist(), "message": res.message}
 
 

@@ -89,7 +89,8 @@ def main() -> None:
               "load_average_before": load_before, "load_average_after": os.getloadavg(),
               "headline": head, "recipes": rows, "peer": peer}
     lines = [f"String pendulum least squares (fits/real/string_pendulum_lab1.toml, {len(new['names'])} parameters, "
-             f"warm), load average {load_before[0]:.1f} before / {os.getloadavg()[0]:.1f} after on {os.cpu_count()} CPUs:",
+             f"warm), load average {load_before[0]:.1f} before / {os.getloadavg()[0]:.1f} after on "
+             f"{os.cpu_count()} CPUs:",
              "",
              "| run | wall s | CPU s | model evaluations |",
              "| --- | ---: | ---: | ---: |",
@@ -98,7 +99,8 @@ def main() -> None:
              f"| scipy peer (solve_ivp LSODA + least_squares, one start) | {peer['seconds']:.2f} | "
              f"{peer['cpu_seconds']:.2f} | {peer['evaluations']} |",
              "",
-             f"current vs previous: {head['speedup']:.1f}x wall, {head['cpu_speedup']:.1f}x CPU; current vs scipy peer: "
+             f"current vs previous: {head['speedup']:.1f}x wall, {head['cpu_speedup']:.1f}x CPU; "
+             f"current vs scipy peer: "
              f"{head['vs_peer']:.1f}x wall, {head['vs_peer_cpu']:.1f}x CPU.  RMS residual: escfit "
              f"{new['rms_reading']:.4g} rad, peer {peer['rms_rad']:.4g} rad.",
              "",

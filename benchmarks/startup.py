@@ -50,8 +50,8 @@ def wall(cmd: list[str], folder: Path | None) -> float:
 
 
 def first_evaluation(folder: Path | None) -> float:
-    res = subprocess.run([sys.executable, str(PROBE), str(RECIPE), repr(time.time())], env=_env(folder), cwd=folder or ROOT,
-                         check=True, capture_output=True, text=True)
+    res = subprocess.run([sys.executable, str(PROBE), str(RECIPE), repr(time.time())], env=_env(folder),
+                         cwd=folder or ROOT, check=True, capture_output=True, text=True)
     return float(json.loads(res.stdout.strip().splitlines()[-1])["first_evaluation_s"])
 
 
