@@ -35,13 +35,35 @@ if TYPE_CHECKING:
     from ..results import FitResult
     from .mcmc import McmcResult
 
-# xarray, the results schema and the sampler (emcee, scipy.stats) are imported where they are
-# used: a least-squares fit reaches its first model evaluation without them
-
 __all__ = ["fit", "fit_problem", "build_tree"]
 
 GENERIC_DEFAULTS = {"walkers": 32, "steps": "auto", "max_steps": 20000, "burn": None, "n_starts": 8,
                     "n_refine": None, "predictive_draws": 400, "moves": "stretch"}
+
+# xarray, the results schema and the sampler (emcee, scipy.stats) are imported where they are
+# used: a least-squares fit reaches its first model evaluation without them.  The three
+# functions below stand for theirs at module level (tests and benchmarks replace them here).
+
+
+def run_emcee(*args, **kwargs):
+    """:func:`escfit.inference.mcmc.run_emcee`, imported on first use."""
+    from .mcmc import run_emcee as run
+
+    return run(*args, **kwargs)
+
+
+def resumable(*args, **kwargs):
+    """:func:`escfit.inference.mcmc.resumable`, imported on first use."""
+    from .mcmc import resumable as check
+
+    return check(*args, **kwargs)
+
+
+def write_fit(*args, **kwargs):
+    """:func:`escfit.results.write_fit`, imported on first use."""
+    from ..results import write_fit as write
+
+    return write(*args, **kwargs)
 
 
 def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, force: bool = False, seed: int = 0,
@@ -150,8 +172,6 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
     if predictive_draws < 1:
         raise FitError(f"predictive_draws must be at least 1, got {predictive_draws}")
     if method == "emcee":  # too large a run is refused before any work
-        from .mcmc import resumable, run_emcee
-
         check_sampler_size(walkers, max_steps if steps == "auto" else int(steps), len(problem.names))
     if method == "emcee" and resume:  # a checkpoint of another run is refused before any work
         if checkpoint is None:
@@ -174,7 +194,7 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
                        resume=resume, progress=progress, moves=moves, max_steps=max_steps,
                        checkpoint_every=checkpoint_every, provenance=problem.provenance(), fit_options=fit_options)
         timings.update(mc.timings)
-    from ..results import FitResult, clean_attrs, write_fit  # xarray: only once there is a result to hold
+    from ..results import FitResult, clean_attrs  # xarray: only once there is a result to hold
 
     clock = time.perf_counter()
     tree = build_tree(problem, lsq, mc, method=method, seed=seed, started=started, predictive_draws=predictive_draws,
