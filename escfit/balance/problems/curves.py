@@ -17,6 +17,7 @@ import numpy as np
 
 from .. import BalanceScene
 from ...core.errors import EscfitError, FitError
+from ...core.status import LABELS, Status
 from ..observation import observation_from_table
 from ...core.params import ParamSet
 from ..recordings import UnitCurve
@@ -27,6 +28,9 @@ from .common import BalanceProblem
 from .loads import LoadRule
 
 __all__ = ["FitProblem", "Curve"]
+
+# status codes of a batch run that the one-at-a-time path must redo: refused, failed, out of segments
+_UNFINISHED = np.array([LABELS[Status(i)][0] in ("failed", "max_segments") for i in range(len(Status))])
 
 
 
@@ -394,7 +398,7 @@ class FitProblem(FreeParameters, BalanceProblem):
         if n > 0:
             batch = solve_batch(stack, n, throw=False, max_segments=self.solver_options.get("max_segments"))
             turns[:, 1:] = batch.theta_turn
-            n_done, failed = batch.n_done, (batch.status == "failed") | (batch.status == "max_segments")
+            n_done, failed = batch.n_done, _UNFINISHED[batch.code]
             if self.solver_options.get("max_segments") is None:
                 # the one-set default budget grows with the swings asked for (64 n + 1000): a set that
                 # used more segments than the shortest curve's budget goes the one-at-a-time way,
