@@ -38,6 +38,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import tomllib
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -57,8 +58,17 @@ def _quickstart_command(folder: Path | None, moves: str | None, work: Path, tag:
     """Wall seconds of ``escfit fit fits/monday_unit3.toml --report`` (interpreter start to exit)."""
     out, report = work / f"{tag}.h5", work / f"{tag}.html"
     env = {**os.environ, "PYTHONPATH": str(folder or ROOT), "ESCFIT_QUIET_COMPILE": "1"}
-    cmd = [sys.executable, "-m", "escfit.cli.main", "fit", str(ROOT / "fits" / "monday_unit3.toml"), "--out", str(out),
-           "--report", str(report), "--quiet", "--force"] + (["--moves", moves] if moves else [])
+    recipe = ROOT / "fits" / "monday_unit3.toml"
+    if moves:  # the recipe as the previous version shipped it: its moves, the same data and scene
+        text = recipe.read_text()
+        for key in ("data", "scene"):
+            rel = tomllib.loads(text)[key]
+            text = text.replace(f'"{rel}"', json.dumps(str((recipe.parent / rel).resolve())))
+        recipe = work / "monday_unit3_previous.toml"
+        recipe.write_text("\n".join(ln if not ln.startswith("moves") else f'moves = "{moves}"'
+                                     for ln in text.splitlines()) + "\n")
+    cmd = [sys.executable, "-m", "escfit.cli.main", "fit", str(recipe), "--out", str(out), "--report", str(report),
+           "--quiet", "--force"]
     t0 = time.perf_counter()
     proc = subprocess.run(cmd, env=env, capture_output=True, text=True, cwd=work)
     wall = time.perf_counter() - t0

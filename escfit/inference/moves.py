@@ -16,7 +16,9 @@ this is emcee's own construction for its KDE move, with a parametric density ins
 kernel estimate, so it costs microseconds instead of milliseconds).  A half-step whose
 complement cannot fix a covariance (fewer walkers than dimensions plus two, or a degenerate
 spread) uses the differential-evolution proposal instead, a choice that depends on the
-complement only and so keeps the half-step valid.  The heavy tails (5 degrees of freedom) keep
+complement only and so keeps the half-step valid.  With many parameters for the walkers the
+ensemble is split into more than two parts (:func:`complement_splits`), so that the complement
+holds at least three walkers per dimension.  The heavy tails (5 degrees of freedom) keep
 far-out regions reachable; the mixture with differential evolution (:func:`de_t_moves`) keeps
 the ensemble mixing when the posterior is far from normal.
 """
@@ -28,7 +30,7 @@ import math
 import emcee
 import numpy as np
 
-__all__ = ["EnsembleTMove", "de_t_moves"]
+__all__ = ["EnsembleTMove", "de_t_moves", "complement_splits"]
 
 
 class EnsembleTMove(emcee.moves.RedBlueMove):
@@ -52,6 +54,7 @@ class EnsembleTMove(emcee.moves.RedBlueMove):
 
     def setup(self, coords: np.ndarray) -> None:
         self._de.setup(coords)
+        self.nsplits = complement_splits(*coords.shape)
 
     def get_proposal(self, s: np.ndarray, c: list, random) -> tuple[np.ndarray, np.ndarray]:
         comp = np.concatenate(c, axis=0)
@@ -85,6 +88,24 @@ class EnsembleTMove(emcee.moves.RedBlueMove):
         """Log density of the proposal at the rows of ``x``, up to a constant shared by all rows."""
         y = np.linalg.solve(chol, (x - mean).T)
         return -0.5 * (self.df + x.shape[1]) * np.log1p(np.sum(y * y, axis=0) / self.df)
+
+
+def complement_splits(walkers: int, ndim: int) -> int:
+    """Sub-ensembles of an :class:`EnsembleTMove` step: two, or more when the other half of the
+    ensemble would hold fewer than three walkers per dimension.
+
+    The proposal's scatter is estimated from the complement; 16 walkers in 8 dimensions give a
+    poor estimate (its smallest eigenvalues a tenth of the truth's), which on the 120-swing
+    waveform benchmark halved the acceptance and doubled the autocorrelation time (16 steps
+    against 8.5 with four sub-ensembles).  More sub-ensembles update fewer walkers at a time
+    against a larger complement; the count depends on the ensemble's shape only, so each
+    sub-step stays a valid Metropolis-Hastings update.
+    """
+    n = 2
+    # the complement of the largest sub-ensemble; sub-ensembles keep at least two walkers
+    while walkers - -(-walkers // n) < 3 * ndim and walkers // (n + 1) >= 2:
+        n += 1
+    return n
 
 
 def de_t_moves(t_weight: float = 0.8) -> list:
