@@ -108,13 +108,6 @@ def main(argv: list[str] | None = None) -> dict:
                     "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())}
     with tempfile.TemporaryDirectory(prefix="escfit-mcmc-speed-") as tmp:
         work = Path(tmp)
-        for case in cases:
-            runs = {"previous (de)": run_in(prev, WORKER, [case, "de", str(work)])}
-            if args.same_moves:
-                runs["current (de)"] = run_in(None, WORKER, [case, "de", str(work)])
-            runs["current (de-t)"] = run_in(None, WORKER, [case, "de-t", str(work)])
-            record["cases"][case] = {"runs": runs, "agreement": agreement(runs["previous (de)"], runs["current (de-t)"])}
-            _print_case(case, record["cases"][case])
         if "quickstart" in cases and args.repeat > 0:
             timings = {"previous (de)": [], "current (de-t)": []}
             for i in range(args.repeat):  # alternating, so both see the same load
@@ -122,12 +115,24 @@ def main(argv: list[str] | None = None) -> dict:
                 timings["current (de-t)"].append(_quickstart_command(None, None, work, f"cur{i}"))
             record["quickstart_command"] = timings
             print("quick start command (s): " + ", ".join(f"{k} {statistics.median(v):.1f} (min {min(v):.1f})"
-                                                          for k, v in timings.items()))
-    record["load_after"] = _load()
-    args.out_dir.mkdir(parents=True, exist_ok=True)
-    (args.out_dir / "mcmc_speed.json").write_text(json.dumps(record, indent=1))
-    (args.out_dir / "mcmc_speed.md").write_text(markdown(record))
+                                                          for k, v in timings.items()), flush=True)
+        for case in cases:
+            runs = {"previous (de)": run_in(prev, WORKER, [case, "de", str(work)])}
+            if args.same_moves:
+                runs["current (de)"] = run_in(None, WORKER, [case, "de", str(work)])
+            runs["current (de-t)"] = run_in(None, WORKER, [case, "de-t", str(work)])
+            record["cases"][case] = {"runs": runs, "agreement": agreement(runs["previous (de)"], runs["current (de-t)"])}
+            _print_case(case, record["cases"][case])
+            _write(record, args.out_dir)  # each case as it ends: a long run stopped early keeps the others
+    _write(record, args.out_dir)
     return record
+
+
+def _write(record: dict, out_dir: Path) -> None:
+    record["load_after"] = _load()
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / "mcmc_speed.json").write_text(json.dumps(record, indent=1))
+    (out_dir / "mcmc_speed.md").write_text(markdown(record))
 
 
 def _row(label: str, r: dict) -> str:
@@ -144,7 +149,8 @@ def _print_case(case: str, data: dict) -> None:
               f"R-hat {r['rhat_max']:.3f}  ESS {r['ess_min']:.0f}")
     worst = max(abs(a["median_shift_sd"]) for a in data["agreement"].values())
     wid = max(abs(a["width90_change"]) for a in data["agreement"].values())
-    print(f"  new vs previous: largest median shift {worst:.3f} sd, largest 90 % width change {100 * wid:.1f} %")
+    print(f"  new vs previous: largest median shift {worst:.3f} sd, largest 90 % width change {100 * wid:.1f} %",
+          flush=True)
 
 
 def markdown(record: dict) -> str:
