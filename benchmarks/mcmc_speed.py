@@ -136,7 +136,8 @@ def _write(record: dict, out_dir: Path) -> None:
 
 
 def _row(label: str, r: dict) -> str:
-    return (f"| {label} | {r['steps']} | {r['sampling_s']:.1f} | {1e3 * r['s_per_step']:.2f} | {r['tau_max']:.1f} | "
+    cpu = f"{1e3 * r['cpu_s_per_step']:.2f}" if "cpu_s_per_step" in r else "-"
+    return (f"| {label} | {r['steps']} | {r['sampling_s']:.1f} | {1e3 * r['s_per_step']:.2f} | {cpu} | {r['tau_max']:.1f} | "
             f"{r['tau_per_s']:.1f} | {r['ess_per_s']:.0f} | {r['rhat_max']:.3f} | {r['ess_min']:.0f} | "
             f"{r['acceptance']:.2f} |")
 
@@ -157,8 +158,8 @@ def markdown(record: dict) -> str:
     lines = [f"emcee speed, `python benchmarks/mcmc_speed.py` on {record['date']} ({record['cpus']} processors, load "
              f"average {record['load_before']} before, {record['load_after']} after); previous version "
              f"{record['baseline']}.", "",
-             "| case, version (moves) | steps | sampling s | ms/step | max tau | tau/s | draws/s | max R-hat | "
-             "min ESS | acceptance |", "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+             "| case, version (moves) | steps | sampling s | ms/step | CPU ms/step | max tau | tau/s | draws/s | "
+             "max R-hat | min ESS | acceptance |", "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for case, data in record["cases"].items():
         for label, r in data["runs"].items():
             lines.append(_row(f"{case}, {label}", r))

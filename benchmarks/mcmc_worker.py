@@ -77,9 +77,9 @@ def main() -> None:
     t1 = time.perf_counter()
     lsq = least_squares(problem, seed=seed, priors_count=True)
     lsq, *_ = reconcile(problem, lsq, seed=seed, priors_count=True)
-    t2 = time.perf_counter()
+    t2, c2 = time.perf_counter(), time.process_time()
     mc = run_emcee(problem, lsq, walkers=walkers, steps="auto", seed=seed, moves=moves, max_steps=max_steps)
-    t3 = time.perf_counter()
+    t3, c3 = time.perf_counter(), time.process_time()
     sampling = float(mc.timings.get("sampling_s", t3 - t2))
     tau = float(np.max(mc.tau))
     rhat = [float(az.rhat(mc.chain[:, :, i])) for i in range(len(mc.names))]
@@ -89,7 +89,8 @@ def main() -> None:
     q = np.quantile(flat, [0.05, 0.5, 0.95], axis=0)
     out = {"case": case, "moves": moves, "names": mc.names, "walkers": walkers, "steps": int(mc.steps),
            "converged": bool(mc.converged), "setup_s": t1 - t0, "lsq_s": t2 - t1, "sampling_s": sampling,
-           "s_per_step": sampling / mc.steps, "tau": [float(t) for t in mc.tau], "tau_max": tau,
+           "s_per_step": sampling / mc.steps,
+           "cpu_s": c3 - c2, "cpu_s_per_step": (c3 - c2) / mc.steps, "tau": [float(t) for t in mc.tau], "tau_max": tau,
            "tau_per_s": mc.steps / tau / sampling if math.isfinite(tau) and tau > 0 else float("nan"),
            "ess_per_s": walkers * mc.steps / tau / sampling if math.isfinite(tau) and tau > 0 else float("nan"),
            "rhat_max": max(rhat), "ess_min": min(ess), "acceptance": float(np.mean(mc.acceptance)),
