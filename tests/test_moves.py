@@ -100,3 +100,29 @@ def test_bad_settings_are_refused():
         EnsembleTMove(df=0.0)
     with pytest.raises(ValueError, match="t_weight"):
         de_t_moves(1.0)
+
+
+def test_an_interrupted_de_t_run_resumes_to_identical_draws(tmp_path):
+    """The move draws from the sampler's own generator only, so the checkpoint's state replays it."""
+    from escfit.inference.checkpoint import load_checkpoint
+
+    class Dying(Target):
+        calls = 0
+
+        def log_prob_many(self, x):
+            if np.ndim(x) == 2 and len(x) > 1:
+                self.calls += 1
+                if self.calls > 1 + 2 * 150:
+                    raise KeyboardInterrupt
+            return super().log_prob_many(x)
+
+    whole = run_emcee(Target(ndim=5, skewed=1), None, walkers=32, steps=300, seed=8, moves="de-t")
+    ck = tmp_path / "run.emcee"
+    with pytest.raises(KeyboardInterrupt):
+        run_emcee(Dying(ndim=5, skewed=1), None, walkers=32, steps=300, seed=8, moves="de-t", checkpoint=ck,
+                  checkpoint_every=1e9)
+    assert 0 < load_checkpoint(ck, 32, [f"x{i}" for i in range(5)]).steps < 300
+    again = run_emcee(Target(ndim=5, skewed=1), None, walkers=32, steps=300, seed=8, moves="de-t", checkpoint=ck,
+                      resume=True)
+    np.testing.assert_array_equal(again.chain, whole.chain)
+    np.testing.assert_array_equal(again.log_prob, whole.log_prob)
