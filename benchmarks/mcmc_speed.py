@@ -26,6 +26,7 @@ start's whole command (``escfit fit fits/monday_unit3.toml --report ...``, warm 
 is timed too, ``--repeat`` times each.  Writes ``benchmarks/results/mcmc_speed.{md,json}``.
 
 Run:  python benchmarks/mcmc_speed.py [--baseline 9f98f15] [--repeat 2] [--recipes] [--same-moves]
+      python benchmarks/mcmc_speed.py --cases waveform120 --repeat 0 --name mcmc_speed_waveform
 """
 
 from __future__ import annotations
@@ -101,6 +102,7 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--same-moves", action="store_true", help="also this checkout with the previous moves (de)")
     ap.add_argument("--cases", nargs="*", default=None, help=f"subset of {CASES + RECIPES}")
     ap.add_argument("--out-dir", type=Path, default=ROOT / "benchmarks" / "results")
+    ap.add_argument("--name", default="mcmc_speed", help="file name of the results (NAME.md, NAME.json)")
     args = ap.parse_args(argv)
     prev = checkout(args.baseline)
     cases = args.cases or (CASES + (RECIPES if args.recipes else []))
@@ -123,16 +125,16 @@ def main(argv: list[str] | None = None) -> dict:
             runs["current (de-t)"] = run_in(None, WORKER, [case, "de-t", str(work)])
             record["cases"][case] = {"runs": runs, "agreement": agreement(runs["previous (de)"], runs["current (de-t)"])}
             _print_case(case, record["cases"][case])
-            _write(record, args.out_dir)  # each case as it ends: a long run stopped early keeps the others
-    _write(record, args.out_dir)
+            _write(record, args.out_dir, args.name)  # each case as it ends: a long run stopped early keeps the others
+    _write(record, args.out_dir, args.name)
     return record
 
 
-def _write(record: dict, out_dir: Path) -> None:
+def _write(record: dict, out_dir: Path, name: str) -> None:
     record["load_after"] = _load()
     out_dir.mkdir(parents=True, exist_ok=True)
-    (out_dir / "mcmc_speed.json").write_text(json.dumps(record, indent=1))
-    (out_dir / "mcmc_speed.md").write_text(markdown(record))
+    (out_dir / f"{name}.json").write_text(json.dumps(record, indent=1))
+    (out_dir / f"{name}.md").write_text(markdown(record))
 
 
 def _row(label: str, r: dict) -> str:
