@@ -101,7 +101,7 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
         Posterior draws at which the expected readings and the pointwise log-likelihood
         (for PSIS-LOO) are stored.
     moves
-        emcee's proposal: ``"stretch"`` or ``"de"`` (see :func:`~escfit.inference.mcmc.run_emcee`);
+        emcee's proposal: ``"stretch"``, ``"de"`` or ``"de-t"`` (see :func:`~escfit.inference.mcmc.run_emcee`);
         ``None`` takes the family's default.
     title
         A title for reports (a fit recipe's ``title``), kept in the results' attributes.
