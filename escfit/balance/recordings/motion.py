@@ -471,7 +471,8 @@ def reference(rec, turns: list[Turn]) -> tuple[float, float, list[Turn]]:
         else:
             rec.notes.append(f"the record starts at a turning point ({rec.show(found.theta, 4)} on the "
                              "sensor's scale)")
-    return found.time, found.theta, turns[found.first:end]
+    # an extremum next to the start that no local fit could place (time None) is no turning point
+    return found.time, found.theta, [u for u in turns[found.first:end] if u.time is not None]
 
 
 def _flat_start(rec) -> tuple[float, float] | None:
