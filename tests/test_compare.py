@@ -121,6 +121,32 @@ def test_loglike_and_criteria_against_the_gaussian_likelihood_written_out(lsq_fi
     assert w.sum() == pytest.approx(1.0) and w[1] / w[0] == pytest.approx(math.exp(-d[1] / 2), rel=1e-9)
 
 
+def test_the_report_prints_the_criteria_compare_ranks_by(lsq_fits):
+    """The report's fit statistics and escfit compare print one computation: the AICc and BIC of
+    the Gaussian likelihood written out from the stored readings (profiled scale, every free
+    parameter counted), to the digits the report shows."""
+    import re
+
+    from escfit.report.tables import fit_statistics
+
+    _, fits = lsq_fits
+    f = fits["viscous_coulomb"]
+    for path in (f["v"], f["vc"]):
+        res = load_fit(path)
+        y = res.group("observed_data")["reading"].values
+        e = res.group("least_squares")["expected"].values
+        n, rss = y.size, float(np.sum((y - e) ** 2))
+        ll = -0.5 * n * (math.log(2 * math.pi * rss / n) + 1.0)
+        k = len(res.parameter_names)
+        text = fit_statistics(res)
+        got = {m.group(1): float(m.group(2)) for m in re.finditer(r"(AICc|BIC) (-?[0-9.]+(?:e[-+]?[0-9]+)?)", text)}
+        assert got["AICc"] == pytest.approx(-2 * ll + 2 * k + 2 * k * (k + 1) / (n - k - 1), rel=1e-5), text
+        assert got["BIC"] == pytest.approx(-2 * ll + k * math.log(n), rel=1e-5), text
+        row = next(r for r in compare_fits([f["v"], f["vc"]]).rows if r["file"] == str(path))
+        assert got["AICc"] == pytest.approx(row["aicc"], rel=1e-5) and got["BIC"] == pytest.approx(row["bic"], rel=1e-5)
+        assert "aic" not in res.group("least_squares").attrs  # the old number that dropped constants is gone
+
+
 def test_known_noise_scale_is_not_a_parameter_and_enters_the_likelihood(lsq_fits):
     from scipy.stats import norm
 

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..core.errors import ResultsError
 from ..results import FitResult, load_fit
-from .information import EXACT_KEY, aicc, akaike_weights, bic
+from .information import EXACT_KEY, akaike_weights, stored_criteria
 
 __all__ = ["FitComparison", "compare_fits", "psis_loo", "K_GOOD"]
 
@@ -293,9 +293,10 @@ def _compare_ic(fits: list[FitResult], labels: dict, data: dict) -> FitCompariso
     for p, (ll, k, _, _) in stats.items():
         if n - k - 1 <= 0:
             raise ResultsError(f"{n} readings and {k} free parameters: AICc needs more readings than parameters + 1", p)
-    crit = {p: aicc(ll, k, n) for p, (ll, k, _, _) in stats.items()}
+    ic = {f.path: stored_criteria(f.group("least_squares").attrs, n) for f in fits}
+    crit = {p: ic[p]["aicc"] for p in stats}
     order = sorted(crit, key=lambda p: crit[p])
-    b = {p: bic(stats[p][0], stats[p][1], n) for p in order}
+    b = {p: ic[p]["bic"] for p in order}
     weights = akaike_weights(np.array([crit[p] for p in order]))
     rows = []
     for rank, (p, w) in enumerate(zip(order, weights), 1):

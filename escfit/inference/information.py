@@ -30,7 +30,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-__all__ = ["information_attrs", "aicc", "bic", "akaike_weights", "EXACT_KEY"]
+__all__ = ["information_attrs", "aicc", "bic", "akaike_weights", "stored_criteria", "EXACT_KEY"]
 
 #: attribute saying whether ``loglike`` is the maximum (1) or the likelihood at the Gaussian optimum (0)
 EXACT_KEY = "loglike_maximised"
@@ -52,6 +52,33 @@ def aicc(loglike: float, k: int, n: int) -> float:
 def bic(loglike: float, k: int, n: int) -> float:
     """Schwarz's Bayesian information criterion: ``-2 logL + k ln n``."""
     return -2.0 * loglike + k * math.log(n)
+
+
+def stored_criteria(attrs: Mapping[str, Any], n: int) -> dict[str, float] | None:
+    """AICc and BIC of a saved least-squares fit, from what :func:`information_attrs` stored.
+
+    The one computation behind both ``escfit compare`` and the report's fit statistics, so the
+    two always print the same numbers.
+
+    Parameters
+    ----------
+    attrs
+        The ``least_squares`` group's attributes (``loglike``, ``n_params``).
+    n
+        Number of readings the likelihood sums over.
+
+    Returns
+    -------
+    dict or None
+        ``loglike``, ``n_params``, ``aicc``, ``bic``; ``None`` when the file stores no
+        log-likelihood (written by an older escfit) or the model failed at the optimum.
+    """
+    if "loglike" not in attrs or "n_params" not in attrs:
+        return None
+    ll, k = float(attrs["loglike"]), int(attrs["n_params"])
+    if not math.isfinite(ll):
+        return None
+    return {"loglike": ll, "n_params": k, "aicc": aicc(ll, k, n), "bic": bic(ll, k, n)}
 
 
 def akaike_weights(values: np.ndarray) -> np.ndarray:
