@@ -1,6 +1,6 @@
 """Real data: the free decay of a Pohl torsion wheel (shared/realdata, MIT licence).
 
-Amplitudes are in scale divisions (Skt) every half period; the decay model is homogeneous in
+Amplitudes are in scale divisions (Skt, 10 deg each) every half period; the decay model is homogeneous in
 the amplitude, so the fit works in Skt directly (R is then in Skt/s^2).  Criterion: BIC from
 the least-squares fits with the noise scale profiled out (Gaussian readings); a difference
 above 10 is conventionally "very strong" evidence.
