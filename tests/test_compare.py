@@ -298,3 +298,15 @@ def test_same_names_in_different_folders_are_told_apart(lsq_fits, tmp_path):
     shutil.copy(f["vc"], b)
     cmp = compare_fits([a, b])
     assert {r["label"] for r in cmp.rows} == {str(a), str(b)}
+
+
+def test_verdict_names_the_simplest_then_the_best_ranked_of_equally_simple_fits():
+    from escfit.inference.compare import _undecided, verdict_choice
+
+    rows = [{"file": "vc.h5", "label": "vc.h5", "n_params": 4}, {"file": "c.h5", "label": "c.h5", "n_params": 3},
+            {"file": "v.h5", "label": "v.h5", "n_params": 3}]  # best first
+    assert verdict_choice(rows)["file"] == "c.h5"  # not nested with v.h5: the criterion ranks them
+    text, choice = _undecided(rows, "dAICc below 2")
+    assert choice == "c.h5" and "of those with 3 parameters, c.h5 ranks best" in text
+    text, choice = _undecided(rows[:2], "dAICc below 2")
+    assert choice == "c.h5" and "prefer the simplest, c.h5 (3 parameters)" in text
