@@ -30,10 +30,15 @@ RATE, DURATION, START, NOISE = 20.0, 40.0, 0.4, 0.005  # Hz, s, s, rad
 #: law -> the effects it has (keys of EFFECT_TABLES)
 LAWS = {"viscous": ("C",), "coulomb": ("R",), "drag": ("D",), "viscous+coulomb": ("C", "R"),
         "viscous+drag": ("C", "D")}
-NAMES = {"C": "viscous.C", "R": "coulomb.R", "D": "drag.D"}
+#: laws whose coefficients are recovered but which the five-law comparison leaves out: a stiffening
+#: spring dissipates nothing and shows in the period's growth with the amplitude, so it is fitted
+#: on the waveform only (turning points hold omega0 at the measured period)
+STIFF_LAWS = {"viscous+stiffening": ("C", "K")}
+NAMES = {"C": "viscous.C", "R": "coulomb.R", "D": "drag.D", "K": "stiffening.k3"}
 EFFECT_TABLES = {"C": "[effects.viscous]\nC = {{ value = 0.02, vary = true, min = 0, max = 1 }}\n",
                  "R": "[effects.coulomb]\nR = {{ value = 0.02, vary = true, min = 0, max = 1 }}\n",
-                 "D": "[effects.drag]\nD = {{ value = 0.01, vary = true, min = 0, max = 1 }}\n"}
+                 "D": "[effects.drag]\nD = {{ value = 0.01, vary = true, min = 0, max = 1 }}\n",
+                 "K": "[effects.stiffening]\nk3 = {{ value = 0.1, vary = true, min = 0, max = 3 }}\n"}
 FIT_SCENE = """model = "balance"
 [recording]
 time_column = 1
@@ -61,19 +66,24 @@ def draw_truth(law: str, rng: np.random.Generator) -> tuple[float, dict]:
 
     The amplitude falls to a fraction ``f`` of the release amplitude, drawn from 0.3-0.6, over the
     record's 50 half swings (a decay long enough to show its law, as a user's free decay does);
-    each effect of a mixture takes about an equal share of the loss.  Small-swing forms: viscous
+    each dissipative effect of a mixture takes about an equal share of the loss.  A stiffening
+    spring's ``k3`` is drawn from 0.1-0.5 /rad^2 (at 0.5 rad it changes the restoring torque by
+    2.5-12.5 %, against the pendulum's own softening of 4 %).  Small-swing forms: viscous
     ``A0 exp(-C t/2)``, Coulomb ``A0 - 2 n R/omega0**2``, drag ``1/A = 1/A0 + 4 n D/3``.
     """
     theta0 = float(rng.uniform(0.5, 0.9))
     f = float(rng.uniform(0.3, 0.6))
-    share = 1.0 / len(LAWS[law])
+    keys = {**LAWS, **STIFF_LAWS}[law]
+    share = 1.0 / len([k for k in keys if k != "K"])
     n = DURATION * W0 / math.pi  # half swings in the record
     truth = {}
-    for key in LAWS[law]:
+    for key in keys:
         if key == "C":
             truth["viscous.C"] = share * -2.0 * math.log(f) / DURATION
         elif key == "R":
             truth["coulomb.R"] = share * (1.0 - f) * theta0 * W0**2 / (2.0 * n)
+        elif key == "K":
+            truth["stiffening.k3"] = float(rng.uniform(0.1, 0.5))
         else:
             truth["drag.D"] = share * 3.0 * (1.0 / f - 1.0) / (4.0 * n * theta0)
     return theta0, truth
@@ -95,4 +105,4 @@ def make_record(law: str, seed: int) -> Record:
 
 def fit_scene(law: str, observation: str) -> str:
     """The scene a user writes to fit ``law`` (its coefficients free from a generic start)."""
-    return FIT_SCENE.format(effects="".join(EFFECT_TABLES[k].format() for k in LAWS[law]), observation=observation)
+    return FIT_SCENE.format(effects="".join(EFFECT_TABLES[k].format() for k in {**LAWS, **STIFF_LAWS}[law]), observation=observation)
