@@ -310,3 +310,41 @@ def test_verdict_names_the_simplest_then_the_best_ranked_of_equally_simple_fits(
     assert choice == "c.h5" and "of those with 3 parameters, c.h5 ranks best" in text
     text, choice = _undecided(rows[:2], "dAICc below 2")
     assert choice == "c.h5" and "prefer the simplest, c.h5 (3 parameters)" in text
+
+
+def _ar1_loglike_max(r: np.ndarray) -> float:
+    """The exact Gaussian AR(1) log-likelihood of residuals ``r``, maximised over (sigma, rho) by a
+    fine grid in rho with sigma in closed form: the reference for the stored number."""
+    best = -math.inf
+    for rho in np.linspace(-0.995, 0.995, 4001):
+        q = 1.0 - rho * rho
+        ss = r[0] ** 2 + np.sum((r[1:] - rho * r[:-1]) ** 2) / q  # = n sigma^2 at the optimum
+        s2 = ss / r.size
+        best = max(best, -0.5 * r.size * (math.log(2 * math.pi * s2) + 1.0) - 0.5 * (r.size - 1) * math.log(q))
+    return best
+
+
+def test_ar1_fits_store_the_likelihood_maximised_over_rho_so_a_nesting_law_never_scores_lower():
+    """AR(1) readings (rho 0.8) fitted with viscous damping and with viscous + Coulomb friction: the
+    stored log-likelihood is the AR(1) likelihood maximised over the noise scale and rho at each
+    optimum (checked against a grid), so the nesting law's is never below the nested one's."""
+    from escfit.inference import least_squares, make_problem
+    from escfit.inference.information import information_attrs
+
+    from .test_waveform_fit import SCENE, correlated_record
+
+    vc = (SCENE % "waveform") + 'noise = "ar1"\n'
+    v = vc.replace("[effects.coulomb]\nR = { value = 0.2, vary = true, min = 0, max = 5 }\n", "")
+    assert "coulomb" not in v
+    for seed in range(3):
+        rec = correlated_record(seed)
+        ll = {}
+        for name, text in (("v", v), ("vc", vc)):
+            problem = make_problem(load_scene("s.toml", text=text), rec)
+            res = least_squares(problem, n_starts=1)
+            a = information_attrs(problem, res)
+            r = problem.observed - problem.expected(res.values)
+            assert a["loglike"] == pytest.approx(_ar1_loglike_max(r), abs=2e-3)
+            assert "maximising the likelihood" in a["noise_model"]
+            ll[name] = a["loglike"]
+        assert ll["vc"] >= ll["v"] - 1e-6, (seed, ll)
