@@ -348,3 +348,25 @@ def test_ar1_fits_store_the_likelihood_maximised_over_rho_so_a_nesting_law_never
             assert "maximising the likelihood" in a["noise_model"]
             ll[name] = a["loglike"]
         assert ll["vc"] >= ll["v"] - 1e-6, (seed, ll)
+
+
+def test_the_reports_criteria_are_the_numbers_compare_ranks_by(lsq_fits, tmp_path):
+    """The report's information-criteria line and ``escfit compare`` read one stored likelihood:
+    the same log L, parameter count, AICc and BIC for every fit."""
+    import re
+
+    _, fits = lsq_fits
+    f = fits["viscous_coulomb"]
+    rows = {r["file"]: r for r in compare_fits([f["v"], f["vc"]]).rows}
+    for path in (f["v"], f["vc"]):
+        md = tmp_path / f"{path.stem}.md"
+        res = CliRunner().invoke(cli, ["report", str(path), "--format", "md", "--out", str(md)])
+        assert res.exit_code == 0, res.output
+        text = " ".join(md.read_text().split())
+        m = re.search(r"log-likelihood (\S+) with its normalising constants, (\d+) parameters? counted.*?"
+                      r"AICc (\S+), BIC (\S+),", text)
+        assert m, text[:2000]
+        row = rows[str(path)]
+        assert int(m.group(2)) == row["n_params"]
+        for got, want in zip(m.group(1, 3, 4), (row["loglike"], row["aicc"], row["bic"])):
+            assert float(got) == pytest.approx(want, rel=1e-5, abs=1e-3)

@@ -53,8 +53,9 @@ def without_coulomb(text: str) -> str:
 
 
 def candidates(name: str, text: str) -> dict[str, str]:
-    """Law -> scene text, built from the recipe's viscous + Coulomb scene."""
-    if "[effects.coulomb]" not in text:
+    """Law -> scene text, built from the recipe's viscous + Coulomb scene (none for a recipe that
+    is itself a law variant of another, i.e. already has drag, or has no Coulomb friction)."""
+    if "[effects.coulomb]" not in text or "[effects.drag]" in text:
         return {}
     plain = without_coulomb(text)
     out = {"viscous": plain, "viscous+coulomb": text, "viscous+drag": plain + DRAG, "viscous+coulomb+drag": text + DRAG}
