@@ -76,7 +76,7 @@ def interval(res, key: str) -> str:
 
 def misfit_words(res) -> str:
     """The misfit warnings of a fit, each shortened to its first clause."""
-    words = [w.split(":")[0] for w in res.warnings if any(k in w for k in ("runs", "lag-1", "branches", "smooth"))]
+    words = [w.split(":")[0].split(" (")[0] for w in res.warnings if any(k in w for k in ("runs", "lag-1", "branches", "smooth"))]
     return "; ".join(words) or "clean"
 
 
