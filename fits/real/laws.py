@@ -71,6 +71,8 @@ def interval(res, key: str) -> str:
         return "-"
     i = names.index(key)
     v, lo, hi = (float(lsq[k].values[i]) for k in ("value", "lo95", "hi95"))
+    if v <= 1e-6 * hi:  # on its lower bound 0: an upper limit
+        return f"0 [0, {hi:.3g}] (bound)"
     return f"{v:.3g} [{lo:.3g}, {hi:.3g}]"
 
 
