@@ -233,7 +233,16 @@ def test_readings_scattering_more_than_the_stated_noise_are_warned():
 # -- recovery of known parameters -------------------------------------------------------------------------------
 def test_known_friction_law_geometry_and_noise_recovered(tmp_path):
     """A session drawn with a load slope, the stylus 0.8 sd long and the wire 0.6 sd low, and a
-    reading noise the scene does not give (free: profiled by least squares, sampled by emcee)."""
+    reading noise the scene does not give (free: profiled by least squares, sampled by emcee).
+
+    The run is long enough for its R-hat check to hold in any environment (another library
+    version is another sampler seed).  Measured over emcee seeds 0-39 with these data: at 2000
+    steps the largest split R-hat was 1.047 +- 0.004 (sd) and exceeded 1.05 for 7 of 40 seeds
+    (the failure seen under numpy 2.4.6); at 5000 steps, burn 1000, it is 1.017 +- 0.0013, 25
+    standard deviations below 1.05.  The truths lie inside the 95 % intervals by at least 0.3
+    posterior sd (sigma; mu 1.2, mu_w 1.8, the lever ratio 1.1), which the Monte Carlo error of
+    the interval ends (0.01-0.03 sd between seeds) cannot cross (benchmarks/false_failures.py).
+    """
     truth = {"friction.mu": 0.14, "friction.mu_w": -0.05 * 0.14 / GF, "observation.sigma": 0.006 * GF}
     k, d = (2.0 + 0.008) * IN, (1.0 - 0.006) * IN
     spec = SessionSpec(mu=truth["friction.mu"], loads=tuple(np.array([1.2, 1.7, 2.2, 2.7, 3.2]) * GF),
@@ -251,7 +260,7 @@ mu = { value = 0.1, vary = true, min = 0.0, max = 1.0 }
 mu_w = { value = 0.0, vary = true, prior = "normal(0, 0.02 / gf)" }
 load_ref = "2.2 gf"
 """)
-    res = fit(scene, path, method="emcee", walkers=48, steps=2000, burn=500, seed=11)
+    res = fit(scene, path, method="emcee", walkers=48, steps=5000, burn=1000, seed=11)
     lsq = res.group("least_squares")
     assert lsq.attrs["noise_profiled"] == 1
     for name in ("friction.mu", "friction.mu_w"):

@@ -36,6 +36,11 @@ BF01_BEFORE = {
 }
 
 
+#: Five sds of ln BF01 of the load slope between sampler seeds (+ the mean offset from the chain
+#: of BF01_BEFORE), per material
+LOAD_TOLERANCE = {"1095 steel (hard)": 0.25, "17-4 PH stainless": 0.5, "aluminum": 2.0}
+
+
 @pytest.fixture(scope="module")
 def fitted(rows):
     """Posterior of every material's session file with the committed scene (about 5 s each):
@@ -108,11 +113,13 @@ def test_monday_speed_and_load_findings(rows, fitted):
     load = {m: e["friction.mu_w"] for m, e in evidence.items()}
     assert load["aluminum"].bf01 < 1 / 100 and load["17-4 PH stainless"].bf01 < 1 / 20
     assert load["1095 steel (hard)"].ci95[0] < -0.06 * 0.100 / GF < load["1095 steel (hard)"].ci95[1]
-    # the numbers of the port's predecessor, within the Monte Carlo noise of one run (measured
-    # over seeds: +-0.003 in ln BF for the speed slope, +-0.07 for the load slope, +-0.5 at BF ~ 1e-7)
+    # the numbers of the port's predecessor, within the Monte Carlo noise of one run: five sds of
+    # ln BF01 between seeds (measured over 29 seeds: 0.0019, 0.0004, 0.0006 for the speed slopes,
+    # 0.037, 0.094, 0.39 for the load slopes of steel, stainless, aluminum).  The former limits of
+    # 0.15 and 0.8 were 1.6 and 2.1 sds and failed for one seed in ten (a library version is a seed)
     for row in rows:
         for name, before in BF01_BEFORE[row.material].items():
-            tol = 0.02 if name == "friction.mu_v" else (0.15 if before > 1e-4 else 0.8)
+            tol = 0.02 if name == "friction.mu_v" else LOAD_TOLERANCE[row.material]
             shift = math.log(evidence[row.material][name].bf01 / before)
             assert shift == pytest.approx(0, abs=tol), (row.material, name)
 

@@ -212,3 +212,26 @@ def test_init_reads_an_arduino_encoder_log_in_degrees(tmp_path):
     p = fit(here / "s.toml", str(GALILEO), n_starts=2).summary()
     # the source's period 1.36 s is measured on swings of a few degrees (the decay's long tail)
     assert abs(2 * math.pi / p["oscillator.omega0"]["estimate"] / 1.36 - 1) < 0.02
+
+
+def test_init_reads_a_gyroscope_rate_and_the_fit_recovers_the_decay(tmp_path):
+    """A phone gyroscope's rate in deg/s (a linear viscous oscillator, the closed form's derivative):
+    init takes it as a rate, and the fit of theta'(t) covers the truth."""
+    w0, C, a0 = 5.0, 0.12, 0.4  # rad/s, 1/s, rad
+    wd = math.sqrt(w0 ** 2 - C ** 2 / 4)
+    t = np.arange(0.0, 14.0, 0.02)
+    # theta = a0 e^(-Ct/2) (cos wd t + C/(2 wd) sin wd t), released at rest; its exact derivative:
+    rate = -a0 * np.exp(-C * t / 2) * (w0 ** 2 / wd) * np.sin(wd * t)
+    rate += np.random.default_rng(4).normal(0, 0.01, t.size) + 0.02  # noise and a bias, rad/s
+    data = tmp_path / "gyro.csv"
+    data.write_text("t (s),Gyroscope z (deg/s)\n" + "".join(f"{a:.3f},{math.degrees(b):.4f}\n"
+                                                          for a, b in zip(t + 1.0, rate)))
+    result, here = _init([data, "--spring", "--out", "gyro.toml"], tmp_path)
+    assert result.exit_code == 0, result.output
+    doc = tomllib.loads((here / "gyro.toml").read_text())
+    assert doc["recording"]["velocity_column"] == "Gyroscope z (deg/s)"
+    assert "zeros of the rate" in result.output
+    res = fit(here / "gyro.toml", str(data), n_starts=2)
+    for name, truth in (("oscillator.omega0", w0), ("viscous.C", C)):
+        ok, why = _covers(res, name, truth)
+        assert ok, why

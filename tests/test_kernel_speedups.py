@@ -18,7 +18,7 @@ import escfit
 from escfit.balance import System, exact, regions
 from escfit.balance.batch import solve_batch
 from escfit.balance.records import blank, half_swings, run_options
-from escfit.balance.segment import cross_time, propagate, turn_time
+from escfit.balance.segment import CREEP_OVERSHOOT, cross_time, propagate, turn_time
 from escfit.balance.solvers import solve_system
 
 from .conftest import DATASETS
@@ -66,7 +66,8 @@ def reference_phase(theta0, c0, r, w2, w_lo, w_hi, w_x, w_dir, dr_th, dr_rate, n
 def reference_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_dir, bank, restitution, dr_th,
                     dr_rate, n_swings, max_seg):
     """Angle switching, segment by segment: the closed form at every turning point, then the
-    bracketed crossing solve (the kernel as of escfit 2e7e582)."""
+    bracketed crossing solve (the kernel as of escfit 2e7e582), with the creep rule of every
+    solver (:func:`escfit.balance.segment.creeps_to_rest`)."""
     out = {k: [] for k in ("amplitude", "theta_turn", "half_period", "time", "banked")}
     s = (1.0 if theta0 < 0.0 else -1.0) if v0 == 0.0 else (1.0 if v0 > 0.0 else -1.0)
     x, v, c, t, t_swing, int_c = s * theta0, s * v0, c0, 0.0, 0.0, 0.0
@@ -77,6 +78,7 @@ def reference_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_
                      dr_rate)
     edge_tab, n_edge_tab, w2_tab, xc_tab = regions.region_tables(k[0])
     d = 0 if s > 0.0 else 1
+    scale = None
     while n_done < n_swings:
         if n_seg >= max_seg:
             status = 3
@@ -87,6 +89,8 @@ def reference_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_
             j += 1
         w2, xc = w2_tab[d, j], xc_tab[d, j]
         y0, h = x - xc, 0.5 * c
+        if scale is None:
+            scale = math.sqrt(y0 * y0 + v * v / w2)
         xb = edges[j] if j < n_edges else math.inf
         grazed = crosses = False
         if v <= 0.0 and y0 >= 0.0:
@@ -103,10 +107,13 @@ def reference_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_
             tau_turn = turn_time(y0, v, h, w2)
             x_turn = xc + propagate(y0, v, tau_turn, h, w2)[0] if math.isfinite(tau_turn) else xc
             crosses = x_turn > xb
+            # the creep rule (segment.creeps_to_rest): a turn overshooting its rest position by
+            # less than CREEP_OVERSHOOT of the larger of the segment's motion and the release's
+            creep = abs(x_turn - xc) <= CREEP_OVERSHOOT * max(math.sqrt(y0 * y0 + v * v / w2), scale)
             if crosses:
                 tau, v_new = cross_time(y0, v, h, w2, xb - xc, tau_turn)
                 x, v = xb, max(v_new, 0.0)
-            elif math.isfinite(tau_turn):
+            elif math.isfinite(tau_turn) and not creep:
                 tau, x, v = tau_turn, x_turn, 0.0
             else:
                 n_seg += 1

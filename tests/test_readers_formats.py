@@ -140,9 +140,6 @@ def test_phyphox_zip_with_meta_and_a_pause(tmp_path):
     np.testing.assert_allclose(ts.theta, w, rtol=1e-9, atol=1e-12)
     assert ts.meta["phyphox_set"] == "Raw Data" and ts.meta["start_time"].startswith("2024-05-03 16:04:31.273")
     assert "paused and resumed 1 time(s) (t = 2.5 s" in ts.meta["notes"]
-    with pytest.raises(FitError, match="an angular velocity .* does not fit such an observation yet"):
-        from escfit.balance.recordings.series import refuse_unless_angle
-        refuse_unless_angle(ts)
 
 
 def test_xlsx_is_refused_with_what_to_do(tmp_path):
@@ -335,3 +332,25 @@ def test_bad_instrument_files_get_one_line(tmp_path, make, spec, message):
     with pytest.raises(DataError, match=message) as info:
         read_with_spec(make(tmp_path), spec)
     assert "\n" not in str(info.value)
+
+
+def test_a_title_line_naming_one_run_is_not_a_header_of_runs(tmp_path):
+    """DataStudio's text export: a title line (``Output Voltage, Run #16``) above the real header
+    (``Time ( s )<TAB>Voltage ( V )``); the title's comma split it into two names, one of them a
+    run label, and the file was taken for a runs-side-by-side CSV ("no run labels ...")."""
+    from escfit.balance.recordings.detect import detect_format
+    from escfit.balance.recordings.rawseries import read_raw_series
+    from escfit.balance.recordings.recording_spec import RecordingSpec
+
+    t = np.arange(0, 40, 0.1)
+    x = 0.2 * np.exp(-0.03 * t) * np.cos(2 * np.pi * t / 14.3)
+    body = "\r\n".join(f"{a:.4f}\t{b:.3f}" for a, b in zip(t, x))
+    path = tmp_path / "blow.txt"
+    path.write_bytes(("Output Voltage, Run #16\r\nTime ( s )\tVoltage ( V )\r\n" + body + "\r\n").encode())
+    try:
+        found = detect_format(path)
+    except DataError:  # a plain table: read with the [recording] table, as below
+        found = None
+    assert found != "pasco-csv"
+    ts = read_raw_series(path, RecordingSpec(time_column=1, angle_column=2, angle_unit="rad"))
+    assert ts.time.size == t.size and ts.theta[0] == pytest.approx(0.2, abs=1e-3)

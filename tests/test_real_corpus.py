@@ -68,7 +68,7 @@ def small_swing_period(res) -> float:
 def measured_period(res) -> float:
     """The record's period as escfit measured it (the count note)."""
     for note in res.notes:
-        m = re.search(r"turning points after the reference one .*; period ([0-9.]+) s", note)
+        m = re.search(r"turning points(?: \([^)]*\))? after the reference one .*; period ([0-9.]+) s", note)
         if m:
             return float(m.group(1))
     raise AssertionError(f"no period note in {res.notes}")
@@ -76,7 +76,7 @@ def measured_period(res) -> float:
 
 def counted(res) -> int:
     for note in res.notes:
-        m = re.match(r"(\d+) turning points after the reference one", note)
+        m = re.match(r"(\d+) turning points(?: \([^)]*\))? after the reference one", note)
         if m:
             return int(m.group(1)) + 1
     raise AssertionError(f"no count note in {res.notes}")
@@ -100,6 +100,31 @@ def jensen_first_period(res):
     return ratio_model, ratio_data, 0.01
 
 
+def damped_cosine(path: Path, constant: bool):
+    """The source notebook's own fit of the rate (03_bicycle_wheel_inertia.ipynb): scipy's curve_fit of
+    ``a exp(lambda t) cos(omega t)`` to the rate samples, a viscous decay with C = -2 lambda; with
+    ``constant``, plus a phase and a constant (the gyro's zero, which the notebook leaves out)."""
+    import numpy as np
+    from scipy.optimize import curve_fit
+
+    t, v = np.loadtxt(path, delimiter=",", skiprows=1, unpack=True)
+    if not constant:
+        p, _ = curve_fit(lambda t, a, lam, w: a * np.exp(lam * t) * np.cos(w * t), t, v, p0=(v[0], -0.01, 14.0
+                         if "radial" in path.name else 4.4))
+        return -2.0 * p[1]
+    p, _ = curve_fit(lambda t, a, lam, w, ph, b: a * np.exp(lam * t) * np.cos(w * t + ph) + b, t, v,
+                     p0=(v[0], -0.01, 14.0 if "radial" in path.name else 4.4, 0.0, 0.0))
+    return -2.0 * p[1]
+
+
+def viscous_c(res) -> float:
+    return float(res.summary()["viscous.C"]["estimate"])
+
+
+GYRO = OURS / "gyro_torsion_resonance"
+RADIAL = GYRO / "bicycle-wheel-radial-inertia-rate-gyro-measurement.csv"
+AXIAL = GYRO / "bicycle-wheel-axial-inertia-rate-gyro-measurement.csv"
+
 DECAYS = [
     Decay("encoder pendulum, 1 kHz, from 135 deg (jensen)", OURS / "encoder_pendulum_jensen" /
           "pendulum_free_swing_data_02.txt", "encoder_pendulum_jensen.toml", 15,
@@ -107,13 +132,16 @@ DECAYS = [
           reference=(("the source's zero-crossing period, 0.65 s (amplitude-dependent)",
                       lambda r: (measured_period(r), 0.65, 0.03)),
                      ("compute.py's decay of the first period (first two maxima)", jensen_first_period))),
-    Decay("bicycle wheel on a torsion rod, rate gyro", OURS / "gyro_torsion_resonance" /
-          "bicycle-wheel-radial-inertia-rate-gyro-measurement.csv", "gyro_torsion_radial.toml", 10,
-          reference=(("the source's period, 0.422 s", lambda r: (small_swing_period(r), 0.422, 0.002)),)),
-    Decay("bicycle wheel as a compound pendulum, rate gyro", OURS / "gyro_torsion_resonance" /
-          "bicycle-wheel-axial-inertia-rate-gyro-measurement.csv", "gyro_compound_axial.toml", 7,
+    # the rate's zeros (the angle's turning points): 9 and 6 sign changes of the rate on a plot
+    Decay("bicycle wheel on a torsion rod, rate gyro", RADIAL, "gyro_torsion_radial.toml", 9,
+          reference=(("the source's period, 0.422 s", lambda r: (small_swing_period(r), 0.422, 0.002)),
+                     ("the notebook's damped cosine of the rate, C = -2 lambda",
+                      lambda r: (viscous_c(r), damped_cosine(RADIAL, False), 0.01)))),
+    Decay("bicycle wheel as a compound pendulum, rate gyro", AXIAL, "gyro_compound_axial.toml", 6,
           slow=True,
-          reference=(("the source's period, 1.429 s", lambda r: (small_swing_period(r), 1.429, 0.005)),)),
+          reference=(("the source's period, 1.429 s", lambda r: (small_swing_period(r), 1.429, 0.005)),
+                     ("the notebook's damped cosine of the rate with the gyro's zero added",
+                      lambda r: (viscous_c(r), damped_cosine(AXIAL, True), 0.006)))),
     Decay("encoder pendulum, Arduino 50 Hz, 17 s", REAL / "gpl_tests_only" / "arduino_encoder_galileo_ferrucci" /
           "galileo_2024-07-19_09-27-13.csv", "galileo_encoder_pendulum.toml", 30,
           slow=True,

@@ -8,6 +8,7 @@ autocorrelation time of an AR(1) chain, the moments of a Gaussian posterior).
 from __future__ import annotations
 
 import math
+import time
 from collections import Counter
 
 import h5py
@@ -66,7 +67,7 @@ def test_interrupted_run_saves_its_completed_steps_and_resumes_to_identical_draw
     np.testing.assert_allclose(again.acceptance, whole.acceptance)
 
 
-@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT"])
 def test_a_signal_during_a_step_finishes_the_step_saves_and_resumes_exactly(tmp_path, sig):
     import os
     import signal
@@ -92,19 +93,31 @@ def test_a_signal_during_a_step_finishes_the_step_saves_and_resumes_exactly(tmp_
 def test_checkpoint_is_saved_in_chunks_not_every_step(tmp_path, monkeypatch):
     import escfit.inference.mcmc as mcmc
 
-    saves = []
+    saves, durations = [], []
     original = mcmc.save_checkpoint
-    monkeypatch.setattr(mcmc, "save_checkpoint", lambda path, ck: (saves.append(ck.steps), original(path, ck)))
+
+    def timed(path, ck):
+        t0 = time.perf_counter()
+        original(path, ck)
+        saves.append(ck.steps)
+        durations.append(time.perf_counter() - t0)
+
+    monkeypatch.setattr(mcmc, "save_checkpoint", timed)
     run_emcee(Gaussian2D(), walkers=8, steps=200, seed=1, checkpoint=tmp_path / "c.emcee", checkpoint_every=1e9)
     assert saves == [200]  # none on the way, one when sampling ends (before diagnostics and writing)
     saves.clear()
+    durations.clear()
     res = run_emcee(Gaussian2D(), walkers=8, steps=3000, seed=1, checkpoint=tmp_path / "d.emcee",
                     checkpoint_every=0.0)
     # asked to save all the time, it saves at most a twentieth of the time (the interval grows)
     assert 2 <= len(saves) < 3000 and saves == sorted(set(saves)) and saves[-1] == 3000
     t = res.timings
     assert t["checkpoint_saves"] == len(saves)
-    assert t["checkpoint_s"] <= 0.05 * t["sampling_s"] + 2 * t["checkpoint_s"] / len(saves) + 0.05
+    # after a save lasting s the next one comes at least 20 s of sampling later; only the last
+    # periodic save (the run ends before its 20 s are up) and the final one are not followed by
+    # such a stretch: so the saves take at most a twentieth of the sampling plus two saves,
+    # however loaded the machine (the bound is in the run's own times, not fixed seconds)
+    assert sum(durations) <= 0.05 * t["sampling_s"] + sum(sorted(durations)[-2:]) + 1e-3
     assert load_checkpoint(tmp_path / "d.emcee", 8, ["a", "b"]).steps == 3000
 
 
@@ -162,16 +175,38 @@ def test_walkers_that_disagree_are_not_converged():
     assert "max R-hat" in a.verdict()
 
 
+def closed_form_z(res) -> np.ndarray:
+    """Errors of a run's mean, sd and correlation against the Gaussian's, in units of their Monte
+    Carlo standard errors (each from the effective sample size of the quantity it averages:
+    the draws, their squared deviations, the product of the standardised deviations)."""
+    chain = res.chain  # (walkers, draws, 2)
+    dev = chain - chain.mean(axis=(0, 1))
+    sd_true = np.sqrt(np.diag(Gaussian2D.cov))
+    prod = (dev[..., :1] / sd_true[0]) * (dev[..., 1:] / sd_true[1])
+    ess = lambda x: assess(x.transpose(1, 0, 2), burn=0).ess_bulk  # noqa: E731
+    draws = chain.reshape(-1, 2)
+    z_mean = (draws.mean(axis=0) - Gaussian2D.mean) / (sd_true / np.sqrt(ess(chain)))
+    # a Gaussian's sample sd has relative standard error 1/sqrt(2 n), its correlation (1 - r^2)/sqrt(n)
+    z_sd = (np.sqrt(np.diag(np.cov(draws.T))) / sd_true - 1.0) * np.sqrt(2.0 * ess(dev**2))
+    z_r = (np.corrcoef(draws.T)[0, 1] - 0.8) / ((1 - 0.8**2) / np.sqrt(ess(prod)[0]))
+    return np.concatenate([z_mean, z_sd, [z_r]])
+
+
 def test_auto_run_stops_when_converged_and_gets_the_closed_form_moments():
+    """The moments of the draws agree with the Gaussian's within 4.5 Monte Carlo standard errors.
+
+    Fixed tolerances (6 % on the sds, 0.03 on r) were 1.7 standard errors at the run's effective
+    sample size and failed for about one seed in ten (another library version is another seed).
+    The z-scores of these five checks, measured over seeds 0-199, have sds of 0.98 to 1.13 and
+    their largest |z| of the 1000 was 3.7; at sd 1.13 the limit 4.5 is 4.0 sd, a two-sided
+    normal tail of 6e-5 per check, 3e-4 for the five.
+    """
     res = run_emcee(Gaussian2D(), walkers=16, steps="auto", seed=3, moves="de", max_steps=20000)
     assert res.auto and res.converged and res.steps < 20000
     final = assess(np.concatenate([res.chain.transpose(1, 0, 2)]), burn=0)
     assert np.all(final.rhat <= 1.011) and np.all(final.ess_bulk >= 390)
-    draws = res.chain.reshape(-1, 2)
-    se = np.sqrt(np.diag(Gaussian2D.cov) / final.ess_bulk)
-    assert np.all(np.abs(draws.mean(axis=0) - Gaussian2D.mean) < 4 * se)
-    assert np.corrcoef(draws.T)[0, 1] == pytest.approx(0.8, abs=0.03)
-    assert np.sqrt(np.diag(np.cov(draws.T))) == pytest.approx([0.5, 2.0], rel=0.06)
+    z = closed_form_z(res)
+    assert np.all(np.abs(z) < 4.5), z
 
 
 def test_auto_run_stopped_by_its_cap_says_so():
@@ -196,15 +231,17 @@ def test_an_interrupted_auto_run_resumes_to_the_same_length_and_draws(tmp_path):
         np.testing.assert_array_equal(again.chain, whole.chain)
 
 
-def test_resume_refuses_other_moves_and_a_shorter_fixed_length(tmp_path):
+def test_resume_refuses_other_moves_another_seed_and_a_shorter_fixed_length(tmp_path):
     ck = tmp_path / "c.emcee"
     run_emcee(Gaussian2D(), walkers=8, steps=100, seed=0, checkpoint=ck, moves="de")  # saved when sampling ends
     with pytest.raises(ResultsError, match="moves 'de'"):
         run_emcee(Gaussian2D(), walkers=8, steps=200, seed=0, checkpoint=ck, resume=True, moves="stretch")
     with pytest.raises(ResultsError, match="already holds 100 steps"):
         run_emcee(Gaussian2D(), walkers=8, steps=50, seed=0, checkpoint=ck, resume=True, moves="de")
-    done = run_emcee(Gaussian2D(), walkers=8, steps=100, seed=9, checkpoint=ck, resume=True, moves="de")
-    assert done.steps == 100 and done.seed == 0  # the random state, hence the seed, is the checkpoint's
+    with pytest.raises(ResultsError, match=r"its seed is '\d+', this run's is '\d+'"):  # another run's draws
+        run_emcee(Gaussian2D(), walkers=8, steps=100, seed=9, checkpoint=ck, resume=True, moves="de")
+    done = run_emcee(Gaussian2D(), walkers=8, steps=100, seed=0, checkpoint=ck, resume=True, moves="de")
+    assert done.steps == 100 and done.resumed
 
 
 def test_bad_run_lengths_are_refused():

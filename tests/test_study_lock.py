@@ -292,3 +292,28 @@ def test_sigterm_stops_the_batch_like_ctrl_c(data, tmp_path):
     assert (out / "u01.h5").exists() and not (out / "u03.h5").exists()
     assert not list(out.glob(".*.part")) and not _locked_elsewhere(out)
     load_fit(out / "u01.h5").tree.close()
+
+
+def test_a_hangup_after_the_last_unit_still_writes_the_summary(data, tmp_path, monkeypatch):
+    """SIGHUP (a closed terminal) while the summary is made: the summary is finished first, then
+    the batch ends as interrupted (exit 130), nothing left to rerun."""
+    import importlib
+
+    from click.testing import CliRunner
+
+    from escfit.cli.main import cli
+
+    batch = importlib.import_module("escfit.study.batch")
+    real = batch.summarize
+
+    def hangup(*args, **kwargs):
+        os.kill(os.getpid(), signal.SIGHUP)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(batch, "summarize", hangup)
+    out = tmp_path / "fits"
+    r = CliRunner().invoke(cli, ["fit-many", str(data / "u04.csv"), "--scene", str(SCENE), "--out", str(out),
+                                 "--workers", "0", "--n-starts", "2", "--quiet"])
+    assert r.exit_code == 130, r.output
+    assert (out / "summary.nc").exists() and (out / "u04.h5").exists()
+    assert not list(out.glob(".*.part")) and not _locked_elsewhere(out)

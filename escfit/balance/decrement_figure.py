@@ -66,6 +66,8 @@ def decrement_panels(res) -> tuple[list[DecrementPanel], list[str]]:
             s = obs["swing"].values[m]
             pieces[c] = (from_readings(s, y[m], None if half is None else np.full(m.sum(), half)),
                          from_readings(s, expected[m]))
+    elif kind == "timeseries" and obs["reading"].attrs.get("units") == "rad/s":
+        return [], ["a record of the angular velocity shows no amplitudes per half swing (the fit reads the rate)"]
     elif kind == "timeseries" and "time" in obs:
         t = obs["time"].values.astype(float)
         rate = best.get("observation.offset_rate", 0.0)
@@ -211,7 +213,8 @@ def _add_parts(panel: DecrementPanel, scene, vals: dict, measured: Decrements, m
     absent = {key: "zero" for key, v in parts.items() if float(np.max(np.abs(v))) < 1e-6 * scale}
     panel.parts = {key: (grid, v) for key, v in parts.items() if key not in absent}
     panel.coefficients = coeff | {"restoring": scene.restoring, "switching": scene.switching,
-                                  "windows": len(windows), "absent": absent}
+                                  "windows": len(windows), "absent": absent,
+                                  "linear": getattr(scene, "linear", False)}
 
 
 # -- drawing -----------------------------------------------------------------------------------
@@ -245,7 +248,7 @@ def decrement_figure(res):
     if n > 1:
         fig.legend(*zip(*[(h, _label(key, None)) for key, h in handles]), loc="outside lower center", ncols=2,
                    fontsize=LEGEND_PT - 1)
-    axes[0, 0].set_ylabel("decrement per half swing, A(k) - A(k+1) (deg)")
+    axes[0, 0].set_ylabel(f"decrement per half swing, A(k) - A(k+1) ({_units(panels[0])[1]})")
     notes = notes + [f"{LAWS[key][0]} is {why} at the best fit, so it has no part"
                      for p in panels[:1] for key, why in p.coefficients.get("absent", {}).items()]
     return png(fig, caption=_caption(res, panels, notes))
@@ -253,7 +256,7 @@ def decrement_figure(res):
 
 def _draw_panel(ax, p: DecrementPanel, pt: float) -> list[tuple[str, object]]:
     """Draw one curve; returns ``(key, handle)`` pairs in legend order."""
-    k = RAD_TO_DEG
+    k, unit = _units(p)
     m = p.measured
     many = m.decrement.size > 30
     out = []
@@ -282,7 +285,7 @@ def _draw_panel(ax, p: DecrementPanel, pt: float) -> list[tuple[str, object]]:
     ax.axhline(0.0, color="k", lw=0.6)
     if not p.coefficients.get("windows"):
         ax.set_xlim(left=0.0)  # lines through the origin show the laws' shapes
-    ax.set_xlabel("amplitude A (deg)")
+    ax.set_xlabel(f"amplitude A ({unit})")
     ax.tick_params(labelsize=pt)
     ax.grid(alpha=0.25)
     return out
@@ -316,13 +319,20 @@ def _label(key: str, p: DecrementPanel | None) -> str:
 
 def _values_text(p: DecrementPanel, only: str | None = None) -> list[str]:
     """``name = value`` of each part's coefficient (display units), one line each."""
-    c, k = p.coefficients, RAD_TO_DEG
-    text = {"coulomb": f"Coulomb, R = {c.get('R', 0):.3g} rad/s^2", "viscous": f"viscous, C = {c.get('C', 0):.3g} 1/s",
-            "drag": f"drag, D = {c.get('D', 0):.3g} 1/rad", "escapement": "escapement"}
+    c, (k, unit) = p.coefficients, _units(p)
+    linear = c.get("linear", False)
+    text = {"coulomb": f"Coulomb, R = {c.get('R', 0):.3g} {'m/s^2' if linear else 'rad/s^2'}",
+            "viscous": f"viscous, C = {c.get('C', 0):.3g} 1/s",
+            "drag": f"drag, D = {c.get('D', 0):.3g} {'1/m' if linear else '1/rad'}", "escapement": "escapement"}
     if "constant" in p.parts:
-        text["constant"] = f"Coulomb + escapement, {float(p.parts['constant'][1][-1]) * k:.3g} deg"
+        text["constant"] = f"Coulomb + escapement, {float(p.parts['constant'][1][-1]) * k:.3g} {unit}"
     keys = [only] if only else list(p.parts)
     return [text[key] for key in keys]
+
+
+def _units(p: DecrementPanel) -> tuple[float, str]:
+    """Factor and label of the amplitudes: degrees for an angle, metres for a linear oscillator."""
+    return (1.0, "m") if p.coefficients.get("linear") else (RAD_TO_DEG, "deg")
 
 
 def _stopped(p: DecrementPanel) -> bool:

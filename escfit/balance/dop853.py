@@ -42,7 +42,7 @@ from ..core.kernels import kernel
 from ..core.status import Status
 from .records import ROWS_FULL, columns, half_swings, run_options, with_rows
 from .regions import region_tables
-from .segment import CREEP_OVERSHOOT, creep_horizon
+from .segment import creep_horizon, creeps_to_rest
 from .solution import ROW_DOP853, RowSolution
 from .steps import N_STAGES, dop853_step
 from .system import System
@@ -258,6 +258,7 @@ def run_dop853(k, run, out, rows):
     h = -1.0
     rejected = False
     at_start = True
+    scale = -1.0
     while n_done < n_swings and not reached:
         if n_seg >= max_seg:
             status = _MAX_SEGMENTS
@@ -290,6 +291,8 @@ def run_dop853(k, run, out, rows):
         # no turning point within many time constants: creeping to rest (overdamped)
         horizon = creep_horizon(k.c, w2)
         x_seg, v_seg = x, v
+        if scale < 0.0:  # the run's scale: the release's offset from its rest position (rad)
+            scale = math.sqrt(acceleration(x, 0.0, w2, xc, k) ** 2 + w2 * v * v) / w2
         t_seg = 0.0
         while event < 0:
             if n_steps >= max_steps:
@@ -352,8 +355,8 @@ def run_dop853(k, run, out, rows):
                 break
         if status != 0 or reached:
             break
-        if event == 1 and abs(acceleration(xe, 0.0, w2, xc, k)) <= CREEP_OVERSHOOT * math.sqrt(
-                acceleration(x_seg, 0.0, w2, xc, k) ** 2 + w2 * v_seg * v_seg):
+        if event == 1 and creeps_to_rest(acceleration(xe, 0.0, w2, xc, k) / w2, math.sqrt(
+                acceleration(x_seg, 0.0, w2, xc, k) ** 2 + w2 * v_seg * v_seg) / w2, scale):
             # the "turn" lies on the rest position to within rounding: a creep to rest, as the
             # exact solver decides it (segment.CREEP_OVERSHOOT), not a swing
             x = xe

@@ -43,7 +43,7 @@ from ..core.kernels import kernel
 from ..core.status import Status
 from .records import ROWS_FULL
 from .regions import applies, region_tables
-from .segment import CREEP_OVERSHOOT, cross_time, propagate, turn_time
+from .segment import creeps_to_rest, cross_time, propagate, turn_time
 
 __all__ = ["run_angle", "run_phase", "run_angle_many", "run_phase_many", "run_one", "run_phase_one", "N_LOG"]
 
@@ -165,6 +165,7 @@ def run_angle(k, run, out, log):
     at_start = True
     at_edge = False  # the state sits on edge j after a crossing
     j = 0
+    scale = -1.0
     while n_done < n_swings:
         if n_seg >= max_seg:
             status = _MAX_SEGMENTS
@@ -178,6 +179,8 @@ def run_angle(k, run, out, log):
         w2 = w2_tab[d, j]
         xc = xc_tab[d, j]
         y0 = x - xc
+        if scale < 0.0:  # the run's scale: the release's offset from its rest position
+            scale = math.sqrt(y0 * y0 + v * v / w2)
         h = 0.5 * c
         xb = edges[j] if j < n_edges else math.inf
         grazed = False
@@ -214,8 +217,8 @@ def run_angle(k, run, out, log):
                 if math.isfinite(tau_turn):
                     y_turn, _ = propagate(y0, v, tau_turn, h, w2)
                     x_turn = xc + y_turn
-                    # a turn that overshoots the rest position by a rounding-level amount is a creep
-                    creep = abs(y_turn) <= CREEP_OVERSHOOT * math.sqrt(y0 * y0 + v * v / w2)
+                    # a turn that overshoots the rest position by a negligible amount is a creep
+                    creep = creeps_to_rest(y_turn, math.sqrt(y0 * y0 + v * v / w2), scale)
                 crosses = x_turn > xb
             if crosses:
                 tau, v_new = cross_time(y0, v, h, w2, xb - xc, tau_turn)

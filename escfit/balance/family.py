@@ -75,9 +75,6 @@ def make_problem(scene, data, *, solver: str | None = None, solver_options: dict
         raise FitError("--unit selects a unit of a unit-curve file; this recording holds one unit",
                        getattr(data, "source", None))
     if isinstance(data, TimeSeries):
-        from .recordings.series import refuse_unless_angle
-
-        refuse_unless_angle(data)
         readings = spec.readings if spec is not None else "samples"
         problem = problem_from_series(sc, data, solver=solver, solver_options=options, readings=readings)
         problem.notes += _override_notes(sc, recording)
@@ -182,14 +179,9 @@ def _read_data(path, spec, fmt: str | None, notch_deg: float | None, default_not
         try:
             detected = detect_format(path)
         except DataError as exc:
-            if "several formats" in exc.message:
-                raise
-            try:
-                return read_raw_series(path, None)
-            except DataError as raw_exc:
-                if "binary" in exc.message or "empty" in exc.message:
-                    raise exc from None
-                raise raw_exc from None
+            if "cannot tell the recording format" not in exc.message:
+                raise  # several formats, a file escfit cannot read, an empty file: said as it is
+            return read_raw_series(path, None)
     if detected not in ESCFIT_FORMATS:
         return read_with_spec(path, spec, detected)
     options = {}

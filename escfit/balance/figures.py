@@ -124,26 +124,32 @@ def _lift_angle_deg(res) -> str:
     return ""
 
 
+#: what a waveform's readings are, by their unit: factor to the drawn unit, its label, the words
+READ_AS = {"rad": (RAD_TO_DEG, "deg", "angle", "theta(t)"),
+           "rad/s": (1.0, "rad/s", "angular velocity", "theta'(t), the rate of the angle,"),
+           "m": (1.0, "m", "displacement", "x(t)")}
+
+
 def _waveform_figure(res, plt) -> bytes:
-    """Every sample against time with the model's theta(t), and the residuals below (deg)."""
+    """Every sample against time with the model's theta(t) (or theta'(t), x(t)), and the residuals below."""
     obs = res.group("observed_data")
     lsq_exp = res.group("least_squares")["expected"].values
     t = obs["time"].values
-    k = RAD_TO_DEG
+    k, unit, what, model_words = READ_AS.get(obs["reading"].attrs.get("units", "rad"), READ_AS["rad"])
     y = obs["reading"].values.astype(float)
     band = _band(res, y.size)
     fig, (ax, axr) = plt.subplots(2, 1, figsize=(9, 6), sharex=True, layout="constrained",
                                   gridspec_kw={"height_ratios": [3, 1.3]})
     ms = 3 if y.size < 500 else 1.5
-    ax.plot(t, k * y, "o", ms=ms, color="C0", mfc="none", label="recorded angle (every sample fitted)")
+    ax.plot(t, k * y, "o", ms=ms, color="C0", mfc="none", label=f"recorded {what} (every sample fitted)")
     ax.plot(t, k * lsq_exp, "-", lw=0.9, color="C3", label="model, best fit")
     if band is not None:
         axr.fill_between(t, k * (band[0] - lsq_exp), k * (band[1] - lsq_exp), alpha=0.3, color="C3",
                          label="95 % posterior band of the model")
     axr.plot(t, k * (y - lsq_exp), "o", ms=ms, color="C0", mfc="none", label="recording - best fit")
     axr.axhline(0, color="k", lw=0.6)
-    ax.set_ylabel("recorded angle, sensor's scale (deg)")
-    axr.set_ylabel("reading - best fit (deg)")
+    ax.set_ylabel(f"recorded {what}, sensor's scale ({unit})")
+    axr.set_ylabel(f"reading - best fit ({unit})")
     axr.set_xlabel("time on the recording's clock (s)")
     for a in (ax, axr):
         a.tick_params(labelsize=LEGEND_PT)
@@ -151,11 +157,12 @@ def _waveform_figure(res, plt) -> bytes:
     ax.legend(fontsize=LEGEND_PT, loc="upper right")
     if band is not None:
         axr.legend(fontsize=LEGEND_PT, loc="upper right")
-    caption = ("The recorded angle of every sample (blue circles) and the model's reading at the least-squares best "
-               "fit (red line: theta(t) about the fitted centre of the swing, placed on the sensor's scale), in "
-               "degrees as the sensor reads; the centre and its drift are in the parameter table. Lower panel: "
+    zero = "the rate's zero (the sensor's bias)" if unit == "rad/s" else "the centre"
+    caption = (f"The recorded {what} of every sample (blue circles) and the model's reading at the least-squares best "
+               f"fit (red line: {model_words} placed on the sensor's scale by the fitted {zero}), in {unit}; "
+               f"{zero} and its drift are in the parameter table. Lower panel: "
                "recording minus model; a pattern that repeats each swing points at a missing effect, a slow trend at "
-               "the centre's drift.")
+               "a drift of the sensor's zero.")
     return png(fig, caption=caption)
 
 
@@ -170,19 +177,21 @@ def _envelope_figure(res, plt):
     model = res.group("least_squares")["expected"].values.astype(float)
     y = obs["reading"].values.astype(float)
     t = obs["time"].values.astype(float)
+    k, unit, what, _ = READ_AS.get(obs["reading"].attrs.get("units", "rad"), READ_AS["rad"])
     cuts = np.flatnonzero(np.signbit(model[1:]) != np.signbit(model[:-1])) + 1
     if cuts.size < 3:
         return None
     pieces = [(a, b) for a, b in zip(cuts[:-1], cuts[1:]) if b - a >= 3]
     times = np.array([t[np.argmax(np.abs(model[a:b])) + a] for a, b in pieces])
-    amp_y = RAD_TO_DEG * np.array([np.max(np.abs(y[a:b])) for a, b in pieces])
-    amp_m = RAD_TO_DEG * np.array([np.max(np.abs(model[a:b])) for a, b in pieces])
+    amp_y = k * np.array([np.max(np.abs(y[a:b])) for a, b in pieces])
+    amp_m = k * np.array([np.max(np.abs(model[a:b])) for a, b in pieces])
+    peak = "peak angular velocity" if unit == "rad/s" else "amplitude"
     fig = fit_figure(plt, x=times, y=amp_y, model=amp_m, curves=np.full(times.size, "amplitude"),
-                     xlabel="time on the recording's clock (s)", ylabel="amplitude of the half swing (deg)",
-                     reading_key="largest recorded angle in the half swing", figsize=(9.0, 5.0))
-    caption = ("Amplitude of every half swing: the largest recorded angle (circles) and the model's (line, "
-               "least-squares best fit), in degrees from the sensor's zero, so alternate half swings differ by twice "
-               "the centre's offset. The decay's shape tells the "
+                     xlabel="time on the recording's clock (s)", ylabel=f"{peak} of the half swing ({unit})",
+                     reading_key=f"largest recorded {what} in the half swing", figsize=(9.0, 5.0))
+    caption = (f"{peak[0].upper() + peak[1:]} of every half swing: the largest recorded {what} (circles) and the "
+               f"model's (line, least-squares best fit), in {unit} from the sensor's zero, so alternate half swings "
+               "differ by twice the zero's offset. The decay's shape tells the "
                "damping: exponential for viscous drag, a straight line for dry (Coulomb) friction. Samples are "
                "discrete and noisy: a recorded peak may fall short of the true turning point (between samples) or "
                "pass it (the largest of several noisy samples), so the lower panel may sit off zero.")

@@ -24,7 +24,7 @@ from ..core.errors import SolverError
 from ..core.kernels import kernel
 from ..core.status import Status
 from .regions import region_at, swing_edges
-from .segment import CREEP_OVERSHOOT
+from .segment import creep_horizon, creeps_to_rest
 from .solution import DenseSolution
 from .system import System
 from .torque import acceleration
@@ -86,9 +86,12 @@ def solve_ivp_events(system: System, n_swings: int, *, method: str = "DOP853", r
     status, nsteps, n_seg, at_start = Status.OK, 0, 0, True
     pieces = []  # (t0, t1, s, swing, OdeSolution) of every segment, for the dense solution
     pend = system.restoring == "pendulum"
-    horizon = 4.0 * math.pi / system.omega0 + 8.0 / max(c, 1e-300)
+    # no event within this long a segment: a creep to rest, on the horizon every solver uses
+    # (segment.creep_horizon) so that they agree on when a balance has stopped
+    horizon = 0.0
     if pend:  # a pendulum's half swing lasts 2 K(sin^2(A/2)) / omega0, long near A = pi
-        horizon += 4.0 * float(ellipk(math.sin(0.5 * theta0) ** 2)) / system.omega0
+        horizon = 4.0 * float(ellipk(math.sin(0.5 * theta0) ** 2)) / system.omega0
+    scale = -1.0
     while len(amp) < n_swings:
         if n_seg >= nseg:
             status = Status.MAX_SEGMENTS
@@ -98,6 +101,8 @@ def solve_ivp_events(system: System, n_swings: int, *, method: str = "DOP853", r
             status = Status.STOPPED  # the net acceleration at rest cannot overcome static friction
             break
         xb = edges[j] if j < n_edges else math.inf
+        if scale < 0.0:  # the run's scale: the release's offset from its rest position (rad)
+            scale = math.hypot(_acc(ks, w2, xc, x, 0.0), v * math.sqrt(w2)) / w2
 
         def rhs(_t, y, w2=w2, xc=xc):
             return (y[1], _acc(ks, w2, xc, y[0], y[1]))
@@ -120,7 +125,7 @@ def solve_ivp_events(system: System, n_swings: int, *, method: str = "DOP853", r
         y0 = [x, v if v > 0 else 0.0]
         if y0[1] == 0.0:  # start from rest: nudge past the trivial root of the turning event
             y0[1] = 1e-300
-        sol = solve_ivp(rhs, (0.0, horizon), y0, method=method, rtol=rtol, atol=atol, events=events,
+        sol = solve_ivp(rhs, (0.0, horizon + creep_horizon(c, w2)), y0, method=method, rtol=rtol, atol=atol, events=events,
                         dense_output=dense or math.isfinite(xb))
         nsteps += int(sol.t.size)
         n_seg += 1
@@ -152,7 +157,7 @@ def solve_ivp_events(system: System, n_swings: int, *, method: str = "DOP853", r
         else:
             x, v, is_bank = float(ye[0]), 0.0, False
             a_end, a_start = _acc(ks, w2, xc, x, 0.0), _acc(ks, w2, xc, y0[0], 0.0)
-            if abs(a_end) <= CREEP_OVERSHOOT * math.hypot(a_start, y0[1] * math.sqrt(w2)):
+            if creeps_to_rest(a_end / w2, math.hypot(a_start, y0[1] * math.sqrt(w2)) / w2, scale):
                 status = Status.STOPPED  # a turn on the rest position to within rounding: a creep to rest
                 break
         amp.append(abs(x))

@@ -29,7 +29,7 @@ from ..core.kernels import kernel
 from ..core.status import Status
 from .records import ROWS_FULL, columns, half_swings, run_options, with_rows
 from .regions import region_at, swing_edges
-from .segment import CREEP_OVERSHOOT, creep_horizon
+from .segment import creep_horizon, creeps_to_rest
 from .solution import ROW_RK4, RowSolution
 from .steps import rk4_step
 from .system import System
@@ -132,6 +132,7 @@ def _run_located(k, run, out, rows):
     edges = np.empty(2 * k.n_windows + k.n_pieces)
     n_edges = swing_edges(s, k, edges)
     at_start = True
+    scale = -1.0
     while n_done < run.n_swings:
         j, w2, xc = region_at(x, s, edges, n_edges, k)
         regime = (w2, xc, k)
@@ -143,6 +144,8 @@ def _run_located(k, run, out, rows):
         n = 0
         event = -1
         x_seg, v_seg = x, v
+        if scale < 0.0:  # the run's scale: the release's offset from its rest position (rad)
+            scale = math.sqrt(acceleration(x, 0.0, w2, xc, k) ** 2 + w2 * v * v) / w2
         horizon = creep_horizon(k.c, w2)
         row_start = 0
         if record:
@@ -199,8 +202,8 @@ def _run_located(k, run, out, rows):
                 rows[n_rows - 1, 9] = n - row_start
         if status != 0 or event < 0:
             break
-        if event == 1 and abs(acceleration(x, 0.0, w2, xc, k)) <= CREEP_OVERSHOOT * math.sqrt(
-                acceleration(x_seg, 0.0, w2, xc, k) ** 2 + w2 * v_seg * v_seg):
+        if event == 1 and creeps_to_rest(acceleration(x, 0.0, w2, xc, k) / w2, math.sqrt(
+                acceleration(x_seg, 0.0, w2, xc, k) ** 2 + w2 * v_seg * v_seg) / w2, scale):
             status = _STOPPED  # a turn on the rest position to within rounding: a creep to rest
             break
         at_start = False

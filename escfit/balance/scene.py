@@ -33,6 +33,11 @@ class BalanceScene:
         ``"spring"`` (hairspring: restoring acceleration ``omega0**2 * theta``) or
         ``"pendulum"`` (gravity: ``omega0**2 * sin(theta)``, ``omega0 = sqrt(g/L)``),
         from ``[oscillator] restoring``.
+    coordinate
+        ``"angle"`` (a balance, a pendulum: theta in rad, R in rad/s^2) or ``"linear"`` (a mass on
+        a spring, ``[oscillator] coordinate = "linear"``: the same equation in a displacement x
+        in m, released at ``x0``, with R a friction force per mass in m/s^2; the release keeps
+        the parameter name ``oscillator.theta0``, in m).
     effects
         The effect objects, in reading order (structure only).
     params
@@ -58,6 +63,12 @@ class BalanceScene:
     extra: Mapping[str, Any] = field(default_factory=dict)
     model: str = "balance"
     restoring: str = "spring"
+    coordinate: str = "angle"
+
+    @property
+    def linear(self) -> bool:
+        """Whether the scene is a linear oscillator (a displacement in m) rather than an angle."""
+        return self.coordinate == "linear"
 
     @functools.cached_property
     def structure(self) -> Structure:
@@ -116,8 +127,9 @@ def parse(doc: Mapping[str, Any], *, where: str, text: str) -> BalanceScene:
         raise SceneError("missing table [oscillator]", where)
     ow = f"{where} [oscillator]"
     # theta0 may be left out: a sampled recording supplies the release itself (see escfit.balance.problems.release)
-    check_keys(osc, {"omega0", "inertia", "stiffness", "theta0", "restoring"}, ow)
+    check_keys(osc, {"omega0", "inertia", "stiffness", "theta0", "restoring", "coordinate", "x0"}, ow)
     restoring = _read_restoring(osc, doc, switching, ow)
+    coordinate = _read_coordinate(osc, doc, restoring, switching, ow)
     params = ParamSet()
     inertia = None
     if "inertia" in osc:
@@ -132,7 +144,9 @@ def parse(doc: Mapping[str, Any], *, where: str, text: str) -> BalanceScene:
         raise SceneError("with [effects.hairspring] give omega0 per piece there, not in [oscillator]", ow)
     if not has_spring:
         params.add(_read_omega0(osc, inertia, ow))
-    if "theta0" in osc:
+    if coordinate == "linear":
+        params.add(_read_x0(osc, ow))
+    elif "theta0" in osc:
         params.add(read_param(osc["theta0"], name="oscillator.theta0", kind="angle", bare_limit=BARE_ANGLE_LIMIT,
                               meaning="release angle (rad); released at rest", where=f"{ow}.theta0"))
     else:  # nan: taken from the recording's reference turning point when fitting
@@ -143,7 +157,7 @@ def parse(doc: Mapping[str, Any], *, where: str, text: str) -> BalanceScene:
     swings = run.get("swings", 120)
     if isinstance(swings, bool) or not isinstance(swings, int) or not 1 <= swings <= 10_000_000:
         raise SceneError(f"swings must be a whole number from 1 to 1e7, got {swings!r}", f"{where} [run].swings")
-    ctx = ReadContext(where=where, inertia=inertia, switching=switching)
+    ctx = ReadContext(where=where, inertia=inertia, switching=switching, coordinate=coordinate)
     unknown = sorted(set(effects_doc) - set(EFFECTS))
     if unknown:
         raise SceneError(f"unknown effect(s) {unknown}; known effects: {sorted(EFFECTS)}", f"{where} [effects]")
@@ -167,7 +181,7 @@ def parse(doc: Mapping[str, Any], *, where: str, text: str) -> BalanceScene:
     title = doc.get("title", "")
     extra = {k: doc[k] for k in ("observation", "fit", "recording") if k in doc}
     return BalanceScene(switching, tuple(effects), params, swings, inertia, text, where, str(title), extra,
-                        restoring=restoring)
+                        restoring=restoring, coordinate=coordinate)
 
 
 def _read_restoring(osc: Mapping, doc: Mapping, switching: str, where: str) -> str:
@@ -184,6 +198,43 @@ def _read_restoring(osc: Mapping, doc: Mapping, switching: str, where: str) -> s
             raise SceneError("restoring = 'pendulum' needs switching = 'angle': phase switching assumes the fixed "
                              "half period of a linear spring", f"{where}.restoring")
     return restoring
+
+
+LINEAR_EFFECTS = ("viscous", "coulomb", "drag")  # what acts on a mass on a spring (the others act on a balance's angle)
+
+
+def _read_coordinate(osc: Mapping, doc: Mapping, restoring: str, switching: str, where: str) -> str:
+    """``[oscillator] coordinate``: ``"angle"`` (default) or ``"linear"`` (a displacement in m), with its refusals."""
+    coordinate = osc.get("coordinate", "angle")
+    if coordinate not in ("angle", "linear"):
+        raise SceneError(f"coordinate must be 'angle' or 'linear', got {coordinate!r}", f"{where}.coordinate")
+    if coordinate == "angle":
+        if "x0" in osc:
+            raise SceneError("x0 is a linear oscillator's release displacement: with coordinate = 'linear'; a balance "
+                             "or pendulum is released at theta0", f"{where}.x0")
+        return coordinate
+    for key, why in (("theta0", "give its release displacement as x0 (a length, e.g. \"5 cm\")"),
+                     ("inertia", "give omega0 (rad/s); masses and forces enter per mass"),
+                     ("stiffness", "give omega0 (rad/s); masses and forces enter per mass")):
+        if key in osc:
+            raise SceneError(f"a linear oscillator (coordinate = 'linear') takes no {key}: {why}", f"{where}.{key}")
+    if restoring != "spring" or switching != "angle":
+        raise SceneError("a linear oscillator (coordinate = 'linear') is a mass on a spring: restoring = 'spring' "
+                         "and switching = 'angle'", f"{where}.coordinate")
+    effects = doc.get("effects", {})
+    other = sorted(set(effects) - set(LINEAR_EFFECTS)) if isinstance(effects, Mapping) else []
+    if other:
+        raise SceneError(f"effect(s) {other} act on a balance's angle; a linear oscillator takes "
+                         f"{', '.join(LINEAR_EFFECTS)}", f"{where}.coordinate")
+    return coordinate
+
+
+def _read_x0(osc: Mapping, where: str) -> Param:
+    """A linear oscillator's release displacement, m (``nan``: from the recording)."""
+    meaning = "release displacement x0 (m); released at rest"
+    if "x0" not in osc:
+        return Param("oscillator.theta0", math.nan, "m", meaning + " (from the recording)")
+    return read_param(osc["x0"], name="oscillator.theta0", kind="length", meaning=meaning, where=f"{where}.x0")
 
 
 def _read_omega0(osc: Mapping, inertia: float | None, where: str) -> Param:

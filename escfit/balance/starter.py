@@ -94,6 +94,8 @@ class Survey:
     notes: list = field(default_factory=list)
     data: object = None
     tp: object = None
+    quantity: str = "angle"  # what a sampled record measured: angle, angular_velocity, displacement
+    counts_extra: dict = field(default_factory=dict)
 
 
 # -- reading -------------------------------------------------------------------------------------
@@ -146,9 +148,22 @@ def read_with_help(path: str | Path, recording: dict | None = None, *, fmt: str 
                     str(path))
 
 
+_OTHER_QUANTITY = re.compile(r"column '([^']+)' looks like (angular velocity|displacement): set \[recording\] "
+                             r"(velocity_column|displacement_column)")
+
+
 def _help(path, table: dict, exc: DataError, fmt) -> tuple[str, object, str] | None:
     """One ``[recording]`` option the reader's message asks for and the record can settle."""
     message = str(exc)
+    other = _OTHER_QUANTITY.search(message)
+    if other and other.group(3) not in table:
+        return other.group(3), other.group(1), (f"column {other.group(1)!r} holds the {other.group(2)}, not an angle: "
+                                                "it is fitted as measured")
+    if "gives no unit: set [recording] velocity_unit" in message and "velocity_unit" not in table:
+        return "velocity_unit", "rad/s", ("the file names no unit for the rate: rad/s assumed; CHECK it (deg/s, "
+                                          "rpm, or V with scale)")
+    if "gives no unit: set [recording] displacement_unit" in message and "displacement_unit" not in table:
+        return "displacement_unit", "m", "the file names no unit for the displacement: m assumed; CHECK it (cm, mm)"
     if "angle_column" in message and "angle_column" not in table:
         found = _swinging_column(path, table, fmt)
         if found is not None:
@@ -238,9 +253,6 @@ def survey(path: str | Path, *, restoring: str = "spring", recording: dict | Non
     data, table, why = read_with_help(path, recording, fmt=fmt, notch_deg=notch_deg)
     s = Survey(kind="", path=str(path), recording=table, why=why, data=data)
     if isinstance(data, TimeSeries):
-        from .recordings.series import refuse_unless_angle
-
-        refuse_unless_angle(data)  # velocities and displacements are read, not fitted yet
         if table.get("readings") == "amplitudes":
             _survey_amplitude_rows(s, data)
         else:
@@ -260,7 +272,17 @@ def _survey_samples(s: Survey, series: TimeSeries, restoring: str) -> None:
     from .problems.period import implied_omega0, measured_period
     from .recordings.turning_points import reduce_series
 
-    tp = reduce_series(series, strict=False)
+    if series.quantity == "angular_velocity":  # the angle's turning points are the rate's zeros
+        from .recordings.rate import reduce_rate
+
+        rate = reduce_rate(series)
+        tp = rate.turns
+        s.counts_extra = {"rate zero": rate.offset, "rate zero se": rate.offset_stderr}
+        notes = rate.notes
+    else:
+        tp = reduce_series(series, strict=False)
+        notes = list(tp.notes)
+    s.quantity = series.quantity
     s.kind, s.tp = "waveform", tp
     s.period = float(tp.period)
     times = np.concatenate([[tp.release_time], np.asarray(tp.time, float)])
@@ -272,7 +294,8 @@ def _survey_samples(s: Survey, series: TimeSeries, restoring: str) -> None:
                 "rate": float((t.size - 1) / (t[-1] - t[0])) if t.size > 1 and t[-1] > t[0] else math.nan,
                 "centre": float(tp.offset), "centre rate": float(tp.offset_rate),
                 "omega0": implied_omega0(restoring, measured_period(tp, series.source))}
-    s.notes = list(tp.notes)
+    s.counts.update(s.counts_extra)
+    s.notes = notes
     s.format_words = series.meta.get("source_format", "escfit time series (time_s, theta)")
     s.columns_words = _columns_words(series.meta)
     s.lag1 = _excess_lag1(np.asarray(series.theta, float), s.period / np.median(np.diff(t)))
@@ -344,6 +367,10 @@ def _columns_words(meta: dict) -> str:
         unit = meta.get("angle_unit", "")
         assumed = " (assumed)" if meta.get("angle_unit_assumed") else ""
         parts.append(f"angle: {meta['angle_column']}" + (f" in {unit}{assumed}" if unit else ""))
+    for key, what in (("velocity", "angular velocity"), ("displacement", "displacement")):
+        if meta.get(f"{key}_column"):
+            unit = meta.get(f"{key}_unit", "")
+            parts.append(f"{what}: {meta[f'{key}_column']}" + (f" in {unit}" if unit else ""))
     return "; ".join(parts) or "time_s and theta columns"
 
 

@@ -68,6 +68,8 @@ def starter_scene(path: str | Path, *, restoring: str = "spring", recording: dic
         terminal, and the survey itself.
     """
     s = survey(path, restoring=restoring, recording=recording, fmt=fmt, notch_deg=notch_deg)
+    if s.quantity == "displacement":  # a displacement is a linear oscillator's, whatever was asked
+        restoring, restoring_said = "spring", "a displacement in m"
     name = Path(path).name
     lines = [f"# Starter scene written by `escfit init` from {name}.",
              "# Every value is a starting point for the fit, measured from the record: edit freely.",
@@ -89,10 +91,19 @@ def _record_lines(s: Survey) -> list[str]:
     deg, unit = np.degrees(s.amplitudes), "deg"
     out = []
     if s.kind == "waveform":
+        zeros = " (zeros of the rate)" if s.quantity == "angular_velocity" else ""
         out.append(f"{c['samples']} samples over {c['duration']:.4g} s ({c['rate']:.4g} per s); {c['turning points']} "
-                   f"turning points; period {s.period:.5g} s (the record's periodogram and turning times)")
-        out.append(f"amplitude about the centre {deg[0]:.3g} deg at the release, {deg[-1]:.3g} deg at the last turn; "
-                   f"centre {math.degrees(c['centre']):+.3g} deg on the sensor's scale")
+                   f"turning points{zeros}; period {s.period:.5g} s (the record's periodogram and turning times)")
+        if s.quantity == "displacement":
+            out.append(f"amplitude about the centre {s.amplitudes[0]:.3g} m at the release, {s.amplitudes[-1]:.3g} m "
+                       f"at the last turn; centre {c['centre']:+.4g} m on the sensor's scale")
+        elif s.quantity == "angular_velocity":
+            out.append(f"angle swept about the centre (from the rate's zeros) {deg[0]:.3g} deg at the release, "
+                       f"{deg[-1]:.3g} deg at the last turn; the rate's zero (the sensor's bias) "
+                       f"{c['rate zero']:+.3g} +- {c['rate zero se']:.2g} rad/s")
+        else:
+            out.append(f"amplitude about the centre {deg[0]:.3g} deg at the release, {deg[-1]:.3g} deg at the last "
+                       f"turn; centre {math.degrees(c['centre']):+.3g} deg on the sensor's scale")
     elif s.kind in ("amplitude", "notches"):
         count = c.get("readings", s.amplitudes.size)
         out.append(f"{count} readings, one per half swing; amplitude {deg[0]:.3g} -> {deg[-1]:.3g} {unit}")
@@ -120,7 +131,11 @@ def _decay_body(s: Survey, restoring: str, said: str) -> list[str]:
     w = omega0 if timed else 2 * math.pi  # placeholder: 1 s period when the file has no times
     est = decay_estimates(s.amplitudes, w, s.times)
     out = ["[oscillator]"]
-    if restoring == "pendulum":
+    linear = s.quantity == "displacement"
+    if linear:
+        out.append("coordinate = \"linear\"    # a mass on a spring, recorded by its displacement x (m): x0 in m, "
+                   "R in m/s^2")
+    elif restoring == "pendulum":
         out.append(f"restoring = \"pendulum\"    # a gravity pendulum ({said or '--pendulum'}): torque omega0^2 sin(theta)")
     else:
         out.append(f"# a linear restoring torque (a balance spring, a torsion wire; {said or '--spring'}); for a "
@@ -143,7 +158,8 @@ def _decay_body(s: Survey, restoring: str, said: str) -> list[str]:
         what = "the release amplitude" if first == 0 else f"the first reading (half swing {first}), CHECK it"
         out += [f"theta0 = {toml_number(s.amplitudes[0], 5)}    # rad: {what}"]
     else:
-        out += ["# theta0 is left out: the model is released at rest at the record's reference turning point"]
+        out += [f"# {'x0' if linear else 'theta0'} is left out: the model is released at rest at the record's "
+                "reference turning point"]
     out += ["", "[effects.viscous]"]
     if not est["decays"]:
         out.append("# the record shows no clear decay: the bounds below are wide guesses")
@@ -151,6 +167,7 @@ def _decay_body(s: Survey, restoring: str, said: str) -> list[str]:
             f"# {BOUND_TEXT} the C that alone explains the decay seen",
             f"C = {_param(est['C'], 0.0, _outward(est['C_max'], True), 3)}",
             "", "[effects.coulomb]",
+            "# dry (Coulomb) friction, force per mass R (m/s^2): alone, the amplitude would fall by" if linear else
             "# dry (Coulomb) friction, torque per inertia R (rad/s^2): alone, the amplitude would fall by",
             f"# 2 R / omega0^2 per half swing; the upper bound is {BOUND_TEXT} the R that alone explains the decay",
             f"R = {_param(est['R'], 0.0, _outward(est['R_max'], True), 3)}"]
@@ -166,7 +183,9 @@ def _decay_body(s: Survey, restoring: str, said: str) -> list[str]:
 
 def _observation_lines(s: Survey) -> list[str]:
     if s.kind == "waveform":
-        out = ["model = \"waveform\"    # every sample of theta(t) is fitted (the release instant and the centre too)"]
+        what = {"angular_velocity": "theta'(t), the rate,", "displacement": "x(t)"}.get(s.quantity, "theta(t)")
+        zero = "the rate's zero (bias)" if s.quantity == "angular_velocity" else "the centre"
+        out = [f"model = \"waveform\"    # every sample of {what} is fitted (the release instant and {zero} too)"]
         if s.noise_ar1:
             out.append(f"noise = \"ar1\"    # the samples' scatter is correlated from one to the next (lag-1 "
                        f"correlation {s.lag1:+.2f} above white noise's): a tracker or filter, or a small unmodelled effect")

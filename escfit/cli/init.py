@@ -21,7 +21,7 @@ import click
 __all__ = ["init", "offer_starter", "write_starter", "interactive"]
 
 RECORDING_OPTIONS = ("time_column", "sample_rate", "angle_column", "angle_unit", "counts_per_turn", "scale", "start",
-                     "stop")
+                     "stop", "velocity_column", "velocity_unit", "displacement_column", "displacement_unit", "run")
 
 
 def interactive() -> bool:
@@ -86,12 +86,16 @@ def write_starter(data: str, out: str | Path, *, kind: str | None = None, force:
     check_output_folder(out, "--out")
     refuse_existing(out, force)
     restoring, said = _restoring(kind)
-    text, summary, _ = starter_scene(data, restoring=restoring, recording=recording, fmt=fmt, restoring_said=said)
+    text, summary, s = starter_scene(data, restoring=restoring, recording=recording, fmt=fmt, restoring_said=said)
+    if s.quantity == "displacement":
+        said = "a displacement"
     load_scene(str(out), text=text)  # the scene must parse before it is written
     with atomic_path(out, force=force) as tmp:
         tmp.write_text(text, encoding="utf-8")
     lines = list(summary)
-    if said == "assumed":
+    if said == "a displacement":
+        lines.append("a linear oscillator (a mass on a spring): the record is a displacement in m")
+    elif said == "assumed":
         lines.append("assumed a spring (linear restoring torque: a balance spring, a torsion wire); for a gravity "
                      f"pendulum run: escfit init {data} --pendulum --force" + (f" --out {out}" if out != default_scene_path(data) else ""))
     else:
@@ -124,6 +128,14 @@ def next_command(data: str, scene: Path) -> str:
 @click.option("--scale", type=float, default=None, help="[recording] scale: multiplies the raw readings.")
 @click.option("--start", "start", default=None, help="[recording] start of the window, e.g. '13 s'.")
 @click.option("--stop", "stop", default=None, help="[recording] end of the window, e.g. '60 s'.")
+@click.option("--velocity-column", default=None,
+              help="[recording] velocity_column: the column of an angular velocity (a gyroscope, a velocity pickup).")
+@click.option("--velocity-unit", default=None, help="[recording] velocity_unit: rad/s, deg/s, rpm, or V with --scale.")
+@click.option("--displacement-column", default=None,
+              help="[recording] displacement_column: the column of a linear displacement (a motion detector).")
+@click.option("--displacement-unit", default=None, help="[recording] displacement_unit: m, cm, mm, or V with --scale.")
+@click.option("--run", type=click.IntRange(min=1), default=None,
+              help="[recording] run: which run (from 1) of a file holding several side by side (Vernier, PASCO, CASSY).")
 def init(data, out, kind, force, fmt, **options):
     """Write a starter scene that fits DATA (a recording of your own), and say what to run next.
 

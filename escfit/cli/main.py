@@ -18,6 +18,7 @@ before a command runs, so that ``escfit -h`` answers at once.
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 import sys
@@ -29,6 +30,8 @@ import click
 
 from ..core.version import __version__
 from ..core.errors import EscfitError
+from .options import STEPS_MAX, WALKERS_MAX, FiniteFloat, StepsType
+from ..core.interrupts import interrupting_signals
 
 __all__ = ["main", "cli"]
 
@@ -53,6 +56,9 @@ THIRD_PARTY = ("lmfit", "numpy", "scipy", "arviz", "xarray", "dask", "distribute
                "numba", "pint", "matplotlib", "pandas", "tqdm", "jinja2", "asteval", "uncertainties")
 
 CONTEXT_SETTINGS = {"help_option_names": ["-h", "--help"]}
+# The finest notch a recorder's scale can carry, deg: below it counts of a swing exceed 10**6
+# and a mistyped value (1e-300) would be blamed on the data
+NOTCH_MIN_DEG = 0.01
 
 
 def quiet_third_party_warnings(argv: list[str] | None = None) -> bool:
@@ -80,18 +86,18 @@ def quiet_third_party_warnings(argv: list[str] | None = None) -> bool:
     return True
 
 
-def _quiet_broken_pipe() -> None:
-    """The reader of stdout has gone (``escfit summary X.h5 | head``): leave quietly.
+def _quiet_broken_pipe(status: int = EXIT_BROKEN_PIPE) -> None:
+    """The reader of stdout has gone (``escfit summary X.h5 | head``) or stdout is full: leave quietly.
 
     stdout is pointed at the null device so that the interpreter's last flush cannot fail
-    again, then the command exits with :data:`EXIT_BROKEN_PIPE`.
+    again, then the command exits with ``status`` (:data:`EXIT_BROKEN_PIPE` by default).
     """
     try:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
     except (OSError, ValueError):  # no file descriptor behind stdout (tests): nothing to protect
         pass
-    raise click.exceptions.Exit(EXIT_BROKEN_PIPE)
+    raise click.exceptions.Exit(status)
 
 
 class _Group(click.Group):
@@ -129,7 +135,8 @@ class _Group(click.Group):
 
     def invoke(self, ctx):
         try:
-            return super().invoke(ctx)
+            with interrupting_signals():  # SIGTERM, SIGHUP, SIGQUIT end a command as Ctrl-C does
+                return super().invoke(ctx)
         except EscfitError as exc:
             click.echo(f"escfit: error: {exc}", err=True)
             ctx.exit(2)
@@ -141,6 +148,12 @@ class _Group(click.Group):
             raise
         except BrokenPipeError:
             _quiet_broken_pipe()
+        except OSError as exc:
+            if exc.errno not in (errno.ENOSPC, errno.EDQUOT, errno.EIO):
+                raise
+            # the output files are written whole or not at all; this is the console itself (> /dev/full)
+            click.echo(f"escfit: error: cannot write the command's output ({exc.strerror})", err=True)
+            _quiet_broken_pipe(2)
         except KeyboardInterrupt:  # commands with something to resume say so themselves
             click.echo("escfit: interrupted", err=True)
             ctx.exit(EXIT_INTERRUPTED)
@@ -169,19 +182,19 @@ def cli(debug) -> None:
               help="Solver: balance exact (default; dop853 for a pendulum) | dop853 | rk4 | ivp; "
                    "geneva dop853 (default) | rk4; see the README.")
 @click.option("--swings", type=click.IntRange(1), default=None, help="Half swings (overrides the scene).")
-@click.option("--h", "step", type=float, default=None, help="RK4 step size, s.")
+@click.option("--h", "step", type=FiniteFloat(0.0, low_open=True, unit="s"), default=None, help="RK4 step size, s.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object with the results.")
 @click.option("--out", type=click.Path(dir_okay=False), default=None, help="Write the dataset to FILE.nc (HDF5).")
 @click.option("--force", is_flag=True, help="Replace an existing --out file.")
 @click.option("--recorder", type=click.Choice(["unit-curve", "pulses", "timegrapher", "timeseries"]), default=None,
               help="Write a synthetic recording of a balance scene to --out instead of the dataset "
                    "(timegrapher: tg JSON, or the per-beat CSV when --out ends in .csv).")
-@click.option("--noise", type=click.FloatRange(0.0), default=None,
+@click.option("--noise", type=FiniteFloat(0.0), default=None,
               help="The recorder's noise sd: reading (rad), pulse timing (s), timegrapher amplitude (deg) "
                    "or sample (rad); each recorder's default if omitted.")
 @click.option("--seed", type=click.IntRange(0, SEED_MAX), default=0, show_default=True,
               help="Seed of the recorder's noise.")
-@click.option("--notch-deg", type=click.FloatRange(0.0, min_open=True), default=None,
+@click.option("--notch-deg", type=FiniteFloat(NOTCH_MIN_DEG, 360.0, high_open=True, unit="deg"), default=None,
               help="unit-curve recorder: count notches of this angle (deg) instead of amplitudes.")
 @click.option("--notch-reading", type=click.Choice(["counted", "nearest"]), default=None,
               help="unit-curve recorder with --notch-deg: marks passed (counted, the default) or the mark "
@@ -247,7 +260,7 @@ def _record(sc, recorder: str, out: str | None, *, force: bool, noise, seed: int
 @cli.command()
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default="charts", show_default=True,
               help="Directory for the CSV and PNG files.")
-@click.option("--c-over-omega0", "c0", type=click.FloatRange(0.0, 1.99), default=0.05, show_default=True,
+@click.option("--c-over-omega0", "c0", type=FiniteFloat(0.0, 1.99), default=0.05, show_default=True,
               help="Damping ratio at which the conversion charts are drawn.")
 @click.option("--no-png", is_flag=True, help="CSV only (no matplotlib needed).")
 @click.option("--force", is_flag=True, help="Replace existing files.")
@@ -262,35 +275,24 @@ def charts(out_dir, c0, no_png, force):
     click.echo(f"graph factor K/K_R at C/omega0 = {c0:g}: {graph_factor(c0):.4f}")
 
 
-def _check_outputs(outputs: dict, inputs: dict) -> None:
+# Bytes a Markdown report's figure files add to its stem (``<stem>_<figure>.png``; the longest
+# figure names are about 25 characters)
+REPORT_FIGURE_NAMES = 48
+
+
+def _check_outputs(outputs: dict, inputs: dict, companions: dict | None = None) -> None:
     """Refuse, before any work, outputs that are inputs or each other, or whose folder cannot take them."""
-    from ..core.atomic import check_output_folder, refuse_clobbering_inputs
+    from ..core.atomic import check_output_folder, refuse_clobbering_inputs, refuse_existing
 
     refuse_clobbering_inputs(outputs, inputs)
     for role, path in outputs.items():
         if path is not None:
-            check_output_folder(path, role)
+            check_output_folder(path, role, companions=(companions or {}).get(role, 0))
+            refuse_existing(path, force=True)  # a device, FIFO, socket or link is never replaced
 
 
 RECIPE_KEYS = {"data", "scene", "method", "out", "seed", "walkers", "steps", "max_steps", "burn", "unit", "material",
                "format", "notch_deg", "report", "title", "solver", "moves"}
-
-
-class StepsType(click.ParamType):
-    """``--steps``: a whole number of steps (at least 10) or ``auto`` (sample until converged)."""
-
-    name = "N|auto"
-
-    def convert(self, value, param, ctx):
-        if value == "auto" or (isinstance(value, int) and not isinstance(value, bool) and value >= 10):
-            return value
-        try:
-            n = int(str(value))
-        except ValueError:
-            n = None
-        if n is None or n < 10:
-            self.fail(f"{value!r} is neither 'auto' nor a whole number of steps >= 10", param, ctx)
-        return n
 
 
 def _recipe_steps(recipe: dict, key: str, where: str):
@@ -299,17 +301,17 @@ def _recipe_steps(recipe: dict, key: str, where: str):
 
     value = recipe.get(key)
     ok = value is None or (key == "steps" and value == "auto") or (
-        isinstance(value, int) and not isinstance(value, bool) and value >= 10)
+        isinstance(value, int) and not isinstance(value, bool) and 10 <= value <= STEPS_MAX)
     if not ok:
-        raise SceneError(f"{key} must be {'auto or ' if key == 'steps' else ''}a whole number >= 10, got {value!r}",
-                         f"{where} (recipe).{key}")
+        raise SceneError(f"{key} must be {'auto or ' if key == 'steps' else ''}a whole number in [10, {STEPS_MAX}], "
+                         f"got {value!r}", f"{where} (recipe).{key}")
     return value
 
 
 # The kind of value each recipe key takes (steps and max_steps: see _recipe_steps)
 RECIPE_TEXT = ("data", "scene", "out", "report", "title", "solver", "format", "material")
 RECIPE_CHOICES = {"method": ("leastsq", "emcee"), "moves": ("stretch", "de")}
-RECIPE_WHOLE = {"seed": (0, SEED_MAX), "walkers": (2, None), "burn": (0, None)}
+RECIPE_WHOLE = {"seed": (0, SEED_MAX), "walkers": (2, WALKERS_MAX), "burn": (0, STEPS_MAX)}
 
 
 def _check_recipe_values(doc: dict, where: str) -> None:
@@ -333,8 +335,8 @@ def _check_recipe_values(doc: dict, where: str) -> None:
     if "unit" in doc and (isinstance(doc["unit"], bool) or not isinstance(doc["unit"], (str, int))):
         refuse("unit", "a unit's name or number")
     if "notch_deg" in doc and (isinstance(doc["notch_deg"], bool) or not isinstance(doc["notch_deg"], (int, float))
-                               or not 0 < doc["notch_deg"] < float("inf")):
-        refuse("notch_deg", "a positive number of degrees")
+                               or not NOTCH_MIN_DEG <= doc["notch_deg"] < 360):
+        refuse("notch_deg", f"a number of degrees in [{NOTCH_MIN_DEG:g}, 360)")
 
 
 def _read_recipe(path: Path) -> dict:
@@ -343,10 +345,15 @@ def _read_recipe(path: Path) -> dict:
     from ..core.errors import SceneError
     from ..core.scene import check_keys
 
+    from ..core.inputs import check_input_file
+    from ..core.scene import parse_toml
+
+    check_input_file(path, "fit recipe", SceneError)
     try:
-        doc = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
         raise SceneError(f"cannot read fit recipe ({exc})", str(path)) from None
+    doc = parse_toml(text, str(path))
     check_keys(doc, RECIPE_KEYS, f"{path} (recipe)", {"data", "scene"})
     _check_recipe_values(doc, f"{path} (recipe)")
     for key in ("data", "scene"):
@@ -360,12 +367,12 @@ def _read_recipe(path: Path) -> dict:
 @click.option("--method", type=click.Choice(["leastsq", "emcee"]), default=None, help="Default leastsq (recipe may set it).")
 @click.option("--out", type=click.Path(dir_okay=False), default=None, help="Results file (HDF5).")
 @click.option("--seed", type=click.IntRange(0, SEED_MAX), default=None, help="Seed of the fit's random numbers.")
-@click.option("--walkers", type=click.IntRange(2), default=None)
+@click.option("--walkers", type=click.IntRange(2, WALKERS_MAX), default=None)
 @click.option("--steps", type=StepsType(), default=None,
               help="emcee steps, or 'auto': sample until split R-hat <= 1.01, bulk and tail ESS >= 400 and 50 "
                    "autocorrelation times, up to --max-steps (default: the model family's; auto for balance).")
-@click.option("--max-steps", type=click.IntRange(10), default=None, help="Cap of an automatic run (default 20000).")
-@click.option("--checkpoint-every", type=click.FloatRange(0.0), default=10.0, show_default=True,
+@click.option("--max-steps", type=click.IntRange(10, STEPS_MAX), default=None, help="Cap of an automatic run (default 20000).")
+@click.option("--checkpoint-every", type=FiniteFloat(0.0, unit="s"), default=10.0, show_default=True,
               help="Seconds between saves of the sampler's checkpoint (<out>.emcee); longer when a save would take "
                    "over a twentieth of the run.  A kill loses the steps since the last save.")
 @click.option("--burn", type=click.IntRange(0), default=None)
@@ -378,15 +385,16 @@ def _read_recipe(path: Path) -> dict:
 @click.option("--sample-rate", default=None, help="[recording] sample_rate, e.g. '500 Hz' (instead of a time column).")
 @click.option("--angle-column", default=None, help="[recording] angle_column: name or 1-based position.")
 @click.option("--angle-unit", default=None, help="[recording] angle_unit: deg, rad, ... or counts.")
-@click.option("--counts-per-turn", type=float, default=None, help="[recording] counts_per_turn (with counts).")
-@click.option("--scale", type=float, default=None, help="[recording] scale: multiplies the raw readings.")
+@click.option("--counts-per-turn", type=FiniteFloat(0.0, low_open=True), default=None, help="[recording] counts_per_turn (with counts).")
+@click.option("--scale", type=FiniteFloat(), default=None, help="[recording] scale: multiplies the raw readings.")
 @click.option("--start", "start_time", default=None, help="[recording] start of the window, e.g. '13 s'.")
 @click.option("--stop", "stop_time", default=None, help="[recording] end of the window, e.g. '60 s'.")
 @click.option("--solver", default=None, help="Forward solver (default: exact, or dop853 for a pendulum).")
 @click.option("--moves", type=click.Choice(["stretch", "de"]), default=None,
               help="emcee proposal: stretch or de (differential evolution: coupled parameters, one-parameter "
                    "posteriors); default: the model family's.")
-@click.option("--notch-deg", type=float, default=None, help="Notch angle for notch counts, deg.")
+@click.option("--notch-deg", type=FiniteFloat(NOTCH_MIN_DEG, 360.0, high_open=True, unit="deg"), default=None,
+              help="Notch angle for notch counts, deg.")
 @click.option("--resume", is_flag=True, help="Continue an interrupted emcee run from its checkpoint.")
 @click.option("--force", is_flag=True, help="Replace an existing results file.")
 @click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None, help="Also write a report.")
@@ -409,6 +417,9 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoi
         data, scene_path = recipe["data"], recipe["scene"]
         for key in ("steps", "max_steps"):
             _recipe_steps(recipe, key, where)
+    from ..core.inputs import check_input_file
+
+    check_input_file(data, "data")
     if scene_path is None:  # a record of one's own: offer a starter scene (on a terminal) or name `escfit init`
         from .init import offer_starter, recording_table
 
@@ -426,7 +437,8 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoi
     if method == "emcee":
         outputs["the checkpoint (--out + .emcee)"] = f"{out}.emcee"
     # refused before any work, --force or not: an output must not replace an input or another output
-    _check_outputs(outputs, {"data": data, "scene": scene_path, "recipe": recipe_path})
+    _check_outputs(outputs, {"data": data, "scene": scene_path, "recipe": recipe_path},
+                   companions={"--report": REPORT_FIGURE_NAMES} if str(report_path).endswith(".md") else None)
     if report_path:
         from ..core.atomic import refuse_existing
 
@@ -469,12 +481,28 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoi
     click.echo(f"wrote {out}")
     _print_summary(result)
     if report_path:
-        from ..report import make_report
-
-        make_report(out, report_path, fmt="md" if str(report_path).endswith(".md") else "html", force=force)
-        click.echo(f"wrote {report_path}")
+        _write_report(out, report_path, force)
     if getattr(result, "verdict", "") == "not determined":
         raise click.exceptions.Exit(EXIT_NOT_DETERMINED)
+
+
+def _write_report(results: str, report_path: str, force: bool) -> None:
+    """The report of a fit just written; if it cannot be written, say that the results are kept
+    and which command writes the report from them (a rerun of the fit would find its output)."""
+    from ..core.errors import ResultsError
+    from ..report import make_report
+
+    again = f"`escfit report {results} --out {report_path}{' --format md' if report_path.endswith('.md') else ''}`"
+    try:
+        make_report(results, report_path, fmt="md" if str(report_path).endswith(".md") else "html", force=force)
+    except KeyboardInterrupt:
+        click.echo(f"escfit: interrupted while writing the report; the results are saved in {results}: {again} "
+                   "writes it", err=True)
+        sys.exit(EXIT_INTERRUPTED)
+    except EscfitError as exc:
+        raise ResultsError(f"the report was not written ({exc}); the results are saved in {results}: {again} "
+                           "writes it") from None
+    click.echo(f"wrote {report_path}")
 
 
 def _column(text: str | None):
@@ -522,7 +550,8 @@ def report(results, out, fmt, force, title):
     from ..report import make_report
 
     out = out or str(Path(results).with_suffix(".html" if fmt == "html" else ".md"))
-    _check_outputs({"--out": out}, {"results": results})
+    _check_outputs({"--out": out}, {"results": results},
+                   companions={"--out": REPORT_FIGURE_NAMES} if fmt == "md" else None)
     click.echo(f"wrote {make_report(results, out, fmt=fmt, force=force, title=title)}")
 
 

@@ -3,20 +3,19 @@
 Exit status: 0 when every unit is fitted (or was done before), 3 when some units failed (the
 others are fitted and summarised; each failure is printed on stderr), 2 on bad input or when
 dask.distributed (the ``study`` extra) is missing or another fit-many is writing into the same
---out folder, 130 when interrupted (Ctrl-C or SIGTERM): the units fitted by then are kept, the
+--out folder, 130 when interrupted (Ctrl-C, SIGTERM, SIGHUP or SIGQUIT): the units fitted by then are kept, the
 folder's lock is released, and the same command fits the rest.
 """
 
 from __future__ import annotations
 
-import contextlib
-import signal
 import sys
-import threading
 
 import click
 
-from .main import EXIT_INTERRUPTED, StepsType
+from ..core.interrupts import interrupting_signals
+from .main import EXIT_INTERRUPTED, NOTCH_MIN_DEG
+from .options import WALKERS_MAX, FiniteFloat, StepsType
 
 __all__ = ["fit_many"]
 
@@ -35,14 +34,14 @@ EXIT_SOME_FAILED = 3
 @click.option("--workers", type=click.IntRange(0), default=None,
               help="Worker processes of the local cluster (default: CPUs available; 0: in this process).")
 @click.option("--seed", type=click.IntRange(0, 2**32 - 1), default=0, show_default=True, help="Batch seed (each unit's seed derives from it).")
-@click.option("--walkers", type=click.IntRange(2), default=None, help="emcee walkers (default: the family's).")
+@click.option("--walkers", type=click.IntRange(2, WALKERS_MAX), default=None, help="emcee walkers (default: the family's).")
 @click.option("--steps", type=StepsType(), default=None,
               help="emcee steps or 'auto' (until converged; default: the family's).")
 @click.option("--burn", type=click.IntRange(0), default=None, help="Default: half the steps.")
 @click.option("--n-starts", type=click.IntRange(1), default=None,
               help="Least-squares start points (default: the family's).")
 @click.option("--unit", "units", multiple=True, help="Fit only this unit (repeatable).")
-@click.option("--notch-deg", type=float, default=None,
+@click.option("--notch-deg", type=FiniteFloat(NOTCH_MIN_DEG, 360.0, high_open=True, unit="deg"), default=None,
               help="Balance unit curves: notch angle for files without a '# notch_deg:' line.")
 @click.option("--quiet", is_flag=True, help="No progress lines.")
 @click.pass_context
@@ -58,7 +57,7 @@ def fit_many(ctx, data, scene_path, out_dir, method, scheduler, workers, seed, w
     from ..study.batch import fit_many as run
 
     try:
-        with _sigterm_interrupts():
+        with interrupting_signals():
             res = run(list(data), scene_path, out_dir, method=method, scheduler=scheduler, workers=workers, seed=seed,
                       walkers=walkers, steps=steps, burn=burn, n_starts=n_starts, units=list(units) or None,
                       notch_deg=notch_deg, progress=not quiet)
@@ -72,24 +71,6 @@ def fit_many(ctx, data, scene_path, out_dir, method, scheduler, workers, seed, w
     if res.failed:  # each failure was printed on stderr as it came back
         click.echo(f"escfit fit-many: {len(res.failed)} unit(s) failed: {', '.join(res.failed)}", err=True)
         ctx.exit(EXIT_SOME_FAILED)
-
-
-@contextlib.contextmanager
-def _sigterm_interrupts():
-    """While active, SIGTERM interrupts like Ctrl-C: the local cluster is shut down, the folder's
-    lock released and the way on printed, instead of the process ending mid-write."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-
-    def interrupt(signum, frame):
-        raise KeyboardInterrupt
-
-    previous = signal.signal(signal.SIGTERM, interrupt)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
 
 
 def format_summary(ds, *, max_params: int = 4) -> str:

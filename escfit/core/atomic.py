@@ -10,7 +10,9 @@ when the caller says so (``force=True``).  Commands check their outputs before a
 
 from __future__ import annotations
 
+import errno
 import os
+import stat
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
@@ -18,7 +20,7 @@ from typing import Iterator
 
 from .errors import ResultsError
 
-__all__ = ["atomic_path", "refuse_existing", "refuse_clobbering_inputs", "check_output_folder", "current_umask",
+__all__ = ["atomic_path", "refuse_existing", "existing_kind", "refuse_folder_syntax", "name_limit", "refuse_clobbering_inputs", "check_output_folder", "current_umask",
            "new_file_mode"]
 
 
@@ -45,10 +47,65 @@ def new_file_mode() -> int:
     return 0o666 & ~current_umask()
 
 
+# What stands at an output path, by ``stat`` file type (see :func:`existing_kind`)
+KINDS = {stat.S_IFREG: "regular file", stat.S_IFDIR: "folder", stat.S_IFLNK: "symbolic link",
+         stat.S_IFIFO: "FIFO (named pipe)", stat.S_IFSOCK: "socket", stat.S_IFCHR: "character device",
+         stat.S_IFBLK: "block device"}
+# A temporary beside the target is named ``.<name>.<8 random characters>.part``
+TEMPORARY_EXTRA = len("..12345678.part")
+
+
+def existing_kind(path: str | Path) -> str | None:
+    """What is at ``path`` itself (a symbolic link is not followed): ``None`` when nothing is,
+    else ``"regular file"``, ``"folder"``, ``"symbolic link"``, ``"FIFO (named pipe)"``, ..."""
+    try:
+        mode = os.lstat(path).st_mode
+    except FileNotFoundError:
+        return None
+    except OSError as exc:
+        if exc.errno in (errno.ENAMETOOLONG, errno.ENOTDIR):  # nothing can be there; the name is judged later
+            return None  # e.g. a name too long: refused by check_output_folder with its own words
+        raise ResultsError(f"cannot use this output path ({exc.strerror or exc})", str(path)) from None
+    return KINDS.get(stat.S_IFMT(mode), "special file")
+
+
+def refuse_folder_syntax(path: str | Path) -> None:
+    """Refuse an output written as a folder (``res/``): a file name cannot end with a separator."""
+    text = os.fspath(path)
+    if isinstance(text, str) and (text.endswith("/") or (os.altsep and text.endswith(os.altsep))):
+        raise ResultsError("ends with '/', so it names a folder; give a file name", text)
+
+
 def refuse_existing(path: str | Path, force: bool) -> None:
-    """Raise :class:`ResultsError` if ``path`` exists and ``force`` is false."""
-    if Path(path).exists() and not force:
+    """Refuse to replace what is at ``path``.
+
+    Nothing there: fine.  A regular file: replaced only with ``force``.  Anything else (a
+    device such as ``/dev/null``, a FIFO, a socket, a folder, a symbolic link, dangling or
+    not) is never replaced, ``force`` or not: renaming a new file over it would destroy
+    something that is not an earlier result.
+
+    Raises
+    ------
+    ResultsError
+        Naming the path and what is there.
+    """
+    refuse_folder_syntax(path)
+    kind = existing_kind(path)
+    if kind is None:
+        return
+    if kind != "regular file":
+        raise ResultsError(f"is a {kind}, not a results file; only a regular file is ever replaced (--force "
+                           "or not): choose another name", str(path))
+    if not force:
         raise ResultsError("output file exists; pass --force to replace it", str(path))
+
+
+def name_limit(folder: str | Path) -> int:
+    """The longest file name (bytes) the file system of ``folder`` takes (255 where unknown)."""
+    try:
+        return int(os.pathconf(folder, "PC_NAME_MAX"))
+    except (OSError, ValueError, AttributeError):
+        return 255
 
 
 def same_file(a: str | Path, b: str | Path) -> bool:
@@ -90,17 +147,25 @@ def refuse_clobbering_inputs(outputs: dict[str, str | Path | None], inputs: dict
         seen.append((role, path))
 
 
-def check_output_folder(path: str | Path, role: str = "output") -> None:
-    """Refuse, before any work, an output whose folder is missing, not a folder or not writable.
+def check_output_folder(path: str | Path, role: str = "output", *, companions: int = 0) -> None:
+    """Refuse, before any work, an output whose folder is missing, not a folder or not writable,
+    or whose name (with its temporary's additions) is longer than the file system takes.
+
+    Parameters
+    ----------
+    companions
+        Bytes that files written beside the output add to its stem (a Markdown report's
+        ``<stem>_<figure>.png``), so that their names are checked too.
 
     Raises
     ------
     ResultsError
         Naming the output, its role and the folder.
     """
+    refuse_folder_syntax(path)
     target = Path(path)
     folder = target.parent
-    if target.is_dir():
+    if existing_kind(target) == "folder":
         raise ResultsError(f"{role} is a folder; give a file name", str(target))
     if not folder.exists():
         raise ResultsError(f"the folder of {role} does not exist ({folder}); create it first", str(target))
@@ -108,6 +173,13 @@ def check_output_folder(path: str | Path, role: str = "output") -> None:
         raise ResultsError(f"the folder of {role} is not a folder ({folder} is a file)", str(target))
     if not os.access(folder, os.W_OK | os.X_OK):
         raise ResultsError(f"the folder of {role} is not writable ({folder})", str(target))
+    limit = name_limit(folder)
+    name, stem = len(os.fsencode(target.name)), len(os.fsencode(target.stem))
+    allowed = min(limit - TEMPORARY_EXTRA, limit - companions + (name - stem))
+    if name > allowed:
+        raise ResultsError(f"the file name of {role} is {name} bytes long; at most {allowed} fit this file system "
+                           "(with the additions of its temporary and companion files): choose a shorter name",
+                           str(target))
 
 
 @contextmanager
@@ -121,6 +193,7 @@ def atomic_path(path: str | Path, *, force: bool = False) -> Iterator[Path]:
     force
         Replace an existing file.  Checked before and again just before the rename.
     """
+    refuse_folder_syntax(path)
     target = Path(path)
     refuse_existing(target, force)
     if not target.parent.exists():

@@ -1,7 +1,13 @@
-"""A small, strict CSV reader shared by the recording formats.
+"""A small, strict CSV reader shared by escfit's own recording formats (unit curves, pulse trains,
+time series, per-beat timegrapher CSVs).
 
 ``#`` lines are comments; ``# key: value`` comments are metadata.  Every error names the
-file, the line and the column.
+file, the line and the column.  Lines and fields come from the tokenizer every text format
+shares (:func:`~escfit.core.tabletext.numbered_lines`: LF, CRLF, CR and CR CR LF each end one
+line; :func:`~escfit.core.tabletext.split_fields`: comma-separated, double quotes around a field);
+the text must be UTF-8 (:func:`~escfit.core.textfile.decode_text`) and the numbers plain
+(``float``): these formats are escfit's, written by escfit or by hand to its documentation, so
+no decimal commas or thousands marks are guessed.
 """
 
 from __future__ import annotations
@@ -13,6 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .errors import DataError
+from .tabletext import numbered_lines, split_fields
 from .textfile import decode_text
 
 __all__ = ["refuses_unreadable", "Table", "read_table"]
@@ -83,7 +90,7 @@ def read_table(path: str | Path) -> Table:
     text = decode_text(raw, where, what="a CSV table")
     meta: dict[str, str] = {}
     body: list[tuple[int, str]] = []
-    for n, line in enumerate(text.splitlines(), start=1):
+    for n, line in numbered_lines(text):
         s = line.strip()
         if not s:
             continue
@@ -96,7 +103,7 @@ def read_table(path: str | Path) -> Table:
     if not body:
         raise DataError("empty file (no header and no rows)", where)
     try:
-        rows = list(csv.reader([b for _, b in body]))
+        rows = [split_fields(b, ",") for _, b in body]
     except csv.Error as exc:
         raise DataError(f"cannot read as a table ({exc})", where) from None
     header = [h.strip() for h in rows[0]]

@@ -62,6 +62,16 @@ NAMES: tuple[tuple[str, str], ...] = (
     (r"verge\.restitution", "impact restitution e"),
 )
 
+# a record of another quantity than an angle (an angular velocity, a linear displacement) says so in
+# the parameter's stored meaning: (name, words in the meaning, plain name)
+BY_MEANING: tuple[tuple[str, str, str], ...] = (
+    ("oscillator.theta0", "displacement", "release displacement x0"),
+    ("observation.offset", "angular velocity", "zero of the rate on the sensor's scale (its bias) b"),
+    ("observation.offset_rate", "rad/s**2", "drift of the rate's zero db/dt"),
+    ("observation.offset", "displacement", "centre of the swing on the sensor's scale xc"),
+    ("observation.offset_rate", "(m/s)", "drift of the centre dxc/dt"),
+)
+
 _COMPILED = tuple((re.compile(p + r"\Z"), text) for p, text in NAMES)
 _SYMBOL = re.compile(r"\s(\S+)$")
 _UNIT_TAIL = re.compile(r",\s*(rad|deg|m|kg|s|N|kg\*m\^2|kg\*m\*\*2|N\*m|rad/s|1/s)$")
@@ -89,6 +99,9 @@ def plain_name(name: str, meaning: str = "", loads_in: str = "", kind: str = "")
     >>> plain_name("coulomb.R[load=330.66]", loads_in="g")
     'Coulomb friction R at 330.66 g'
     """
+    for code, words, text in BY_MEANING:
+        if name == code and words in meaning:
+            return text
     for pattern, text in _COMPILED:
         found = pattern.match(name)
         if not found:

@@ -81,6 +81,27 @@ def safe_name(name: str) -> str:
     return out.replace(".", "__")
 
 
+# A free parameter's fitted range may be at most this many times its value wide: least squares
+# maps a two-sided range onto a sine, which resolves values near the value only to about
+# 3.5e-16 * sqrt(range / value) of themselves (1e-10 at this ratio; with max = 1e200 and a
+# value of 0.1 the fit ended at the wrong value, with max = 1e308 at NaN)
+WIDEST_RANGE = 1e12
+
+
+def _check_range_resolvable(value: float, pmin: float, pmax: float, sd: float | None, raw: Mapping, where: str) -> None:
+    """Refuse a free parameter whose two-sided range is too wide for a fit to resolve its value."""
+    if not (math.isfinite(pmin) and math.isfinite(pmax)):
+        return  # an open side is mapped without loss of resolution
+    span = pmax - pmin
+    nonzero = [abs(b) for b in (pmin, pmax) if b != 0]
+    scale = abs(value) if value != 0 else (sd or (min(nonzero) if nonzero else 1.0))
+    if not math.isfinite(span) or span > WIDEST_RANGE * scale:
+        bound = "max" if abs(pmax) >= abs(pmin) else "min"
+        raise SceneError(f"the range [{pmin:g}, {pmax:g}] is more than {WIDEST_RANGE:g} times the value {value:g} wide: "
+                         f"a fit cannot resolve the value in it; leave {bound} out for an open range, or give a "
+                         "narrower one", f"{where}.{bound}" if bound in raw else where)
+
+
 def read_param(
     raw: Any,
     *,
@@ -164,6 +185,8 @@ def read_param(
         pmin, pmax = max(pmin, lower), min(pmax, upper)
         if not (pmin <= value <= pmax):
             raise SceneError(f"value {raw['value']!r} lies outside [{pmin:g}, {pmax:g}] ({out_unit or 'dimensionless'})", where)
+        if vary:
+            _check_range_resolvable(value, pmin, pmax, sd, raw, where)
     else:
         value = canonical(raw, where)
         vary, pmin, pmax, prior, sd = False, lower, upper, None, None

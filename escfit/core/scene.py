@@ -15,7 +15,15 @@ from typing import Any, Mapping, Protocol
 from .errors import SceneError
 from .params import ParamSet
 
-__all__ = ["Scene", "load_scene", "MODELS", "check_keys"]
+__all__ = ["Scene", "load_scene", "parse_toml", "MODELS", "check_keys", "MAX_DEPTH", "MAX_SCENE_BYTES"]
+
+# Deepest nesting of tables and arrays a scene or recipe may have: real ones use 3 or 4
+# (effects.escapement[1].X.prior); tomllib recurses once per level and fails with a bare
+# RecursionError near 1000
+MAX_DEPTH = 16
+# Largest scene or recipe text, bytes: real ones are a few kB (a 1000-piece hairspring is 20 kB);
+# a million-piece spring (20 MB) would run for hours before any error could be reported
+MAX_SCENE_BYTES = 1_000_000
 
 # model name -> module that provides ``parse(doc, where, text) -> Scene`` and
 # ``simulate(scene, solver=..., **options) -> xarray.Dataset``.
@@ -48,6 +56,38 @@ def check_keys(table: Mapping[str, Any], allowed: set[str], where: str, required
         raise SceneError(f"missing required key(s) {missing}", where)
 
 
+def parse_toml(text: str, where: str) -> dict:
+    """Parse TOML ``text``; a syntax error, nesting deeper than :data:`MAX_DEPTH` or a text
+    longer than :data:`MAX_SCENE_BYTES` is a :class:`SceneError` naming ``where`` (the line,
+    for syntax errors)."""
+    if len(text) > MAX_SCENE_BYTES:
+        raise SceneError(f"{len(text) / 1e6:.3g} MB of text; a scene or recipe is a few kB, at most "
+                         f"{MAX_SCENE_BYTES / 1e6:g} MB", where)
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"not valid TOML: {exc}", where) from None
+    except RecursionError:
+        raise SceneError(f"tables or arrays nested too deeply (more than {MAX_DEPTH} levels)", where) from None
+    path = _deep_key(doc, MAX_DEPTH)
+    if path is not None:
+        raise SceneError(f"tables or arrays nested more than {MAX_DEPTH} levels deep", f"{where} [{path}]")
+    return doc
+
+
+def _deep_key(value: Any, budget: int, path: str = "") -> str | None:
+    """The key path at which ``value`` nests deeper than ``budget`` levels, or ``None``."""
+    if isinstance(value, (dict, list)) and budget <= 0:
+        return path or "(top)"
+    items = value.items() if isinstance(value, dict) else enumerate(value) if isinstance(value, list) else ()
+    for key, item in items:
+        found = _deep_key(item, budget - 1, f"{path}.{key}" if path and isinstance(key, str) else
+                          (f"{path}[{key}]" if not isinstance(key, str) else key))
+        if found is not None:
+            return found
+    return None
+
+
 def model_module(name: str):
     """Import the module implementing model ``name``."""
     return importlib.import_module(MODELS[name])
@@ -77,9 +117,10 @@ def load_scene(source: str | Path, *, text: str | None = None) -> "Scene":
     """
     where = str(source)
     if text is None:
+        from .inputs import check_input_file
+
         path = Path(source)
-        if not path.is_file():
-            raise SceneError("scene file not found", where)
+        check_input_file(path, "scene", SceneError)
         try:
             raw = path.read_bytes()
         except OSError as exc:
@@ -93,10 +134,7 @@ def load_scene(source: str | Path, *, text: str | None = None) -> "Scene":
             raise SceneError(exc.message, exc.where) from None
     elif text.startswith("\ufeff"):
         text = text[1:]
-    try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"not valid TOML: {exc}", where) from None
+    doc = parse_toml(text, where)
     model = doc.get("model")
     if model is None:
         raise SceneError(f"missing key 'model' (one of {sorted(MODELS)})", where)

@@ -83,6 +83,9 @@ CANONICAL: dict[str, str] = {
     "stiffness": "N*m",  # per radian; rad is dimensionless
     "damping": "N*m*s",  # per rad/s
     "length": "m",
+    "speed": "m/s",  # a linear oscillator's drift of its centre
+    "acceleration": "m/s**2",  # a linear oscillator's Coulomb friction per mass
+    "inverse_length": "1/m",  # a linear oscillator's quadratic drag per mass
     "mass": "kg",
     "force": "N",
     "dimensionless": "",

@@ -9,29 +9,70 @@ either the previous checkpoint or the new one, never a torn file: at most the st
 last save are lost.  Datasets carry HDF5 checksums (fletcher32), so a damaged file is refused
 instead of being continued.
 
-Layout (format ``escfit-emcee-checkpoint``, version 1)::
+A checkpoint resumes only the run it belongs to: it records the run's identity (the data's
+SHA-256, a hash of the scene text, the family's options, walkers, moves and seed; see
+:func:`run_identity`), and a resume whose identity differs is refused with the first
+difference named.  What it holds is checked before it is used, checksums or not: finite
+draws, a generator state numpy can continue from (an all-zero key would hang it), counts
+within the run.
+
+Layout (format ``escfit-emcee-checkpoint``, version 2)::
 
     /chain      float64 (steps, walkers, ndim)
     /log_prob   float64 (steps, walkers)
     /accepted   int64   (walkers,)
     /mt_keys    uint32  (624,)          numpy MT19937 key of emcee's RandomState
-    attrs: format, version, names (JSON), seed, moves, mt_pos, mt_has_gauss, mt_gauss
+    attrs: format, version, names (JSON), seed, moves, mt_pos, mt_has_gauss, mt_gauss, identity (JSON)
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any, Mapping
 
 import numpy as np
 
 from ..core.errors import ResultsError
 
-__all__ = ["Checkpoint", "save_checkpoint", "load_checkpoint", "FORMAT"]
+__all__ = ["Checkpoint", "save_checkpoint", "load_checkpoint", "check_identity", "run_identity", "FORMAT"]
 
 FORMAT = "escfit-emcee-checkpoint"
-VERSION = 1
+VERSION = 2  # 2: the run's identity is recorded and compared on resume
+# Provenance entries that name where things were, not what they were (a moved file is the same run)
+LOCATIONS = ("scene_file", "data_file")
+
+
+def run_identity(provenance: Mapping[str, Any] | None = None, options: Mapping[str, Any] | None = None, *,
+                 walkers: int, moves: str, seed: int, names: list[str]) -> dict[str, str]:
+    """What makes two sampler runs the same run, as text: compared entry by entry on resume.
+
+    Parameters
+    ----------
+    provenance
+        The problem's :meth:`~escfit.likelihood.problem.Problem.provenance`: its ``data_sha256``
+        and the SHA-256 of its ``scene`` text are recorded, and every other entry but the files'
+        locations (moving the files does not change the run).
+    options
+        The options the problem was built with (recording format, unit, solver, ...).
+    walkers, moves, seed, names
+        The sampler's settings and the free parameters in vector order.
+    """
+    prov = dict(provenance or {})
+    scene = prov.pop("scene", None)
+    ident = {"data SHA-256": str(prov.pop("data_sha256", None)),
+             "scene text (SHA-256)": hashlib.sha256(str(scene).encode()).hexdigest() if scene is not None else "None",
+             "free parameters": json.dumps(list(names)), "walkers": str(int(walkers)), "moves": str(moves),
+             "seed": str(int(seed))}
+    for key in LOCATIONS:
+        prov.pop(key, None)
+    canonical = lambda x: json.dumps(x, sort_keys=True, default=str)  # noqa: E731
+    ident["model options"] = canonical(prov)
+    ident["fit options"] = canonical(dict(options or {}))
+    return ident
 
 
 @dataclass
@@ -50,6 +91,8 @@ class Checkpoint:
         Free parameters in vector order.
     seed : int
     moves : str
+    identity : dict
+        :func:`run_identity` of the run.
     """
 
     chain: np.ndarray
@@ -59,6 +102,7 @@ class Checkpoint:
     names: list[str]
     seed: int
     moves: str
+    identity: dict = field(default_factory=dict)
 
     @property
     def steps(self) -> int:
@@ -91,18 +135,27 @@ def save_checkpoint(path: str | Path, ck: Checkpoint) -> None:
         f.create_dataset("mt_keys", data=np.asarray(keys, np.uint32), fletcher32=True)
         f.attrs.update({"format": FORMAT, "version": VERSION, "names": json.dumps(list(ck.names)),
                         "seed": int(ck.seed), "moves": str(ck.moves), "mt_pos": int(pos),
-                        "mt_has_gauss": int(has_gauss), "mt_gauss": float(gauss)})
+                        "mt_has_gauss": int(has_gauss), "mt_gauss": float(gauss),
+                        "identity": json.dumps(dict(ck.identity), sort_keys=True)})
     write_bytes(buf.getvalue(), target, force=True)
 
 
-def load_checkpoint(path: str | Path, walkers: int, names: list[str]) -> Checkpoint:
+def load_checkpoint(path: str | Path, walkers: int, names: list[str],
+                    identity: Mapping[str, str] | None = None) -> Checkpoint:
     """Read a checkpoint for a run of ``walkers`` walkers over ``names``.
+
+    Parameters
+    ----------
+    identity
+        :func:`run_identity` of the run that wants to resume: every entry must equal the
+        checkpoint's.
 
     Raises
     ------
     ResultsError
-        Missing, damaged or foreign file, or one of another shape or parameter set (the
-        message names the way out: ``--force`` starts again).
+        Missing, damaged or foreign file, one of another shape or parameter set, or of
+        another run (the message names the first difference and the way out: ``--force``
+        starts again).
     """
     import h5py
 
@@ -114,24 +167,63 @@ def load_checkpoint(path: str | Path, walkers: int, names: list[str]) -> Checkpo
             if f.attrs.get("format") != FORMAT:
                 raise ResultsError("not an escfit sampler checkpoint (written by another program or an older "
                                    "version); pass --force to start again", where)
+            if int(f.attrs.get("version", 0)) != VERSION or "identity" not in f.attrs:
+                raise ResultsError(f"a checkpoint of format version {f.attrs.get('version')} (this escfit writes "
+                                   f"{VERSION}) cannot be checked to belong to this run; pass --force to start again",
+                                   where)
             ck = Checkpoint(f["chain"][()], f["log_prob"][()], f["accepted"][()],
                             ("MT19937", f["mt_keys"][()], int(f.attrs["mt_pos"]), int(f.attrs["mt_has_gauss"]),
                              float(f.attrs["mt_gauss"])),
-                            list(json.loads(f.attrs["names"])), int(f.attrs["seed"]), str(f.attrs["moves"]))
+                            list(json.loads(f.attrs["names"])), int(f.attrs["seed"]), str(f.attrs["moves"]),
+                            dict(json.loads(f.attrs["identity"])))
     except ResultsError:
         raise
     except (OSError, KeyError, ValueError, TypeError) as exc:  # truncated, checksum failure, missing parts
         raise ResultsError(f"cannot resume from this checkpoint ({type(exc).__name__}: {exc}); pass --force to "
                            "start again", where) from None
+    _check_contents(ck, where)
     shape = ck.chain.shape
-    if (len(shape) != 3 or shape[0] < 1 or ck.log_prob.shape != shape[:2] or ck.accepted.shape != (shape[1],)
-            or ck.random_state[1].shape != (624,) or not 0 <= ck.random_state[2] <= 624):
-        raise ResultsError(f"damaged checkpoint (chain {shape}, log_prob {ck.log_prob.shape}); pass --force to "
-                           "start again", where)
     if shape[1:] != (walkers, len(names)):
         raise ResultsError(f"checkpoint holds {shape[1]} walkers x {shape[2]} parameters, this fit has "
                            f"{walkers} x {len(names)}; pass --force to start again", where)
     if ck.names != list(names):
         raise ResultsError(f"checkpoint is of a fit of {ck.names}, this fit has {list(names)}; pass --force to "
                            "start again", where)
+    if identity is not None:
+        check_identity(ck, identity, where)
     return ck
+
+
+def check_identity(ck: Checkpoint, identity: Mapping[str, str], where: str) -> None:
+    """Refuse ``ck`` unless every entry of ``identity`` (:func:`run_identity`) equals its own,
+    naming the first that differs."""
+    for key, now in identity.items():
+        then = ck.identity.get(key)
+        if then != now:
+            raise ResultsError(f"the checkpoint belongs to another run: its {key} is {_short(then)}, this run's is "
+                               f"{_short(now)}; resume with the same data, scene and options, or pass --force to "
+                               "start again", where)
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "...'"
+
+
+def _check_contents(ck: Checkpoint, where: str) -> None:
+    """Refuse contents no run of escfit can have written (checksums catch damage, not tampering)."""
+    shape = ck.chain.shape
+    _, keys, pos, has_gauss, gauss = ck.random_state
+    problem = None
+    if (len(shape) != 3 or shape[0] < 1 or ck.log_prob.shape != shape[:2] or ck.accepted.shape != (shape[1],)
+            or keys.shape != (624,)):
+        problem = f"chain {shape}, log_prob {ck.log_prob.shape}, accepted {ck.accepted.shape}"
+    elif not np.all(np.isfinite(ck.chain)) or not np.all(np.isfinite(ck.log_prob)):
+        problem = "draws or log-probabilities that are not finite numbers"
+    elif not np.all((ck.accepted >= 0) & (ck.accepted <= shape[0])):
+        problem = f"accepted-proposal counts outside [0, {shape[0]}]"
+    elif (not (np.any(keys[1:]) or keys[0] & 0x80000000)  # MT19937 uses only the top bit of the first word
+          or not 0 <= pos <= 624 or has_gauss not in (0, 1) or not math.isfinite(gauss)):
+        problem = "a random-generator state numpy cannot continue from"
+    if problem is not None:
+        raise ResultsError(f"damaged checkpoint ({problem}); pass --force to start again", where)

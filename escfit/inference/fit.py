@@ -9,6 +9,7 @@ the model fits, and returns a :class:`~escfit.results.FitResult` laid out as Arv
 
 from __future__ import annotations
 
+import contextlib
 import datetime as _dt
 import time
 from pathlib import Path
@@ -17,6 +18,7 @@ import numpy as np
 import xarray as xr
 
 from ..core.errors import FitError
+from ..core.limits import check_sampler_size
 from ..core.provenance import dependency_versions
 from ..core.scene import load_scene
 from ..likelihood.problem import Problem
@@ -24,7 +26,7 @@ from ..results import SCHEMA_VERSION, FitResult, clean_attrs, write_fit
 from .information import information_attrs
 from .identifiability import bound_warnings, correlation_warnings, ridge_warnings, sloppy_directions
 from .lsq import LeastSquaresResult, least_squares
-from .mcmc import McmcResult, run_emcee
+from .mcmc import McmcResult, resumable, run_emcee
 from .misfit import misfit_report
 from .reconcile import reconcile, verdict, with_held_uncertainty
 from .registry import family
@@ -85,9 +87,14 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
         Also written to ``out`` when given.
     """
     from ..core.atomic import check_output_folder, refuse_clobbering_inputs, refuse_existing
+    from ..core.inputs import check_input_file
+    from ..core.outlock import output_lock
 
     if method not in ("leastsq", "emcee"):
         raise FitError(f"method must be 'leastsq' or 'emcee', got {method!r}")
+    if resume and method != "emcee":
+        raise FitError("--resume continues an interrupted emcee run; a least-squares fit has nothing to resume "
+                       "(use --method emcee, or leave out --resume)")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2**32:
         raise FitError(f"seed must be a whole number in [0, 2**32 - 1], got {seed!r}")
     if checkpoint is None and out is not None and method == "emcee":
@@ -98,22 +105,26 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
                                  {"data": paths(data), "scene": paths(scene)})
         refuse_existing(out, force)
         check_output_folder(out, "out")
-    if method == "emcee" and checkpoint is not None:
-        _check_checkpoint(checkpoint, resume=resume, force=force)
-    sc = load_scene(scene) if not hasattr(scene, "model") else scene
-    fam = family(sc.model)
-    defaults = {**GENERIC_DEFAULTS, **dict(getattr(fam, "fit_defaults", {}))}
-    pick = lambda value, key: defaults[key] if value is None else value  # noqa: E731
-    problem = fam.problem(sc, data, **options)
-    if out is not None:
-        _remove_stale_temporaries(out, checkpoint)
-    if method == "emcee" and checkpoint is not None and force and not resume:
-        Path(checkpoint).unlink(missing_ok=True)  # a forced fresh run must not leave the old run resumable
-    return fit_problem(problem, method=method, out=out, force=force, seed=seed, walkers=pick(walkers, "walkers"),
-                       steps=pick(steps, "steps"), burn=pick(burn, "burn"), n_starts=pick(n_starts, "n_starts"),
-                       n_refine=defaults["n_refine"], resume=resume, progress=progress, checkpoint=checkpoint,
-                       predictive_draws=pick(predictive_draws, "predictive_draws"), moves=pick(moves, "moves"),
-                       max_steps=pick(max_steps, "max_steps"), checkpoint_every=checkpoint_every, title=title)
+    if isinstance(data, (str, Path)):
+        check_input_file(data, "data")
+    with output_lock(out) if out is not None else contextlib.nullcontext():  # one run per results file
+        if method == "emcee" and checkpoint is not None:
+            _check_checkpoint(checkpoint, resume=resume, force=force)
+        sc = load_scene(scene) if not hasattr(scene, "model") else scene
+        fam = family(sc.model)
+        defaults = {**GENERIC_DEFAULTS, **dict(getattr(fam, "fit_defaults", {}))}
+        pick = lambda value, key: defaults[key] if value is None else value  # noqa: E731
+        problem = fam.problem(sc, data, **options)
+        if out is not None:
+            _remove_stale_temporaries(out, checkpoint)
+        if method == "emcee" and checkpoint is not None and force and not resume:
+            Path(checkpoint).unlink(missing_ok=True)  # a forced fresh run must not leave the old run resumable
+        return fit_problem(problem, method=method, out=out, force=force, seed=seed, walkers=pick(walkers, "walkers"),
+                           steps=pick(steps, "steps"), burn=pick(burn, "burn"), n_starts=pick(n_starts, "n_starts"),
+                           n_refine=defaults["n_refine"], resume=resume, progress=progress, checkpoint=checkpoint,
+                           predictive_draws=pick(predictive_draws, "predictive_draws"), moves=pick(moves, "moves"),
+                           max_steps=pick(max_steps, "max_steps"), checkpoint_every=checkpoint_every, title=title,
+                           fit_options=options)
 
 
 def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | None = None, force: bool = False,
@@ -121,14 +132,23 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
                 n_starts: int = 8, n_refine: int | None = None, resume: bool = False, progress: bool = False,
                 checkpoint: str | Path | None = None, predictive_draws: int = 400,
                 moves: str = "stretch", max_steps: int = 20000, checkpoint_every: float = 10.0,
-                title: str | None = None) -> FitResult:
+                title: str | None = None, fit_options: dict | None = None) -> FitResult:
     """:func:`fit` of a prepared problem (any family).
 
-    The result's ``timings`` attribute holds the seconds spent in each phase (least squares,
-    sampling, checkpoint saves, diagnostics and predictive draws, writing).
+    ``fit_options`` are the options the problem was built with; with the problem's provenance
+    they identify the run, so that a checkpoint resumes only its own run.  The result's
+    ``timings`` attribute holds the seconds spent in each phase (least squares, sampling,
+    checkpoint saves, diagnostics and predictive draws, writing).
     """
     if predictive_draws < 1:
         raise FitError(f"predictive_draws must be at least 1, got {predictive_draws}")
+    if method == "emcee":  # too large a run is refused before any work
+        check_sampler_size(walkers, max_steps if steps == "auto" else int(steps), len(problem.names))
+    if method == "emcee" and resume:  # a checkpoint of another run is refused before any work
+        if checkpoint is None:
+            raise FitError("resume needs the checkpoint of the run to continue (give out or checkpoint)")
+        resumable(problem, checkpoint, walkers=walkers, moves=moves, seed=seed,
+                  target=None if steps == "auto" else steps, provenance=problem.provenance(), fit_options=fit_options)
     started = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
     clock = time.perf_counter()
     lsq = least_squares(problem, n_starts=n_starts, n_refine=n_refine, seed=seed, priors_count=method == "emcee")
@@ -143,7 +163,7 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
     if method == "emcee":
         mc = run_emcee(problem, lsq, walkers=walkers, steps=steps, burn=burn, seed=seed, checkpoint=checkpoint,
                        resume=resume, progress=progress, moves=moves, max_steps=max_steps,
-                       checkpoint_every=checkpoint_every)
+                       checkpoint_every=checkpoint_every, provenance=problem.provenance(), fit_options=fit_options)
         timings.update(mc.timings)
     clock = time.perf_counter()
     tree = build_tree(problem, lsq, mc, method=method, seed=seed, started=started, predictive_draws=predictive_draws,
@@ -173,7 +193,10 @@ def _check_checkpoint(checkpoint: str | Path, *, resume: bool, force: bool) -> N
     from ..core.errors import ResultsError
     from .checkpoint import FORMAT
 
+    from ..core.atomic import refuse_existing
+
     path = Path(checkpoint)
+    refuse_existing(path, force=True)  # a device, FIFO, socket or link there is never replaced
     if not resume:
         if path.exists() and not force:
             raise FitError("an interrupted run's checkpoint exists; pass --resume to continue it or --force to "

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections import Counter
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
@@ -33,7 +34,7 @@ import lmfit
 import numpy as np
 from scipy.stats import qmc
 
-from ..core.errors import FitError
+from ..core.errors import EscfitError, FitError
 from ..likelihood.problem import FAIL_RESIDUAL, Problem, gaussian_prior_residuals
 
 __all__ = ["LeastSquaresResult", "least_squares", "bounded_interval", "bound_flags", "INTERVAL_Z"]
@@ -153,6 +154,7 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
         evaluation; Gaussian priors' residual rows are not readings), or no start converging.
     """
     noise = tuple(getattr(problem, "noise_names", ()))
+    failures_before = Counter(problem.failures)
     fixed = dict(fixed or {})
     for n in fixed:
         if n not in problem.names:
@@ -239,6 +241,13 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
                             "(standard errors undefined, no interval); fix some of them in the scene, give them "
                             "informative priors or use --method emcee")
     vals = problem.values({**fixed, **dict(zip(names, value))})
+    _refuse_failed_optimum(problem, vals, n)
+    searched = _failures_since(problem, failures_before)
+    if searched:
+        count, reason = searched
+        cov_warnings.append(f"{count} model evaluation(s) failed while least squares searched ({reason}): the search "
+                            "met parameters where the model cannot be computed, and an interval reaching towards "
+                            "them is not to be trusted")
     r = best.residual[:n] * scale[0]
     chisqr = float(r @ r)
     redchi = chisqr / free_dof
@@ -252,6 +261,45 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
     return LeastSquaresResult(names, value, stderr, corr, chisqr, float(redchi), float(sigma_hat), int(n),
                               len(starts), bool(best.success), str(best.message), vals, profile_noise,
                               lower=lo.copy(), upper=hi.copy(), warnings=cov_warnings)
+
+
+def _failures_since(problem: Problem, before: Counter) -> tuple[int, str] | None:
+    """Failed evaluations counted since ``before``: their number and the commonest reason, or ``None``."""
+    new = Counter(problem.failures)
+    new.subtract(before)
+    new = +new
+    if not new:
+        return None
+    reason, count = new.most_common(1)[0]
+    return sum(new.values()), f"{reason!r} x {count}" + (f" and {len(new) - 1} other reason(s)" if len(new) > 1 else "")
+
+
+def _refuse_failed_optimum(problem: Problem, vals: dict, n: int) -> None:
+    """Refuse a least-squares optimum at which the model itself cannot be computed.
+
+    A failed evaluation is counted in ``problem.failures`` and gets a large constant residual
+    (:data:`~escfit.likelihood.problem.FAIL_RESIDUAL`), so a search over a region where the
+    solver fails everywhere (runs out of segments, is refused) ends somewhere in it with
+    meaningless numbers and NaN intervals; it is reported as a failed fit instead.
+
+    Raises
+    ------
+    FitError
+        Naming the reason the model failed there.
+    """
+    before = Counter(problem.failures)
+    try:
+        r = np.asarray(problem.residuals(vals), float)[:n]
+        reason = _failures_since(problem, before)  # a failed solve is counted (its residuals are large, finite)
+        if reason is None and np.all(np.isfinite(r)):
+            return
+        why = reason[1] if reason else f"{int(np.count_nonzero(~np.isfinite(r)))} reading(s) not computed"
+    except (EscfitError, ValueError, ArithmeticError) as exc:
+        why = str(exc)
+    shown = ", ".join(f"{k} = {v:.6g}" for k, v in vals.items() if k in problem.names)
+    raise FitError(f"the model cannot be computed at the best fit least squares found ({shown}): {why}; no estimate "
+                   "is given (for a solver that runs out of segments: fewer hairspring pieces or swings, or a solver "
+                   "option max_segments)")
 
 
 def refuse_underdetermined(problem: Problem, names: list[str], pinned: int = 0) -> None:

@@ -8,7 +8,7 @@ The run length is fixed (``steps = N``) or set by convergence (``steps = "auto"`
 until the criteria of :mod:`escfit.inference.convergence` hold, up to a cap).  The draws are
 kept in memory and saved to the checkpoint (:mod:`escfit.inference.checkpoint`) every
 ``checkpoint_every`` seconds (the interval grows if saving would take more than a twentieth
-of the time) and when the run is interrupted (Ctrl-C, SIGTERM), so a resumed run draws
+of the time) and when the run is interrupted (Ctrl-C, SIGTERM, SIGHUP, SIGQUIT), so a resumed run draws
 exactly what the uninterrupted one would have.
 """
 
@@ -19,17 +19,19 @@ import signal
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any, Mapping
 
 import emcee
 import numpy as np
 
 from ..core.errors import FitError, ResultsError
+from ..core.limits import check_sampler_size
 from ..likelihood.problem import Problem
-from .checkpoint import Checkpoint, load_checkpoint, save_checkpoint
+from .checkpoint import Checkpoint, check_identity, load_checkpoint, run_identity, save_checkpoint
 from .convergence import Assessment, assess, autocorr_time
 from .lsq import LeastSquaresResult
 
-__all__ = ["McmcResult", "run_emcee"]
+__all__ = ["McmcResult", "run_emcee", "resumable"]
 
 
 @dataclass
@@ -117,6 +119,53 @@ def _start(problem: Problem, lsq: LeastSquaresResult | None, walkers: int, rng: 
     return out
 
 
+def resumable(problem: Problem, checkpoint: str | Path, *, walkers: int, moves: str, seed: int, target: int | None,
+              provenance: Mapping[str, Any] | None = None, fit_options: Mapping[str, Any] | None = None) -> Checkpoint:
+    """The checkpoint a resumed run continues, after checking that it belongs to this run.
+
+    Checked: its shape and parameters, its moves, its identity (:func:`run_identity`: data,
+    scene, options, walkers, seed), that a fixed-length run (``target`` steps) is not shorter
+    than what it holds, and that the posterior gives its last walker positions the stored
+    log-probabilities.  Cheap (one evaluation per walker), so :func:`escfit.fit` calls it
+    before any other work too.
+
+    Raises
+    ------
+    ResultsError
+        Naming the checkpoint and the first thing that differs.
+    """
+    where = str(checkpoint)
+    previous = load_checkpoint(checkpoint, walkers, list(problem.names))
+    if previous.moves != moves:
+        raise ResultsError(f"the checkpoint's run used moves {previous.moves!r}, this one asks for {moves!r}; "
+                           "resume with the same moves, or pass --force to start again", where)
+    ident = run_identity(provenance, fit_options, walkers=walkers, moves=moves, seed=seed, names=list(problem.names))
+    check_identity(previous, ident, where)
+    if target is not None and previous.steps > target:
+        raise ResultsError(f"the checkpoint already holds {previous.steps} steps, more than the {target} asked "
+                           f"for; resume with --steps {previous.steps} or more, or pass --force to start again", where)
+    _check_support(problem, previous, where)
+    return previous
+
+
+def _check_support(problem: Problem, ck: Checkpoint, where: str) -> None:
+    """Refuse a checkpoint whose last walker positions this posterior does not give the stored
+    log-probabilities (outside the bounds, or another posterior): continuing would reuse them."""
+    lo, hi = problem.bounds
+    last = ck.chain[-1]
+    outside = np.nonzero(np.any((last < lo) | (last > hi), axis=0))[0]
+    if outside.size:
+        i = int(outside[0])
+        raise ResultsError(f"damaged checkpoint: its walkers stand outside the bounds of {problem.names[i]} "
+                           f"([{lo[i]:g}, {hi[i]:g}]); pass --force to start again", where)
+    now = np.array([problem.log_prob(x) for x in last])
+    tol = 1e-8 * (1.0 + np.abs(ck.log_prob[-1]))  # rounding of another library version, not another posterior
+    if not np.all(np.abs(now - ck.log_prob[-1]) <= tol):
+        w = int(np.argmax(~(np.abs(now - ck.log_prob[-1]) <= tol)))
+        raise ResultsError(f"the checkpoint belongs to another posterior: walker {w}'s stored log-probability "
+                           f"{ck.log_prob[-1][w]:.10g} is {now[w]:.10g} now; pass --force to start again", where)
+
+
 AUTO_MIN_STEPS = 400  # first look at convergence
 AUTO_GROWTH = 1.25  # later looks: each after the run has grown by a quarter
 
@@ -124,7 +173,9 @@ AUTO_GROWTH = 1.25  # later looks: each after the run has grown by a quarter
 def run_emcee(problem: Problem, lsq: LeastSquaresResult | None = None, *, walkers: int = 32,
               steps: int | str = 2000, burn: int | None = None, seed: int = 0, checkpoint: str | Path | None = None,
               resume: bool = False, progress: bool = False, vectorize: bool | None = None, moves: str = "stretch",
-              max_steps: int = 20000, checkpoint_every: float = 10.0) -> McmcResult:
+              max_steps: int = 20000, checkpoint_every: float = 10.0,
+              provenance: Mapping[str, Any] | None = None, fit_options: Mapping[str, Any] | None = None
+              ) -> McmcResult:
     """Sample the posterior.
 
     Parameters
@@ -159,7 +210,13 @@ def run_emcee(problem: Problem, lsq: LeastSquaresResult | None = None, *, walker
     max_steps
         Cap of an ``"auto"`` run.
     checkpoint_every
-        Seconds between checkpoint saves (at least; longer when a save is slow).
+        Seconds between checkpoint saves (at least; longer when a save is slow): a finite
+        number >= 0.
+    provenance, fit_options
+        The problem's provenance (data SHA-256, scene text, solver, ...) and the options it
+        was built with: with the sampler's settings they are the run's identity
+        (:func:`~escfit.inference.checkpoint.run_identity`), recorded in the checkpoint; a
+        resume whose identity differs is refused, naming the difference.
     """
     ndim = len(problem.names)
     auto = steps == "auto"
@@ -170,25 +227,26 @@ def run_emcee(problem: Problem, lsq: LeastSquaresResult | None = None, *, walker
         raise FitError(f"emcee needs at least {2 * ndim} walkers for {ndim} free parameters, got {walkers}")
     if target < 10:
         raise FitError(f"{'max_steps' if auto else 'steps'} must be at least 10, got {target}")
+    check_sampler_size(walkers, int(target), ndim)
     if burn is not None and not 0 <= int(burn) < target:
         raise FitError(f"burn must lie in [0, {'max_steps' if auto else 'steps'}), got {burn}")
     if moves not in MOVES:
         raise FitError(f"moves must be one of {sorted(MOVES)}, got {moves!r}")
-    previous = load_checkpoint(checkpoint, walkers, list(problem.names)) if resume and checkpoint else None
-    if previous is not None:
-        if previous.moves != moves:
-            raise ResultsError(f"the checkpoint's run used moves {previous.moves!r}, this one asks for {moves!r}; "
-                               "resume with the same moves, or pass --force to start again", str(checkpoint))
-        if not auto and previous.steps > target:
-            raise ResultsError(f"the checkpoint already holds {previous.steps} steps, more than the {target} asked "
-                               f"for; resume with --steps {previous.steps} or more, or pass --force to start again",
-                               str(checkpoint))
-        seed = previous.seed  # the random state comes from the checkpoint
+    if isinstance(checkpoint_every, bool) or not isinstance(checkpoint_every, (int, float)) or not (
+            math.isfinite(checkpoint_every) and checkpoint_every >= 0):
+        raise FitError(f"checkpoint_every must be a finite number of seconds >= 0, got {checkpoint_every!r}")
+    previous = None
+    if resume:
+        if checkpoint is None:
+            raise FitError("resume needs the checkpoint of the run to continue (give out or checkpoint)")
+        previous = resumable(problem, checkpoint, walkers=walkers, moves=moves, seed=seed, target=None if auto else target,
+                             provenance=provenance, fit_options=fit_options)
+    ident = run_identity(provenance, fit_options, walkers=walkers, moves=moves, seed=seed, names=list(problem.names))
     if vectorize is None:
         vectorize = bool(getattr(problem, "vectorized", False))
     fn = problem.log_prob_many if vectorize else problem.log_prob
     sampler = emcee.EnsembleSampler(walkers, ndim, fn, vectorize=vectorize, moves=MOVES[moves]())
-    run = _Run(problem, sampler, previous, checkpoint, seed, moves, checkpoint_every)
+    run = _Run(problem, sampler, previous, checkpoint, seed, moves, checkpoint_every, ident)
     if previous is None:
         sampler.random_state = np.random.RandomState(seed).get_state()
         run.start(_start(problem, lsq, walkers, np.random.default_rng(seed)))
@@ -209,9 +267,9 @@ class _Run:
     """The draws of one run in memory, advanced step by step and saved in chunks."""
 
     def __init__(self, problem: Problem, sampler: emcee.EnsembleSampler, previous: Checkpoint | None,
-                 path: str | Path | None, seed: int, moves: str, every: float) -> None:
+                 path: str | Path | None, seed: int, moves: str, every: float, identity: dict) -> None:
         self.problem, self.sampler, self.path = problem, sampler, path
-        self.seed, self.moves, self.every = seed, moves, float(every)
+        self.seed, self.moves, self.every, self.identity = seed, moves, float(every), identity
         self.parts: list[np.ndarray] = []
         self.lp_parts: list[np.ndarray] = []
         self.accepted = np.zeros(sampler.nwalkers, np.int64)
@@ -243,9 +301,9 @@ class _Run:
         """Sample to ``target`` steps in all (or, with ``auto``, until converged); save on the way.
 
         Convergence is looked at on one fixed sequence of run lengths (:func:`look_points`), so
-        a resumed run stops where the uninterrupted one would.  Ctrl-C and SIGTERM only raise a
-        flag while sampling; the step under way is finished, the steps done are saved and then
-        :class:`KeyboardInterrupt` is raised (a second Ctrl-C interrupts at once).
+        a resumed run stops where the uninterrupted one would.  Ctrl-C, SIGTERM, SIGHUP and
+        SIGQUIT only raise a flag while sampling; the step under way is finished, the steps done
+        are saved and then :class:`KeyboardInterrupt` is raised (a second Ctrl-C interrupts at once).
         """
         assessment = None
         if auto and self.steps in look_points(self.steps):
@@ -311,7 +369,7 @@ class _Run:
     def save(self) -> None:
         t0 = time.perf_counter()
         save_checkpoint(self.path, Checkpoint(self.chain(), self.log_prob(), self.accepted, self.state.random_state,
-                                              list(self.problem.names), self.seed, self.moves))
+                                              list(self.problem.names), self.seed, self.moves, self.identity))
         self.saved_steps = self.steps
         spent = time.perf_counter() - t0
         self.timings["checkpoint_s"] += spent
@@ -346,10 +404,12 @@ def _bar(progress: bool, done: int, total: int | None):
 
 
 class _Interrupts:
-    """While active (main thread only), Ctrl-C and SIGTERM set :attr:`raised` instead of raising
-    in the middle of a step; a second Ctrl-C raises :class:`KeyboardInterrupt` at once."""
+    """While active (main thread only), Ctrl-C, SIGTERM, SIGHUP and SIGQUIT set :attr:`raised`
+    instead of raising in the middle of a step; a second Ctrl-C raises :class:`KeyboardInterrupt`
+    at once.  A signal set to be ignored (``nohup`` ignores SIGHUP) stays ignored."""
 
-    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+    SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT")
+                    if hasattr(signal, name))
 
     def __init__(self) -> None:
         self.raised = False
@@ -363,7 +423,8 @@ class _Interrupts:
     def __enter__(self) -> "_Interrupts":
         try:
             for sig in self.SIGNALS:
-                self._old[sig] = signal.signal(sig, self._handler)
+                if signal.getsignal(sig) is not signal.SIG_IGN:
+                    self._old[sig] = signal.signal(sig, self._handler)
         except ValueError:  # not the main thread (a worker of a batch): leave signals alone
             self._restore()
         return self

@@ -278,6 +278,13 @@ class Prior:
         return f"{self.kind}({inner}) on [{lo:.6g}, {hi:.6g}]"
 
 
+# A normal prior narrower than 1e-10 of its centre (or than 1e-150 absolutely, whose square
+# underflows) pins the parameter below what double precision resolves in a fit: least squares
+# meets a singular curvature (numpy's eigenvalue routine failed on normal(0.05, 1e-300))
+SPREAD_RESOLUTION = 1e-10
+SPREAD_FLOOR = 1e-150
+
+
 def _problem(kind: str, args: tuple[float, ...], lower: float, upper: float) -> str | None:
     """What makes a prior impossible, or ``None``."""
     if kind == "flat":
@@ -297,6 +304,14 @@ def _problem(kind: str, args: tuple[float, ...], lower: float, upper: float) -> 
         return f"loguniform needs a positive lower end, got {args[0]:g}"
     if kind in ("normal", "halfnormal", "lognormal") and not args[-1] > 0:
         return f"the spread of {kind} must be positive, got {args[-1]:g}"
+    if kind in ("normal", "halfnormal") and not args[-1] >= max(SPREAD_FLOOR, SPREAD_RESOLUTION * abs(args[0])):
+        centre = f" of its centre {args[0]:g}" if kind == "normal" and args[0] else ""
+        return (f"the spread {args[-1]:g} of {kind} is below the resolution{centre} (at least "
+                f"{max(SPREAD_FLOOR, SPREAD_RESOLUTION * abs(args[0])):g}): such a prior fixes the parameter; "
+                "give it as value with vary = false instead")
+    if kind == "lognormal" and not args[-1] >= SPREAD_RESOLUTION:
+        return (f"the spread sigma = {args[-1]:g} of lognormal is below {SPREAD_RESOLUTION:g}: such a prior fixes the "
+                "parameter; give it as value with vary = false instead")
     if kind == "lognormal" and not abs(args[0]) < 700:
         return f"lognormal mu is the log of the median; {args[0]:g} is out of range"
     return None

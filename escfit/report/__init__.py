@@ -33,19 +33,27 @@ __all__ = ["make_report", "parameter_table", "report_title"]
 _TEMPLATES = Path(__file__).with_name("templates")
 
 
+def visible(text: str, keep: str = "") -> str:
+    """``text`` with control characters (escape sequences, NUL, ...) shown as ``\\xNN`` escapes
+    instead of being passed to a terminal, a Markdown renderer or a browser; ``keep`` lists
+    those left as they are (a paragraph's line ends)."""
+    return "".join(c if c.isprintable() or c in keep or c == " " else
+                   (f"\\x{ord(c):02x}" if ord(c) < 0x100 else f"\\u{ord(c):04x}") for c in str(text))
+
+
 def report_title(res: FitResult, title: str | None = None) -> str:
     """The report's title: ``title`` if given, else the fit's ``title`` attribute (a recipe's),
-    else the scene's own ``title``, else the data file's name."""
+    else the scene's own ``title``, else the data file's name; one line of visible characters."""
     for candidate in (title, res.attrs.get("title")):
         if candidate:
-            return str(candidate)
+            return visible(candidate)
     try:
         scene_title = tomllib.loads(res.attrs.get("scene", "") or "").get("title")
     except tomllib.TOMLDecodeError:
         scene_title = None
     if scene_title:
-        return str(scene_title)
-    return Path(res.attrs.get("data_file", "") or "fit").name or "escfit fit"
+        return visible(scene_title)
+    return visible(Path(res.attrs.get("data_file", "") or "fit").name or "escfit fit")
 
 
 def _environment():
@@ -73,7 +81,12 @@ def _units_note(units: list[str], res=None) -> str:
     text = ("Display units: " + ", ".join(said) + "; the results file and its JSON and CSV summaries keep SI units "
             "(angles in radians).") if said else ""
     names = res.parameter_names if res is not None else []
-    if "observation.offset" in names or "observation.offset_rate" in names:
+    obs = res.group("observed_data") if res is not None else None
+    rate = obs is not None and obs["reading"].attrs.get("units") == "rad/s"
+    if rate and ("observation.offset" in names or "observation.offset_rate" in names):
+        text += (" The rate's zero (the sensor's bias) is what the sensor reads when the oscillator is still, and its "
+                 "drift how fast that moves; the files store the zero offset, observation.offset, which is minus it.")
+    elif "observation.offset" in names or "observation.offset_rate" in names:
         text += (" The centre of the swing is where the sensor reads when the oscillator is at its centre, and its "
                  "drift is how fast that moves, positive towards larger readings, as in the notes; the files store "
                  "the scale's zero offset, observation.offset, which is minus the centre.")
@@ -82,8 +95,9 @@ def _units_note(units: list[str], res=None) -> str:
 
 def _md_text(text) -> str:
     """Text for Markdown outside code blocks: HTML special characters escaped (renderers pass raw
-    HTML through), so a title or note with markup is shown, not interpreted."""
-    return html.escape(str(text), quote=False)
+    HTML through), so a title or note with markup is shown, not interpreted; control characters
+    are shown as escapes."""
+    return html.escape(visible(text, keep="\n\t"), quote=False)
 
 
 def _md_cell(text: str) -> str:
@@ -125,8 +139,8 @@ def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: 
         raise ValueError(f"report format must be 'html' or 'md', got {fmt!r}")
     out = Path(out)
     refuse_clobbering_inputs({"the report": out}, {"results": path})
+    check_output_folder(out, "the report", companions=48 if fmt == "md" else 0)  # md: <stem>_<figure>.png
     refuse_existing(out, force)
-    check_output_folder(out, "the report")
     res = load_fit(path)
     a = res.attrs
     page = {

@@ -202,8 +202,9 @@ def _label(name: str, meanings: dict, loads_in: str, plain: bool, a: dict | None
         from ..core.display import display_name
 
         if name in CENTRE_BASE:
-            return {"observation.offset": "centre [observation.offset]",
-                    "observation.offset_rate": "centre drift [observation.offset_rate]"}[name]
+            rate = "angular velocity" in meanings.get("observation.offset", "")
+            return {"observation.offset": f"{'rate zero (bias)' if rate else 'centre'} [observation.offset]",
+                    "observation.offset_rate": f"{'bias' if rate else 'centre'} drift [observation.offset_rate]"}[name]
         return display_name(name, loads_in)
     return plain_name(name, meanings.get(name, ""), loads_in) + _reference(name, a or {})
 

@@ -88,6 +88,14 @@ def parameter_draws(res, rng: np.random.Generator | None = None) -> dict[str, np
     return out
 
 
+def _linear(res) -> bool:
+    """Whether the fit's scene is a linear oscillator (amplitudes in m, R in m/s^2)."""
+    try:
+        return tomllib.loads(res.attrs.get("scene", "") or "").get("oscillator", {}).get("coordinate") == "linear"
+    except tomllib.TOMLDecodeError:
+        return False
+
+
 def _restoring(res) -> str:
     try:
         return str(tomllib.loads(res.attrs.get("scene", "") or "").get("oscillator", {}).get("restoring", "spring"))
@@ -126,6 +134,7 @@ def derived_rows(res) -> tuple[list[str], list[list[str]], str]:
         rows.append([label, unit, text, f"[{ends[0]}, {ends[1]}]", formula])
 
     small = " (small swings)" if _restoring(res) == "pendulum" else ""
+    k, unit = (1.0, "m") if _linear(res) else (RAD_TO_DEG, "deg")  # amplitudes as people read them
     if np.any(c > 0):
         with np.errstate(divide="ignore"):
             add("quality factor Q (viscous damping alone)", "", np.where(c > 0, w0 / c, np.inf), "ω0 / C")
@@ -136,15 +145,15 @@ def derived_rows(res) -> tuple[list[str], list[list[str]], str]:
         "amplitude lost per half swing to Coulomb friction"
     for name, r in rs.items():
         at = _at_load(name, loads_in)
-        add(f"{taken}{at}{small}", "deg", 2 * r / w0 ** 2 * RAD_TO_DEG, "2 R / ω0²")
+        add(f"{taken}{at}{small}", unit, 2 * r / w0 ** 2 * k, "2 R / ω0²")
     a0 = draws.get("oscillator.theta0")
     if a0 is not None and not has_escapement:
         amp = np.abs(a0)
         for name, r in (rs or {"": np.zeros_like(w0)}).items():
             at = _at_load(name, loads_in)
             loss = half_swing_loss(amp, w0, c, r)
-            add(f"amplitude lost in the first half swing, from {np.median(amp) * RAD_TO_DEG:.3g} deg{at}{small}",
-                "deg", loss * RAD_TO_DEG, "A (1 − r) + (1 + r) R / ω0², r = exp(−π C / 2ωd)")
+            add(f"amplitude lost in the first half swing, from {np.median(amp) * k:.3g} {unit}{at}{small}",
+                unit, loss * k, "A (1 − r) + (1 + r) R / ω0², r = exp(−π C / 2ωd)")
     inertia = inertia_of(res)
     if inertia is not None:
         for name, r in rs.items():
@@ -158,7 +167,8 @@ def derived_rows(res) -> tuple[list[str], list[list[str]], str]:
     if inertia is not None:
         note = f"Torques from the scene's moment of inertia I = {inertia:.4g} kg m²."
     else:
-        note = "The scene gives no moment of inertia, so torques stay per unit inertia (rad/s² in the table above)."
+        note = ("The model is per unit mass: R is a friction force per mass (m/s² in the table above)." if _linear(res)
+                else "The scene gives no moment of inertia, so torques stay per unit inertia (rad/s² in the table above).")
     how = ("posterior draws" if res.group("posterior") is not None
            else "the least-squares estimate's normal approximation")
     note += f" Medians and 95 % intervals over {how}; held parameters at their values."

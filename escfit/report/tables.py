@@ -52,8 +52,10 @@ def fit_statistics(res) -> str:
     else:
         fitted = (f"{plural(npar, 'parameter')} fitted by least squares (lmfit)"
                   + (", the reading noise profiled from the residuals" if profiled else ""))
-    head = (f"{_model_words(a)} fitted to {plural(n, 'reading')} ({_kind_words(a.get('data_kind', 'readings'))}): "
-            f"{fitted}")
+    kind = _kind_words(a.get('data_kind', 'readings'))
+    if a.get("data_kind") == "timeseries" and units in SAMPLED:
+        kind = SAMPLED[units]
+    head = f"{_model_words(a)} fitted to {plural(n, 'reading')} ({kind}): {fitted}"
     if "redchi" not in la:
         return head + "."
     if n <= npar:
@@ -106,6 +108,9 @@ _KIND_WORDS = {"rig-readings": "rig readings: the extra load dw of each setting"
                "terminal_speeds": "terminal speeds", "speed_trace": "a driver-speed trace"}
 
 
+SAMPLED = {"rad/s": "a sampled angular velocity", "m": "a sampled displacement"}  # a time series by its units
+
+
 def _kind_words(kind) -> str:
     return _KIND_WORDS.get(str(kind), str(kind).replace("_", " "))
 
@@ -119,6 +124,8 @@ def _model_words(a: dict) -> str:
             osc = tomllib.loads(a.get("scene", "") or "").get("oscillator", {})
         except tomllib.TOMLDecodeError:
             osc = {}
+        if osc.get("coordinate") == "linear":
+            return "Linear oscillator (mass on a spring) model"
         return "Gravity pendulum model" if osc.get("restoring") == "pendulum" else "Balance wheel (spring) model"
     return {"friction_rig": "Friction rig model", "geneva": "Geneva escapement model",
             "verge": "Verge escapement model"}.get(model, f"{model} model")

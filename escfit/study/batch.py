@@ -50,6 +50,7 @@ import xarray as xr
 from ..core.atomic import atomic_path
 from ..core.errors import DataError, FitError, ResultsError
 from ..core.h5write import write_bytes
+from ..core.interrupts import deferred_interrupts
 from ..balance.recordings import UnitCurve, read_unit_curve
 from ..core.provenance import dependency_versions
 from ..results import SCHEMA_VERSION, FitResult, clean_attrs
@@ -324,15 +325,16 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
         family_options["notch_deg"] = notch_deg
     items = [data] if isinstance(data, (str, Path, UnitCurve)) else list(data)
     out = Path(out_dir)
+    # the data are read before the folder and its lock are made: a refusal leaves nothing behind
+    tasks = discover_units(items, out, notch_deg=notch_deg, scene=sc)
+    if units is not None:
+        known = {t.unit for t in tasks}
+        missing = [u for u in units if u not in known]
+        if missing:
+            raise DataError(f"no readings of unit(s) {missing}; units in the data: {sorted(known)}")
+        tasks = [t for t in tasks if t.unit in set(units)]
     out.mkdir(parents=True, exist_ok=True)
     with folder_lock(out):  # one batch at a time in a results folder
-        tasks = discover_units(items, out, notch_deg=notch_deg, scene=sc)
-        if units is not None:
-            known = {t.unit for t in tasks}
-            missing = [u for u in units if u not in known]
-            if missing:
-                raise DataError(f"no readings of unit(s) {missing}; units in the data: {sorted(known)}")
-            tasks = [t for t in tasks if t.unit in set(units)]
         say = progress if callable(progress) else \
             ((lambda s: print(s, file=sys.stderr)) if progress else (lambda s: None))
         started = time.perf_counter()
@@ -379,11 +381,12 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
         finally:
             runner.close()
         elapsed = time.perf_counter() - started
-        # from the rows the tasks returned: no results file of this run is read back
-        summary = summarize(tasks, status, rows=rows, attrs={
-            "method": method, "seed": seed, "model": sc.model, "scene": sc.text, "scene_file": str(scene),
-            "runner": where, "elapsed_s": elapsed, "settings": {k: v for k, v in options.items() if v is not None}})
-        write_bytes(results_image(summary), out / SUMMARY_FILE, force=True)
+        with deferred_interrupts():  # every unit is done: a signal now waits for the summary (a second or so)
+            # from the rows the tasks returned: no results file of this run is read back
+            summary = summarize(tasks, status, rows=rows, attrs={
+                "method": method, "seed": seed, "model": sc.model, "scene": sc.text, "scene_file": str(scene),
+                "runner": where, "elapsed_s": elapsed, "settings": {k: v for k, v in options.items() if v is not None}})
+            write_bytes(results_image(summary), out / SUMMARY_FILE, force=True)
         return BatchResult(summary, out, [u for u, s in status.items() if s["status"] == "ok"],
                            [u for u, s in status.items() if s["status"] == "skipped"],
                            {u: s["error"] for u, s in status.items() if s["status"] == "failed"}, elapsed,

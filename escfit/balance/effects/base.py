@@ -126,11 +126,15 @@ class ReadContext:
         to convert physical torques and damping coefficients to per-inertia form.
     switching
         ``"angle"`` or ``"phase"``.
+    coordinate
+        ``"angle"`` (a balance or pendulum, rad) or ``"linear"`` (a mass on a spring, m): the
+        units of the per-inertia (per-mass) parameters follow it.
     """
 
     where: str
     inertia: float | None
     switching: str
+    coordinate: str = "angle"
 
 
 def per_inertia(ctx: ReadContext, key: str, where: str):

@@ -51,6 +51,8 @@ class Coulomb:
     def read(cls, table: Mapping, ctx: ReadContext) -> tuple["Coulomb", list[Param]]:
         where = f"{ctx.where} [effects.coulomb]"
         check_keys(table, {"R", "torque", "R_static", "static_torque"}, where)
+        if ctx.coordinate == "linear":
+            return cls._read_linear(table, ctx, where)
         sliding = {k: table[k] for k in ("R", "torque") if k in table}
         p = read_either(sliding, ctx, where, name="coulomb.R", unit="1/s**2",
                         meaning="Coulomb friction torque per inertia R (rad/s^2), opposes the motion",
@@ -71,6 +73,31 @@ class Coulomb:
 
             raise SceneError(f"static friction R_static = {q.value:g} rad/s^2 is below the sliding friction "
                              f"R = {p.value:g} rad/s^2; it must be at least R", f"{where}.R_static")
+        return cls(static=True), [p, q]
+
+    @classmethod
+    def _read_linear(cls, table: Mapping, ctx: ReadContext, where: str) -> tuple["Coulomb", list[Param]]:
+        """A linear oscillator's dry friction: a force per mass, ``R`` (and ``R_static``) in m/s^2."""
+        from ...core.errors import SceneError
+        from ...core.params import read_param
+
+        for key in ("torque", "static_torque"):
+            if key in table:
+                raise SceneError(f"a linear oscillator takes its dry friction as a force per mass, R (m/s^2); "
+                                 f"'{key}' is a balance's torque", f"{where}.{key}")
+        if "R" not in table:
+            raise SceneError("give 'R' (m/s^2): the friction force per mass", where)
+        meaning = "Coulomb (dry) friction force per mass R (m/s^2), opposes the motion"
+        p = read_param(table["R"], name="coulomb.R", kind="acceleration", lower=0.0, meaning=meaning,
+                       where=f"{where}.R")
+        if "R_static" not in table:
+            return cls(), [p]
+        q = read_param(table["R_static"], name="coulomb.R_static", kind="acceleration", lower=0.0,
+                       meaning="static friction force per mass (m/s^2, >= R): holds the mass at rest",
+                       where=f"{where}.R_static")
+        if q.value < p.value:
+            raise SceneError(f"static friction R_static = {q.value:g} m/s^2 is below the sliding friction "
+                             f"R = {p.value:g} m/s^2; it must be at least R", f"{where}.R_static")
         return cls(static=True), [p, q]
 
     def fill(self, values: Mapping[str, float], k: np.ndarray) -> None:

@@ -43,6 +43,11 @@ class Drag:
         if ctx.switching == "phase":
             raise SceneError("air drag needs switching = 'angle' (phase switching assumes the fixed half period of a "
                              "linear oscillator)", where)
+        if ctx.coordinate == "linear":  # a mass moving through air: the drag force per mass is -D |x'| x'
+            p = read_param(table["D"], name="drag.D", kind="inverse_length", lower=0.0,
+                           meaning="quadratic air drag per mass D (1/m): force -D |x'| x' per mass",
+                           where=f"{where}.D")
+            return cls(), [p]
         p = read_param(table["D"], name="drag.D", kind="dimensionless", lower=0.0, unit="1/rad",
                        meaning="quadratic air drag per inertia D (1/rad): torque -D |theta'| theta'",
                        where=f"{where}.D")

@@ -1,8 +1,16 @@
-"""Waveform readings: every sample of a time series is a reading of theta(t).
+"""Waveform readings: every sample of a time series is a reading of theta(t), theta'(t) or x(t).
 
 A sample taken at time ``t`` (the recording's clock, s) reads
 
     y = theta(t - t_release) - offset - offset_rate * (t - t_ref) + noise
+
+for an angle (``quantity = "angle"``, rad), and the same with the model's angular velocity
+theta'(t) in place of theta for a gyroscope or a velocity pickup (``"angular_velocity"``,
+rad/s: ``offset`` is then minus the sensor's bias, rad/s, and ``offset_rate`` its drift,
+rad/s^2), or with a linear oscillator's displacement x(t) (``"displacement"``, m: offset in m,
+offset_rate in m/s).  The model is the same solution either way (its dense output gives theta
+and theta' at any time); the readings are compared as measured, never differentiated or
+integrated.  In words, for an angle:
 
 (the sensor's zero sits at ``offset`` in the oscillator's frame, as for amplitude readings: an
 encoder reading pi at the hanging position of a pendulum has ``offset = -pi``), where ``theta``
@@ -20,15 +28,16 @@ jitter, and the likelihood of a sample is the probability mass of its step, as f
 counts.
 
 A scene may also name ``gain``: the readings are then ``gain * theta(t - t_release) - offset - ...``,
-an angle-scale error of the sensor (a video tracker whose pivot marker sits off the true pivot,
-a camera not square to the swing, an encoder's wrong counts per turn).  For a linear oscillator
+a scale error of the sensor (a video tracker whose pivot marker sits off the true pivot, a
+camera not square to the swing, an encoder's wrong counts per turn).  For a linear oscillator
 it is indistinguishable from the release angle; for a pendulum the period's growth with the
 amplitude (``sin theta``) fixes the true angle scale, so a free gain is identifiable there.
-Without the key there is no gain parameter (readings are the angle).
+Without the key there is no gain parameter (readings are the model's quantity as it is).
 
-Parameters: ``observation.sigma`` (rad), ``observation.offset`` (rad), ``observation.offset_rate``
-(rad/s), ``observation.t_release`` (s, recording clock), ``observation.rho`` (AR(1) noise only),
-``observation.gain`` (dimensionless, only when the scene names it).  ``quantum`` (an angle) and ``thin``
+Parameters: ``observation.sigma`` (rad; rad/s; m), ``observation.offset`` (rad; rad/s; m),
+``observation.offset_rate`` (rad/s; rad/s^2; m/s), ``observation.t_release`` (s, recording clock),
+``observation.rho`` (AR(1) noise only), ``observation.gain`` (dimensionless, only when the scene
+names it).  ``quantum`` (a step of the readings' unit) and ``thin``
 (use every n-th sample) are settings, not parameters.
 """
 
@@ -43,10 +52,28 @@ import numpy as np
 from ...core.errors import SceneError
 from ...core.params import Param, read_param
 from ...core.units import BARE_ANGLE_LIMIT, to_canonical
-from .amplitude import drift_param, noise_params
 from .notches import log_interval_mass
 
-__all__ = ["WaveformObservation"]
+__all__ = ["WaveformObservation", "READINGS"]
+
+
+@dataclass(frozen=True)
+class Readings:
+    """What the samples are: the unit kinds of a reading and of its drift, for :func:`read_param`."""
+
+    unit: str  # the readings' unit
+    kind: str  # unit kind of a reading (escfit.core.units.CANONICAL)
+    rate_unit: str  # unit of the offset's drift
+    rate_kind: str
+    words: str  # "angle", "angular velocity", "displacement"
+    bare_limit: float | None = None
+
+
+READINGS = {
+    "angle": Readings("rad", "angle", "rad/s", "rate_per_s", "angle", BARE_ANGLE_LIMIT),
+    "angular_velocity": Readings("rad/s", "rate_per_s", "rad/s**2", "angular_acceleration", "angular velocity"),
+    "displacement": Readings("m", "length", "m/s", "speed", "displacement"),
+}
 
 
 @dataclass(frozen=True)
@@ -70,13 +97,14 @@ class WaveformObservation:
     t_ref: float
     params: tuple[Param, ...]
     noise: str = "white"
+    quantity: str = "angle"
     kind = "waveform"
     KEYS = {"model", "sigma", "offset", "offset_rate", "t_release", "quantum", "thin", "noise", "rho", "gain"}
     MAX_SAMPLES = 4000
 
     @classmethod
     def from_table(cls, table: Mapping, where: str, *, t_release: float, period: float, offset: float,
-                   offset_rate: float, sigma: float) -> "WaveformObservation":
+                   offset_rate: float, sigma: float, quantity: str = "angle") -> "WaveformObservation":
         """Read ``[observation]`` with ``model = "waveform"``.
 
         Parameters
@@ -86,17 +114,22 @@ class WaveformObservation:
         where
             ``"file [observation]"`` for messages.
         t_release, period, offset, offset_rate, sigma
-            Estimates from the record's turning points (s, s, rad, rad/s, rad; the offsets in
-            this module's convention, i.e. minus the centre on the sensor's scale): the defaults
-            of parameters the table does not give.  ``t_release`` is free within a tenth of
-            a period either side, the offsets and sigma are free.
+            Estimates from the record's turning points (s, s, and the readings' units: rad, rad/s,
+            rad; the offsets in this module's convention, i.e. minus the centre on the sensor's
+            scale): the defaults of parameters the table does not give.  ``t_release`` is free
+            within a tenth of a period either side, the offsets and sigma are free.
+        quantity
+            What the samples are: ``"angle"``, ``"angular_velocity"`` or ``"displacement"``
+            (the units of sigma, offset, offset_rate and quantum follow).
         """
+        r = READINGS[quantity]
         unknown = sorted(set(table) - cls.KEYS)
         if unknown:
             raise SceneError(f"unknown key(s) {unknown}; known: {sorted(cls.KEYS)}", where)
-        quantum = to_canonical(table.get("quantum", 0.0), "angle", f"{where}.quantum", bare_limit=BARE_ANGLE_LIMIT)
+        quantum = to_canonical(table.get("quantum", 0.0), r.kind, f"{where}.quantum", bare_limit=r.bare_limit)
         if not (math.isfinite(quantum) and quantum >= 0.0):
-            raise SceneError(f"quantum must be a step angle >= 0, got {table.get('quantum')!r}", f"{where}.quantum")
+            raise SceneError(f"quantum must be a step of the readings ({r.unit}) >= 0, got {table.get('quantum')!r}",
+                             f"{where}.quantum")
         noise = table.get("noise", "white")
         if noise not in ("white", "ar1"):
             raise SceneError(f"noise must be 'white' or 'ar1', got {noise!r}", f"{where}.noise")
@@ -110,14 +143,15 @@ class WaveformObservation:
             raise SceneError(f"thin must be a whole number >= 1 (or 0 for automatic), got {thin!r}", f"{where}.thin")
         guess = dict(table)
         floor = max(quantum / 10.0, 1e-9)
-        guess.setdefault("sigma", {"value": max(sigma, 2 * floor), "vary": True, "min": floor, "max": 1.0,
-                                   "prior": f"loguniform({floor!r}, 1.0)"})
+        top = max(1.0, 100.0 * sigma) if math.isfinite(sigma) else 1.0  # a rate in rad/s may be noisier than 1
+        guess.setdefault("sigma", {"value": max(sigma, 2 * floor), "vary": True, "min": floor, "max": top,
+                                   "prior": f"loguniform({floor!r}, {top!r})"})
         span = abs(offset) + 1.0
         guess.setdefault("offset", {"value": offset, "vary": True, "min": offset - span, "max": offset + span})
         rate_span = abs(offset_rate) + 0.1
         guess.setdefault("offset_rate", {"value": offset_rate, "vary": True, "min": offset_rate - rate_span,
                                          "max": offset_rate + rate_span})
-        params = noise_params(guess, where, sigma) + [drift_param(guess, where)]
+        params = _reading_params(guess, where, r)
         half = 0.1 * period
         t_rel = read_param(table.get("t_release", {"value": t_release, "vary": True, "min": t_release - half,
                                                    "max": t_release + half}),
@@ -131,12 +165,13 @@ class WaveformObservation:
                                      where=f"{where}.rho"))
         if "gain" in table:
             params.append(read_param(table["gain"], name="observation.gain", kind="dimensionless", lower=0.0,
-                                     lower_open=True, meaning="angle scale of the readings: a reading is gain times "
-                                     "the angle (1: the sensor is calibrated)", where=f"{where}.gain"))
-        return cls(quantum, thin, t_release, tuple(params) + (t_rel,), noise)
+                                     lower_open=True, meaning="scale of the readings: a reading is gain times "
+                                     "the model's quantity (1: the sensor is calibrated)", where=f"{where}.gain"))
+        return cls(quantum, thin, t_release, tuple(params) + (t_rel,), noise, quantity)
 
     def expected(self, theta: np.ndarray, t: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
-        """Noise-free readings (rad) at sample times ``t`` (s) for the model angles ``theta``."""
+        """Noise-free readings at sample times ``t`` (s) for the model's ``theta`` (its angle, angular
+        velocity or displacement, as :attr:`quantity` says; the readings' unit), times ``gain`` if any."""
         gain = values.get("observation.gain", 1.0)
         return gain * theta - values["observation.offset"] - values["observation.offset_rate"] * (t - self.t_ref)
 
@@ -180,3 +215,21 @@ class WaveformObservation:
                 e[i] = rho * e[i - 1] + s * e[i]
         y = self.expected(theta, t, values) + values["observation.sigma"] * e
         return np.round(y / self.quantum) * self.quantum if self.quantum > 0.0 else y
+
+
+def _reading_params(table: Mapping, where: str, r: Readings) -> list[Param]:
+    """``observation.sigma``, ``offset`` and ``offset_rate`` in the readings' units."""
+    if r.unit == "rad":
+        from .amplitude import drift_param, noise_params
+
+        return noise_params(table, where, math.nan) + [drift_param(table, where)]
+    sigma = read_param(table["sigma"], name="observation.sigma", kind=r.kind, lower=0.0, lower_open=True,
+                       bare_limit=r.bare_limit, unit=r.unit, meaning=f"reading noise scale ({r.unit})",
+                       where=f"{where}.sigma")
+    offset = read_param(table["offset"], name="observation.offset", kind=r.kind, bare_limit=r.bare_limit, unit=r.unit,
+                        meaning=(f"zero offset of the sensor ({r.unit}): a reading is the {r.words} less it"
+                                 + (" (minus the sensor's bias)" if r.unit == "rad/s" else "")),
+                        where=f"{where}.offset")
+    rate = read_param(table["offset_rate"], name="observation.offset_rate", kind=r.rate_kind, unit=r.rate_unit,
+                      meaning=f"drift of the zero offset ({r.rate_unit})", where=f"{where}.offset_rate")
+    return [sigma, offset, rate]

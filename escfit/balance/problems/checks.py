@@ -55,9 +55,13 @@ def end_of_motion(problem, best: Mapping[str, float]) -> list[str]:
         return []
     y, e = problem.observed[last], problem.expected(best)[last]
     swing_data, swing_model = float(np.ptp(y)), float(np.ptp(e))
-    noise = 4.0 * float(best.get("observation.sigma", 0.0))
+    # the range of n noisy samples alone: about 2 sqrt(2 ln n) noise scales (6 for a hundred)
+    n = int(np.count_nonzero(last))
+    noise = (2.0 * math.sqrt(2.0 * math.log(n)) + 2.0) * float(best.get("observation.sigma", 0.0))
     if swing_data > noise and not 0.5 <= swing_model / swing_data <= 2.0:
-        return [f"over the last period of the record the model swings {math.degrees(swing_model):.3g} deg where the "
-                f"recording swings {math.degrees(swing_data):.3g} deg: the model's friction ends the motion "
+        unit = getattr(problem, "reading_units", "rad")
+        k, label = (math.degrees(1.0), "deg") if unit == "rad" else (1.0, unit)
+        return [f"over the last period of the record the model swings {k * swing_model:.3g} {label} where the "
+                f"recording swings {k * swing_data:.3g} {label}: the model's friction ends the motion "
                 f"{'too early' if swing_model < swing_data else 'too late'} (a friction law the scene lacks?)"]
     return []

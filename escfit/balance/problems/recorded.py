@@ -12,6 +12,12 @@ its drift, the end of motion.  Then, by the scene's ``[observation] model``:
 
 Either way the release angle comes from the record (:func:`~escfit.balance.problems.release.release_from_record`)
 and what was done is kept as plain-sentence ``notes``.
+
+A record of what was measured other than an angle (the series' ``quantity``) is fitted sample
+by sample: an angular velocity (a gyroscope, a velocity pickup) as theta'(t) of the scene's
+oscillator, its turning points the rate's zeros (:func:`~escfit.balance.recordings.rate.reduce_rate`),
+its sensor zero the bias measured from the rate's extrema; a displacement as the x(t) of a linear
+oscillator scene (``[oscillator] coordinate = "linear"``), analysed as an angle is, in m.
 """
 
 from __future__ import annotations
@@ -25,6 +31,7 @@ from .. import BalanceScene
 from ...core.params import ParamSet
 from ..recordings import UnitCurve
 from ..recordings.rawseries import notes_of
+from .amplitude_rows import amplitude_readings_curve
 from .curves import FitProblem
 from .nuisance import centre_priors
 from .period import check_scene_omega0, hold_omega0, measured_period, start_omega0
@@ -51,31 +58,6 @@ def turning_point_curve(series, tp) -> UnitCurve:
                 release_time_s=repr(float(tp.release_time)), release_theta_rad=repr(float(tp.release_theta)))
     return UnitCurve(swing, amp, "amplitude", unit=np.full(amp.size, "", dtype=str), time=time,
                      source=series.source, sha256=series.sha256, meta=meta)
-
-
-def amplitude_readings_curve(series) -> UnitCurve:
-    """Rows that are already amplitude readings, one per half swing (reading 0: the release).
-
-    For records such as a pointer read at every turning point: the angle column holds
-    amplitudes, the time column the reading times.  Swings are numbered by row order; the
-    spacing of the times is checked to be even within 40 % of its median.
-    """
-    from ...core.errors import DataError
-
-    t = np.asarray(series.time, float)
-    if t.size >= 3:
-        gaps = np.diff(t)
-        med = float(np.median(gaps))
-        bad = np.flatnonzero(np.abs(gaps - med) > 0.4 * med)
-        if bad.size:
-            raise DataError(f"readings {bad[0] + 1} and {bad[0] + 2} are {gaps[bad[0]]:.4g} s apart where the others are "
-                            f"~{med:.4g} s: a half swing missed or repeated; amplitude rows must follow one per half swing",
-                            series.source)
-    value = np.abs(np.asarray(series.theta, float))
-    meta = dict(series.meta)
-    meta.update(derived_from="amplitude readings, one per half swing in row order")
-    return UnitCurve(np.arange(value.size, dtype=np.int64), value, "amplitude", unit=np.full(value.size, "", dtype=str),
-                     time=t - t[0], source=series.source, sha256=series.sha256, meta=meta)
 
 
 def _free_centre(scene: BalanceScene, curve: UnitCurve, tp) -> BalanceScene:
@@ -109,13 +91,13 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
     """
     scene = replace(scene, params=ParamSet(dict(scene.params.params)))  # the release is set on a copy
     notes = notes_of(series.meta)
+    quantity = getattr(series, "quantity", "angle")
+    _check_quantity(scene, quantity, series.source)
+    if quantity != "angle":
+        return _sampled_problem(scene, series, notes, solver, solver_options)
     model = dict(scene.extra.get("observation", {})).get("model", "amplitude")
     if readings == "amplitudes":
-        curve = amplitude_readings_curve(series)
-        notes += release_from_record(scene.params, float(curve.value[0]), series.source, scene.restoring)
-        problem = FitProblem(scene, curve, solver, dict(solver_options or {}))
-        problem.notes = notes
-        return problem
+        return _amplitude_rows_problem(scene, series, notes, solver, solver_options)
     from ..recordings.turning_points import reduce_series
 
     # a waveform fit uses the turning points only for its start (reference, period, centre): an
@@ -145,9 +127,84 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
     return problem
 
 
-def _count_note(tp) -> str:
-    return (f"{tp.swing.size} turning points after the reference one at t = {tp.release_time:.4g} s "
-            f"({math.degrees(tp.release_theta - tp.offset):+.2f} deg from the centre); period {tp.period:.5g} s")
+def _amplitude_rows_problem(scene: BalanceScene, series, notes: list[str], solver: str, solver_options):
+    """Rows that are amplitude readings; omega0 held at the scene's value when the rows are
+    numbered by their times (amplitudes alone cannot determine it)."""
+    p = scene.params.params.get("oscillator.omega0")
+    curve, by_time = amplitude_readings_curve(series, omega0=None if p is None else float(p.value),
+                                              restoring=scene.restoring)
+    held: tuple[str, ...] = ()
+    if by_time:
+        notes.append(curve.meta["derived_from"])
+        if p.vary:
+            scene.params.params[p.name] = replace(p, vary=False, prior=None)
+            held = (p.name,)
+            notes.append(f"omega0 held at the scene's {p.value:.5g} rad/s: amplitudes depend on it only through "
+                         "C/omega0 and R/omega0^2 and their times were numbered with it")
+    notes += release_from_record(scene.params, float(curve.value[0]), series.source, scene.restoring)
+    problem = FitProblem(scene, curve, solver, dict(solver_options or {}))
+    problem.notes = notes
+    problem.held = held
+    return problem
+
+
+def _count_note(tp, quantity: str = "angle") -> str:
+    where = tp.release_theta - tp.offset
+    shown = f"{where:+.4g} m" if quantity == "displacement" else f"{math.degrees(where):+.2f} deg"
+    how = " (zeros of the angular velocity)" if quantity == "angular_velocity" else ""
+    return (f"{tp.swing.size} turning points{how} after the reference one at t = {tp.release_time:.4g} s "
+            f"({shown} from the centre); period {tp.period:.5g} s")
+
+
+WHAT = {"angular_velocity": "an angular velocity (rad/s)", "displacement": "a linear displacement (m)"}
+
+
+def _check_quantity(scene: BalanceScene, quantity: str, source: str) -> None:
+    """A displacement goes with a linear oscillator scene and an angle or a rate with a balance's: else refused."""
+    from ...core.errors import FitError
+
+    if scene.linear and quantity != "displacement":
+        raise FitError(f"the scene is a linear oscillator (coordinate = 'linear', x in m) but the recording is "
+                       f"{WHAT.get(quantity, 'an angle (rad)')}: record its displacement ([recording] "
+                       "displacement_column), or write the scene for a balance or pendulum", source)
+    if quantity == "displacement" and not scene.linear:
+        raise FitError("the recording is a linear displacement (m), so the scene must be a linear oscillator: "
+                       "[oscillator] coordinate = \"linear\", its release x0 in m, Coulomb friction R in m/s^2 "
+                       "(or read an angle column with [recording] angle_column)", scene.where)
+    model = dict(scene.extra.get("observation", {})).get("model", "waveform")
+    if quantity != "angle" and model != "waveform":
+        raise FitError(f"the recording is {WHAT[quantity]}: it is fitted sample by sample, as a waveform; set "
+                       "[observation] model = \"waveform\" (or leave model out)", scene.where)
+
+
+def _sampled_problem(scene: BalanceScene, series, notes: list, solver, solver_options):
+    """The waveform problem of an angular velocity or a displacement (see the module docstring)."""
+    from .waveform import WaveformProblem
+
+    obs = dict(scene.extra.get("observation", {}))
+    if "model" not in obs:
+        obs["model"] = "waveform"
+        scene = replace(scene, extra={**scene.extra, "observation": obs})
+    if series.quantity == "angular_velocity":
+        from ..recordings.rate import reduce_rate
+
+        rate = reduce_rate(series)
+        tp, centre, noise = rate.turns, rate, rate.noise
+        notes += rate.notes
+    else:
+        from ..recordings.turning_points import reduce_series
+
+        tp = reduce_series(series, strict=False)
+        centre, noise = tp, None
+        notes += list(tp.notes)
+    _refuse_sustained(scene, tp, series.source)
+    mp = measured_period(tp, series.source)
+    check_scene_omega0(scene, mp)
+    notes += start_omega0(scene, mp)
+    problem = WaveformProblem(scene, series, tp, solver, solver_options, centre=centre, noise=noise)
+    problem.notes = notes + [_count_note(tp, series.quantity)] + problem.notes
+    problem.measured_period = mp
+    return problem
 
 
 def _refuse_sustained(scene: BalanceScene, tp, source: str) -> None:

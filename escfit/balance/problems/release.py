@@ -21,7 +21,8 @@ REL_TOL = 0.05  # a fixed scene theta0 may differ from the record's reference an
 FREE_SPAN = 0.2  # a free release angle may move this fraction of the reference angle either way
 
 
-def release_from_record(params: ParamSet, measured: float, source: str, restoring: str = "spring") -> list[str]:
+def release_from_record(params: ParamSet, measured: float, source: str, restoring: str = "spring",
+                        unit: str = "rad") -> list[str]:
     """Set ``oscillator.theta0`` from the record's signed reference angle (rad), in place.
 
     A pendulum's reference beyond 180 deg is refused (the angles are in another unit).
@@ -31,6 +32,9 @@ def release_from_record(params: ParamSet, measured: float, source: str, restorin
     - theta0 fixed within :data:`REL_TOL` of ``|measured|``: kept fixed, signed as the record;
     - theta0 fixed elsewhere: refused (another scene's data);
     - theta0 not given by the scene (``nan``): free around ``measured``, +-:data:`FREE_SPAN`.
+
+    ``unit`` is ``"m"`` for a linear oscillator: ``measured`` is then its reference displacement
+    (m), the scene's ``x0``, and the messages say so.
 
     Returns
     -------
@@ -43,8 +47,14 @@ def release_from_record(params: ParamSet, measured: float, source: str, restorin
         When the scene's release angle contradicts the record.
     """
     p = params["oscillator.theta0"]
+    linear = unit == "m"
+    key, word = ("x0", "displacement") if linear else ("theta0", "angle")
+
+    def shown(x: float) -> str:
+        return f"{x:+.5g} m" if linear else f"{x:+.5g} rad ({math.degrees(x):+.4g} deg)"
+
     if not math.isfinite(measured) or measured == 0.0:
-        raise DataError(f"the record's reference turning point is at {measured!r} rad: no decay to fit", source)
+        raise DataError(f"the record's reference turning point is at {measured!r} {unit}: no decay to fit", source)
     if restoring == "pendulum" and abs(measured) >= math.pi:
         raise DataError(f"the record's reference turning point lies {math.degrees(abs(measured)):.4g} deg from the "
                         "centre, but a pendulum cannot swing past 180 deg: are the angles in another unit? set "
@@ -53,26 +63,25 @@ def release_from_record(params: ParamSet, measured: float, source: str, restorin
         span = FREE_SPAN * abs(measured)
         params.params[p.name] = replace(p, value=measured, vary=True, min=measured - span, max=measured + span,
                                         prior=None)
-        return [f"release angle free around the record's reference turning point, {measured:+.5g} rad "
-                f"({math.degrees(measured):+.4g} deg) from the centre"]
+        return [f"release {word} free around the record's reference turning point, {shown(measured)} from the centre"]
     if p.vary:
         notes = []
         if not p.min <= measured <= p.max and p.min <= -measured <= p.max:
             # the scene's sign is a convention; the record decides on which side the decay starts
             p = replace(p, value=-p.value, min=-p.max, max=-p.min)
             params.params[p.name] = p
-            notes.append(f"theta0's range mirrored to the record's side ([{p.min:.4g}, {p.max:.4g}] rad)")
+            notes.append(f"{key}'s range mirrored to the record's side ([{p.min:.4g}, {p.max:.4g}] {unit})")
         if not p.min <= measured <= p.max:
-            raise DataError(f"the record's reference turning point is at {measured:+.4g} rad, outside theta0's bounds "
+            raise DataError(f"the record's reference turning point is at {measured:+.4g} {unit}, outside {key}'s bounds "
                             f"[{p.min:.4g}, {p.max:.4g}] in the scene", source)
         if not p.min <= p.value <= p.max or math.copysign(1.0, p.value) != math.copysign(1.0, measured):
             params.params[p.name] = replace(p, value=measured)
         return notes
     if abs(abs(p.value) - abs(measured)) > REL_TOL * abs(measured):
-        raise DataError(f"the record's reference turning point is at {measured:+.4g} rad but the scene releases the "
-                        f"balance at theta0 = {p.value:.4g} rad: another scene's data (leave theta0 out to take it from "
-                        "the record, or make it free)", source)
+        raise DataError(f"the record's reference turning point is at {measured:+.4g} {unit} but the scene releases the "
+                        f"{'oscillator' if linear else 'balance'} at {key} = {p.value:.4g} {unit}: another scene's data "
+                        f"(leave {key} out to take it from the record, or make it free)", source)
     if math.copysign(1.0, p.value) != math.copysign(1.0, measured):
         params.params[p.name] = replace(p, value=-p.value)
-        return [f"release angle {p.value:+.4g} rad taken on the record's side ({-p.value:+.4g} rad)"]
+        return [f"release {word} {p.value:+.4g} {unit} taken on the record's side ({-p.value:+.4g} {unit})"]
     return []

@@ -3,8 +3,11 @@
 Turning points keep one number per half swing; a short or noisy record has few of them.  The
 waveform fit compares the model's theta(t) with every sample (see
 :mod:`escfit.balance.observation.waveform`), through the solvers' dense output
-(:func:`escfit.balance.waveform.sample_theta`): parameter vector -> values -> balance system ->
-theta at the sample times -> observation model -> log-likelihood.
+(:func:`escfit.balance.waveform.sample_state`): parameter vector -> values -> balance system ->
+theta (or theta') at the sample times -> observation model -> log-likelihood.  What was measured
+is the series' ``quantity``: an angle (rad) is compared with theta(t), an angular velocity
+(rad/s: a gyroscope, a velocity pickup) with theta'(t), a displacement (m) with the x(t) of a
+linear oscillator scene (``[oscillator] coordinate = "linear"``).
 
 Samples used: from a tenth of a period after the record's reference turning point (so that
 every admissible release instant ``t_release`` precedes them) up to the end of motion, thinned
@@ -22,7 +25,7 @@ import numpy as np
 
 from .. import BalanceScene
 from ...core.errors import FitError
-from ..observation.waveform import WaveformObservation
+from ..observation.waveform import READINGS, WaveformObservation
 from ...core.params import ParamSet
 from .curves import Curve
 from .pulses import RecordingProblem
@@ -55,20 +58,29 @@ class WaveformProblem(RecordingProblem):
         The samples (:class:`~escfit.balance.recordings.timeseries.TimeSeries`).
     reference
         The record's turning-point analysis (:class:`~escfit.balance.recordings.timeseries.TurningPoints`):
-        reference instant and angle, period, offset and drift estimates, end of motion.
+        reference instant and angle (or displacement), period, offset and drift estimates, end of
+        motion; for an angular velocity, the angle's turning points (the rate's zeros).
     solver, solver_options
         Any solver (default: the scene's) and its options.
+    centre
+        Where the sensor's zero and its drift were measured, with standard errors (attributes
+        ``offset``, ``offset_stderr``, ``offset_rate``, ``offset_rate_measured``,
+        ``offset_rate_stderr``, in the readings' units): for an angular velocity the rate's bias
+        (:class:`~escfit.balance.recordings.rate.RateAnalysis`); default ``reference``.
+    noise
+        The readings' noise scale (their unit), a start for ``observation.sigma``; default: from
+        the samples' second differences.
     """
 
-    reading_units = "rad"
-
     def __init__(self, scene: BalanceScene, series, reference, solver: str | None = None,
-                 solver_options: dict | None = None):
+                 solver_options: dict | None = None, *, centre=None, noise: float | None = None):
         scene = replace(scene, params=ParamSet(dict(scene.params.params)))  # the release is set on a copy
         super().__init__(scene, series, solver, solver_options)
+        self.quantity = getattr(series, "quantity", "angle")
         where = f"{scene.where} [observation]"
         table = {k: v for k, v in dict(scene.extra.get("observation", {})).items() if k != "model"}
-        for key, value in centre_priors(reference, sign=-1.0).items():
+        centre = reference if centre is None else centre
+        for key, value in centre_priors(centre, sign=-1.0).items():
             table.setdefault(key, value)
         t_ref = float(reference.release_time)
         period = float(reference.period)
@@ -79,37 +91,43 @@ class WaveformProblem(RecordingProblem):
         if idx.size < 20:
             raise FitError(f"only {idx.size} samples between the reference turning point at {t_ref:.4g} s and the end "
                            f"of motion at {end:.4g} s; a waveform fit needs a longer record", series.source)
-        sigma0 = noise_from_samples(series.theta[idx])
-        if math.isfinite(sigma0) and sigma0 > 0.3:
+        sigma0 = noise_from_samples(series.theta[idx]) if noise is None else float(noise)
+        if self.quantity == "angle" and math.isfinite(sigma0) and sigma0 > 0.3:
             raise FitError(f"the samples scatter by {sigma0:.3g} rad about a smooth curve: are they angles in rad? set "
                            "[recording] angle_unit (and scale) for another unit", series.source)
+        if not (math.isfinite(sigma0) and sigma0 > 0):
+            sigma0 = 1e-3 * max(float(np.ptp(series.theta[idx])), 1e-6)
         self.observation = WaveformObservation.from_table(
-            table, where, t_release=t_ref, period=period, offset=-float(reference.offset),
-            offset_rate=-float(getattr(reference, "offset_rate", 0.0)),
-            sigma=sigma0 if math.isfinite(sigma0) and sigma0 > 0 else 1e-3)
+            table, where, t_release=t_ref, period=period, offset=-float(centre.offset),
+            offset_rate=-float(getattr(centre, "offset_rate", 0.0)), sigma=sigma0, quantity=self.quantity)
         thin = self.observation.thin or max(1, math.ceil(idx.size / WaveformObservation.MAX_SAMPLES))
         idx = idx[::thin]
         self.thin = thin
         self.period = period
         self.sample_time = series.time[idx]
         self.notes = release_from_record(self.scene.params, float(reference.release_theta) - float(reference.offset),
-                                         series.source, scene.restoring)
+                                         series.source, scene.restoring, "m" if scene.linear else "rad")
         self._setup_params()
         if thin > 1:
             self.notes.append(f"waveform: one sample in {thin} used ({idx.size} of {np.count_nonzero(keep)})")
         self.curves = [Curve("waveform", math.nan, np.arange(idx.size), series.theta[idx], self.sample_time)]
 
+    @property
+    def reading_units(self) -> str:
+        """The readings' unit: rad, rad/s or m."""
+        return READINGS[self.quantity].unit
+
     def _predict(self, vals: Mapping[str, float]) -> np.ndarray:
-        """Model angle (rad, about the centre) at every sample used."""
-        from ..waveform import sample_theta
+        """The model's angle (rad), angular velocity (rad/s) or displacement (m) at every sample used."""
+        from ..waveform import sample_state
 
         t = self.sample_time - vals["observation.t_release"]
         if t[0] < 0.0:
             raise FitError("the release instant falls after the first sample used")
-        theta, status = sample_theta(self.scene.system(vals), t, self.solver, **self.solver_options)
+        theta, omega, status = sample_state(self.scene.system(vals), t, self.solver, **self.solver_options)
         if status in ("max_segments", "failed"):
             raise FitError(f"solver status {status}")
-        return theta
+        return omega if self.quantity == "angular_velocity" else theta
 
     def _pointwise(self, pred, vals):
         return self.observation.loglike_pointwise(pred, self.sample_time, self.curves[0].y, vals)

@@ -10,7 +10,9 @@ it one ``<channel>`` per run (``runs="true"``), each with ``<quantity>`` (the na
 program's language: ``Zeit``, ``Winkel``, ``Weg`` ...), ``<symbol>``, ``<unit>`` (empty for a
 dimensionless quantity: CASSY's angles calculated as arc over radius are in rad) and
 ``<values count="N"><value>x</value>...``, decimal points, an empty ``<value />`` where a
-calculated channel has no value (the first sample of a derivative).  Channels of another length
+calculated channel has no value (the first sample of a derivative).  A ``.labx`` saved
+compressed is a zip whose member ``data.xml`` holds that XML (the layout another CASSY reader,
+the ``cassy`` module of a lab-course package, opens; no compressed file was at hand).  Channels of another length
 (the FFT axis ``Frequenz``) are left out.
 
 Text export: UTF-8 with a byte-order mark, tab-separated, decimal commas, every line ended by
@@ -34,6 +36,7 @@ import numpy as np
 from ...core.errors import DataError
 from ...core.tabletext import decode_lenient, numbered_lines, split_fields
 from .columns import Columns, series_from_columns
+from .foreign import cassy_member, zip_names
 from .recording_spec import RecordingSpec
 from .series import TimeSeries
 
@@ -82,7 +85,10 @@ def read_cassy_labx(path: str | Path, spec: RecordingSpec | None = None) -> Time
     spec = spec or RecordingSpec()
     where = str(path)
     raw = Path(path).read_bytes()
-    root = parse_xml(raw.lstrip(b"\xef\xbb\xbf"), where)
+    xml, packed = raw, ""
+    if raw.startswith(b"PK\x03\x04"):  # saved compressed: a zip whose data.xml is the file's XML
+        xml, packed = _unzipped(path)
+    root = parse_xml(xml.lstrip(b"\xef\xbb\xbf"), where)
     if root.tag != "cassylab":
         raise DataError(f"XML root <{root.tag}>, not <cassylab>: not a CASSY Lab file", where)
     run = (spec.run or 1) - 1
@@ -114,9 +120,26 @@ def read_cassy_labx(path: str | Path, spec: RecordingSpec | None = None) -> Time
         notes.append(f"channel {names[i]!r} ({kept[i][1]}) has no unit: CASSY's angle from arc over radius, read as rad")
     stamp = next((c.get("datetime") for c in root.iter("channel") if c.get("datetime")), None)
     cols = Columns(where, names, [], [], units=units, values=values,
-                   describe=f"CASSY Lab 2 .labx, run {run + 1}, channels {names}", notes=notes,
+                   describe=f"CASSY Lab 2 .labx{packed}, run {run + 1}, channels {names}", notes=notes,
                    meta={"recorded": stamp} if stamp else {})
     return series_from_columns(cols, spec, sha256=hashlib.sha256(raw).hexdigest())
+
+
+_MAX_XML = 2 ** 30  # bytes: a zip member larger than this is not a lab measurement
+
+
+def _unzipped(path) -> tuple[bytes, str]:
+    """The XML of a compressed ``.labx`` and how it was found (for the description)."""
+    import zipfile
+
+    member = cassy_member(zip_names(path), Path(path).suffix.lower())
+    if member is None:
+        raise DataError("a zip archive holding no single CASSY Lab data file: extract the .labx from it and read "
+                        "that", str(path))
+    with zipfile.ZipFile(path) as zf:
+        if zf.getinfo(member).file_size > _MAX_XML:
+            raise DataError(f"{member} in the zip unpacks to more than 1 GB: not a lab measurement", str(path))
+        return zf.read(member), f" (compressed, {member})"
 
 
 def sniff_cassy_text(text: str) -> bool:
@@ -147,10 +170,13 @@ def read_cassy_text(path: str | Path, spec: RecordingSpec | None = None) -> Time
     settings = {s.split("=", 1)[0]: s.split("=", 1)[1] for n, s in lines if re.match(r"^[A-Z]+=", s)}
     body = [(n, s) for n, s in lines if n > head_line and not re.match(r"^[A-Z]+=", s)]
     rows = [split_fields(s, "\t") for _, s in body]
-    if rows and len(rows[-1]) < len(names):
+    if rows and len(rows[-1]) < len(names) and (len(rows) < 2 or len(rows[-1]) < len(rows[-2])):
         notes.append(f"the last row (line {body[-1][0]}) has {len(rows[-1])} of {len(names)} fields and was dropped as "
                      "truncated")
         rows, body = rows[:-1], body[:-1]
+    # a channel shorter than the time (an FFT's axis and spectrum, a derivative) ends in empty cells,
+    # or, last in the row, in no cells at all
+    rows = [r + [""] * (len(names) - len(r)) if len(r) < len(names) else r for r in rows]
     for r, (n, _) in zip(rows, body):
         if len(r) != len(names):
             raise DataError(f"expected {len(names)} fields ({', '.join(names)}), found {len(r)}", f"{where}:{n}")

@@ -26,6 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .series import QUANTITIES, show_value
+
 __all__ = ["Centre", "measure_centre"]
 
 
@@ -72,7 +74,7 @@ def centre_estimates(values: np.ndarray) -> np.ndarray:
     return 0.5 * (other + e[1:-1])
 
 
-def measure_centre(times: np.ndarray, values: np.ndarray, band: float) -> Centre:
+def measure_centre(times: np.ndarray, values: np.ndarray, band: float, quantity: str = "angle") -> Centre:
     """Centre and drift of alternating turning points ``values`` (rad) at ``times`` (s).
 
     Parameters
@@ -82,6 +84,9 @@ def measure_centre(times: np.ndarray, values: np.ndarray, band: float) -> Centre
     band
         Half width of the rest band (rad): a drift smaller than a quarter of it over the
         record is not kept.
+    quantity
+        What the values are (:data:`~escfit.balance.recordings.series.QUANTITIES`; the units
+        above are then rad/s or m), for the note.
     """
     t = np.asarray(times, float)
     v = np.asarray(values, float)
@@ -113,6 +118,8 @@ def measure_centre(times: np.ndarray, values: np.ndarray, band: float) -> Centre
         offset_se = scatter * math.sqrt(1.0 / n_eff + (tc.mean() ** 2) * c.size / (n_eff * sxx))
     note = ""
     if significant:
-        note = (f"the centre drifts by {math.degrees(rate * (tc[-1] - tc[0])):+.3g} deg over the record "
-                f"({math.degrees(rate):+.3g} +- {math.degrees(rate_se):.2g} deg/s)")
+        per_s = "deg/s" if quantity == "angle" else f"{QUANTITIES[quantity]}/s"
+        k = math.degrees(1.0) if quantity == "angle" else 1.0
+        note = (f"the centre drifts by {show_value(rate * (tc[-1] - tc[0]), quantity, signed=True)} over the record "
+                f"({k * rate:+.3g} +- {k * rate_se:.2g} {per_s})")
     return Centre(offset, float(offset_se), kept, float(rate_se), float(rate), note)

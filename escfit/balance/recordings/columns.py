@@ -32,7 +32,7 @@ __all__ = ["Columns", "series_from_columns", "signal_role"]
 
 _VELOCITY_WORDS = ("gyro", "omega", "angular velocity", "angular_velocity", "angularvelocity", "rotation rate",
                    "rate gyro", "angular speed", "winkelgeschwindigkeit", "rotation x", "rotation y", "rotation z")
-_DISPLACEMENT_WORDS = ("displacement", "position", "distance", "weg", "x", "y", "z")
+_DISPLACEMENT_WORDS = ("displacement", "position", "distance", "weg", "s", "x", "y", "z", "auslenkung", "elongation")
 _TEXT_KINDS = ("text", "flag", "date")
 
 
@@ -113,14 +113,15 @@ def signal_role(name: str, unit: str | None) -> str | None:
     dim = _dimension(unit)
     if dim == "angular_velocity":
         return "angular_velocity"
-    low = re.sub(r"\s*[(\[].*$", "", name.strip().lower())
+    low = re.sub(r"\s*([(\[].*|/.*)$", "", name.strip().lower())
     if any(w in low for w in _VELOCITY_WORDS) and dim in (None, "angular_velocity"):
         return "angular_velocity"
-    if role is not None and not (role == "angle" and dim == "length"):
+    # CASSY's path symbol s (``s / m``, ``Weg s_A1 / m``) is a length, not the time
+    if role is not None and not (role in ("angle", "time") and dim == "length"):
         return role
-    if dim == "length" and low in _DISPLACEMENT_WORDS:
+    if dim == "length" and (low in _DISPLACEMENT_WORDS or set(re.split(r"[\s_]+", low)) & set(_DISPLACEMENT_WORDS)):
         return "displacement"
-    return role
+    return None if role == "time" and dim == "length" else role
 
 
 def _dimension(unit: str | None) -> str | None:
@@ -162,7 +163,8 @@ def _hint_other_quantities(cols: Columns, roles: list[str | None]) -> str:
     volts = [i for i in range(cols.ncols) if (cols.unit(i) or "").strip() in ("V", "mV", "volt", "volts")]
     if volts:
         return (f" (column {cols.label(volts[0])!r} holds a sensor's volts: with angle_column set angle_unit and scale, "
-                "the angle per volt)")
+                "the angle per volt; a rate or a position: velocity_column or displacement_column with its unit and "
+                "scale)")
     for role, key in (("angular_velocity", "velocity_column"), ("displacement", "displacement_column")):
         hits = [i for i, r in enumerate(roles) if r == role]
         if hits:
@@ -207,6 +209,8 @@ def _choose(cols: Columns, spec: RecordingSpec, rate: float | None) -> tuple[int
             hits = [i for i, r in enumerate(roles) if r == quantity and i != t]
             if n == 1 and roles[0] != "time":
                 hits = [0]
+            if len(hits) > 1:
+                hits = _measured_candidates(cols, hits)
             if len(hits) != 1:
                 what = "no column looks like" if not hits else "several columns could be"
                 other = _hint_other_quantities(cols, roles) if quantity == "angle" and not hits else ""
@@ -218,6 +222,8 @@ def _choose(cols: Columns, spec: RecordingSpec, rate: float | None) -> tuple[int
             hits = hits or [i for i in clocks if i != a]
             if len(hits) > 1:
                 hits = _finest_clock(cols, hits)
+            if not hits and numeric == [a]:
+                raise DataError(_NO_CLOCK.format(what=f"a single column ({cols.label(a)!r})"), first)
             if len(hits) != 1:
                 what = "no column looks like" if not hits else "several columns could be"
                 raise DataError(f"{what} the time in the header {cols.names}; set [recording] time_column "
@@ -225,13 +231,66 @@ def _choose(cols: Columns, spec: RecordingSpec, rate: float | None) -> tuple[int
                                 f"{where}:{cols.header_line}" if cols.header_line else where)
             t = hits[0]
     if t is None and not uniform:
-        what = "a single column of angles" if n == 1 else f"{quantity.replace('_', ' ')} column {a + 1}"
-        raise DataError(f"no clock for {what}: set [recording] sample_rate or time_column", first)
+        if numeric == [a]:
+            raise DataError(_NO_CLOCK.format(what="a single column of numbers"), first)
+        raise DataError(f"no clock for {quantity.replace('_', ' ')} column {a + 1}: set [recording] sample_rate "
+                        "or time_column", first)
     if t == a:
         raise DataError(f"the time and the {quantity.replace('_', ' ')} are the same column ({a + 1})", where)
     if cols.kind(a) in _TEXT_KINDS + ("clock", "datetime"):
         raise DataError(f"column {cols.label(a)!r} holds {cols.kind(a)}s, not numbers; {hint}", where)
     return t, a
+
+
+_SPECTRUM_WORDS = ("fft", "fourier", "spektrum", "spectrum", "spectra", "psd", "frequenz", "frequency", "periodogram")
+_DERIVED_WORDS = ("mittel", "mean", "average", "avg", "smooth", "glätt", "glaett", "filter", "fit", "model", "theor",
+                  "energie", "energy", "ableitung", "derivative", "diff", "delta", "integral", "berechnet", "calc",
+                  "residu", "error", "fehler", "sigma", "std")
+_MEASURED_WORDS = {"weg", "s", "x", "y", "winkel", "alpha", "α", "phi", "φ", "theta", "θ", "angle", "position", "pos",
+                   "displacement", "auslenkung", "elongation", "encoder"}
+
+
+def _measured_candidates(cols: Columns, hits: list[int]) -> list[int]:
+    """Of several columns that could hold the signal, those that are the measured one (a note says why
+    the others were passed over): a column with fewer readings than the table's longest (an FFT's
+    axis or spectrum, a derivative's or a fit's column padded with empty cells) or named as a
+    spectrum is no candidate; of the rest, a plainly named measured quantity (CASSY's ``Winkel``,
+    ``Weg``, ``s``, ``x``, ``alpha``) is preferred over derived ones (a mean, a fit, an energy)."""
+    counts = {i: _readings(cols, i) for i in range(cols.ncols) if cols.kind(i) not in _TEXT_KINDS}
+    longest = max(counts.values(), default=0)
+    passed = []
+    kept = []
+    for i in hits:
+        low = cols.label(i).lower()
+        if any(w in low for w in _SPECTRUM_WORDS):
+            passed.append(f"{cols.label(i)!r} (a spectrum)")
+        elif counts.get(i, 0) < 0.95 * longest - 2:
+            passed.append(f"{cols.label(i)!r} ({counts.get(i, 0)} readings of {longest})")
+        else:
+            kept.append(i)
+    if len(kept) > 1:
+        words = {i: set(re.findall(r"[^\W\d_]+", re.sub(r"\s*[(\[/].*$", "", cols.label(i).lower()))) for i in kept}
+        plain = [i for i in kept if words[i] & _MEASURED_WORDS and not any(d in w for w in words[i] for d in _DERIVED_WORDS)]
+        if len(plain) == 1:
+            passed += [f"{cols.label(i)!r} (derived)" for i in kept if i != plain[0]]
+            kept = plain
+    if len(kept) == 1 and passed:
+        cols.notes.append(f"column {cols.label(kept[0])!r} is the measured one, passing over {', '.join(passed)} "
+                          "([recording] angle_column, velocity_column or displacement_column chooses another)")
+    return kept or hits
+
+
+def _readings(cols: Columns, i: int) -> int:
+    """How many cells of column i hold a reading (not empty, not NaN)."""
+    if i in cols.values:
+        return int(np.isfinite(np.asarray(cols.values[i], dtype=float)).sum())
+    if i >= len(cols.cells):
+        return 0
+    return sum(1 for c in cols.cells[i] if c.strip() and c.strip().strip('"').lower() not in ("nan", "-nan", "na"))
+
+
+_NO_CLOCK = ("{what} and no time: set the samples per second with [recording] sample_rate (e.g. "
+             "sample_rate = \"50 Hz\") or --sample-rate 50")
 
 
 def _shown(cols: Columns) -> list[str]:
@@ -303,15 +362,17 @@ def _si_factor(cols: Columns, col: int, spec: RecordingSpec, opts: dict, reader:
         if unit is None:
             raise DataError(f"column {name!r} gives no unit: set [recording] {key}", at)
         target = "rad/s" if quantity == "angular_velocity" else "m"
+        volts = False
         try:
             q = ureg.parse_expression(unit.strip().replace("°", "deg")) if safe_unit_text(unit) else None
-            if q is not None and q.dimensionality == ureg.volt.dimensionality:
-                factor = 1.0  # the sensor's volts: scale is the SI value per volt
-            else:
-                factor = float(q.to(target).magnitude)
+            volts = q is not None and q.dimensionality == ureg.volt.dimensionality
+            factor = 1.0 if volts else float(q.to(target).magnitude)  # volts: scale is the SI value per volt
         except Exception:
             raise DataError(f"column {name!r}: {unit!r} is not a unit of {quantity.replace('_', ' ')}; set "
                             f"[recording] {key} (and scale)", at) from None
+        if volts and spec.scale is None and "scale" not in opts:
+            raise DataError(f"column {name!r} holds a sensor's volts: set [recording] scale, its "
+                            f"{target} per volt", at)
         reader[key] = unit
         if scale != 1.0:
             reader["scale"] = f"{scale:g}"

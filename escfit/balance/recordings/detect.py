@@ -18,6 +18,7 @@ from ...core.csvtable import refuses_unreadable
 from ...core.errors import DataError
 from ...core.tabletext import decode_lenient, numbered_lines, split_fields
 from .cassy import read_cassy_labx, read_cassy_text, sniff_cassy_text
+from .foreign import cassy_member, refuse_foreign, zip_names
 from .formats_list import ESCFIT_FORMATS, FORMAT_NAMES, TIMEGRAPHER_FORMATS, TIMESERIES_FORMATS
 from .labfiles import read_arduino_log, read_cmbl, read_run_csv, sniff_arduino_log, sniff_run_csv
 from .lvm import read_lvm, sniff_lvm
@@ -61,14 +62,9 @@ def candidates(path: str | Path) -> list[str]:
     if kind == "empty":
         raise DataError("empty file (no header and no rows)", str(path))
     raw = p.read_bytes()[:8]
-    if raw.startswith(b"PK\x03\x04"):
-        names = _zip_names(p)
-        if "[Content_Types].xml" in names:
-            raise DataError("an Excel workbook (.xlsx): export it as CSV (phyphox: 'CSV (Comma, decimal point)') and "
-                            "read that", str(path))
-        return ["phyphox"] if any(n.lower().endswith(".csv") for n in names) else []
-    if raw.startswith(b"\xfd7zXZ\x00") and p.suffix.lower() == ".lml":
-        raise DataError("a LabPlot project (.lml, xz-compressed): export its spreadsheet as CSV and read that", str(path))
+    refuse_foreign(p)  # workbooks, compressed or zipped instrument files, audio, unknown binaries
+    if raw.startswith(b"PK\x03\x04"):  # a zip that passed: a compressed CASSY file or phyphox's CSV files
+        return ["cassy"] if cassy_member(zip_names(p), p.suffix.lower()) is not None else ["phyphox"]
     if raw.startswith(b"MATLAB") or p.suffix.lower() == ".mat":
         return ["raw"]
     if kind == "binary" and not raw.startswith((b"\xff\xfe", b"\xfe\xff")):
@@ -100,7 +96,7 @@ def candidates(path: str | Path) -> list[str]:
         found.append("timeseries")
     if sniff_tg_applog(path) and "timegrapher" not in found:
         found.append("tg-applog")
-    runs = sniff_run_csv(header)
+    runs = sniff_run_csv(_header_above_numbers(stripped))
     if runs:
         found.append(runs)
     if sniff_phyphox_csv(stripped):
@@ -112,23 +108,35 @@ def candidates(path: str | Path) -> list[str]:
     return found
 
 
-def _zip_names(p: Path) -> list[str]:
-    import zipfile
-
-    try:
-        with zipfile.ZipFile(p) as zf:
-            return zf.namelist()
-    except zipfile.BadZipFile:
-        raise DataError("a damaged .zip file", str(p)) from None
+def _fields(line: str) -> list[str]:
+    s = line.strip()
+    delim = max((",", ";", "\t"), key=s.count) if any(d in s for d in ",;\t") else None
+    return split_fields(s, delim)
 
 
 def _first_header(text: str) -> list[str]:
     for _, line in numbered_lines(text):
         s = line.strip()
         if s and not s.startswith("#"):
-            delim = max((",", ";", "\t"), key=s.count) if any(d in s for d in ",;\t") else None
-            return split_fields(s, delim)
+            return _fields(s)
     return []
+
+
+_NUMBER = re.compile(r"^\s*[-+]?(\d|\.\d)")
+
+
+def _header_above_numbers(text: str) -> list[str]:
+    """The line right above the first line that starts with a number (a table's header; a
+    title line above it, such as DataStudio's ``Output Voltage, Run #16``, is not one)."""
+    previous = None
+    for _, line in numbered_lines(text):
+        s = line.strip()
+        if not s or s.startswith("#"):
+            continue
+        if _NUMBER.match(s):
+            return _fields(previous) if previous is not None else []
+        previous = s
+    return _first_header(text)
 
 
 @refuses_unreadable

@@ -9,8 +9,9 @@ real files show (the column/cell structure is the same in Graphical Analysis's `
 no writer code is public.
 
 **Vernier CSV** (Logger Pro and Graphical Analysis "Export CSV"): a header of
-``"Run 1: Time (s)","Run 1: Angle (°)",...`` (or ``Latest: ...``), one block of columns per
-run side by side.  **PASCO Capstone CSV**: ``Time (s) Run #1,Angle (rad) Run #1,...``, runs side
+``"Run 1: Time (s)","Run 1: Angle (°)",...`` (or ``Latest: ...``, ``Data Set 1: ...``), one block of
+columns per run side by side; or numbered names ``Time 1,Position 1,Time 2,Position 2`` (units in
+brackets after the number), read when every run has its time column.  **PASCO Capstone CSV**: ``Time (s) Run #1,Angle (rad) Run #1,...``, runs side
 by side, shorter runs padded with empty cells.  Both are read by the shared table reader; the
 run (``[recording] run``, default 1, or the only one) selects the columns, whose names lose the
 run label.
@@ -37,7 +38,7 @@ from ...core.tabletext import decode_lenient, numbered_lines, parse_number
 from .cassy import parse_xml
 from .columns import Columns, series_from_columns
 from .rawtable import scan_text, table_columns
-from .recording_spec import RecordingSpec
+from .recording_spec import RecordingSpec, header_role
 from .series import TimeSeries
 
 __all__ = ["read_cmbl", "read_run_csv", "read_arduino_log", "sniff_run_csv", "sniff_arduino_log",
@@ -45,6 +46,7 @@ __all__ = ["read_cmbl", "read_run_csv", "read_arduino_log", "sniff_run_csv", "sn
 
 _VERNIER_RUN = re.compile(r"^\s*(Run\s*\d+|Latest|Last|Data\s*Set\s*\d*)\s*:\s*(.+)$", re.I)
 _PASCO_RUN = re.compile(r"^(.*?)\s*Run\s*#\s*(\d+)\s*$", re.I)
+_NUMBERED_RUN = re.compile(r"^\s*(.*?[^\d\s])\s*(\d+)\s*(\([^()]*\)|\[[^\[\]]*\])?\s*$")
 _PAIR = re.compile(r"\s*([A-Za-z_][\w .]*?)\s*[:=]\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-zµ°/]*)\s*")
 
 
@@ -101,7 +103,20 @@ def write_cmbl(runs: dict[str, dict[str, tuple[str, list[float]]]]) -> str:
     return "".join(parts)
 
 
-def _run_of(name: str) -> tuple[str | None, str]:
+def _numbered_runs(header: list[str]) -> bool:
+    """Whether every name is ``<quantity> <run>`` (Logger Pro's ``Time 1``, ``Position 1 (m)``) and every
+    run has its time column."""
+    found = [_NUMBERED_RUN.match(h) for h in header]
+    if len(header) < 2 or not all(found):
+        return False
+    timed = {m.group(2) for m in found if header_role(m.group(1))[0] == "time"}
+    return timed == {m.group(2) for m in found}
+
+
+def _run_of(name: str, numbered: bool = False) -> tuple[str | None, str]:
+    if numbered:
+        m = _NUMBERED_RUN.match(name)
+        return f"Run {int(m.group(2))}", m.group(1) + (f" {m.group(3)}" if m.group(3) else "")
     m = _VERNIER_RUN.match(name)
     if m:
         return re.sub(r"\s+", " ", m.group(1)).title(), m.group(2).strip()
@@ -113,7 +128,7 @@ def _run_of(name: str) -> tuple[str | None, str]:
 
 def sniff_run_csv(header: list[str]) -> str | None:
     """``"vernier-csv"`` or ``"pasco-csv"`` when a header's names carry run labels, else None."""
-    if len(header) >= 2 and all(_VERNIER_RUN.match(h) for h in header):
+    if len(header) >= 2 and all(_VERNIER_RUN.match(h) for h in header) or _numbered_runs(header):
         return "vernier-csv"
     if len(header) >= 2 and sum(bool(_PASCO_RUN.match(h)) for h in header) >= len(header) - 1:
         return "pasco-csv"
@@ -130,7 +145,8 @@ def read_run_csv(path: str | Path, spec: RecordingSpec | None = None, *, program
     cols = table_columns(body, where, notes)
     if cols.names is None:
         raise DataError("no header naming the runs' columns", where)
-    labelled = [_run_of(n) for n in cols.names]
+    numbered = _numbered_runs(cols.names)
+    labelled = [_run_of(n, numbered) for n in cols.names]
     runs = list(dict.fromkeys(r for r, _ in labelled if r is not None))
     if not runs:
         raise DataError(f"no run labels ('Run 1: ...', '... Run #1') in the header {cols.names}", where)

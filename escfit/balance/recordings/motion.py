@@ -108,9 +108,12 @@ def faded_end(rec, times: np.ndarray, values: np.ndarray) -> int:
     amp = _amplitudes(values)
     big = float(np.max(amp))
     for i in bad:
-        if amp[i] <= max(0.1 * big, 3.0 * rec.band) and amp[i] < 0.5 * np.max(amp[:i + 1]):
+        # faded: small against what came before and nothing large after (a hand's jitter while the
+        # oscillator is held before its release is small too, but the swing follows it)
+        if amp[i] <= max(0.1 * big, 3.0 * rec.band) and amp[i] < 0.5 * np.max(amp[:i + 1]) \
+                and np.max(amp[i + 1:], initial=0.0) < 0.5 * np.max(amp[:i + 1]):
             rec.notes.append(f"turning points from t = {times[i + 1]:.4g} s on left out: the swing had faded to "
-                             f"{math.degrees(amp[i]):.2g} deg and their spacing is irregular (noise, not motion)")
+                             f"{rec.show(amp[i], 2)} and their spacing is irregular (noise, not motion)")
             return int(i) + 1
     return times.size
 
@@ -155,8 +158,47 @@ def held_release(rec, turn: Turn, amplitude: float = math.inf) -> tuple[float, f
     free = rec.period / math.pi * math.sqrt(2.0 * rec.band / amplitude) if amplitude > rec.band else rec.period
     if t[j1] - t[j0] < max(HOLD_PERIODS * rec.period, 2.0 * free):
         return None
-    got = rec.refine(j1, j1, flat="left", degree=RELEASE_DEGREE)
+    got = release_instant(rec, j1)
+    if got is None:
+        got = rec.refine(j1, j1, flat="left", degree=RELEASE_DEGREE)
     return got if got is not None else (float(t[j1]), float(np.median(x[j0:j1])))
+
+
+def release_instant(rec, j1: int) -> tuple[float, float] | None:
+    """When a held oscillator was let go, and where it was held, from the swing that follows.
+
+    ``j1`` is the first sample that left the hold.  Released at rest, a free oscillator
+    starts as ``level + a (1 - cos(w (t - t_r)))`` with ``w = 2 pi / period``: the samples from
+    a quarter period before ``j1`` to a fifth of a period after it are fitted with that, flat
+    before ``t_r`` (``level`` and ``a`` by linear least squares for each ``t_r``, ``t_r`` searched
+    in the quarter period before ``j1``).  Damping and friction change the swing little over a
+    fifth of a period; a local polynomial needs many samples there (at 20 samples per period it
+    put a release a tenth of a period early).  ``None`` when too few samples follow.
+    """
+    t, x, period = rec.t, rec.x, rec.period
+    w = 2.0 * math.pi / period
+    lo, hi = np.searchsorted(t, [t[j1] - 0.25 * period, t[j1] + 0.2 * period])
+    if hi - j1 < 3 or hi - lo < 6:
+        return None
+    tt, xx = t[lo:hi], x[lo:hi]
+
+    def fit(tr: float) -> tuple[float, float]:
+        g = 1.0 - np.cos(w * np.clip(tt - tr, 0.0, None))
+        design = np.stack([np.ones_like(g), g], axis=1)
+        coef, *_ = np.linalg.lstsq(design, xx, rcond=None)
+        r = xx - design @ coef
+        return float(r @ r), float(coef[0])
+
+    grid = np.linspace(max(tt[0], t[j1] - 0.25 * period), t[j1], 101)
+    costs = [fit(tr)[0] for tr in grid]
+    k = int(np.argmin(costs))
+    from scipy.optimize import minimize_scalar
+
+    step = grid[1] - grid[0]
+    found = minimize_scalar(lambda tr: fit(tr)[0], bounds=(grid[max(k - 1, 0)], grid[min(k + 1, grid.size - 1)] + 1e-12 * step),
+                            method="bounded", options={"xatol": 1e-6 * period})
+    tr = float(found.x) if found.fun <= costs[k] else float(grid[k])
+    return tr, fit(tr)[1]
 
 
 def _regular(interval: float, half: float) -> bool:
@@ -238,7 +280,7 @@ def envelope(rec) -> tuple[np.ndarray, np.ndarray]:
     """
     t, xs = rec.t, rec.xs
     width = 1.5 * rec.period
-    starts = np.arange(t[0], t[-1] - width + 1e-12, 0.25 * rec.period)
+    starts = np.arange(t[0], t[-1] - width + 1e-9 * width, 0.25 * rec.period)
     lo = np.searchsorted(t, starts)
     hi = np.searchsorted(t, starts + width)
     return starts, np.array([0.5 * float(np.ptp(xs[a:b])) if b > a else 0.0 for a, b in zip(lo, hi)])
@@ -314,8 +356,8 @@ def find_start(rec, turns: list[Turn], end: int, *, at_start: bool = False) -> S
     """
     ok = [i for i in range(end) if turns[i].time is not None]
     if not ok:
-        raise DataError("no turning point found: the angle never comes back by more than "
-                        f"{math.degrees(rec.step):.3g} deg", rec.where)
+        raise DataError(f"no turning point found: the {rec.quantity.replace('_', ' ')} never comes back by more than "
+                        f"{rec.show(rec.step, 3)}", rec.where)
     first_ok = ok[0]
     times = np.array([turns[i].time if turns[i].time is not None else np.nan for i in range(end)])
     values = np.array([turns[i].value if turns[i].value is not None else np.nan for i in range(end)])
@@ -331,7 +373,7 @@ def find_start(rec, turns: list[Turn], end: int, *, at_start: bool = False) -> S
         half = _local_half(times, i, end, 0.5 * rec.period)
         if (times[i] - times[i - 1]) / half > INTERVAL_RANGE[1] \
                 and held_release(rec, turns[i - 1], 0.5 * abs(values[i] - values[i - 1])) is not None:
-            r, why = i - 1, f"the oscillator is held at {math.degrees(values[i - 1]):.4g} deg before t = {times[i]:.4g} s"
+            r, why = i - 1, f"the oscillator is held at {rec.show(values[i - 1], 4)} before t = {times[i]:.4g} s"
             break
     driven = _driven_prefix(values[r:end], tol)
     if driven:
@@ -340,8 +382,8 @@ def find_start(rec, turns: list[Turn], end: int, *, at_start: bool = False) -> S
         r += driven
     pulled = r == first_ok + 1 and held_release(rec, turns[first_ok]) is not None
     if pulled:
-        rec.notes.append(f"held at {math.degrees(values[first_ok]):.4g} deg, then moved to "
-                         f"{math.degrees(values[r]):.4g} deg by hand: the free swing starts at that turning point "
+        rec.notes.append(f"held at {rec.show(values[first_ok], 4)}, then moved to "
+                         f"{rec.show(values[r], 4)} by hand: the free swing starts at that turning point "
                          f"(t = {times[r]:.4g} s), the reference")
     elif r > first_ok:
         rec.notes.append(f"the record before t = {times[r]:.4g} s is not a free decay ({why}); the free decay is "
@@ -350,7 +392,7 @@ def find_start(rec, turns: list[Turn], end: int, *, at_start: bool = False) -> S
     held = held_release(rec, turns[r], amplitude)
     if held is not None and r + 1 < end \
             and _regular(times[r + 1] - held[0], _local_half(times, r + 1, end, 0.5 * rec.period)):
-        rec.notes.append(f"held at {math.degrees(held[1]):.4g} deg until the release at t = {held[0]:.4g} s")
+        rec.notes.append(f"held at {rec.show(held[1], 4)} until the release at t = {held[0]:.4g} s")
         return Start(held[0], held[1], r + 1, "held")
     if r == first_ok and not (at_start and r == 0):
         _note_pull(rec, turns[r])
@@ -365,20 +407,20 @@ def _note_pull(rec, turn: Turn) -> None:
     moved = np.abs(rec.xs[:turn.first + 1] - level) > rec.band
     j = int(np.argmax(moved)) if moved.any() else turn.first
     if t[j] - t[0] >= HOLD_PERIODS * rec.period and abs(level - turn.value) > rec.band:
-        rec.notes.append(f"held at {math.degrees(level):.4g} deg until t = {t[j]:.4g} s, then moved to "
-                         f"{math.degrees(turn.value):.4g} deg: the free swing starts at that turning point "
+        rec.notes.append(f"held at {rec.show(level, 4)} until t = {t[j]:.4g} s, then moved to "
+                         f"{rec.show(turn.value, 4)}: the free swing starts at that turning point "
                          f"(t = {turn.time:.4g} s), the reference")
     elif turn.first > 0 or turn.time > t[0] + 0.05 * rec.period:
         rec.notes.append(f"the record starts mid-swing; reference: the first turning point at t = {turn.time:.4g} s "
-                         f"({math.degrees(turn.value):.4g} deg on the sensor's scale)")
+                         f"({rec.show(turn.value, 4)} on the sensor's scale)")
 
 
 def reference(rec, turns: list[Turn]) -> tuple[float, float, list[Turn]]:
     """The reference instant and angle of a record without a given release, and the turning
     points after it (see the module docstring and :mod:`escfit.balance.recordings.turning_points`)."""
     if not turns:
-        raise DataError("no turning point found: the angle never comes back by more than "
-                        f"{math.degrees(rec.step):.3g} deg", rec.where)
+        raise DataError(f"no turning point found: the {rec.quantity.replace('_', ' ')} never comes back by more than "
+                        f"{rec.show(rec.step, 3)}", rec.where)
     at_start = held = False
     if turns[0].time is None:  # the first extremum lies too close to the start for a local fit
         start = _turn_at_start(rec)
@@ -401,7 +443,7 @@ def reference(rec, turns: list[Turn]) -> tuple[float, float, list[Turn]]:
         settled, level, periods = steady_tail(rec)
         if math.isfinite(settled):
             raise DataError(f"the swing grows again {len(episodes)} times and from about t = {settled:.4g} s keeps an "
-                            f"amplitude of {math.degrees(level):.3g} deg for {periods:.0f} periods, to the end: a "
+                            f"amplitude of {rec.show(level, 3)} for {periods:.0f} periods, to the end: a "
                             "driven oscillation (a drive's steady state), not a free decay; a decay after the drive "
                             "is switched off can be cut out with [recording] start and stop", rec.where)
         raise DataError(f"the swing grows again {len(episodes)} times (from about t = {when} s): beating modes, a "
@@ -417,17 +459,17 @@ def reference(rec, turns: list[Turn]) -> tuple[float, float, list[Turn]]:
     while end and turns[end - 1].time is None:
         end -= 1
     done = [u for u in turns[:end] if u.time is not None]
-    _check_decay(np.array([u.time for u in done]), np.array([u.value for u in done]), rec.where)
+    _check_decay(np.array([u.time for u in done]), np.array([u.value for u in done]), rec)
     if done:  # the faded end first: extrema of the noise must not pass for a push
         skipped = end - len(done)
         end = skipped + faded_end(rec, np.array([u.time for u in done]), np.array([u.value for u in done]))
     found = find_start(rec, turns, end, at_start=at_start)
     if at_start and found.first == 1 and found.kind == "turn":
         if held:
-            rec.notes.append(f"held at {math.degrees(found.theta):.4g} deg until the release at t = "
+            rec.notes.append(f"held at {rec.show(found.theta, 4)} until the release at t = "
                              f"{found.time:.4g} s")
         else:
-            rec.notes.append(f"the record starts at a turning point ({math.degrees(found.theta):.4g} deg on the "
+            rec.notes.append(f"the record starts at a turning point ({rec.show(found.theta, 4)} on the "
                              "sensor's scale)")
     return found.time, found.theta, turns[found.first:end]
 
@@ -440,7 +482,8 @@ def _flat_start(rec) -> tuple[float, float] | None:
     out = np.flatnonzero(np.abs(rec.xs - level) > rec.band)
     if not out.size or out[0] < 3:
         return None
-    return rec.refine(int(out[0]), int(out[0]), flat="left", degree=RELEASE_DEGREE)
+    got = release_instant(rec, int(out[0]))
+    return got if got is not None else rec.refine(int(out[0]), int(out[0]), flat="left", degree=RELEASE_DEGREE)
 
 
 def _turn_at_start(rec) -> tuple[float, float, bool] | None:
@@ -474,7 +517,7 @@ def _turn_at_start(rec) -> tuple[float, float, bool] | None:
     return float(t[0] + sc), value, is_max
 
 
-def _check_decay(times: np.ndarray, values: np.ndarray, where: str) -> None:
+def _check_decay(times: np.ndarray, values: np.ndarray, rec) -> None:
     """Refuse a swing that grows steadily (most peak-to-peak swings larger than the one before): not a free decay."""
     size = np.abs(np.diff(values))
     if size.size < 4:
@@ -482,6 +525,6 @@ def _check_decay(times: np.ndarray, values: np.ndarray, where: str) -> None:
     m = max(1, size.size // 3)
     first, last = float(np.mean(size[:m])), float(np.mean(size[-m:]))
     if last > 1.2 * first and np.mean(np.diff(size) > 0) > 0.6:
-        raise DataError(f"the swing grows from {math.degrees(first):.4g} to {math.degrees(last):.4g} deg "
+        raise DataError(f"the swing grows from {rec.show(first, 4)} to {rec.show(last, 4)} "
                         f"(peak to peak) between t = {times[0]:.4g} s and {times[-1]:.4g} s: a driven or sustained "
-                        "oscillation (a drive, an escapement, a sound), not a free decay", where)
+                        "oscillation (a drive, an escapement, a sound), not a free decay", rec.where)

@@ -23,6 +23,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ...core.errors import DataError
+from .foreign import refuse_foreign
 from .matfile import read_mat_series
 from .rawsteps import FILE_OPTIONS, MIN_SAMPLES, build_series, file_options, merge_file_meta, notes_of, regular_times
 from .rawtable import read_raw_table
@@ -68,4 +69,5 @@ def read_raw_series(path: str | Path, spec: RecordingSpec | None = None) -> Time
         return read_mat_series(p, spec)
     if head.startswith(_HDF5) or head[512:520] == _HDF5:
         raise DataError("an HDF5 file, not a text table (a MATLAB v7.3 file needs its .mat suffix)", str(path))
+    refuse_foreign(p)
     return read_raw_table(p, spec)

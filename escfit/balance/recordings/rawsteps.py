@@ -30,6 +30,7 @@ __all__ = ["build_series", "regular_times", "notes_of", "merge_file_meta", "file
            "FILE_OPTIONS", "MIN_SAMPLES"]
 
 MIN_SAMPLES = 20
+MIN_AMPLITUDE_ROWS = 4  # rows of amplitude readings: more than a viscous and Coulomb fit's parameters
 FILE_OPTIONS = {"rate": "sample_rate", "sample_rate": "sample_rate", "samplerate": "sample_rate",
                 "sampling_rate": "sample_rate", "sample_rate_hz": "sample_rate", "rate_hz": "sample_rate",
                 "fs": "sample_rate", "dt": "dt", "dt_s": "dt", "sample_interval": "dt", "units": "angle_unit",
@@ -98,8 +99,9 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
             raise DataError(f"{name} value {float(values[bad[0]])!r} is not a finite number", where_of_row(int(bad[0])))
     if np.size(time) < 2:
         raise DataError(f"only {np.size(time)} samples; a decay needs at least {MIN_SAMPLES}", source)
-    time = regular_times(np.asarray(time, dtype=float), where_of_row, notes)
-    theta = np.asarray(theta, dtype=float)
+    time, theta = _drop_repeated_rows(np.asarray(time, dtype=float), np.asarray(theta, dtype=float), notes,
+                                      where_of_row)
+    time = regular_times(time, where_of_row, notes)
     if meta.get("angle_unit_assumed") and np.ptp(theta) > 2.0 * math.pi:
         raise DataError(f"the angles span {np.ptp(theta):.4g} with no unit given (rad assumed): more than a turn, so "
                         "not radians of a swinging balance; if they are degrees set [recording] angle_unit = \"deg\" "
@@ -117,12 +119,29 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
                             f"{source} [recording].start/stop")
         time, theta = time[keep], theta[keep]
         meta["window"] = window
-    if time.size < MIN_SAMPLES:
-        raise DataError(f"only {time.size} samples; a decay needs at least {MIN_SAMPLES}", source)
+    need = MIN_SAMPLES if spec.readings == "samples" else MIN_AMPLITUDE_ROWS
+    if time.size < need:
+        what = "samples" if spec.readings == "samples" else "amplitude readings"
+        raise DataError(f"only {time.size} {what}; a decay needs at least {need}", source)
     if notes:
         meta["notes"] = "; ".join(n.replace(";", ",") for n in notes)
     return TimeSeries(time=time, theta=np.asarray(theta, dtype=float), release_s=release_s, source=source,
                       sha256=sha256, meta=meta)
+
+
+def _drop_repeated_rows(time: np.ndarray, theta: np.ndarray, notes: list[str],
+                        where_of_row: Callable[[int], str]) -> tuple[np.ndarray, np.ndarray]:
+    """Rows that repeat the previous row exactly (time and reading: a spreadsheet's pasted copy)
+    left out, with a note; a repeated time with another reading stays (and is refused)."""
+    if time.size < 2:
+        return time, theta
+    same = np.r_[False, (np.diff(time) == 0.0) & (np.diff(theta) == 0.0)]
+    if not same.any():
+        return time, theta
+    first = int(np.flatnonzero(same)[0])
+    notes.append(f"{int(same.sum())} row(s) repeating the previous row exactly left out, the first at "
+                 f"{where_of_row(first)}")
+    return time[~same], theta[~same]
 
 
 def unwrap_angles(theta: np.ndarray, notes: list[str]) -> np.ndarray:

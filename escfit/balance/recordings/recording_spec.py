@@ -53,7 +53,8 @@ Column = str | int | tuple[str, ...]
 COUNT_WORDS = frozenset({"count", "counts", "cts", "ticks"})
 TIME_WORDS = frozenset({"t", "time", "zeit", "sec", "secs", "seconds", "s", "timestamp", "time_stamp", "elapsed"})
 UNIT_WORDS = frozenset({"deg", "degree", "degrees", "rad", "radian", "radians"} | COUNT_WORDS)
-ANGLE_WORDS = frozenset({"theta", "angle", "phi", "position", "pos", "winkel", "encoder", "θ", "φ"} | UNIT_WORDS)
+ANGLE_WORDS = frozenset({"theta", "angle", "phi", "alpha", "position", "pos", "winkel", "encoder", "θ", "φ", "α"}
+                        | UNIT_WORDS)
 
 
 @dataclass(frozen=True)

@@ -16,9 +16,10 @@ quantity                      unit          recorded by
 ``"displacement"``            m             a motion detector under a mass, a linear coordinate
 ============================  ============  ===========================================================
 
-Only angles are fitted today; the readers deliver the other two so that the waveform fit can
-take them as they are (never differentiated or integrated), and a fit refuses them with one line
-until it does (:func:`refuse_unless_angle`).
+The waveform fit takes each as it was measured (:mod:`escfit.balance.problems.waveform`): an
+angular velocity is compared with the model's theta'(t), a displacement with the x(t) of a linear
+oscillator scene; nothing is differentiated or integrated for the fit.  :func:`show_value` writes
+a value of any quantity for the analysis' notes (angles in degrees, as people read them).
 """
 
 from __future__ import annotations
@@ -28,9 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...core.errors import FitError
-
-__all__ = ["TimeSeries", "QUANTITIES", "refuse_unless_angle"]
+__all__ = ["TimeSeries", "QUANTITIES", "show_value", "quantity_words"]
 
 #: quantity -> SI unit of the samples
 QUANTITIES = {"angle": "rad", "angular_velocity": "rad/s", "displacement": "m"}
@@ -81,18 +80,16 @@ class TimeSeries:
         return QUANTITIES[self.quantity]
 
 
-def refuse_unless_angle(series: TimeSeries) -> None:
-    """Refuse, in one line, to fit a series that is not an angle (velocity and displacement
-    observations are read but not yet fitted).
+def show_value(value: float, quantity: str = "angle", digits: int = 3, *, signed: bool = False) -> str:
+    """A value of ``quantity`` (in its SI unit) for a sentence: ``"12.3 deg"``, ``"0.51 rad/s"``, ``"0.0123 m"``.
 
-    Raises
-    ------
-    FitError
-        The series is an angular velocity or a displacement.
+    Angles are written in degrees, as people read them; rates and displacements in their SI unit.
     """
-    if series.quantity == "angle":
-        return
-    what = {"angular_velocity": "an angular velocity (rad/s)", "displacement": "a linear displacement (m)"}
-    raise FitError(f"the recording is {what[series.quantity]}; escfit reads it but does not fit such an observation "
-                   "yet (only angles): give the angle column instead ([recording] angle_column), or keep the file "
-                   "for a later version", series.source or None)
+    v = math.degrees(value) if quantity == "angle" else float(value)
+    unit = "deg" if quantity == "angle" else QUANTITIES[quantity]
+    return f"{v:{'+' if signed else ''}.{digits}g} {unit}"
+
+
+def quantity_words(quantity: str) -> str:
+    """``"angle"``, ``"angular velocity"`` or ``"displacement"``: the quantity in a sentence."""
+    return quantity.replace("_", " ")

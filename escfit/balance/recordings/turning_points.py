@@ -63,10 +63,11 @@ import numpy as np
 
 from ...core.errors import DataError
 from .centre import measure_centre
-from .extrema import (alternating_extrema, extrema_period, kinked_vertex, local_amplitude, power_near, resolution,
-                      second_mode, smooth, spectral_period, vertex_at)
+from .extrema import (alternating_extrema, extrema_period, kinked_vertex, local_amplitude,
+                      power_near, resolution, second_mode, smooth, smoothing_share, smoothing_window, spectral_period,
+                      vertex_at)
 from .motion import INTERVAL_RANGE, Turn, faded_end, growth_tolerance, levels_off, reference, steady_tail
-from .series import TimeSeries
+from .series import TimeSeries, quantity_words, show_value
 
 __all__ = ["TurningPoints", "reduce_series", "turning_points", "period_of", "MIN_SAMPLES_PER_PERIOD", "MIN_TURNS"]
 
@@ -167,6 +168,11 @@ class _Record:
     shared: bool  # noise or quantisation dominate: only the curvature kinked at a turn
     sigma: float = 0.0  # reading noise, rad
     quantum: float = 0.0  # sensor step, rad
+    quantity: str = "angle"  # what the samples are (the units of the notes)
+
+    def show(self, value: float, digits: int = 3, *, signed: bool = False) -> str:
+        """A value of the record's quantity for a note (angles in degrees)."""
+        return show_value(value, self.quantity, digits, signed=signed)
 
     def half_width(self) -> float:
         """Half width of a local vertex fit, s: ``window`` periods, at least 4.5 samples."""
@@ -241,7 +247,7 @@ class _Record:
 
 
 def reduce_series(series: TimeSeries, *, window: float | None = None, degree: int = 4,
-                  strict: bool = True) -> TurningPoints:
+                  strict: bool = True, min_noise: float = 0.0) -> TurningPoints:
     """Turning points of a sampled free decay (see the module docstring for the method).
 
     Parameters
@@ -256,6 +262,10 @@ def reduce_series(series: TimeSeries, *, window: float | None = None, degree: in
     strict
         Refuse a record whose turning points are irregularly spaced (a missed or spurious
         extremum); with ``False`` the result carries a note instead.
+    min_noise
+        A floor for the noise scale the rest band and the hysteresis are set from (rad): for a
+        series whose slow wander the scatter about a smoothing does not show (the running
+        integral of a rate, :mod:`escfit.balance.recordings.rate`).
 
     Returns
     -------
@@ -273,8 +283,8 @@ def reduce_series(series: TimeSeries, *, window: float | None = None, degree: in
         raise DataError(f"degree must be 2 to 6, got {degree!r}", where)
     t = np.asarray(series.time, dtype=float)
     x = np.asarray(series.theta, dtype=float)
-    rec = _prepare(t, x, window, degree, where)
-    i_rest, rest_theta = _resting_tail(rec)
+    rec = prepare(t, x, window, degree, where, series.quantity, min_noise)
+    i_rest, rest_theta = resting_tail(rec)
     if i_rest < t.size:
         period, prominence = _working_period(t[:i_rest], x[:i_rest], min_cycles=1.5)
         if math.isfinite(period) and prominence > MIN_PROMINENCE:
@@ -299,13 +309,14 @@ def reduce_series(series: TimeSeries, *, window: float | None = None, degree: in
     if keep < all_t.size:
         all_t, all_v = all_t[:keep], all_v[:keep]
         times, values = times[:keep - 1], values[:keep - 1]
-        stop_time = math.nan
+        # the turning points of the noise are gone; the motion still ended where the record rests
+        stop_time = float(t[i_rest]) if i_rest < t.size else math.nan
     if all_t.size < MIN_TURNS:
         raise DataError(f"only {all_t.size} turning point(s) from the reference at t = {t_ref:.4g} s on stand above "
-                        f"the noise ({math.degrees(rec.band):.2g} deg); a decay needs at least {MIN_TURNS} (one whole "
+                        f"the noise ({rec.show(rec.band, 2)}); a decay needs at least {MIN_TURNS} (one whole "
                         "period)", where)
-    _check_intervals(rec, all_t, strict)
-    centre = measure_centre(all_t, all_v, rec.band)
+    _check_intervals(rec, all_t, all_v, strict)
+    centre = measure_centre(all_t, all_v, rec.band, rec.quantity)
     if centre.note:
         rec.notes.append(centre.note)
     # the reference is left out: a release from a hold or a hand is not a free turning point on
@@ -316,8 +327,8 @@ def reduce_series(series: TimeSeries, *, window: float | None = None, degree: in
         else period_of(all_t[:n_moving], amps[:n_moving])
     if math.isfinite(stop_time):
         level = centre.offset + centre.rate * (stop_time - t_ref)
-        rec.notes.append(f"motion stopped at t = {stop_time:.4g} s (resting {math.degrees(rest_theta - level):+.3g} "
-                         "deg from the centre)")
+        rec.notes.append(f"motion stopped at t = {stop_time:.4g} s (resting {rec.show(rest_theta - level, signed=True)} "
+                         "from the centre)")
     sustained = levels_off(all_t, all_v, growth_tolerance(rec, all_v))
     if not math.isfinite(sustained):  # or settled after a larger transient: a drive's steady state
         sustained = steady_tail(rec)[0]
@@ -388,17 +399,22 @@ def _given_release(rec: "_Record", release_s: float) -> tuple[float, float, list
 turning_points = reduce_series  # the earlier name
 
 
-def _prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, where: str) -> _Record:
-    """Check the samples; period, smoothing and resolution (steps 1 and 2)."""
+def prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, where: str,
+            quantity: str = "angle", min_noise: float = 0.0) -> _Record:
+    """Check the samples; period, smoothing and resolution (steps 1 and 2).
+
+    ``quantity`` is what the samples are (:data:`~escfit.balance.recordings.series.QUANTITIES`):
+    only an angle can be wrapped, and the notes speak in its unit.
+    """
     if t.size < 20:
         raise DataError(f"only {t.size} samples; a decay needs many samples per period", where)
     if not (np.all(np.isfinite(t)) and np.all(np.isfinite(x))):
-        raise DataError("times and angles must be finite numbers", where)
+        raise DataError(f"times and {quantity_words(quantity)}s must be finite numbers", where)
     dts = np.diff(t)
     if np.any(dts <= 0):
         i = int(np.flatnonzero(dts <= 0)[0])
         raise DataError(f"times must increase: {t[i]!r} then {t[i + 1]!r}", where)
-    jump = np.abs(np.diff(x))
+    jump = np.abs(np.diff(x)) if quantity == "angle" else np.zeros(0)
     if np.any(jump > 1.5 * math.pi):  # no motion sampled 16 times a period moves that far
         i = int(np.argmax(jump))
         raise DataError(f"the angle jumps by {math.degrees(jump[i]):.0f} deg between t = {t[i]:.4g} s and "
@@ -426,6 +442,9 @@ def _prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, wh
                         where)
     xs = smooth(x, spp)
     sigma, quantum = resolution(x, xs)
+    if xs.size >= smoothing_window(spp):  # the scatter about the smoothing understates white noise
+        sigma /= math.sqrt(1.0 - smoothing_share(spp))
+    sigma = max(sigma, min_noise)
     amplitude = 0.5 * float(np.ptp(xs))
     band = max(1.5 * quantum, 4.0 * sigma, 1e-3 * amplitude)
     step = max(3.0 * quantum, 5.0 * sigma, 2e-3 * amplitude)
@@ -433,7 +452,7 @@ def _prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, wh
     if window is None:
         window = 0.2 if resolution_ratio > 2e-4 or 0.125 * spp < 6 else 0.125
     shared = resolution_ratio > 2e-3
-    return _Record(t, x, xs, period, dt, band, step, window, degree, where, notes, shared, sigma, quantum)
+    return _Record(t, x, xs, period, dt, band, step, window, degree, where, notes, shared, sigma, quantum, quantity)
 
 
 def _working_period(t: np.ndarray, x: np.ndarray, min_cycles: float = 2.0) -> tuple[float, float]:
@@ -454,7 +473,7 @@ def _working_period(t: np.ndarray, x: np.ndarray, min_cycles: float = 2.0) -> tu
     return period, prominence
 
 
-def _resting_tail(rec: _Record) -> tuple[int, float]:
+def resting_tail(rec: _Record) -> tuple[int, float]:
     """Index of the first sample at rest (``t.size`` when the record ends in motion) and the rest angle.
 
     At rest means within the rest band of the final level for at least a period *and* no
@@ -466,8 +485,8 @@ def _resting_tail(rec: _Record) -> tuple[int, float]:
     rest = float(np.median(rec.x[final]))
     out = np.flatnonzero(np.abs(rec.xs - rest) > rec.band)
     if not out.size:
-        raise DataError(f"no motion: the angle stays within {math.degrees(rec.band):.3g} deg of "
-                        f"{math.degrees(rest):.4g} deg", rec.where)
+        raise DataError(f"no motion: the {quantity_words(rec.quantity)} stays within {rec.show(rec.band)} of "
+                        f"{rec.show(rest, 4)}", rec.where)
     i = int(out[-1]) + 1
     if i >= n or t[-1] - t[i] < rec.period:
         return n, math.nan
@@ -498,18 +517,42 @@ def _final_turn(rec: _Record, i_rest: int, rest: float, t_ref: float, theta_ref:
                 times.append(got[0])
                 values.append(got[1])
                 return got[0]
-    rec.notes.append(f"the swing faded below the resolution ({math.degrees(rec.band):.2g} deg) rather than "
+    rec.notes.append(f"the swing faded below the resolution ({rec.show(rec.band, 2)}) rather than "
                      "stopping at a turning point")
     return float(t[i_rest])
 
 
-def _check_intervals(rec: _Record, times: np.ndarray, strict: bool) -> None:
-    """Each interval between turning points within :data:`INTERVAL_RANGE` local half periods."""
-    d = np.diff(times)
+def _local_ratios(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each interval over the median of its neighbours (three each side), and that median."""
     half = 3
     local = np.array([np.median(d[max(0, i - half):i + half + 1]) for i in range(d.size)])
-    ratio = d / local
-    bad = np.flatnonzero((ratio < INTERVAL_RANGE[0]) | (ratio > INTERVAL_RANGE[1]))
+    return d / local, local
+
+
+def _pendulum_stretch(values: np.ndarray) -> np.ndarray:
+    """How much longer a pendulum's half swing between these turning points is than a small
+    one's: K(sin^2(A/2)) / (pi/2), A half the swing between them (rad, below pi)."""
+    from scipy.special import ellipk
+
+    amp = np.minimum(0.5 * np.abs(np.diff(values)), math.pi - 1e-6)
+    return ellipk(np.sin(0.5 * amp) ** 2) / (0.5 * math.pi)
+
+
+def _check_intervals(rec: _Record, times: np.ndarray, values: np.ndarray, strict: bool) -> None:
+    """Each interval between turning points within :data:`INTERVAL_RANGE` local half periods.
+
+    An angle record's interval also passes when it is regular once each half swing is scaled by
+    a pendulum's lengthening at its amplitude: a pendulum let fall from near the top swings its
+    first half swings far slower than the next (a spring's or balance's neighbours have like
+    amplitudes, so the scaling excuses nothing there).
+    """
+    d = np.diff(times)
+    ratio, local = _local_ratios(d)
+    out = (ratio < INTERVAL_RANGE[0]) | (ratio > INTERVAL_RANGE[1])
+    if out.any() and rec.quantity == "angle":
+        scaled, _ = _local_ratios(d / _pendulum_stretch(np.asarray(values, float)))
+        out &= (scaled < INTERVAL_RANGE[0]) | (scaled > INTERVAL_RANGE[1])
+    bad = np.flatnonzero(out)
     if not bad.size:
         return
     i = int(bad[0])
