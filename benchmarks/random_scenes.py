@@ -103,7 +103,8 @@ def main(argv: list[str] | None = None) -> dict:
             continue
         sys_ = scene.build()
         a0 = abs(sys_.theta0)
-        critical = sys_.c > 0 and abs(sys_.c / (2.0 * sys_.omega0) - 1.0) <= 1e-3
+        c = float(sys_.field("c"))
+        critical = c > 0 and abs(c / (2.0 * sys_.omega0) - 1.0) <= 1e-3
         near_critical["scenes"] += critical
         runs = {"exact": run_solver(scene, "exact"), "dop853": run_solver(scene, "dop853")}
         if args.rk4_every > 0 and i % args.rk4_every == 0:
@@ -121,7 +122,7 @@ def main(argv: list[str] | None = None) -> dict:
                     near_critical[f"status disagreements {p}/{q}"] += critical
                     if len(status_cases) < 20:
                         status_cases.append({"scene": i, "pair": f"{p}/{q}", "near_critical": critical, **c,
-                                             "C/2w0": sys_.c / (2.0 * sys_.omega0), "text": text})
+                                             "C/2w0": c / (2.0 * sys_.omega0), "text": text})
     elapsed = time.perf_counter() - t_start
     figures = {"scenes": args.scenes, "seed": args.seed, "seconds": round(elapsed, 1), "effects": dict(effects_seen),
                "near_critical": dict(near_critical), "solvers": {}, "pairs": {}, "status_cases": status_cases}

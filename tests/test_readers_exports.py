@@ -171,6 +171,10 @@ def _foreign_files(tmp_path):
          r"a compressed Logger Pro file \(.cmbl\): open it in Logger Pro and File > Export As > CSV"),
         (write(tmp_path, "beats.wav", b"RIFF\x24\x08\x00\x00WAVEfmt " + bytes(64)),
          r"a sound recording \(WAV\): escfit does not read audio"),
+        (write(tmp_path, "Pendulum.phyphox", b'<?xml version="1.0" encoding="UTF-8"?><phyphox version="1.14" '
+               b'locale="en">\n  <title>Pendulum</title>\n<data-containers>\n<container init="0.1,0.2">acc'
+               b'</container></data-containers></phyphox>\n'),
+         r"a phyphox experiment file \(.phyphox.*'Export data' with 'CSV \(Comma, decimal point\)'"),
         (write(tmp_path, "seiko.dat", bytes(range(256)) * 2),
          r"a binary file of unknown layout .*save it as CSV \(or text\) from the program that wrote it"),
     ]

@@ -354,3 +354,44 @@ def test_a_title_line_naming_one_run_is_not_a_header_of_runs(tmp_path):
     assert found != "pasco-csv"
     ts = read_raw_series(path, RecordingSpec(time_column=1, angle_column=2, angle_unit="rad"))
     assert ts.time.size == t.size and ts.theta[0] == pytest.approx(0.2, abs=1e-3)
+
+
+def test_a_stalled_clock_at_the_end_is_named_and_cut_by_stop(tmp_path):
+    """An encoder log whose time column stops advancing for its last rows (the logger's clock
+    stalled while the angle went on): refused naming the row and the `stop` that reads the rest,
+    which then reads."""
+    from escfit.balance.recordings.rawseries import read_raw_series
+    from escfit.balance.recordings.recording_spec import RecordingSpec
+
+    t = np.arange(0, 30, 0.02)
+    x = 1.2 * np.exp(-0.05 * t) * np.cos(4.8 * t)
+    t[1200:] = t[1200]
+    path = tmp_path / "enc.csv"
+    path.write_text("time, angle\n" + "\n".join(f"{a:.3f}, {b:.5f}" for a, b in zip(t, x)))
+    spec = dict(time_column=1, angle_column=2, angle_unit="rad")
+    with pytest.raises(DataError, match=r"enc.csv:1203 .*last 300 rows.*stop = \"23.98 s\""):
+        read_raw_series(path, RecordingSpec(**spec))
+    ts = read_raw_series(path, RecordingSpec(**spec, stop=23.98))
+    assert ts.time.size == 1200 and ts.time[-1] == pytest.approx(23.98)
+
+
+def test_graphical_analysis_runs_numbered_first(tmp_path):
+    """Graphical Analysis' CSV export numbers each column by its run first (``1 Time``,
+    ``1 Position``, ... and once ``7: Position``); the header starts with a digit, which is not a
+    row of numbers.  Read as runs side by side: refused without a run, naming them."""
+    from click.testing import CliRunner
+
+    from escfit.balance.recordings.detect import detect_format
+    from escfit.cli.main import cli
+
+    t = np.arange(0, 5, 0.05)
+    names, cols = [], []
+    for run in (1, 2, 3):
+        names += [f"{run} Time", f"{run}{':' if run == 2 else ''} Position"]
+        cols += [t, 0.04 * np.cos(7.3 * t + run)]
+    rows = [",".join(f"{c[i]:.6g}" for c in cols) for i in range(t.size)]
+    path = tmp_path / "data.csv"
+    path.write_text(",".join(names) + "\n" + "\n".join(rows) + "\n")
+    assert detect_format(path) == "vernier-csv"
+    r = CliRunner().invoke(cli, ["init", str(path), "--spring", "--out", str(tmp_path / "s.toml")])
+    assert r.exit_code == 2 and "3 runs side by side (Run 1, Run 2, Run 3)" in r.output, r.output

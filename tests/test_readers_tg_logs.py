@@ -149,3 +149,24 @@ def test_tg_dump_without_amplitude(tmp_path):
 def test_rate_grid_counts_beats_of_a_gaining_watch():
     grid = rate_grid(0.0, 3600.0, 18000, np.array([0.0, 3600.0]), np.array([86.4, 86.4]))
     assert grid.size - 1 == pytest.approx(18000 * 1.001, abs=1.5)  # 86.4 s/day gains 0.1 %
+
+
+def test_a_log_of_a_running_watch_is_refused_as_such(tmp_path):
+    """A TimeGrapher-Net log starts with the watch already running: no release to start the model
+    from.  The fit says so in one line (the amplitude it saw), not in terms of escfit's own keys."""
+    from click.testing import CliRunner
+
+    from escfit.cli.main import cli
+
+    text, _ = tgnet_log()
+    (tmp_path / "measurement.csv").write_text(text)
+    (tmp_path / "watch.toml").write_text(
+        'model = "balance"\n[oscillator]\nomega0 = 18.85\ntheta0 = "220 deg"\n[run]\nswings = 400\n'
+        "[effects.viscous]\nC = { value = 0.5, vary = true, min = 0.0, max = 10.0 }\n"
+        '[observation]\nmodel = "timegrapher"\n')
+    out = tmp_path / "r.h5"
+    r = CliRunner().invoke(cli, ["fit", str(tmp_path / "measurement.csv"), "--scene", str(tmp_path / "watch.toml"),
+                                 "--out", str(out)])
+    lines = [s for s in r.output.splitlines() if s.strip()]
+    assert r.exit_code == 2 and len(lines) == 1 and not out.exists(), r.output
+    assert "the log begins with the watch already running (amplitude" in lines[0] and "no release" in lines[0]

@@ -14,10 +14,9 @@ compiled adaptive solver ``"dop853"`` (:func:`default_solver`); see docs/physics
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import xarray as xr
 
 from .dense import dense_output
 from .scene import BalanceScene, parse
@@ -25,6 +24,9 @@ from .solvers import SOLVERS, default_solver, solve_system
 from .system import System
 from .trajectory import Trajectory
 from .waveform import sample_scene, sample_state, sample_theta
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 __all__ = ["BalanceScene", "parse", "simulate", "solve", "json_summary", "dense_output", "Trajectory", "SOLVERS",
            "default_solver", "sample_theta", "sample_state", "sample_scene", "System"]

@@ -7,11 +7,15 @@ integrator's steps), so every turning point and switch is a sample.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-import xarray as xr
 
 from ..core.errors import SolverError
 from .trajectory import Trajectory
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 __all__ = ["dense_output"]
 
@@ -44,6 +48,8 @@ def dense_output(traj: Trajectory, *, points_per_segment: int = 24) -> xr.Datase
     t = np.maximum.accumulate(t)  # rounding of the ends must not step back
     theta, omega = traj.dense.state(t)
     swing = np.searchsorted(traj.time, t, side="left") + 1
+    import xarray as xr  # imported here: a fit never builds a Dataset of a trajectory
+
     return xr.Dataset(
         {"theta": ("t", theta, {"units": "rad"}), "omega": ("t", omega, {"units": "rad/s"}),
          "swing": ("t", swing, {"long_name": "half swing the sample belongs to"})},

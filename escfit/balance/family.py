@@ -197,7 +197,8 @@ class BalanceFamily:
     # the stretch move by default: it follows the exactly degenerate ridges of Monday's phase
     # convention (R and X trade off at fixed K), where differential evolution failed to mix
     # (R-hat 1.4 after 1500 steps against 1.06); the shipped multi-load recipes, whose ridges are
-    # narrow but not degenerate, ask for "de" (autocorrelation time 16-22 steps against ~43)
+    # narrow but not degenerate, ask for "de" (autocorrelation time 16-22 steps against ~43), the
+    # quick start (unit 3) for "de-t" (8.7 steps: docs/performance.md section 4e)
     fit_defaults = {"walkers": 32, "steps": "auto", "max_steps": 20000, "n_starts": 8, "predictive_draws": 400,
                     "moves": "stretch"}
 

@@ -10,12 +10,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import xarray as xr
 
 from ..core.status import Status
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 __all__ = ["Trajectory"]
 
@@ -86,6 +88,8 @@ class Trajectory:
 
     def to_dataset(self, attrs: dict[str, Any] | None = None) -> xr.Dataset:
         """Dataset with dimension ``swing`` (1-based) and the run's status in attributes."""
+        import xarray as xr  # imported here: a fit never builds a Dataset of a trajectory
+
         n = len(self.amplitude)
         swing = np.arange(1, n + 1)
         ds = xr.Dataset(

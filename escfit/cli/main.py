@@ -310,7 +310,7 @@ def _recipe_steps(recipe: dict, key: str, where: str):
 
 # The kind of value each recipe key takes (steps and max_steps: see _recipe_steps)
 RECIPE_TEXT = ("data", "scene", "out", "report", "title", "solver", "format", "material")
-RECIPE_CHOICES = {"method": ("leastsq", "emcee"), "moves": ("stretch", "de")}
+RECIPE_CHOICES = {"method": ("leastsq", "emcee"), "moves": ("stretch", "de", "de-t")}
 RECIPE_WHOLE = {"seed": (0, SEED_MAX), "walkers": (2, WALKERS_MAX), "burn": (0, STEPS_MAX)}
 
 
@@ -390,9 +390,10 @@ def _read_recipe(path: Path) -> dict:
 @click.option("--start", "start_time", default=None, help="[recording] start of the window, e.g. '13 s'.")
 @click.option("--stop", "stop_time", default=None, help="[recording] end of the window, e.g. '60 s'.")
 @click.option("--solver", default=None, help="Forward solver (default: exact, or dop853 for a pendulum).")
-@click.option("--moves", type=click.Choice(["stretch", "de"]), default=None,
-              help="emcee proposal: stretch or de (differential evolution: coupled parameters, one-parameter "
-                   "posteriors); default: the model family's.")
+@click.option("--moves", type=click.Choice(["stretch", "de", "de-t"]), default=None,
+              help="emcee proposal: stretch, de (differential evolution: coupled parameters, one-parameter "
+                   "posteriors) or de-t (Student-t independence proposals fitted to the ensemble, with de: "
+                   "near-normal posteriors in fewer steps); default: the model family's.")
 @click.option("--notch-deg", type=FiniteFloat(NOTCH_MIN_DEG, 360.0, high_open=True, unit="deg"), default=None,
               help="Notch angle for notch counts, deg.")
 @click.option("--resume", is_flag=True, help="Continue an interrupted emcee run from its checkpoint.")

@@ -30,6 +30,24 @@ def _interrupt(signum, frame):  # noqa: ARG001
 
 
 @contextlib.contextmanager
+def _handled(signals: tuple, handler) -> Iterator[None]:
+    """``handler`` for each of ``signals`` whose disposition is not "ignore", the previous
+    handlers put back on leaving."""
+    previous = {}
+    try:
+        for sig in signals:
+            old = signal.getsignal(sig)
+            if old is signal.SIG_IGN:
+                continue
+            previous[sig] = old
+            signal.signal(sig, handler)
+        yield
+    finally:
+        for sig, old in previous.items():
+            signal.signal(sig, old if old is not None else signal.SIG_DFL)
+
+
+@contextlib.contextmanager
 def interrupting_signals() -> Iterator[None]:
     """While active (main thread only), SIGTERM, SIGHUP and SIGQUIT raise :class:`KeyboardInterrupt`.
 
@@ -39,18 +57,8 @@ def interrupting_signals() -> Iterator[None]:
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = {}
-    try:
-        for sig in TERMINATING:
-            old = signal.getsignal(sig)
-            if old is signal.SIG_IGN:
-                continue
-            previous[sig] = old
-            signal.signal(sig, _interrupt)
+    with _handled(TERMINATING, _interrupt):
         yield
-    finally:
-        for sig, old in previous.items():
-            signal.signal(sig, old if old is not None else signal.SIG_DFL)
 
 
 @contextlib.contextmanager
@@ -68,17 +76,7 @@ def deferred_interrupts() -> Iterator[None]:
             raise KeyboardInterrupt(signal.Signals(signum).name)
         came.append(signum)
 
-    previous = {}
-    try:
-        for sig in (signal.SIGINT, *TERMINATING):
-            old = signal.getsignal(sig)
-            if old is signal.SIG_IGN:
-                continue
-            previous[sig] = old
-            signal.signal(sig, remember)
+    with _handled((signal.SIGINT, *TERMINATING), remember):
         yield
-    finally:
-        for sig, old in previous.items():
-            signal.signal(sig, old if old is not None else signal.SIG_DFL)
     if came:
         raise KeyboardInterrupt(signal.Signals(came[0]).name)

@@ -62,11 +62,13 @@ def _module_file(root: Path, name: str) -> Path | None:
     return None
 
 
-def _imported_modules(path: Path, module: str, top: str, root: Path) -> set[Path]:
+@functools.lru_cache(maxsize=None)
+def _imported_modules(path: Path, module: str, top: str, root: Path) -> frozenset[Path]:
     """Files of package ``top`` that module ``module`` (source ``path``) imports from.
 
     Every import statement counts, including those inside functions or ``if`` blocks: taking
-    one too many only costs a recompilation, one too few a stale cache.
+    one too many only costs a recompilation, one too few a stale cache.  Each file is parsed
+    once per process: the closures of the kernels' modules share most of their files.
     """
     tree = ast.parse(path.read_bytes(), filename=str(path))
     package = module if path.name == "__init__.py" else module.rpartition(".")[0]
@@ -97,7 +99,7 @@ def _imported_modules(path: Path, module: str, top: str, root: Path) -> set[Path
                 # ``from pkg import sub`` brings in a module; ``from mod import name`` reads mod
                 if alias.name == "*" or not add(f"{base}.{alias.name}"):
                     add(base)
-    return found
+    return frozenset(found)
 
 
 @functools.lru_cache(maxsize=None)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 __all__ = ["dependency_versions"]
 
-PACKAGES = ("escfit", "numpy", "scipy", "numba", "lmfit", "emcee", "xarray", "h5netcdf", "arviz", "pint")
+PACKAGES = ("escfit", "numpy", "scipy", "numba", "emcee", "xarray", "h5netcdf", "arviz", "pint")
 
 
 def dependency_versions() -> dict[str, str]:

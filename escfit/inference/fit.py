@@ -13,28 +13,57 @@ import contextlib
 import datetime as _dt
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import xarray as xr
 
 from ..core.errors import FitError
 from ..core.limits import check_sampler_size
 from ..core.provenance import dependency_versions
 from ..core.scene import load_scene
 from ..likelihood.problem import Problem
-from ..results import SCHEMA_VERSION, FitResult, clean_attrs, write_fit
 from .information import information_attrs
 from .identifiability import bound_warnings, correlation_warnings, ridge_warnings, sloppy_directions
 from .lsq import LeastSquaresResult, least_squares
-from .mcmc import McmcResult, resumable, run_emcee
 from .misfit import misfit_report
 from .reconcile import reconcile, verdict, with_held_uncertainty
 from .registry import family
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from ..results import FitResult
+    from .mcmc import McmcResult
 
 __all__ = ["fit", "fit_problem", "build_tree"]
 
 GENERIC_DEFAULTS = {"walkers": 32, "steps": "auto", "max_steps": 20000, "burn": None, "n_starts": 8,
                     "n_refine": None, "predictive_draws": 400, "moves": "stretch"}
+
+# xarray, the results schema and the sampler (emcee, scipy.stats) are imported where they are
+# used: a least-squares fit reaches its first model evaluation without them.  The three
+# functions below stand for theirs at module level (tests and benchmarks replace them here).
+
+
+def run_emcee(*args, **kwargs):
+    """:func:`escfit.inference.mcmc.run_emcee`, imported on first use."""
+    from .mcmc import run_emcee as run
+
+    return run(*args, **kwargs)
+
+
+def resumable(*args, **kwargs):
+    """:func:`escfit.inference.mcmc.resumable`, imported on first use."""
+    from .mcmc import resumable as check
+
+    return check(*args, **kwargs)
+
+
+def write_fit(*args, **kwargs):
+    """:func:`escfit.results.write_fit`, imported on first use."""
+    from ..results import write_fit as write
+
+    return write(*args, **kwargs)
 
 
 def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, force: bool = False, seed: int = 0,
@@ -53,7 +82,7 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
     data
         A recording object of the family, or the path of a recording file.
     method
-        ``"leastsq"`` (lmfit, multistart) or ``"emcee"`` (least squares, then MCMC).
+        ``"leastsq"`` (scipy trust-region, multistart) or ``"emcee"`` (least squares, then MCMC).
     out
         Results file (HDF5); written atomically and never replacing a file without ``force``.
         Refused before any work when it or its checkpoint is the data or scene file, or when
@@ -72,7 +101,7 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
         Posterior draws at which the expected readings and the pointwise log-likelihood
         (for PSIS-LOO) are stored.
     moves
-        emcee's proposal: ``"stretch"`` or ``"de"`` (see :func:`~escfit.inference.mcmc.run_emcee`);
+        emcee's proposal: ``"stretch"``, ``"de"`` or ``"de-t"`` (see :func:`~escfit.inference.mcmc.run_emcee`);
         ``None`` takes the family's default.
     title
         A title for reports (a fit recipe's ``title``), kept in the results' attributes.
@@ -165,6 +194,8 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
                        resume=resume, progress=progress, moves=moves, max_steps=max_steps,
                        checkpoint_every=checkpoint_every, provenance=problem.provenance(), fit_options=fit_options)
         timings.update(mc.timings)
+    from ..results import FitResult, clean_attrs  # xarray: only once there is a result to hold
+
     clock = time.perf_counter()
     tree = build_tree(problem, lsq, mc, method=method, seed=seed, started=started, predictive_draws=predictive_draws,
                       fixes=fixes, unresolved=unresolved)
@@ -238,6 +269,10 @@ def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None,
     ``fixes`` and ``unresolved`` come from :func:`~escfit.inference.reconcile.reconcile`: what was
     refitted to agree with the recording's direct measurements, and what still disagrees.
     """
+    import xarray as xr
+
+    from ..results import SCHEMA_VERSION, clean_attrs
+
     names = list(problem.names)
     units, meanings = dict(problem.units), dict(problem.meanings)
     obs_coords = problem.obs_coords()
@@ -381,6 +416,7 @@ def _derived(problem: Problem, mc: McmcResult, units: dict, meanings: dict) -> d
 
 def _diagnostics(post: xr.Dataset, names: list[str], mc: McmcResult) -> xr.Dataset:
     import arviz as az
+    import xarray as xr
 
     sub = post[names]
     rhat = az.rhat(sub)
@@ -398,6 +434,8 @@ def _diagnostics(post: xr.Dataset, names: list[str], mc: McmcResult) -> xr.Datas
 def _predictive(problem: Problem, mc: McmcResult, obs_coords: dict, reading_units: str,
                 draws: int) -> tuple[xr.Dataset, xr.Dataset]:
     """Expected readings and pointwise log-likelihood for a thinned set of draws."""
+    import xarray as xr
+
     per_chain = max(1, draws // mc.walkers)
     idx = np.unique(np.linspace(0, mc.chain.shape[1] - 1, per_chain).astype(int))
     exp = np.full((mc.walkers, idx.size, problem.n_data), np.nan)

@@ -1,4 +1,7 @@
-"""Least squares through lmfit with a multistart, for every model family.
+"""Bounded least squares with a multistart, for every model family.
+
+Each start runs scipy's trust-region reflective method (:mod:`escfit.inference.trf`, the
+algorithm lmfit's ``least_squares`` method wraps, called directly).
 
 The optimiser sees :meth:`Problem.residuals` (the readings' standardised residuals) plus one
 residual per Gaussian prior of a fitted parameter (see
@@ -6,7 +9,7 @@ residual per Gaussian prior of a fitted parameter (see
 posterior where a prior pins what the data alone cannot.  Noise parameters
 (:attr:`Problem.noise_names`, e.g. ``observation.sigma``) are not fitted:
 
-* when one is free, the noise scale is *profiled*: without Gaussian priors lmfit rescales the
+* when one is free, the noise scale is *profiled*: without Gaussian priors the fit rescales the
   covariance by the reduced chi-square; with them the scale is re-estimated from the reading
   residuals and the fit repeated until the two agree (degrees of freedom: readings minus the
   parameters no prior pins), because rescaling would also inflate the priors' terms;
@@ -16,8 +19,8 @@ posterior where a prior pins what the data alone cannot.  Noise parameters
 
 Uncertainties come from the curvature ``J^T J`` of the stacked residuals at the optimum, in
 the parameters' own units.  A singular curvature (a direction the readings do not fix) leaves
-the standard errors of the parameters it involves undefined (nan) instead of lmfit's
-round-off numbers, and correlations outside [-1, 1] are never reported.  Intervals respect
+the standard errors of the parameters it involves undefined (nan) instead of round-off
+numbers, and correlations outside [-1, 1] are never reported.  Intervals respect
 the scene's bounds (:func:`bounded_interval`); a parameter on a bound is flagged
 (:attr:`LeastSquaresResult.at_bound`) and given a one-sided interval.
 """
@@ -30,12 +33,11 @@ from collections import Counter
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
-import lmfit
 import numpy as np
-from scipy.stats import qmc
 
 from ..core.errors import EscfitError, FitError
 from ..likelihood.problem import FAIL_RESIDUAL, Problem, gaussian_prior_residuals
+from .trf import minimize, single_blas_thread
 
 __all__ = ["LeastSquaresResult", "least_squares", "bounded_interval", "bound_flags", "INTERVAL_Z"]
 
@@ -46,6 +48,9 @@ INTERVAL_Z = {68: 1.0, 95: 1.959963984540054}
 
 #: a parameter within this fraction of its range (or of max(|value|, 1) for an open range) of a bound is on it
 BOUND_RTOL = 1e-6
+
+#: starts optimised by default, the cheapest by their cost at the start point
+N_REFINE = 3
 
 #: eigenvalues of the standardised curvature below this fraction of the largest count as zero (no information)
 SINGULAR_RTOL = 1e-10
@@ -133,9 +138,11 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
         points spread over the priors (through their inverse cdf; over the bounds, or
         +-50 % around the start where a bound is infinite).
     n_refine
-        Optimise from the ``n_refine`` starts of lowest cost (default: all of them).  Rugged
-        costs (a speed trace whose period must be found) are cheap to rank and costly to
-        optimise from everywhere.
+        Optimise from the ``n_refine`` starts of lowest cost (default :data:`N_REFINE`; the
+        costs are one model evaluation each).  Most Latin-hypercube points start far from any
+        record's optimum (a random frequency against seventy periods of a decay), cost a
+        full trust-region run each, and end in worse minima or in the one a cheaper start
+        reaches; ranking keeps the starts that can win.
     seed
         Seeds the Latin hypercube.
     fixed
@@ -178,59 +185,44 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
     profile_noise = "observation.sigma" in problem.names and "observation.sigma" in noise
     iterate_scale = profile_noise and pinned > 0 and not getattr(problem, "mixed_readings", False)
     starts = _starts(priors, x0, lo, hi, n_starts, seed)
-    keys = [f"p{i}" for i in range(len(names))]  # lmfit needs identifiers; names carry dots and brackets
     n = problem.n_data
     options = dict(getattr(problem, "lsq_options", {}) or {})
     scale = [1.0]  # reading residuals are divided by this (the profiled noise over the scene's)
 
-    def vector(params) -> np.ndarray:
-        return np.array([params[k].value for k in keys])
-
-    def residual(params: lmfit.Parameters) -> np.ndarray:
-        x = vector(params)
-        vals = problem.values({**fixed, **dict(zip(names, x))})
+    def residual(x: np.ndarray) -> np.ndarray:
+        vals = problem.values({**fixed, **dict(zip(names, (float(v) for v in x)))})
         r = np.asarray(problem.residuals(vals), float)[:n] / scale[0]
         out = np.concatenate([r, gaussian_prior_residuals(priors, x)])
         return np.where(np.isfinite(out), out, FAIL_RESIDUAL)
 
-    def params_at(x) -> lmfit.Parameters:
-        params = lmfit.Parameters()
-        for k, v, a, b in zip(keys, x, lo, hi):
-            params.add(k, value=float(np.clip(v, a, b)), min=float(a), max=float(b))
-        return params
-
-    if n_refine is not None and n_refine < len(starts):
-        cost = [float(np.sum(residual(params_at(x)) ** 2)) for x in starts]
-        starts = [starts[i] for i in np.argsort(cost)[:max(1, n_refine)]]
-    best = None
-    for x in starts:
-        try:
-            with _quiet():
-                res = lmfit.minimize(residual, params_at(x), method="least_squares", scale_covar=not iterate_scale
-                                     and profile_noise, **options)
-        except (ValueError, FloatingPointError) as exc:  # lmfit refusing a start
-            problem.failures[f"least squares start failed: {exc}"[:120]] += 1
-            continue
-        if best is None or res.chisqr < best.chisqr:
-            best = res
-    if best is None:
-        raise FitError("least squares failed from every start point")
-    free_dof = _data_dof(best, priors, n, len(names) - pinned)
-    if iterate_scale:
-        for _ in range(50):
-            r = best.residual[:n] * scale[0]
-            new = math.sqrt(float(r @ r) / free_dof)
-            if not new > 0:
-                raise FitError("the readings are fitted exactly: the noise scale cannot be estimated; fix "
-                               "observation.sigma in the scene")
-            done = abs(new - scale[0]) <= 1e-9 * scale[0]
-            scale[0] = new
-            if done:
-                break
-            with _quiet():
-                best = lmfit.minimize(residual, best.params, method="least_squares", scale_covar=False, **options)
-            free_dof = _data_dof(best, priors, n, len(names) - pinned)
-    value = vector(best.params)
+    with single_blas_thread(), _quiet():
+        starts = _ranked(starts, residual, lo, hi, N_REFINE if n_refine is None else n_refine)
+        best = None
+        for x in starts:
+            try:
+                res = minimize(residual, x, lo, hi, scale_covar=not iterate_scale and profile_noise, **options)
+            except (ValueError, FloatingPointError) as exc:  # scipy refusing a start
+                problem.failures[f"least squares start failed: {exc}"[:120]] += 1
+                continue
+            if best is None or res.chisqr < best.chisqr:
+                best = res
+        if best is None:
+            raise FitError("least squares failed from every start point")
+        free_dof = _data_dof(best, priors, n, len(names) - pinned)
+        if iterate_scale:
+            for _ in range(50):
+                r = best.residual[:n] * scale[0]
+                new = math.sqrt(float(r @ r) / free_dof)
+                if not new > 0:
+                    raise FitError("the readings are fitted exactly: the noise scale cannot be estimated; fix "
+                                   "observation.sigma in the scene")
+                done = abs(new - scale[0]) <= 1e-9 * scale[0]
+                scale[0] = new
+                if done:
+                    break
+                best = minimize(residual, best.x, lo, hi, scale_covar=False, **options)
+                free_dof = _data_dof(best, priors, n, len(names) - pinned)
+    value = best.x.copy()
     covar_scale = float(best.redchi) if (profile_noise and not iterate_scale) else 1.0
     cov, undetermined = _covariance(best, len(names), covar_scale)
     stderr, corr = _errors_and_correlations(cov)
@@ -259,7 +251,7 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
     else:
         sigma_hat = sigma
     return LeastSquaresResult(names, value, stderr, corr, chisqr, float(redchi), float(sigma_hat), int(n),
-                              len(starts), bool(best.success), str(best.message), vals, profile_noise,
+                              len(starts), bool(best.success), best.message, vals, profile_noise,
                               lower=lo.copy(), upper=hi.copy(), warnings=cov_warnings)
 
 
@@ -330,7 +322,7 @@ def refuse_underdetermined(problem: Problem, names: list[str], pinned: int = 0) 
 
 @contextmanager
 def _quiet():
-    """Keep lmfit's and uncertainties' arithmetic warnings (``sqrt`` of a negative variance of a
+    """Keep the arithmetic warnings (``sqrt`` of a negative variance of a
     singular curvature) off the console: :func:`_covariance` turns that case into our own warning."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -344,7 +336,7 @@ def _covariance(best, k: int, scale: float) -> tuple[np.ndarray, np.ndarray]:
     units) is standardised by its diagonal; eigenvalues below :data:`SINGULAR_RTOL` times the
     largest are directions the readings do not fix.  Parameters with a weight in such a
     direction get a nan variance and covariance; the others take the pseudo-inverse on the
-    determined subspace.  A regular curvature keeps lmfit's covariance (the same numbers).
+    determined subspace.  A regular curvature keeps the optimiser's covariance (the same numbers).
     """
     cov = np.full((k, k), np.nan)
     undetermined = np.ones(k, bool)
@@ -370,7 +362,7 @@ def _covariance(best, k: int, scale: float) -> tuple[np.ndarray, np.ndarray]:
         cov = full * scale
     covar = getattr(best, "covar", None)
     if not undetermined.any() and covar is not None and np.shape(covar) == (k, k) and np.all(np.diag(covar) > 0):
-        cov = np.array(covar, float)  # lmfit's own (already scaled) covariance: identical numbers
+        cov = np.array(covar, float)  # the optimiser's own (already scaled) covariance: identical numbers
     cov[undetermined, :] = np.nan
     cov[:, undetermined] = np.nan
     return cov, undetermined
@@ -501,7 +493,7 @@ def _data_dof(best, priors, n: int, unpinned: int) -> float:
     cov = getattr(best, "covar", None)
     if cov is None or np.shape(cov) != (p, p) or not np.all(np.isfinite(np.diag(cov))):
         return float(max(n - unpinned, 1))
-    x = np.array([best.params[k].value for k in best.var_names])
+    x = best.x
     tr_prior = 0.0
     for i, pr in enumerate(priors):
         if pr.kind in ("normal", "halfnormal"):
@@ -527,8 +519,19 @@ def _two_stage_ar1(problem, *, n_starts, n_refine, seed, fixed, start) -> LeastS
                          start={n: first.values[n] for n in first.names})
 
 
+def _ranked(starts: list[np.ndarray], residual, lo: np.ndarray, hi: np.ndarray,
+            n_refine: int | None) -> list[np.ndarray]:
+    """The ``n_refine`` starts of lowest cost (one evaluation each), best first."""
+    if n_refine >= len(starts):
+        return starts
+    cost = [float(np.sum(residual(np.clip(x, lo, hi)) ** 2)) for x in starts]
+    return [starts[i] for i in np.argsort(cost, kind="stable")[:max(1, n_refine)]]
+
+
 def _starts(priors, x0: np.ndarray, lo: np.ndarray, hi: np.ndarray, n_starts: int, seed: int) -> list[np.ndarray]:
     """The start point and a Latin hypercube over the priors (or the bounds)."""
+    from scipy.stats import qmc  # scipy.stats takes a second to import: only when a multistart needs it
+
     starts = [x0]
     if n_starts <= 1:
         return starts

@@ -30,6 +30,7 @@ from ..likelihood.problem import Problem
 from .checkpoint import Checkpoint, check_identity, load_checkpoint, run_identity, save_checkpoint
 from .convergence import Assessment, assess, autocorr_time
 from .lsq import LeastSquaresResult
+from .moves import de_t_moves
 
 __all__ = ["McmcResult", "run_emcee", "resumable"]
 
@@ -83,6 +84,10 @@ MOVES = {
     # instead of projecting on the unit vector, so its proposal is not symmetric and it biases
     # the posterior (30 % too narrow alone, 8 % in the usual 80/20 mix, on the friction rig)
     "de": lambda: emcee.moves.DEMove(),
+    # independence proposals from a Student-t fitted to the other half-ensemble, mixed with
+    # differential evolution (escfit.inference.moves): 3-5 times shorter autocorrelation times
+    # on near-normal posteriors such as the quick start's
+    "de-t": lambda: de_t_moves(),
 }
 
 
@@ -199,9 +204,12 @@ def run_emcee(problem: Problem, lsq: LeastSquaresResult | None = None, *, walker
     progress
         Show a progress bar (tqdm).
     moves
-        ``"stretch"`` (emcee's default affine-invariant stretch move) or ``"de"`` (differential
+        ``"stretch"`` (emcee's default affine-invariant stretch move), ``"de"`` (differential
         evolution), which mixes faster on posteriors with strongly coupled directions such as
-        a noise scale and its correlation, and on one-parameter posteriors.
+        a noise scale and its correlation, and on one-parameter posteriors, or ``"de-t"``
+        (:func:`~escfit.inference.moves.de_t_moves`: independence proposals from a Student-t
+        fitted to the other half of the ensemble, 80 %, and differential evolution, 20 %),
+        which on near-normal posteriors reaches the same convergence in 3-5 times fewer steps.
     vectorize
         Evaluate each half-ensemble of proposals in one call of
         :meth:`Problem.log_prob_many` (emcee's ``vectorize=True``).  Default: the problem's

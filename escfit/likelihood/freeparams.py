@@ -87,8 +87,11 @@ class FreeParameters:
         return total
 
     def log_prior(self, vec: np.ndarray) -> float:
-        """Sum of the free parameters' log prior densities (``-inf`` outside the bounds)."""
-        return float(sum(p.logpdf(float(x)) for p, x in zip(self.priors, vec)))
+        """Sum of the free parameters' log prior densities (``-inf`` outside the bounds).
+
+        The very sums of :meth:`log_prior_many` (one row), so a sampler's one-set and
+        whole-ensemble paths agree to the last bit."""
+        return float(self.log_prior_many(np.asarray(vec, float)[None, :])[0])
 
     def log_prob(self, vec: np.ndarray) -> float:
         """Log posterior (up to a constant); ``-inf`` outside the prior or on failure.

@@ -50,7 +50,7 @@ def fit_statistics(res) -> str:
                   + (", then sampled with emcee from there" if n_free == 1 else
                      f", then all {n_free} sampled with emcee from there"))
     else:
-        fitted = (f"{plural(npar, 'parameter')} fitted by least squares (lmfit)"
+        fitted = (f"{plural(npar, 'parameter')} fitted by least squares (scipy, trust-region reflective)"
                   + (", the reading noise profiled from the residuals" if profiled else ""))
     kind = _kind_words(a.get('data_kind', 'readings'))
     if a.get("data_kind") == "timeseries" and units in SAMPLED:

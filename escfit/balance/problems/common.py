@@ -123,7 +123,7 @@ class BalanceProblem(ProblemBase):
             raise FitError(f"{name} is not a parameter this problem holds")
         self._base[name] = float(value)
         self.params.params[name] = replace(self.params[name], value=float(value))
-        for cache in ("_merged_fixed", "_merge_keys", "_layout_cache"):
+        for cache in ("_merged_fixed", "_merge_keys", "_layout_cache", "_readings_cache"):
             self.__dict__.pop(cache, None)
 
     def held_effects(self, values: Mapping[str, float]) -> list[tuple[str, float, dict[str, float]]]:

@@ -17,6 +17,7 @@ import numpy as np
 
 from .. import BalanceScene
 from ...core.errors import EscfitError, FitError
+from ...core.status import LABELS, Status
 from ..observation import observation_from_table
 from ...core.params import ParamSet
 from ..recordings import UnitCurve
@@ -27,6 +28,9 @@ from .common import BalanceProblem
 from .loads import LoadRule
 
 __all__ = ["FitProblem", "Curve"]
+
+# status codes of a batch run that the one-at-a-time path must redo: refused, failed, out of segments
+_UNFINISHED = np.array([LABELS[Status(i)][0] in ("failed", "max_segments") for i in range(len(Status))])
 
 
 
@@ -165,21 +169,21 @@ class FitProblem(FreeParameters, BalanceProblem):
         EscfitError
             When the solver refuses the parameters or runs out of segments.
         """
-        out = []
-        for curve in self.curves:
-            cv = self.load_rule.apply(vals, curve.load)
-            sys = self.scene.system(cv)
-            n = int(curve.swing.max())
-            theta_turn = np.zeros(0)
-            if n > 0:
-                from ..solvers import solve_system
-
-                tr = solve_system(sys, n, self.solver, **self.solver_options)
-                if tr.status == "max_segments":
-                    raise FitError("solver ran out of segments")
-                theta_turn = tr.theta_turn
-            out.append(_at_recorded_swings(curve, sys.theta0, theta_turn))
+        out = [_at_recorded_swings(curve, *self._solve_curve(vals, curve)) for curve in self.curves]
         return [self._nominal(t, c) for t, c in zip(out, self.curves)]
+
+    def _solve_curve(self, vals: Mapping[str, float], curve: Curve) -> tuple[float, np.ndarray]:
+        """Release angle and signed turning points (rad) of one curve's run, to its last recorded swing."""
+        sys = self.scene.system(self.load_rule.apply(vals, curve.load))
+        n = int(curve.swing.max())
+        if n <= 0:
+            return sys.theta0, np.zeros(0)
+        from ..solvers import solve_system
+
+        tr = solve_system(sys, n, self.solver, **self.solver_options)
+        if tr.status == "max_segments":
+            raise FitError("solver ran out of segments")
+        return sys.theta0, tr.theta_turn
 
     def _nominal(self, theta: np.ndarray, curve: Curve) -> np.ndarray:
         side = self.sides(curve)
@@ -194,12 +198,26 @@ class FitProblem(FreeParameters, BalanceProblem):
 
     # -- likelihood --------------------------------------------------------------------
     def log_likelihood(self, vals: Mapping[str, float]) -> float:
+        compiled = self._compiled_model() is not None
         try:
-            pred = self.predict(vals)
+            if compiled:  # the kernel the whole-array path uses, on one set: the same numbers
+                runs = [self._solve_curve(vals, c) for c in self.curves]
+            else:
+                pred = self.predict(vals)
         except (EscfitError, ValueError, ArithmeticError) as exc:
             self.failures[f"solve failed: {exc}"[:120]] += 1
             return -math.inf
-        ll = sum(self.observation.loglike(p, c.y, vals, self.sides(c), c.time) for p, c in zip(pred, self.curves))
+        if compiled:
+            n = max(int(c.swing.max()) for c in self.curves)
+            turns = np.full((len(self.curves), 1, 1 + n), np.nan)
+            n_done = np.zeros((len(self.curves), 1), np.int64)
+            for i, (theta0, theta_turn) in enumerate(runs):
+                turns[i, 0, 0] = theta0
+                turns[i, 0, 1:1 + theta_turn.size] = theta_turn
+                n_done[i, 0] = theta_turn.size
+            ll = float(self._loglike_compiled(turns, n_done, vals, 1)[0])
+        else:
+            ll = sum(self.observation.loglike(p, c.y, vals, self.sides(c), c.time) for p, c in zip(pred, self.curves))
         if not math.isfinite(ll):
             self.failures["non-finite likelihood"] += 1
             return -math.inf
@@ -233,15 +251,18 @@ class FitProblem(FreeParameters, BalanceProblem):
     def _log_likelihood_many(self, vecs: np.ndarray) -> np.ndarray:
         n_sets = vecs.shape[0]
         vals = self.values_many(vecs)
-        columns = {k: (v[:, None] if isinstance(v, np.ndarray) else v) for k, v in vals.items()}
         scalar = np.zeros(n_sets, bool)  # sets handed to the one-at-a-time path (refusals, failures)
         total = np.zeros(n_sets)
         try:
             turns, n_done, failed = self._solve_all_curves(vals, n_sets)
         except (EscfitError, ValueError, ArithmeticError):
             turns, scalar[:] = None, True
-        if turns is not None:
+        if turns is not None and self._compiled_model() is not None:
+            scalar |= failed.any(axis=0)
+            total = self._loglike_compiled(turns, n_done, vals, n_sets)
+        elif turns is not None:
             lay = self._layout()
+            columns = {k: (v[:, None] if isinstance(v, np.ndarray) else v) for k, v in vals.items()}
             scalar |= failed.any(axis=0)
             # every reading of every curve at once: (sets, readings), curve after curve
             inside = lay["swing"][:, None] <= n_done[lay["curve"], :]
@@ -261,6 +282,58 @@ class FitProblem(FreeParameters, BalanceProblem):
             # the one-at-a-time path records the same failure reason as log_prob would
             ll[i] = self.log_likelihood(self.values(vecs[i]))
         return ll
+
+    def _compiled_model(self) -> int | None:
+        """The compiled observation kernel's model code for this problem's readings, or None
+        (Student-t amplitudes go through the observation model's numpy code)."""
+        if "_model_code" in self.__dict__:
+            return self.__dict__["_model_code"]
+        self.__dict__["_model_code"] = code = self._model_code_of(self.observation)
+        return code
+
+    @staticmethod
+    def _model_code_of(observation) -> int | None:
+        from ..observation.amplitude import AmplitudeObservation
+        from ..observation.compiled import GAUSSIAN, NOTCHES
+        from ..observation.notches import NotchObservation
+
+        if isinstance(observation, NotchObservation):
+            return NOTCHES
+        if isinstance(observation, AmplitudeObservation) and observation.noise == "gaussian":
+            return GAUSSIAN
+        return None
+
+    def _readings(self) -> np.ndarray:
+        """Every reading as a :data:`~escfit.balance.observation.compiled.READING` record (computed once)."""
+        rec = self.__dict__.get("_readings_cache")
+        if rec is None:
+            from ..observation.compiled import READING
+            from ..observation.notches import NotchObservation
+
+            lay = self._layout()
+            rec = np.zeros(lay["y"].size, READING)
+            rec["curve"], rec["swing"] = lay["curve"], lay["swing"]
+            rec["side"] = 0.0 if lay["side"] is None else lay["side"]
+            rec["time"] = 0.0 if lay["time"] is None else lay["time"]
+            if isinstance(self.observation, NotchObservation):
+                rec["lo"], rec["hi"] = self.observation.interval(lay["y"])
+            else:
+                rec["lo"] = lay["y"]
+            self.__dict__["_readings_cache"] = rec
+        return rec
+
+    def _loglike_compiled(self, turns: np.ndarray, n_done: np.ndarray, vals: Mapping, n_sets: int) -> np.ndarray:
+        """Log-likelihood of each set from its turning points, by the compiled observation kernel."""
+        from ..observation.compiled import SET, loglike_sets
+
+        sets = np.empty(n_sets, SET)
+        sets["sigma"] = vals["observation.sigma"]
+        sets["offset"] = vals["observation.offset"]
+        sets["rate"] = vals.get("observation.offset_rate", 0.0)
+        out = np.empty(n_sets)
+        loglike_sets(turns, np.ascontiguousarray(n_done, np.int64), self._readings(), sets, self._compiled_model(),
+                     out)
+        return out
 
     def _layout(self) -> dict:
         """Where each reading comes from, for the whole-array path (computed once).
@@ -325,7 +398,7 @@ class FitProblem(FreeParameters, BalanceProblem):
         if n > 0:
             batch = solve_batch(stack, n, throw=False, max_segments=self.solver_options.get("max_segments"))
             turns[:, 1:] = batch.theta_turn
-            n_done, failed = batch.n_done, (batch.status == "failed") | (batch.status == "max_segments")
+            n_done, failed = batch.n_done, _UNFINISHED[batch.code]
             if self.solver_options.get("max_segments") is None:
                 # the one-set default budget grows with the swings asked for (64 n + 1000): a set that
                 # used more segments than the shortest curve's budget goes the one-at-a-time way,

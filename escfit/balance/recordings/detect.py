@@ -122,7 +122,7 @@ def _first_header(text: str) -> list[str]:
     return []
 
 
-_NUMBER = re.compile(r"^\s*[-+]?(\d|\.\d)")
+_NUMBER = re.compile(r"^[-+]?(\d+[.,]?\d*|[.,]\d+)([eE][-+]?\d+)?$")
 
 
 def _header_above_numbers(text: str) -> list[str]:
@@ -133,7 +133,8 @@ def _header_above_numbers(text: str) -> list[str]:
         s = line.strip()
         if not s or s.startswith("#"):
             continue
-        if _NUMBER.match(s):
+        fields = _fields(s)
+        if fields and _NUMBER.match(fields[0].strip()):
             return _fields(previous) if previous is not None else []
         previous = s
     return _first_header(text)

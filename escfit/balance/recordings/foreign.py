@@ -72,6 +72,9 @@ def refuse_foreign(path: str | Path) -> None:
     elif b"\x00" in head and not head.startswith((b"\xff\xfe", b"\xfe\xff", b"MATLAB")) and suffix != ".mat":
         why = ("a binary file of unknown layout (an instrument's or a program's own format), not a table of numbers: "
                + _AS_CSV)
+    elif b"<phyphox" in head:
+        why = ("a phyphox experiment file (.phyphox, XML with the experiment and its buffers), not an export: in "
+               "phyphox use 'Export data' with 'CSV (Comma, decimal point)' and read that")
     if why:
         raise DataError(why, str(path))
 

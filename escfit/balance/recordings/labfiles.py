@@ -47,6 +47,8 @@ __all__ = ["read_cmbl", "read_run_csv", "read_arduino_log", "sniff_run_csv", "sn
 _VERNIER_RUN = re.compile(r"^\s*(Run\s*\d+|Latest|Last|Data\s*Set\s*\d*)\s*:\s*(.+)$", re.I)
 _PASCO_RUN = re.compile(r"^(.*?)\s*Run\s*#\s*(\d+)\s*$", re.I)
 _NUMBERED_RUN = re.compile(r"^\s*(.*?[^\d\s])\s*(\d+)\s*(\([^()]*\)|\[[^\[\]]*\])?\s*$")
+# Graphical Analysis' export puts the run first: ``1 Time``, ``1 Position``, ``7: Position``
+_RUN_FIRST = re.compile(r"^\s*(\d+)\s*:?\s+([^\d\s].*?)\s*$")
 _PAIR = re.compile(r"\s*([A-Za-z_][\w .]*?)\s*[:=]\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-zµ°/]*)\s*")
 
 
@@ -103,20 +105,32 @@ def write_cmbl(runs: dict[str, dict[str, tuple[str, list[float]]]]) -> str:
     return "".join(parts)
 
 
+def _numbered(name: str) -> tuple[str, str] | None:
+    """(run number, quantity with its unit) of a numbered column name, run last (Logger Pro's
+    ``Time 1``, ``Position 1 (m)``) or first (Graphical Analysis' ``1 Time``, ``7: Position``)."""
+    m = _NUMBERED_RUN.match(name)
+    if m:
+        return m.group(2), m.group(1) + (f" {m.group(3)}" if m.group(3) else "")
+    m = _RUN_FIRST.match(name)
+    if m:
+        return m.group(1), m.group(2)
+    return None
+
+
 def _numbered_runs(header: list[str]) -> bool:
-    """Whether every name is ``<quantity> <run>`` (Logger Pro's ``Time 1``, ``Position 1 (m)``) and every
-    run has its time column."""
-    found = [_NUMBERED_RUN.match(h) for h in header]
+    """Whether every name is a quantity numbered by its run (:func:`_numbered`) and every run has
+    its time column."""
+    found = [_numbered(h) for h in header]
     if len(header) < 2 or not all(found):
         return False
-    timed = {m.group(2) for m in found if header_role(m.group(1))[0] == "time"}
-    return timed == {m.group(2) for m in found}
+    timed = {run for run, what in found if header_role(what)[0] == "time"}
+    return timed == {run for run, _ in found}
 
 
 def _run_of(name: str, numbered: bool = False) -> tuple[str | None, str]:
     if numbered:
-        m = _NUMBERED_RUN.match(name)
-        return f"Run {int(m.group(2))}", m.group(1) + (f" {m.group(3)}" if m.group(3) else "")
+        run, what = _numbered(name)
+        return f"Run {int(run)}", what
     m = _VERNIER_RUN.match(name)
     if m:
         return re.sub(r"\s+", " ", m.group(1)).title(), m.group(2).strip()

@@ -71,7 +71,11 @@ def regular_times(time: np.ndarray, where_of_row: Callable[[int], str], notes: l
     runs = np.diff(np.r_[starts, time.size])
     if same.mean() < 0.5 or starts.size < 3:
         i = int(np.flatnonzero(same)[0]) + 1
-        raise DataError(f"time {float(time[i])!r} repeats the previous row's; times must increase", where_of_row(i))
+        tail = i > 1 and bool(np.all(time[i:] == time[i]))
+        hint = (f" (the time stops there for the last {time.size - i + 1} rows: a logger's stalled clock? set "
+                f"[recording] stop = \"{float(time[i - 2]):g} s\" to read the rows before it)") if tail else ""
+        raise DataError(f"time {float(time[i])!r} repeats the previous row's; times must increase{hint}",
+                        where_of_row(i))
     rows = np.arange(time.size, dtype=float)
     slope, intercept = np.polyfit(rows, time, 1)
     fitted = intercept + slope * rows
@@ -99,9 +103,17 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
             raise DataError(f"{name} value {float(values[bad[0]])!r} is not a finite number", where_of_row(int(bad[0])))
     if np.size(time) < 2:
         raise DataError(f"only {np.size(time)} samples; a decay needs at least {MIN_SAMPLES}", source)
-    time, theta = _drop_repeated_rows(np.asarray(time, dtype=float), np.asarray(theta, dtype=float), notes,
-                                      where_of_row)
-    time = regular_times(time, where_of_row, notes)
+    time, theta = np.asarray(time, dtype=float), np.asarray(theta, dtype=float)
+    rows = np.arange(time.size)
+    if spec.start is not None or spec.stop is not None:
+        # rows stamped outside the window go before the stamps are checked (a logger's clock that
+        # stalls after the decay is cut by `stop`); the window is applied again to the times read
+        inside = (time >= (-math.inf if spec.start is None else spec.start)) & \
+                 (time <= (math.inf if spec.stop is None else spec.stop))
+        if inside.sum() >= 2:
+            time, theta, rows = time[inside], theta[inside], rows[inside]
+    time, theta, rows = _drop_repeated_rows(time, theta, rows, notes, where_of_row)
+    time = regular_times(time, lambda i: where_of_row(int(rows[i])), notes)
     if meta.get("angle_unit_assumed") and np.ptp(theta) > 2.0 * math.pi:
         raise DataError(f"the angles span {np.ptp(theta):.4g} with no unit given (rad assumed): more than a turn, so "
                         "not radians of a swinging balance; if they are degrees set [recording] angle_unit = \"deg\" "
@@ -129,19 +141,20 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
                       sha256=sha256, meta=meta)
 
 
-def _drop_repeated_rows(time: np.ndarray, theta: np.ndarray, notes: list[str],
-                        where_of_row: Callable[[int], str]) -> tuple[np.ndarray, np.ndarray]:
+def _drop_repeated_rows(time: np.ndarray, theta: np.ndarray, rows: np.ndarray, notes: list[str],
+                        where_of_row: Callable[[int], str]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Rows that repeat the previous row exactly (time and reading: a spreadsheet's pasted copy)
-    left out, with a note; a repeated time with another reading stays (and is refused)."""
+    left out, with a note; a repeated time with another reading stays (and is refused).
+    ``rows`` are the samples' row numbers in the file (for messages)."""
     if time.size < 2:
-        return time, theta
+        return time, theta, rows
     same = np.r_[False, (np.diff(time) == 0.0) & (np.diff(theta) == 0.0)]
     if not same.any():
-        return time, theta
-    first = int(np.flatnonzero(same)[0])
+        return time, theta, rows
+    first = int(rows[np.flatnonzero(same)[0]])
     notes.append(f"{int(same.sum())} row(s) repeating the previous row exactly left out, the first at "
                  f"{where_of_row(first)}")
-    return time[~same], theta[~same]
+    return time[~same], theta[~same], rows[~same]
 
 
 def unwrap_angles(theta: np.ndarray, notes: list[str]) -> np.ndarray:

@@ -374,6 +374,15 @@ def beat_swings(rec: TimegrapherRecording) -> np.ndarray:
         No release instant, or a beat before it.
     """
     if not math.isfinite(rec.release_s):
+        meta = getattr(rec, "meta", None) or {}
+        if "amplitude_drift_deg" in meta:  # a timegrapher program's log: the watch was running when it began
+            amp = np.asarray(rec.amp_deg, float)
+            amp = amp[np.isfinite(amp)]
+            shown = f"amplitude {np.median(amp):.0f} deg, " if amp.size else ""
+            steady = f"; {meta['steady_state_warning']}" if meta.get("steady_state") == "true" else ""
+            raise DataError(f"the log begins with the watch already running ({shown}drifting "
+                            f"{meta['amplitude_drift_deg']} deg over the log) and no release: a fit starts its model at a release, so log the watch from a "
+                            f"release (a free decay, or a run-down from a stop){steady}", rec.source)
         raise DataError("the recording does not say when the balance was released (release_s / escfit.release_sample);"
                         " the beats cannot be aligned with the scene's release", rec.source)
     t = rec.beat_time

@@ -79,7 +79,10 @@ def _viscous(rng: np.random.Generator, s: Scale) -> str:
 
 
 def _coulomb(rng: np.random.Generator, s: Scale) -> str:
-    return f"[effects.coulomb]\nR = {_num(s.unit * 10.0 ** rng.uniform(-4, math.log10(0.3)))}\n"
+    """Sliding friction R; in a third of the scenes static friction R_static up to 3 R above it."""
+    r = s.unit * 10.0 ** rng.uniform(-4, math.log10(0.3))
+    static = f"R_static = {_num(r * rng.uniform(1.0, 3.0))}\n" if rng.uniform() < 1.0 / 3.0 else ""
+    return f"[effects.coulomb]\nR = {_num(r)}\n{static}"
 
 
 def _window(lo: float, hi: float, kind: str, x: float, swings: str = "both") -> str:

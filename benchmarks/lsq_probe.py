@@ -1,0 +1,58 @@
+"""Time one recipe's least squares in this process and print its estimates as JSON.
+
+Run by ``benchmarks/lsq_speed.py`` under the current and the previous version of escfit
+(``PYTHONPATH`` selects which):  python benchmarks/lsq_probe.py RECIPE.toml [RECIPE.toml ...]
+
+For each recipe: the problem is built as ``escfit fit`` builds it, the model is run once (numba's
+kernels loaded, so the timing is warm), then the least squares ``escfit fit`` runs (the family's
+multistart, then the reconciliation of estimates on bounds) is timed.  Printed: wall-clock and CPU seconds, model
+evaluations (calls of ``problem.residuals``), and every fitted parameter's estimate and standard
+error.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+
+def probe(recipe: Path) -> dict:
+    from escfit.core.scene import load_scene
+    from escfit.inference import registry
+    from escfit.inference.lsq import least_squares
+    from escfit.inference.reconcile import reconcile
+
+    table = tomllib.loads(recipe.read_text())
+    scene = load_scene(str((recipe.parent / table["scene"]).resolve()))
+    data = str((recipe.parent / table["data"]).resolve())
+    seed = int(table.get("seed", 0))
+    fam = registry.family(scene.model)
+    defaults = dict(getattr(fam, "fit_defaults", {}))
+    problem = fam.problem(scene, data, **dict(table.get("options", {})))
+    problem.residuals(problem.values(problem.initial))  # warm: kernels loaded before the clock starts
+    calls = [0]
+    inner = problem.residuals
+
+    def counted(vals):
+        calls[0] += 1
+        return inner(vals)
+
+    problem.residuals = counted
+    clock, cpu = time.perf_counter(), time.process_time()
+    lsq = least_squares(problem, n_starts=defaults.get("n_starts", 8), n_refine=defaults.get("n_refine"), seed=seed)
+    lsq, _, _ = reconcile(problem, lsq, seed=seed)
+    seconds, cpu = time.perf_counter() - clock, time.process_time() - cpu
+    return {"recipe": recipe.stem, "seconds": seconds, "cpu_seconds": cpu, "evaluations": calls[0],
+            "names": list(lsq.names),
+            "value": [float(v) for v in lsq.value], "stderr": [float(v) for v in lsq.stderr],
+            "chisqr": float(lsq.chisqr),
+            "rms_reading": float(np.sqrt(np.mean((problem.observed - problem.expected(lsq.values)) ** 2)))}
+
+
+if __name__ == "__main__":
+    print(json.dumps([probe(Path(p).resolve()) for p in sys.argv[1:]]))

@@ -1,0 +1,116 @@
+"""emcee proposals that mix on the narrow, strongly coupled posteriors of decay fits.
+
+A decay fit's posterior is typically a thin ridge (C against R along a unit curve, a noise
+scale against its correlation): emcee's stretch and differential-evolution moves are affine
+invariant, so a straight ridge costs them nothing in principle, but each step still moves a
+walker by about the distance between two others, and the integrated autocorrelation time stays
+at 20-30 steps on the quick start's five parameters.  Most such posteriors are close to a
+(skewed) multivariate normal, and then a walker can jump to an almost independent point in
+one step: :class:`EnsembleTMove` proposes from a Student-t whose centre and scatter are those
+of the other half of the ensemble, and accepts with the independence Metropolis-Hastings ratio.
+
+Validity: emcee updates one half of the ensemble while the other (the complement) stays fixed,
+so a proposal built from the complement alone is a fixed proposal density for that half-step,
+and the ratio ``pi(y) q(x) / (pi(x) q(y))`` leaves the posterior invariant (Hastings 1970;
+this is emcee's own construction for its KDE move, with a parametric density instead of a
+kernel estimate, so it costs microseconds instead of milliseconds).  A half-step whose
+complement cannot fix a covariance (fewer walkers than dimensions plus two, or a degenerate
+spread) uses the differential-evolution proposal instead, a choice that depends on the
+complement only and so keeps the half-step valid.  With many parameters for the walkers the
+ensemble is split into more than two parts (:func:`complement_splits`), so that the complement
+holds at least three walkers per dimension.  The heavy tails (5 degrees of freedom) keep
+far-out regions reachable; the mixture with differential evolution (:func:`de_t_moves`) keeps
+the ensemble mixing when the posterior is far from normal.
+"""
+
+from __future__ import annotations
+
+import math
+
+import emcee
+import numpy as np
+
+__all__ = ["EnsembleTMove", "de_t_moves", "complement_splits"]
+
+
+class EnsembleTMove(emcee.moves.RedBlueMove):
+    """Independence proposals from a Student-t fitted to the complementary half-ensemble.
+
+    Parameters
+    ----------
+    df
+        Degrees of freedom of the proposal (> 0; heavier tails than the posterior's keep the
+        independence sampler uniformly ergodic where the posterior is close to normal).
+    scale
+        Factor on the complement's standard deviations.
+    """
+
+    def __init__(self, df: float = 5.0, scale: float = 1.0, **kwargs) -> None:
+        if not (df > 0 and scale > 0):
+            raise ValueError(f"df and scale must be positive, got {df!r}, {scale!r}")
+        self.df, self.scale = float(df), float(scale)
+        self._de = emcee.moves.DEMove()
+        super().__init__(**kwargs)
+
+    def setup(self, coords: np.ndarray) -> None:
+        self._de.setup(coords)
+        self.nsplits = complement_splits(*coords.shape)
+
+    def get_proposal(self, s: np.ndarray, c: list, random) -> tuple[np.ndarray, np.ndarray]:
+        comp = np.concatenate(c, axis=0)
+        ns, ndim = s.shape
+        factor = self._factor(comp, ndim)
+        if factor is None:
+            return self._de.get_proposal(s, c, random)
+        mean, chol = factor
+        z = random.randn(ns, ndim)
+        w = random.chisquare(self.df, size=(ns, 1)) / self.df
+        q = mean + (z @ chol.T) / np.sqrt(w)
+        return q, self._log_density(s, mean, chol) - self._log_density(q, mean, chol)
+
+    def _factor(self, comp: np.ndarray, ndim: int) -> tuple[np.ndarray, np.ndarray] | None:
+        """Mean and Cholesky factor of the proposal's scatter, or None when the complement fixes none."""
+        if comp.shape[0] < ndim + 2:
+            return None
+        mean = comp.mean(axis=0)
+        dev = comp - mean
+        cov = (dev.T @ dev) / (comp.shape[0] - 1) * self.scale**2
+        try:
+            chol = np.linalg.cholesky(cov)
+        except np.linalg.LinAlgError:
+            return None
+        d = np.diag(chol)
+        if not (np.all(np.isfinite(chol)) and np.all(d > 1e-12 * np.sqrt(np.diag(cov)).max())):
+            return None
+        return mean, chol
+
+    def _log_density(self, x: np.ndarray, mean: np.ndarray, chol: np.ndarray) -> np.ndarray:
+        """Log density of the proposal at the rows of ``x``, up to a constant shared by all rows."""
+        y = np.linalg.solve(chol, (x - mean).T)
+        return -0.5 * (self.df + x.shape[1]) * np.log1p(np.sum(y * y, axis=0) / self.df)
+
+
+def complement_splits(walkers: int, ndim: int) -> int:
+    """Sub-ensembles of an :class:`EnsembleTMove` step: two, or more when the other half of the
+    ensemble would hold fewer than three walkers per dimension.
+
+    The proposal's scatter is estimated from the complement; 16 walkers in 8 dimensions give a
+    poor estimate (its smallest eigenvalues a tenth of the truth's), which on the 120-swing
+    waveform benchmark halved the acceptance and doubled the autocorrelation time (16 steps
+    against 8.5 with four sub-ensembles).  More sub-ensembles update fewer walkers at a time
+    against a larger complement; the count depends on the ensemble's shape only, so each
+    sub-step stays a valid Metropolis-Hastings update.
+    """
+    n = 2
+    # the complement of the largest sub-ensemble; sub-ensembles keep at least two walkers
+    while walkers - -(-walkers // n) < 3 * ndim and walkers // (n + 1) >= 2:
+        n += 1
+    return n
+
+
+def de_t_moves(t_weight: float = 0.8) -> list:
+    """emcee's move mixture ``"de-t"``: :class:`EnsembleTMove` with weight ``t_weight``,
+    differential evolution with the rest (a step uses one of them, drawn with these weights)."""
+    if not 0.0 < t_weight < 1.0 or math.isnan(t_weight):
+        raise ValueError(f"t_weight must lie in (0, 1), got {t_weight!r}")
+    return [(EnsembleTMove(), t_weight), (emcee.moves.DEMove(), 1.0 - t_weight)]
