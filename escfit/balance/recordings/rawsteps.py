@@ -105,7 +105,7 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
         raise DataError(f"only {np.size(time)} samples; a decay needs at least {MIN_SAMPLES}", source)
     time, theta = np.asarray(time, dtype=float), np.asarray(theta, dtype=float)
     rows = np.arange(time.size)
-    if spec.start is not None or spec.stop is not None:
+    if (spec.start is not None or spec.stop is not None) and np.any(np.diff(time) <= 0.0):
         # rows stamped outside the window go before the stamps are checked (a logger's clock that
         # stalls after the decay is cut by `stop`); the window is applied again to the times read
         inside = (time >= (-math.inf if spec.start is None else spec.start)) & \
