@@ -121,6 +121,32 @@ def test_loglike_and_criteria_against_the_gaussian_likelihood_written_out(lsq_fi
     assert w.sum() == pytest.approx(1.0) and w[1] / w[0] == pytest.approx(math.exp(-d[1] / 2), rel=1e-9)
 
 
+def test_the_report_prints_the_criteria_compare_ranks_by(lsq_fits):
+    """The report's fit statistics and escfit compare print one computation: the AICc and BIC of
+    the Gaussian likelihood written out from the stored readings (profiled scale, every free
+    parameter counted), to the digits the report shows."""
+    import re
+
+    from escfit.report.tables import fit_statistics
+
+    _, fits = lsq_fits
+    f = fits["viscous_coulomb"]
+    for path in (f["v"], f["vc"]):
+        res = load_fit(path)
+        y = res.group("observed_data")["reading"].values
+        e = res.group("least_squares")["expected"].values
+        n, rss = y.size, float(np.sum((y - e) ** 2))
+        ll = -0.5 * n * (math.log(2 * math.pi * rss / n) + 1.0)
+        k = len(res.parameter_names)
+        text = fit_statistics(res)
+        got = {m.group(1): float(m.group(2)) for m in re.finditer(r"(AICc|BIC) (-?[0-9.]+(?:e[-+]?[0-9]+)?)", text)}
+        assert got["AICc"] == pytest.approx(-2 * ll + 2 * k + 2 * k * (k + 1) / (n - k - 1), rel=1e-5), text
+        assert got["BIC"] == pytest.approx(-2 * ll + k * math.log(n), rel=1e-5), text
+        row = next(r for r in compare_fits([f["v"], f["vc"]]).rows if r["file"] == str(path))
+        assert got["AICc"] == pytest.approx(row["aicc"], rel=1e-5) and got["BIC"] == pytest.approx(row["bic"], rel=1e-5)
+        assert "aic" not in res.group("least_squares").attrs  # the old number that dropped constants is gone
+
+
 def test_known_noise_scale_is_not_a_parameter_and_enters_the_likelihood(lsq_fits):
     from scipy.stats import norm
 
@@ -272,3 +298,75 @@ def test_same_names_in_different_folders_are_told_apart(lsq_fits, tmp_path):
     shutil.copy(f["vc"], b)
     cmp = compare_fits([a, b])
     assert {r["label"] for r in cmp.rows} == {str(a), str(b)}
+
+
+def test_verdict_names_the_simplest_then_the_best_ranked_of_equally_simple_fits():
+    from escfit.inference.compare import _undecided, verdict_choice
+
+    rows = [{"file": "vc.h5", "label": "vc.h5", "n_params": 4}, {"file": "c.h5", "label": "c.h5", "n_params": 3},
+            {"file": "v.h5", "label": "v.h5", "n_params": 3}]  # best first
+    assert verdict_choice(rows)["file"] == "c.h5"  # not nested with v.h5: the criterion ranks them
+    text, choice = _undecided(rows, "dAICc below 2")
+    assert choice == "c.h5" and "of those with 3 parameters, c.h5 ranks best" in text
+    text, choice = _undecided(rows[:2], "dAICc below 2")
+    assert choice == "c.h5" and "prefer the simplest, c.h5 (3 parameters)" in text
+
+
+def _ar1_loglike_max(r: np.ndarray) -> float:
+    """The exact Gaussian AR(1) log-likelihood of residuals ``r``, maximised over (sigma, rho) by a
+    fine grid in rho with sigma in closed form: the reference for the stored number."""
+    best = -math.inf
+    for rho in np.linspace(-0.995, 0.995, 4001):
+        q = 1.0 - rho * rho
+        ss = r[0] ** 2 + np.sum((r[1:] - rho * r[:-1]) ** 2) / q  # = n sigma^2 at the optimum
+        s2 = ss / r.size
+        best = max(best, -0.5 * r.size * (math.log(2 * math.pi * s2) + 1.0) - 0.5 * (r.size - 1) * math.log(q))
+    return best
+
+
+def test_ar1_fits_store_the_likelihood_maximised_over_rho_so_a_nesting_law_never_scores_lower():
+    """AR(1) readings (rho 0.8) fitted with viscous damping and with viscous + Coulomb friction: the
+    stored log-likelihood is the AR(1) likelihood maximised over the noise scale and rho at each
+    optimum (checked against a grid), so the nesting law's is never below the nested one's."""
+    from escfit.inference import least_squares, make_problem
+    from escfit.inference.information import information_attrs
+
+    from .test_waveform_fit import SCENE, correlated_record
+
+    vc = (SCENE % "waveform") + 'noise = "ar1"\n'
+    v = vc.replace("[effects.coulomb]\nR = { value = 0.2, vary = true, min = 0, max = 5 }\n", "")
+    assert "coulomb" not in v
+    for seed in range(3):
+        rec = correlated_record(seed)
+        ll = {}
+        for name, text in (("v", v), ("vc", vc)):
+            problem = make_problem(load_scene("s.toml", text=text), rec)
+            res = least_squares(problem, n_starts=1)
+            a = information_attrs(problem, res)
+            r = problem.observed - problem.expected(res.values)
+            assert a["loglike"] == pytest.approx(_ar1_loglike_max(r), abs=2e-3)
+            assert "maximising the likelihood" in a["noise_model"]
+            ll[name] = a["loglike"]
+        assert ll["vc"] >= ll["v"] - 1e-6, (seed, ll)
+
+
+def test_the_reports_criteria_are_the_numbers_compare_ranks_by(lsq_fits, tmp_path):
+    """The report's information-criteria line and ``escfit compare`` read one stored likelihood:
+    the same log L, parameter count, AICc and BIC for every fit."""
+    import re
+
+    _, fits = lsq_fits
+    f = fits["viscous_coulomb"]
+    rows = {r["file"]: r for r in compare_fits([f["v"], f["vc"]]).rows}
+    for path in (f["v"], f["vc"]):
+        md = tmp_path / f"{path.stem}.md"
+        res = CliRunner().invoke(cli, ["report", str(path), "--format", "md", "--out", str(md)])
+        assert res.exit_code == 0, res.output
+        text = " ".join(md.read_text().split())
+        m = re.search(r"log-likelihood (\S+) with its normalising constants, (\d+) parameters? counted.*?"
+                      r"AICc (\S+), BIC (\S+),", text)
+        assert m, text[:2000]
+        row = rows[str(path)]
+        assert int(m.group(2)) == row["n_params"]
+        for got, want in zip(m.group(1, 3, 4), (row["loglike"], row["aicc"], row["bic"])):
+            assert float(got) == pytest.approx(want, rel=1e-5, abs=1e-3)

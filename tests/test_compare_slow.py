@@ -34,9 +34,7 @@ PER_LAW = int(os.environ.get("ESCFIT_COMPARE_RECORDS", "20"))
 
 
 def _verdict(cmp) -> str:
-    close = [r for r in cmp.rows if r["d_aicc"] < 2.0]
-    pick = min(close, key=lambda r: r["n_params"]) if len(close) > 1 else cmp.rows[0]
-    return "viscous_coulomb" if pick["n_params"] == 4 else "viscous"
+    return "viscous_coulomb" if cmp.choice.endswith("_vc.h5") else "viscous"
 
 
 def test_compare_picks_the_true_damping_law(tmp_path):
@@ -66,3 +64,65 @@ def test_compare_picks_the_true_damping_law(tmp_path):
           f"{PER_LAW} records without it; missed in {missed} of {PER_LAW} records with it")
     assert right >= math.ceil(0.95 * 2 * PER_LAW)
     assert invented <= PER_LAW / 20
+
+
+# -- five laws, drag among them: the confusion table ------------------------------------------------
+#: 20 records per law, 100 per way of reading: measured 98 of 100 on the waveform and 100 of 100 on
+#: turning points (about 7 and 3.5 minutes alone); at 8 per law the waveform's 38 of 40 sat on the
+#: threshold itself
+MIXED_PER_LAW = int(os.environ.get("ESCFIT_COMPARE_LAW_RECORDS", "20"))
+
+
+def _confusion(tmp_path, observation: str, per_law: int, seed0: int) -> dict:
+    """Records of each law of ``law_records.LAWS`` fitted with every law, decided by the verdict:
+    ``{true law: {chosen law: count}}``."""
+    from .law_records import LAWS, fit_scene, make_record
+
+    scenes = {}
+    for law in LAWS:
+        scenes[law] = tmp_path / f"fit_{law}.toml"
+        scenes[law].write_text(fit_scene(law, observation))
+    table = {law: {other: 0 for other in LAWS} for law in LAWS}
+    for k, law in enumerate(LAWS):
+        for i in range(per_law):
+            rec = make_record(law, seed=seed0 + 100 * k + i)
+            data = tmp_path / f"{law}_{i}.csv"
+            data.write_text(rec.text)
+            files = {}
+            for cand, scene in scenes.items():
+                files[cand] = tmp_path / f"{law}_{i}__{cand}.h5"
+                fit(scene, data, out=files[cand], seed=i, n_starts=2)
+            choice = compare_fits(list(files.values())).choice
+            table[law][next(c for c, f in files.items() if str(f) == choice)] += 1
+    return table
+
+
+def _print_confusion(title: str, table: dict) -> None:
+    laws = list(table)
+    print(f"\n{title}\ntrue law \\ chosen  " + "  ".join(f"{c:>15}" for c in laws))
+    for law in laws:
+        print(f"{law:>18}  " + "  ".join(f"{table[law][c]:>15}" for c in laws))
+
+
+@pytest.mark.parametrize("how", ["waveform", "turning points"])
+def test_compare_picks_the_true_law_among_five_with_drag(tmp_path, how):
+    """Pendulum records (``tests/law_records.py``) with viscous damping, Coulomb friction, drag,
+    viscous + Coulomb or viscous + drag, each fitted with all five laws; the verdict (best AICc,
+    the fewest parameters within 2, the best-ranked among equally simple ones) must name the true
+    law in 95 % of the records, and invent drag (or Coulomb friction) on records without it in at
+    most 1 in 20."""
+    from .law_records import LAWS, TURNING_POINTS, WAVEFORM
+
+    table = _confusion(tmp_path, WAVEFORM if how == "waveform" else TURNING_POINTS, MIXED_PER_LAW,
+                       seed0=9000 if how == "waveform" else 9500)
+    _print_confusion(f"{how}: {MIXED_PER_LAW} records per law", table)
+    total = sum(sum(row.values()) for row in table.values())
+    right = sum(table[law][law] for law in LAWS)
+    has = {"drag": lambda law: "drag" in law, "coulomb": lambda law: "coulomb" in law}
+    for effect, present in has.items():
+        without = [law for law in LAWS if not present(law)]
+        invented = sum(n for law in without for chosen, n in table[law].items() if present(chosen))
+        print(f"{effect} invented in {invented} of {MIXED_PER_LAW * len(without)} records without it")
+        assert invented <= MIXED_PER_LAW * len(without) / 20, (effect, table)
+    print(f"true law chosen in {right} of {total}")
+    assert right >= math.ceil(0.95 * total), table

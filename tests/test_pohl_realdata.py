@@ -1,6 +1,6 @@
 """Real data: the free decay of a Pohl torsion wheel (shared/realdata, MIT licence).
 
-Amplitudes are in scale divisions (Skt) every half period; the decay model is homogeneous in
+Amplitudes are in scale divisions (Skt, 10 deg each) every half period; the decay model is homogeneous in
 the amplitude, so the fit works in Skt directly (R is then in Skt/s^2).  Criterion: BIC from
 the least-squares fits with the noise scale profiled out (Gaussian readings); a difference
 above 10 is conventionally "very strong" evidence.
@@ -14,6 +14,7 @@ import pytest
 import escfit
 from escfit.balance.problems.curves import FitProblem
 from escfit.inference import least_squares
+from escfit.inference.information import bic, information_attrs
 from escfit.balance.recordings import UnitCurve
 from escfit.core.csvtable import read_table
 
@@ -52,10 +53,16 @@ def _lsq(text, data):
     return least_squares(FitProblem(escfit.load_scene("pohl.toml", text=text), data), n_starts=12, seed=1)
 
 
+def _bic(text, data, res) -> float:
+    """BIC as escfit compare and the report compute it (the stored log-likelihood at the optimum)."""
+    a = information_attrs(FitProblem(escfit.load_scene("pohl.toml", text=text), data), res)
+    return bic(a["loglike"], a["n_params"], res.n_data)
+
+
 def test_coulomb_plus_viscous_is_clearly_preferred(pohl):
     both = _lsq(SCENE % COULOMB, pohl)
     expo = _lsq(SCENE % "", pohl)
-    assert expo.bic() - both.bic() > 10.0
+    assert _bic(SCENE % "", pohl, expo) - _bic(SCENE % COULOMB, pohl, both) > 10.0
     assert both.chisqr < 0.1 * expo.chisqr
     values = dict(zip(both.names, both.value))
     errors = dict(zip(both.names, both.stderr))

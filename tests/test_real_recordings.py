@@ -73,3 +73,36 @@ def test_cli_fits_a_raw_recording_with_a_scene(tmp_path):
     assert run.returncode == 0, run.stderr
     assert "note: the record starts mid-swing" in run.stdout
     assert out.exists()
+
+
+@pytest.mark.slow
+def test_string_pendulum_with_air_drag_leaves_no_structure_and_no_dry_friction(tmp_path):
+    """The 116 s string pendulum fitted with viscous + Coulomb friction and with quadratic air drag
+    added (``string_pendulum_lab1_drag``): drag removes the residual runs and the correlated
+    innovations that viscous + Coulomb leave (a decrement growing with the amplitude), AICc prefers
+    it by far, and R stays at zero (a pendulum in air)."""
+    import json
+
+    import h5py
+
+    from escfit.inference import fit
+    from escfit.inference.compare import compare_fits
+
+    files = {}
+    for name in ("string_pendulum_lab1", "string_pendulum_lab1_drag"):
+        doc = tomllib.loads((RECIPES / f"{name}.toml").read_text())
+        files[name] = tmp_path / f"{name}.h5"
+        fit(load_scene((RECIPES / doc["scene"]).resolve()), str((RECIPES / doc["data"]).resolve()), out=files[name],
+            seed=1)
+    misfit = {k: json.loads(h5py.File(f).attrs["misfit"]) for k, f in files.items()}
+    assert misfit["string_pendulum_lab1"]["runs_z"] < -4 and misfit["string_pendulum_lab1"]["lag1_autocorrelation"] > 0.5
+    assert misfit["string_pendulum_lab1_drag"]["runs_z"] > -4  # the runs test no longer flags
+    assert misfit["string_pendulum_lab1_drag"]["lag1_autocorrelation"] < 0.5  # nor the innovations
+    cmp = compare_fits(list(files.values()))
+    assert cmp.best == str(files["string_pendulum_lab1_drag"]) and cmp.rows[1]["d_aicc"] > 100
+    with h5py.File(files["string_pendulum_lab1_drag"]) as h:
+        names = [n.decode() if isinstance(n, bytes) else str(n) for n in h["least_squares/parameter"][:]]
+        hi = dict(zip(names, h["least_squares/hi95"][:]))
+        lo = dict(zip(names, h["least_squares/lo95"][:]))
+    assert hi["coulomb.R"] < 0.005  # rad/s^2: below 7e-4 rad per half swing at omega0^2 = 14.8
+    assert lo["drag.D"] > 0.005  # 1/rad: drag resolved well away from zero

@@ -26,6 +26,20 @@ undamped swing, ``E = omega0**2 (1 - cos A)``, ``dE/dA = omega0**2 sin A`` and `
 (1 - m) K(m)] / (omega0 sin A)`` with ``m = sin(A/2)**2`` (complete elliptic integrals), drag
 ``4 D (sin A - A cos A) / sin A``; each reduces to the table at small A.
 
+A **stiffening spring** (``[effects.stiffening] k3``: restoring ``omega0**2 (theta + k3
+theta**3)``, added to a spring's or a pendulum's) dissipates nothing, so it has no part of its
+own; it changes every law's part through the same energy balance.  The energy at amplitude A
+gains ``omega0**2 k3 A**4 / 4``, so ``dE/dA`` gains ``omega0**2 k3 A**3``, and the speed along
+the swing grows, ``theta'**2 = 2 (V(A) - V(theta))``.  On a linear spring with a cubic term:
+Coulomb ``2 R / (omega0**2 (1 + k3 A**2))`` (exact at the half swing's mean amplitude to second
+order: the energy equation of a constant friction torque gives ``A_n - A_{n+1} = 2R / (omega0**2
+(1 + k3 (A_n**2 + A_{n+1}**2)/2))``), drag ``D (4 A**2/3 + 4 k3 A**4/5) / (1 + k3 A**2)``
+(``int (A**4 - theta**4) dtheta = 8 A**5/5``), viscous ``C int |theta'| dtheta / (dE/dA)``
+by Gauss-Legendre quadrature (an elliptic integral; ``theta = A sin(phi)`` makes the integrand
+smooth).  A stiffer spring stores more energy at the same amplitude, so each loss takes less
+amplitude: at ``k3 A**2 = 0.3`` Coulomb friction's decrement is 23 % smaller than on the linear
+spring, viscous damping's 16 % and drag's 9 % smaller.
+
 An escapement window of constant torque per inertia ``X`` (impulse drives, unlocking opposes)
 over the swing-frame angles ``[lo, hi)`` does work ``+-X |[lo, hi) & [-A, A]|``, a gain
 ``-W/(omega0**2 A)`` that falls like 1/A: the shape that makes an escapement's amplitude
@@ -144,7 +158,7 @@ def from_turns(theta) -> Decrements:
                       np.arange(span.size - 1, dtype=np.int64))
 
 
-def law_parts(amplitude, *, omega0: float, C: float = 0.0, R: float = 0.0, D: float = 0.0,
+def law_parts(amplitude, *, omega0: float, C: float = 0.0, R: float = 0.0, D: float = 0.0, k3: float = 0.0,
               windows: tuple[Window, ...] = (), restoring: str = "spring", switching: str = "angle") -> dict:
     """Each law's decrement per half swing at ``amplitude`` (rad), first order in the damping.
 
@@ -156,6 +170,9 @@ def law_parts(amplitude, *, omega0: float, C: float = 0.0, R: float = 0.0, D: fl
         Natural frequency (rad/s).
     C, R, D
         Viscous (1/s), Coulomb (rad/s^2) and quadratic-drag (1/rad) coefficients per inertia.
+    k3
+        Cubic stiffening of the restoring torque (1/rad^2, ``[effects.stiffening]``): no part of
+        its own, it changes the others (see the module docstring).
     windows
         Escapement windows.
     restoring
@@ -172,7 +189,15 @@ def law_parts(amplitude, *, omega0: float, C: float = 0.0, R: float = 0.0, D: fl
     """
     a = np.asarray(amplitude, float)
     w2 = omega0 * omega0
-    if restoring == "pendulum":
+    if restoring not in ("spring", "pendulum"):
+        raise ValueError(f"restoring must be 'spring' or 'pendulum', got {restoring!r}")
+    if k3:
+        if switching == "phase":
+            raise ValueError("a stiffening spring has no phase-convention decrement (its half period varies)")
+        gain = w2 * ((np.sin(a) if restoring == "pendulum" else a) + k3 * a**3)
+        swing_v, swing_v2 = _stiffened_swing(a, omega0, k3, restoring)
+        viscous = C * swing_v / gain
+    elif restoring == "pendulum":
         from scipy.special import ellipe, ellipk
 
         m = np.sin(a / 2) ** 2
@@ -180,12 +205,10 @@ def law_parts(amplitude, *, omega0: float, C: float = 0.0, R: float = 0.0, D: fl
         swing_v = 8.0 * omega0 * (ellipe(m) - (1.0 - m) * ellipk(m))  # int |theta'| dtheta over a half swing
         swing_v2 = 4.0 * w2 * (np.sin(a) - a * np.cos(a))  # int theta'^2 dtheta
         viscous = C * swing_v / gain
-    elif restoring == "spring":
+    else:
         gain = w2 * a
         swing_v2 = 4.0 / 3.0 * w2 * a**3
         viscous = _viscous_spring(a, C, omega0)
-    else:
-        raise ValueError(f"restoring must be 'spring' or 'pendulum', got {restoring!r}")
     out = {}
     if C:
         out["viscous"] = viscous
@@ -202,6 +225,39 @@ def law_parts(amplitude, *, omega0: float, C: float = 0.0, R: float = 0.0, D: fl
                    for w in windows)
         out["escapement"] = -work / gain
     return _ordered(out)
+
+
+#: Gauss-Legendre nodes and weights on [-1, 1] for the stiffened swing's integrals (phi = pi/2 * node)
+_NODES, _WEIGHTS = np.polynomial.legendre.leggauss(48)
+
+
+def _stiffened_swing(a: np.ndarray, omega0: float, k3: float, restoring: str) -> tuple[np.ndarray, np.ndarray]:
+    """``int |theta'| dtheta`` and ``int theta'**2 dtheta`` over an undamped half swing of
+    amplitude ``a`` with the cubic term (rad/s times rad, rad^2/s^2 times rad).
+
+    With ``theta = A sin(phi)``, ``theta'**2 = 2 q(theta) (A**2 - theta**2)`` where ``q = (V(A) -
+    V(theta))/(A**2 - theta**2)`` is smooth and positive: ``omega0**2 (1/2 + k3 (A**2 +
+    theta**2)/4)`` on a spring, ``omega0**2 (sinc(u) sinc(w)/2 + k3 (A**2 + theta**2)/4)`` on a
+    pendulum (``u, w = (A +- theta)/2``, ``sinc(x) = sin(x)/x``: no cancellation at the turns).
+    """
+    w2 = omega0 * omega0
+    phi = 0.5 * math.pi * _NODES
+    wts = 0.5 * math.pi * _WEIGHTS
+    amp = a[..., None]
+    th = amp * np.sin(phi)
+    if restoring == "pendulum":
+        u, w = 0.5 * (amp + th), 0.5 * (amp - th)
+        base = 0.5 * np.sinc(u / math.pi) * np.sinc(w / math.pi)
+    else:
+        base = 0.5
+    q = w2 * (base + 0.25 * k3 * (amp**2 + th**2))
+    cos2 = np.cos(phi) ** 2
+    swing_v = a**2 * np.sum(wts * np.sqrt(2.0 * q) * cos2, axis=-1)
+    if restoring == "pendulum":  # closed form: 4 w2 (sin A - A cos A) + 4 w2 k3 A**5 / 5
+        swing_v2 = 4.0 * w2 * (np.sin(a) - a * np.cos(a)) + 0.8 * w2 * k3 * a**5
+    else:
+        swing_v2 = w2 * (4.0 / 3.0 * a**3 + 0.8 * k3 * a**5)
+    return swing_v, swing_v2
 
 
 def _viscous_spring(a: np.ndarray, C: float, omega0: float) -> np.ndarray:

@@ -22,7 +22,7 @@ from .decrement import LAWS, Decrements, Window, binned, from_readings, from_tur
 __all__ = ["DecrementPanel", "decrement_panels", "decrement_figure"]
 
 #: effects whose part the decomposition knows (others leave the parts out, said in the caption)
-KNOWN_EFFECTS = {"viscous", "coulomb", "drag", "escapement"}
+KNOWN_EFFECTS = {"viscous", "coulomb", "drag", "escapement", "stiffening"}
 MAX_PANELS = 4
 WINDOW_PERIODS = 0.2  # samples within +-this many periods of a turning point locate it
 
@@ -150,7 +150,8 @@ def _curve_values(res, best: dict, obs) -> tuple[object, dict, list[str]]:
         return None, {}, [f"the stored scene cannot be read ({exc}): no parts drawn"]
     others = sorted({e.key for e in scene.effects} - KNOWN_EFFECTS)
     if others:
-        return None, {}, [f"the parts cover Coulomb friction, viscous damping, drag and an escapement; this scene also "
+        return None, {}, [f"the parts cover Coulomb friction, viscous damping, drag, an escapement and a stiffening "
+                          f"spring; this scene also "
                           f"has {', '.join(others)}, so none is drawn"]
     known = {k: v for k, v in best.items() if k in scene.params}
     vals = dict(scene.params.with_values(known).values())
@@ -192,13 +193,21 @@ def _add_parts(panel: DecrementPanel, scene, vals: dict, measured: Decrements, m
     windows = tuple(Window(w.sign, vals[w.name], w.lo, w.hi, 1.0 if w.swings == "both" else 0.5)
                     for w in esc.windows) if esc is not None else ()
     coeff = {"omega0": omega0, "C": vals.get("viscous.C", 0.0), "R": vals.get("coulomb.R", 0.0),
-             "D": vals.get("drag.D", 0.0)}
+             "D": vals.get("drag.D", 0.0), "k3": vals.get("stiffening.k3", 0.0)}
     amps = np.concatenate([measured.amplitude, model.amplitude])
     top = 1.08 * float(np.max(amps))
     bottom = 0.85 * float(np.min(amps)) if windows else 0.0
     grid = np.linspace(max(bottom, 1e-3 * top), top, 200)
-    parts = law_parts(grid, omega0=omega0, C=coeff["C"], R=coeff["R"], D=coeff["D"], windows=windows,
+    parts = law_parts(grid, omega0=omega0, C=coeff["C"], R=coeff["R"], D=coeff["D"], k3=coeff["k3"], windows=windows,
                       restoring=scene.restoring, switching=scene.switching)
+    if coeff["k3"]:  # how far the linear spring's forms would be off at the largest amplitude: said in the caption
+        top_a = np.array([float(np.max(amps))])
+        stiff = law_parts(top_a, omega0=omega0, C=coeff["C"], R=coeff["R"], D=coeff["D"], k3=coeff["k3"],
+                          restoring=scene.restoring)
+        plain = law_parts(top_a, omega0=omega0, C=coeff["C"], R=coeff["R"], D=coeff["D"], restoring=scene.restoring)
+        coeff["stiffening_effect"] = {key: float(stiff[key][0] / plain[key][0] - 1.0) for key in stiff
+                                      if plain.get(key) is not None and plain[key][0]}
+        coeff["stiffening_at"] = float(top_a[0])
     scale = float(np.max(np.abs(np.concatenate([measured.decrement, model.decrement]))))
     # a coefficient on its lower bound (R = 1e-17) leaves a part too small to see: said, not drawn
     absent = {key: "zero" for key, v in parts.items() if float(np.max(np.abs(v))) < 1e-6 * scale}
@@ -301,6 +310,10 @@ def _label(key: str, p: DecrementPanel | None) -> str:
               "drag": "4 D A^2/3, proportional to A^2",
               "escapement": "-(work per swing)/(omega0^2 A), a gain ~ 1/A",
               "constant": "constant; the phase convention fixes only this sum"}
+    if c.get("k3"):  # the stiffening spring's own forms (escfit.balance.decrement)
+        shapes.update({"coulomb": "2R/(omega0^2 (1 + k3 A^2)) on the stiffening spring",
+                       "viscous": "C int|theta'|dtheta/(dE/dA), about pi C A/(2 omega0) at small A",
+                       "drag": "D (4A^2/3 + 4k3 A^4/5)/(1 + k3 A^2)" + (" at small A" if pend else "")})
     return f"{value}{shapes[key]}" if p is not None else f"{LAWS[key][0]}: {shapes[key]}"
 
 
@@ -346,13 +359,14 @@ def _caption(res, panels: list[DecrementPanel], notes: list[str]) -> str:
                   "(A(k) + 2A(k+1) + A(k+2))/4" if consecutive else
                   "readings j - i half swings apart (j - i even) give (A(i) - A(j))/(j - i) at (A(i) + A(j))/2")
                + ", so a zero offset of the scale cancels.")
-    text = [how, "The damping law shows in the shape: dry (Coulomb) friction loses the same 2R/omega0^2 at every "
+    c = next((p.coefficients for p in panels if p.coefficients), {})
+    shape = "on a linear spring, the damping law shows in the shape" if c.get("k3") else "The damping law shows in the shape"
+    text = [how, ("At small amplitude, " if c.get("k3") else "") + shape + ": dry (Coulomb) friction loses the same 2R/omega0^2 at every "
             "amplitude (a horizontal line), viscous damping a loss proportional to the amplitude, about "
             "pi C A/(2 omega0) (a line through the origin), quadratic air drag 4 D A^2/3 (a parabola)."]
     text.append("Orange: the fitted model's own decrements at the recorded half swings (least-squares best fit), "
                 "measured the same way. Dashed: each law's part at the best-fit values, the viscous one exact on a "
                 "linear spring at the half swing's mean amplitude, the others first order in the damping.")
-    c = next((p.coefficients for p in panels if p.coefficients), {})
     if c.get("restoring") == "pendulum":
         text.append("For a pendulum the parts are the energy lost over one undamped swing of amplitude A, which "
                     "reduce to the forms above at small amplitude (Coulomb's part then grows slowly with A).")
@@ -362,6 +376,16 @@ def _caption(res, panels: list[DecrementPanel], notes: list[str]) -> str:
     elif c.get("windows"):
         text.append("The escapement feeds energy in: its part is a gain, negative here, falling like 1/A; where it "
                     "balances the losses the amplitude settles. The decomposition is first order in the impulse.")
+    if c.get("k3"):
+        effect = c.get("stiffening_effect", {})
+        words = ", ".join(f"{LAWS[key][0]}'s {abs(v) * 100:.0f} % {'smaller' if v < 0 else 'larger'}"
+                          for key, v in effect.items() if abs(v) >= 0.005)
+        text.append(f"The stiffening spring (k3 = {c['k3']:.3g} 1/rad^2) dissipates nothing and has no part of its "
+                    "own: it stores more energy at the same amplitude and speeds up the swing, so it changes every "
+                    "law's decrement, and the dashed parts include that (the energy lost over one undamped swing of "
+                    "the stiffened spring, divided by dE/dA)."
+                    + (f" At the largest amplitude, {c['stiffening_at'] * RAD_TO_DEG:.3g} deg, that makes {words} than "
+                       "on a linear spring." if words else " At these amplitudes the change is below 0.5 %."))
     if any(_stopped(p) for p in panels):
         text.append("Dry friction stops the model at a turning point once the spring can no longer overcome it; "
                     "its decrements there fall below the parts' sum.")

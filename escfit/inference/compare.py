@@ -30,9 +30,9 @@ import numpy as np
 
 from ..core.errors import ResultsError
 from ..results import FitResult, load_fit
-from .information import EXACT_KEY, aicc, akaike_weights, bic
+from .information import EXACT_KEY, akaike_weights, stored_criteria
 
-__all__ = ["FitComparison", "compare_fits", "psis_loo", "K_GOOD"]
+__all__ = ["FitComparison", "compare_fits", "psis_loo", "verdict_choice", "K_GOOD"]
 
 #: Pareto k above which a reading's PSIS-LOO estimate is unreliable (ArviZ lowers it for few draws)
 K_GOOD = 0.7
@@ -76,20 +76,26 @@ class FitComparison:
     data
         What the fits share: data file, SHA-256, kind, number of readings.
     notes
-        Statements about the comparison as a whole (in words).
+        Statements about the comparison as a whole (in words); the last is the verdict.
+    choice
+        The file the verdict names: the best, or among fits the criterion does not tell apart
+        the one with the fewest parameters (see :func:`verdict_choice`).
     """
 
     criterion: str
     rows: list[dict]
     data: dict
     notes: list[str] = field(default_factory=list)
+    choice: str = ""
 
     @property
     def best(self) -> str:
+        """The file ranked first by the criterion."""
         return self.rows[0]["file"]
 
     def to_json(self) -> dict:
-        return {"criterion": self.criterion, "data": self.data, "fits": self.rows, "notes": self.notes}
+        return {"criterion": self.criterion, "data": self.data, "fits": self.rows, "notes": self.notes,
+                "choice": self.choice}
 
     def table(self) -> str:
         """The comparison as aligned text, best first, followed by the notes."""
@@ -238,8 +244,9 @@ def _compare_loo(fits: list[FitResult], labels: dict, data: dict) -> FitComparis
              "the readings' pointwise differences. A difference smaller than about 4, or within 2 dse, does not "
              "tell the fits apart: prefer the simpler model."]
     notes += [_k_words(r) for r in rows if r["n_pareto_k_high"]]
-    notes.append(_verdict_loo(rows))
-    return FitComparison(LOO, rows, data, notes)
+    text, choice = _verdict_loo(rows)
+    notes.append(text)
+    return FitComparison(LOO, rows, data, notes, choice)
 
 
 def _swings(res: FitResult, mask: np.ndarray) -> list[int]:
@@ -269,21 +276,36 @@ def _k_words(row: dict) -> str:
             f"firmer number refit with more predictive draws (it used {row['n_draws']}) or cross-validate by refitting.")
 
 
-def _verdict_loo(rows: list[dict]) -> str:
+def _verdict_loo(rows: list[dict]) -> tuple[str, str]:
     a, b = rows[0], rows[1]
     d, dse = b["elpd_diff"], b["dse"]
     close = [r for r in rows if r["elpd_diff"] < 4.0 or r["elpd_diff"] < 2.0 * r["dse"]]
     if len(close) > 1:
-        return _undecided([r["label"] for r in close], close, "elpd_diff within 4 or 2 dse of the best")
-    return f"verdict: {a['label']} predicts best; the next, {b['label']}, is {d:.2f} +- {dse:.2f} lower in elpd."
+        return _undecided(close, "elpd_diff within 4 or 2 dse of the best")
+    return f"verdict: {a['label']} predicts best; the next, {b['label']}, is {d:.2f} +- {dse:.2f} lower in elpd.", a["file"]
 
 
-def _undecided(labels: list[str], rows: list[dict], why: str) -> str:
-    simplest = min(rows, key=lambda r: r["n_params"])
-    tied = [r for r in rows if r["n_params"] == simplest["n_params"]]
-    pick = (f"prefer the simplest, {simplest['label']} ({simplest['n_params']} parameters)" if len(tied) == 1
-            else "prefer the one with fewer parameters where they differ")
-    return f"verdict: {', '.join(labels)} are not told apart by these readings ({why}); {pick}."
+def verdict_choice(close: list[dict]) -> dict:
+    """The fit to name among fits the criterion does not tell apart (``close``, best first).
+
+    The one with the fewest parameters: a parameter that does not improve the expected
+    predictive accuracy by more than the criterion's own noise is not supported by the
+    readings (with a nesting model, whose extra coefficient sits at or near zero, the simpler
+    law is the one the data show).  Among equally simple fits -- different laws with the same
+    number of coefficients, e.g. viscous damping alone against Coulomb friction alone, which do
+    not nest -- only the criterion can choose, so the best-ranked of them.
+    """
+    fewest = min(r["n_params"] for r in close)
+    return next(r for r in close if r["n_params"] == fewest)
+
+
+def _undecided(rows: list[dict], why: str) -> tuple[str, str]:
+    pick = verdict_choice(rows)
+    tied = [r for r in rows if r["n_params"] == pick["n_params"]]
+    labels = ", ".join(r["label"] for r in rows)
+    how = (f"prefer the simplest, {pick['label']} ({pick['n_params']} parameters)" if len(tied) == 1 else
+           f"prefer the simplest; of those with {pick['n_params']} parameters, {pick['label']} ranks best")
+    return f"verdict: {labels} are not told apart by these readings ({why}); {how}.", pick["file"]
 
 
 # -- least-squares fits: AICc and BIC -----------------------------------------------------------
@@ -293,9 +315,10 @@ def _compare_ic(fits: list[FitResult], labels: dict, data: dict) -> FitCompariso
     for p, (ll, k, _, _) in stats.items():
         if n - k - 1 <= 0:
             raise ResultsError(f"{n} readings and {k} free parameters: AICc needs more readings than parameters + 1", p)
-    crit = {p: aicc(ll, k, n) for p, (ll, k, _, _) in stats.items()}
+    ic = {f.path: stored_criteria(f.group("least_squares").attrs, n) for f in fits}
+    crit = {p: ic[p]["aicc"] for p in stats}
     order = sorted(crit, key=lambda p: crit[p])
-    b = {p: bic(stats[p][0], stats[p][1], n) for p in order}
+    b = {p: ic[p]["bic"] for p in order}
     weights = akaike_weights(np.array([crit[p] for p in order]))
     rows = []
     for rank, (p, w) in enumerate(zip(order, weights), 1):
@@ -316,8 +339,9 @@ def _compare_ic(fits: list[FitResult], labels: dict, data: dict) -> FitCompariso
     if rows[0]["d_bic"] > 0:
         notes.append(f"AICc and BIC disagree on the best fit: BIC prefers "
                      f"{next(r['label'] for r in rows if r['d_bic'] == 0)}")
-    notes.append(_verdict_ic(rows))
-    return FitComparison(IC, rows, data, notes)
+    text, choice = _verdict_ic(rows)
+    notes.append(text)
+    return FitComparison(IC, rows, data, notes, choice)
 
 
 def _lsq_loglike(res: FitResult) -> tuple[float, int, str, bool]:
@@ -333,11 +357,11 @@ def _lsq_loglike(res: FitResult) -> tuple[float, int, str, bool]:
     return ll, int(a["n_params"]), str(a.get("noise_model", "")), bool(int(a.get(EXACT_KEY, 1)))
 
 
-def _verdict_ic(rows: list[dict]) -> str:
+def _verdict_ic(rows: list[dict]) -> tuple[str, str]:
     a, b = rows[0], rows[1]
     close = [r for r in rows if r["d_aicc"] < 2.0]
     if len(close) > 1:
-        return _undecided([r["label"] for r in close], close, "dAICc below 2")
+        return _undecided(close, "dAICc below 2")
     d = b["d_aicc"]
     strength = "strongly preferred" if d > 10.0 else "preferred"
-    return f"verdict: {a['label']} is {strength} (dAICc {d:.2f} to {b['label']})."
+    return f"verdict: {a['label']} is {strength} (dAICc {d:.2f} to {b['label']}).", a["file"]

@@ -296,7 +296,7 @@ def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None,
                       {"units": reading_units, "long_name": "expected reading at the optimum"})},
         coords={"parameter": lsq.names, "parameter_b": lsq.names, **obs_coords},
         attrs=clean_attrs({"chisqr": lsq.chisqr, "redchi": lsq.redchi, "sigma_hat": lsq.sigma_hat,
-                           "n_data": lsq.n_data, "aic": lsq.aic(), "bic": lsq.bic(), **information_attrs(problem, lsq),
+                           "n_data": lsq.n_data, **information_attrs(problem, lsq),
                            "success": lsq.success,
                            "message": lsq.message, "n_starts": lsq.n_starts, "noise_profiled": lsq.profiled,
                            "interval_method": "delta method in log(x - min), -log(max - x) or logit coordinates "

@@ -13,8 +13,12 @@ at fit time, from the problem's own pointwise log-likelihood:
   sigma; for Gaussian readings this is ``sigma * sqrt(chisqr / n)``), and counts as a
   parameter; a scale fixed by the scene does not count;
 * a free AR(1) ``rho``, which least squares estimates from the residuals of a first fit with
-  white noise, stays at that estimate and counts; a Student-t ``nu``, which least squares holds
-  at its starting value, stays there and does not.
+  white noise, is set with the noise scale to the pair that maximises the log-likelihood at the
+  optimum, and counts.  Kept at the first fit's estimate, it would differ from fit to fit of the
+  same readings (each model's white-noise residuals are correlated differently), and a law that
+  nests another could score a lower likelihood than it; maximised, every fit is scored at the
+  best noise model for its residuals.  A Student-t ``nu``, which least squares holds at its
+  starting value, stays there and does not count.
 
 For Gaussian readings (amplitudes, times, independent or AR(1) samples) the number is the
 maximised likelihood.  For readings whose likelihood is not Gaussian (notch intervals,
@@ -30,7 +34,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-__all__ = ["information_attrs", "aicc", "bic", "akaike_weights", "EXACT_KEY"]
+__all__ = ["information_attrs", "aicc", "bic", "akaike_weights", "stored_criteria", "EXACT_KEY"]
 
 #: attribute saying whether ``loglike`` is the maximum (1) or the likelihood at the Gaussian optimum (0)
 EXACT_KEY = "loglike_maximised"
@@ -52,6 +56,33 @@ def aicc(loglike: float, k: int, n: int) -> float:
 def bic(loglike: float, k: int, n: int) -> float:
     """Schwarz's Bayesian information criterion: ``-2 logL + k ln n``."""
     return -2.0 * loglike + k * math.log(n)
+
+
+def stored_criteria(attrs: Mapping[str, Any], n: int) -> dict[str, float] | None:
+    """AICc and BIC of a saved least-squares fit, from what :func:`information_attrs` stored.
+
+    The one computation behind both ``escfit compare`` and the report's fit statistics, so the
+    two always print the same numbers.
+
+    Parameters
+    ----------
+    attrs
+        The ``least_squares`` group's attributes (``loglike``, ``n_params``).
+    n
+        Number of readings the likelihood sums over.
+
+    Returns
+    -------
+    dict or None
+        ``loglike``, ``n_params``, ``aicc``, ``bic``; ``None`` when the file stores no
+        log-likelihood (written by an older escfit) or the model failed at the optimum.
+    """
+    if "loglike" not in attrs or "n_params" not in attrs:
+        return None
+    ll, k = float(attrs["loglike"]), int(attrs["n_params"])
+    if not math.isfinite(ll):
+        return None
+    return {"loglike": ll, "n_params": k, "aicc": aicc(ll, k, n), "bic": bic(ll, k, n)}
 
 
 def akaike_weights(values: np.ndarray) -> np.ndarray:
@@ -81,7 +112,9 @@ def information_attrs(problem, lsq) -> dict[str, Any]:
     rho_free = RHO in getattr(problem, "names", ())
     k = len(lsq.names) + (1 if lsq.profiled else 0) + (1 if rho_free else 0)
     try:
-        if lsq.profiled and SIGMA in values:
+        if rho_free and RHO in values:
+            values.update(_best_noise(problem, values, lsq.profiled and SIGMA in values))
+        elif lsq.profiled and SIGMA in values:
             values[SIGMA] = _best_scale(problem, values)
         loglike = float(np.sum(problem.loglike_pointwise(values)))
     except Exception:  # noqa: BLE001 - a model that fails here leaves the criterion undefined, said by nan
@@ -106,6 +139,29 @@ def _best_scale(problem, values: Mapping[str, float]) -> float:
     return math.exp(float(res.x))
 
 
+def _best_noise(problem, values: Mapping[str, float], scale_free: bool) -> dict[str, float]:
+    """AR(1) ``rho`` (and the noise scale if ``scale_free``) maximising the summed pointwise
+    log-likelihood, the structural parameters fixed: a search in ``atanh(rho)`` and ``log sigma``."""
+    from scipy.optimize import minimize
+
+    x0 = [math.atanh(min(max(float(values[RHO]), -0.99), 0.99))]
+    if scale_free:
+        x0.append(math.log(float(values[SIGMA])))
+
+    def trial(x) -> dict[str, float]:
+        out = {RHO: math.tanh(x[0])}
+        if scale_free:
+            out[SIGMA] = math.exp(x[1])
+        return out
+
+    def cost(x) -> float:
+        ll = float(np.sum(problem.loglike_pointwise({**values, **trial(x)})))
+        return -ll if math.isfinite(ll) else math.inf
+
+    res = minimize(cost, x0, method="Nelder-Mead", options={"xatol": 1e-7, "fatol": 1e-9, "maxiter": 2000})
+    return trial(res.x) if res.fun <= cost(x0) else trial(x0)
+
+
 def noise_model(problem, values: Mapping[str, float], profiled: bool, rho_free: bool = False) -> tuple[str, bool]:
     """The likelihood of the readings in words, and whether least squares maximises it exactly."""
     obs = getattr(problem, "observation", None)
@@ -120,7 +176,7 @@ def noise_model(problem, values: Mapping[str, float], profiled: bool, rho_free: 
         text, exact = f"Student-t readings (nu held at {values.get('observation.nu', math.nan):.3g})", False
     elif noise == "ar1":
         rho = values.get(RHO, math.nan)
-        text = (f"Gaussian AR(1) samples (rho = {rho:.3g} from the residuals of a white-noise fit, counted)"
+        text = (f"Gaussian AR(1) samples (rho = {rho:.3g} maximising the likelihood at the optimum, counted)"
                 if rho_free else f"Gaussian AR(1) samples (rho fixed at {rho:.3g} by the scene)")
     elif kind == "waveform":
         text = "Gaussian, independent samples"

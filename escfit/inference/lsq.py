@@ -123,17 +123,6 @@ class LeastSquaresResult:
         if not self.intervals:
             self.intervals = interval_table(self.value, self.stderr, self.lower, self.upper, self.at_bound)
 
-    def loglike_gaussian(self) -> float:
-        """Gaussian log-likelihood at the optimum with sigma profiled out (for AIC/BIC)."""
-        n = self.n_data
-        return -0.5 * n * (math.log(2 * math.pi * max(self.chisqr, 1e-300) / n) + 1.0)
-
-    def aic(self) -> float:
-        return 2 * (len(self.names) + 1) - 2 * self.loglike_gaussian()
-
-    def bic(self) -> float:
-        return (len(self.names) + 1) * math.log(self.n_data) - 2 * self.loglike_gaussian()
-
 
 def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None = None, seed: int = 0,
                   fixed: dict[str, float] | None = None, start: dict[str, float] | None = None,

@@ -68,7 +68,7 @@ def fit_statistics(res) -> str:
 
     posterior_sigma = res.group("posterior") is not None and "observation.sigma" in res.group("posterior")
     where = " (the posterior's reading noise is the reading-noise row of the table)" if posterior_sigma else ""
-    tail = f". Information criteria at the best fit: AIC {format_value(la['aic'], 5)}, BIC {format_value(la['bic'], 5)}."
+    tail = ". " + _criteria_text(la, obs)
     if mixed:
         per_series = _series_scatter(res, units)
         if per_series:
@@ -82,6 +82,23 @@ def fit_statistics(res) -> str:
     if not mixed:
         text += f" (least-squares residual scatter {scatter(float(la['sigma_hat']) * math.sqrt(float(la['redchi'])))})"
     return head + text + where + tail
+
+
+def _criteria_text(la, obs) -> str:
+    """AICc and BIC at the best fit: the numbers ``escfit compare`` ranks by, from the same
+    stored log-likelihood (:func:`escfit.inference.information.stored_criteria`)."""
+    from ..inference.information import stored_criteria
+
+    n = int(obs["reading"].size) if obs is not None else int(la.get("n_data", 0) or 0)
+    ic = stored_criteria(la, n)
+    if ic is None:
+        return ("No log-likelihood is stored with this fit (written by an older escfit, or the model failed at the "
+                "optimum): fit it again for AICc and BIC.")
+    k = ic["n_params"]
+    return (f"Information criteria at the best fit (log-likelihood {format_value(ic['loglike'], 6)} with its "
+            f"normalising constants, {k} parameter{'' if k == 1 else 's'} counted, a profiled noise scale included; "
+            f"n = {n}): AICc {format_value(ic['aicc'], 6)}, BIC {format_value(ic['bic'], 6)}, as escfit compare "
+            "ranks fits of the same readings (lower is better; only differences between fits mean anything).")
 
 
 _KIND_WORDS = {"rig-readings": "rig readings: the extra load dw of each setting",

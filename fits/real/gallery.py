@@ -1,6 +1,6 @@
 """Fit every real recording at hand as read raw and draw the gallery of docs/real-data.md.
 
-Run:  python fits/real/gallery.py [--out docs/real-data]   (a few minutes; least squares)
+Run:  python fits/real/gallery.py [--out docs/real-data] [NAME ...]   (a few minutes; least squares)
 
 For each recipe in this folder, and each free decay of the shared folder that may not be shipped
 (``../shared/realdata/gpl_tests_only``, when present): the recording is read raw with its
@@ -118,6 +118,7 @@ def figure(problem, res, title: str, path: Path) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--out", default=str(HERE.parents[1] / "docs" / "real-data"))
+    ap.add_argument("names", nargs="*", help="recordings to show (default: all)")
     args = ap.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -127,6 +128,8 @@ def main() -> None:
     from escfit.inference.fit import _misfit
 
     for name, data, scene_path, title in records():
+        if args.names and name not in args.names:
+            continue
         scene = load_scene(scene_path)
         problem = make_problem(scene, str(data))
         res, _, unresolved = reconcile(problem, least_squares(problem, n_starts=8))

@@ -27,9 +27,17 @@ pixel) is described by ``quantum``: the reading is the step containing the true 
 jitter, and the likelihood of a sample is the probability mass of its step, as for notch
 counts.
 
+A scene may also name ``gain``: the readings are then ``gain * theta(t - t_release) - offset - ...``,
+a scale error of the sensor (a video tracker whose pivot marker sits off the true pivot, a
+camera not square to the swing, an encoder's wrong counts per turn).  For a linear oscillator
+it is indistinguishable from the release angle; for a pendulum the period's growth with the
+amplitude (``sin theta``) fixes the true angle scale, so a free gain is identifiable there.
+Without the key there is no gain parameter (readings are the model's quantity as it is).
+
 Parameters: ``observation.sigma`` (rad; rad/s; m), ``observation.offset`` (rad; rad/s; m),
 ``observation.offset_rate`` (rad/s; rad/s^2; m/s), ``observation.t_release`` (s, recording clock),
-``observation.rho`` (AR(1) noise only).  ``quantum`` (a step of the readings' unit) and ``thin``
+``observation.rho`` (AR(1) noise only), ``observation.gain`` (dimensionless, only when the scene
+names it).  ``quantum`` (a step of the readings' unit) and ``thin``
 (use every n-th sample) are settings, not parameters.
 """
 
@@ -91,7 +99,7 @@ class WaveformObservation:
     noise: str = "white"
     quantity: str = "angle"
     kind = "waveform"
-    KEYS = {"model", "sigma", "offset", "offset_rate", "t_release", "quantum", "thin", "noise", "rho"}
+    KEYS = {"model", "sigma", "offset", "offset_rate", "t_release", "quantum", "thin", "noise", "rho", "gain"}
     MAX_SAMPLES = 4000
 
     @classmethod
@@ -155,12 +163,17 @@ class WaveformObservation:
                                      name="observation.rho", kind="dimensionless", lower=-0.999, upper=0.999,
                                      meaning="lag-1 correlation of the reading noise (AR(1), in sample order)",
                                      where=f"{where}.rho"))
+        if "gain" in table:
+            params.append(read_param(table["gain"], name="observation.gain", kind="dimensionless", lower=0.0,
+                                     lower_open=True, meaning="scale of the readings: a reading is gain times "
+                                     "the model's quantity (1: the sensor is calibrated)", where=f"{where}.gain"))
         return cls(quantum, thin, t_release, tuple(params) + (t_rel,), noise, quantity)
 
     def expected(self, theta: np.ndarray, t: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
         """Noise-free readings at sample times ``t`` (s) for the model's ``theta`` (its angle, angular
-        velocity or displacement, as :attr:`quantity` says; the readings' unit)."""
-        return theta - values["observation.offset"] - values["observation.offset_rate"] * (t - self.t_ref)
+        velocity or displacement, as :attr:`quantity` says; the readings' unit), times ``gain`` if any."""
+        gain = values.get("observation.gain", 1.0)
+        return gain * theta - values["observation.offset"] - values["observation.offset_rate"] * (t - self.t_ref)
 
     def loglike_pointwise(self, theta: np.ndarray, t: np.ndarray, y: np.ndarray,
                           values: Mapping[str, float]) -> np.ndarray:
