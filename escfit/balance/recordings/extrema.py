@@ -11,8 +11,23 @@ import math
 
 import numpy as np
 
-__all__ = ["spectral_period", "extrema_period", "power_near", "smooth", "smoothing_window", "smoothing_share", "resolution", "alternating_extrema", "kinked_vertex", "vertex_at",
+__all__ = ["periodogram", "spectral_period", "extrema_period", "power_near", "smooth", "smoothing_window", "smoothing_share", "resolution", "alternating_extrema", "kinked_vertex", "vertex_at",
            "local_amplitude", "second_mode"]
+
+
+def periodogram(t: np.ndarray, x: np.ndarray, oversample: int) -> tuple[np.ndarray, np.ndarray]:
+    """Frequencies (Hz) and power of ``x`` resampled on a uniform grid, its mean and linear trend
+    removed, under a Tukey window (10 % tapers), zero-padded ``oversample`` times."""
+    from scipy.fft import next_fast_len, rfft, rfftfreq
+    from scipy.signal.windows import tukey
+
+    n = t.size
+    dt = (t[-1] - t[0]) / (n - 1)
+    xu = np.interp(t[0] + dt * np.arange(n), t, x)
+    s = np.arange(n) - 0.5 * (n - 1)
+    xu = xu - xu.mean() - s * (s @ xu) / (s @ s)
+    nfft = next_fast_len(oversample * n)
+    return rfftfreq(nfft, dt), np.abs(rfft(xu * tukey(n, 0.1), nfft)) ** 2
 
 
 def spectral_period(t: np.ndarray, x: np.ndarray, *, min_cycles: float = 2.0) -> tuple[float, float]:
@@ -33,18 +48,9 @@ def spectral_period(t: np.ndarray, x: np.ndarray, *, min_cycles: float = 2.0) ->
         Peak power over the median power of the searched band; white noise alone gives
         about ``log2`` of the number of samples, a decay hundreds or more.
     """
-    from scipy.fft import next_fast_len, rfft, rfftfreq
-    from scipy.signal.windows import tukey
-
     n = t.size
     dt = (t[-1] - t[0]) / (n - 1)
-    grid = t[0] + dt * np.arange(n)
-    xu = np.interp(grid, t, x)
-    s = np.arange(n) - 0.5 * (n - 1)
-    xu = xu - xu.mean() - s * (s @ xu) / (s @ s)
-    nfft = next_fast_len(8 * n)
-    power = np.abs(rfft(xu * tukey(n, 0.1), nfft)) ** 2
-    freq = rfftfreq(nfft, dt)
+    freq, power = periodogram(t, x, 8)
     band = np.flatnonzero((freq >= min_cycles / (n * dt)) & (freq <= 0.45 / dt))
     if band.size < 5:
         return math.nan, 0.0
@@ -66,17 +72,7 @@ def spectral_period(t: np.ndarray, x: np.ndarray, *, min_cycles: float = 2.0) ->
 def power_near(t: np.ndarray, x: np.ndarray, periods: list[float], width: float = 0.15) -> list[float]:
     """Largest periodogram power (as :func:`spectral_period` computes it) within ``+-width`` of
     each frequency ``1/period``."""
-    from scipy.fft import next_fast_len, rfft, rfftfreq
-    from scipy.signal.windows import tukey
-
-    n = t.size
-    dt = (t[-1] - t[0]) / (n - 1)
-    xu = np.interp(t[0] + dt * np.arange(n), t, x)
-    s = np.arange(n) - 0.5 * (n - 1)
-    xu = xu - xu.mean() - s * (s @ xu) / (s @ s)
-    nfft = next_fast_len(8 * n)
-    power = np.abs(rfft(xu * tukey(n, 0.1), nfft)) ** 2
-    freq = rfftfreq(nfft, dt)
+    freq, power = periodogram(t, x, 8)
     return [float(np.max(power[(freq > (1 - width) / p) & (freq < (1 + width) / p)], initial=0.0)) for p in periods]
 
 
@@ -337,17 +333,8 @@ def second_mode(t: np.ndarray, x: np.ndarray, period: float, *, min_ratio: float
     power.  Whole multiples of the main frequency (the harmonics of an anharmonic swing, within
     ``harmonic_tol``) are skipped.  ``(nan, 0)`` when there is none.
     """
-    from scipy.fft import next_fast_len, rfft, rfftfreq
-    from scipy.signal.windows import tukey
-
-    n = t.size
-    dt = (t[-1] - t[0]) / (n - 1)
-    xu = np.interp(t[0] + dt * np.arange(n), t, x)
-    s = np.arange(n) - 0.5 * (n - 1)
-    xu = xu - xu.mean() - s * (s @ xu) / (s @ s)
-    nfft = next_fast_len(4 * n)
-    power = np.abs(rfft(xu * tukey(n, 0.1), nfft)) ** 2
-    freq = rfftfreq(nfft, dt)
+    dt = (t[-1] - t[0]) / (t.size - 1)
+    freq, power = periodogram(t, x, 4)
     f0 = 1.0 / period
     main = float(np.max(power[(freq > f0 * 0.9) & (freq < f0 * 1.1)], initial=0.0))
     if main <= 0.0:
