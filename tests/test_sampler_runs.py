@@ -175,6 +175,24 @@ def test_walkers_that_disagree_are_not_converged():
     assert "max R-hat" in a.verdict()
 
 
+def test_chain_diagnostics_are_arviz_figures():
+    """The array functions give ArviZ's rank-normalised R-hat and bulk/tail ESS (5 % and 95 %),
+    parameter by parameter, and NaN for a parameter that never moves."""
+    az = pytest.importorskip("arviz")
+    from escfit.inference.convergence import chain_diagnostics
+
+    rng = np.random.default_rng(4)
+    kept = rng.standard_normal((12, 600, 3)).cumsum(axis=1) * 0.05 + rng.standard_normal((12, 600, 3))
+    kept[:3, :, 1] += 0.4
+    kept[:, :, 2] = 1.5
+    rhat, bulk, tail = chain_diagnostics(kept)
+    for i in range(2):
+        assert rhat[i] == pytest.approx(float(az.rhat(kept[:, :, i])), rel=1e-9)
+        assert bulk[i] == pytest.approx(float(az.ess(kept[:, :, i], method="bulk")), rel=1e-9)
+        assert tail[i] == pytest.approx(float(az.ess(kept[:, :, i], method="tail")), rel=1e-9)
+    assert np.isnan([rhat[2], bulk[2], tail[2]]).all()
+
+
 def closed_form_z(res) -> np.ndarray:
     """Errors of a run's mean, sd and correlation against the Gaussian's, in units of their Monte
     Carlo standard errors (each from the effective sample size of the quantity it averages:

@@ -13,6 +13,7 @@ a value written with its unit is always taken as written.
 from __future__ import annotations
 
 import math
+import os
 import re
 from functools import lru_cache
 from typing import Any
@@ -68,7 +69,24 @@ class _GuardedRegistry(pint.UnitRegistry):
         return super().parse_units_as_container(input_string, *args, **kwargs)
 
 
-ureg = _GuardedRegistry()
+def _registry() -> _GuardedRegistry:
+    """pint's registry, its parsed definitions kept in pint's cache folder between processes.
+
+    Parsing pint's definition files takes about 0.2 s of every command's start; pint keeps the
+    parsed result in the user's cache folder (``platformdirs``' cache path for "pint") and reuses
+    it while the definition files are unchanged.  ``ESCFIT_UNIT_CACHE=0`` turns that off; a
+    cache that cannot be read or written (a read-only home, a file another process is still
+    writing) falls back to parsing, with the same registry.
+    """
+    if os.environ.get("ESCFIT_UNIT_CACHE", "1") != "0":
+        try:
+            return _GuardedRegistry(cache_folder=":auto:")
+        except Exception:  # noqa: BLE001 - any failure of the cache: parse the definitions instead
+            pass
+    return _GuardedRegistry()
+
+
+ureg = _registry()
 ureg.define("gf = gram * g_0 = gram_force")  # gram-force, as in Monday's fixture data
 
 # Canonical unit of each kind of quantity escfit reads.  Per-inertia quantities

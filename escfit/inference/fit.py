@@ -415,17 +415,17 @@ def _derived(problem: Problem, mc: McmcResult, units: dict, meanings: dict) -> d
 
 
 def _diagnostics(post: xr.Dataset, names: list[str], mc: McmcResult) -> xr.Dataset:
-    import arviz as az
     import xarray as xr
 
-    sub = post[names]
-    rhat = az.rhat(sub)
-    ess_b = az.ess(sub, method="bulk")
-    ess_t = az.ess(sub, method="tail")
+    from .convergence import chain_diagnostics
+
+    # (chain, draw, parameter), each parameter's draws as the posterior group holds them
+    rhat, ess_b, ess_t = chain_diagnostics(np.stack([post[n].transpose("chain", "draw").values for n in names],
+                                                    axis=-1))
     return xr.Dataset(
-        {"rhat": ("parameter", [float(rhat[n]) for n in names]),
-         "ess_bulk": ("parameter", [float(ess_b[n]) for n in names]),
-         "ess_tail": ("parameter", [float(ess_t[n]) for n in names]),
+        {"rhat": ("parameter", rhat),
+         "ess_bulk": ("parameter", ess_b),
+         "ess_tail": ("parameter", ess_t),
          "tau": ("parameter", mc.tau), "acceptance": ("chain", mc.acceptance)},
         coords={"parameter": names, "chain": np.arange(mc.walkers)},
         attrs={"tau_reliable": int(mc.tau_reliable)})
