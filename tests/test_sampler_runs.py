@@ -173,6 +173,13 @@ def test_walkers_that_disagree_are_not_converged():
     a = assess(x)
     assert a.rhat[1] > 1.01 and not a.converged
     assert "max R-hat" in a.verdict()
+    # a look during a run stops at the failed R-hat, with the same decision and the same R-hat
+    quick = assess(x, rhat_first=True)
+    assert not quick.complete and not quick.converged
+    np.testing.assert_array_equal(quick.rhat, a.rhat)
+    assert np.isnan(quick.ess_bulk).all() and np.isnan(quick.tau).all()
+    # a run that passes R-hat gets every figure
+    assert assess(x[:, :, :1], rhat_first=True).complete
 
 
 def test_chain_diagnostics_are_arviz_figures():

@@ -38,6 +38,9 @@ class Assessment:
         Of the kept draws (second half).
     tau : ndarray
         Integrated autocorrelation time (steps) from the whole run.
+    complete : bool
+        False when only R-hat was computed (:func:`assess` with ``rhat_first``): it already
+        failed, and the ESS and tau are NaN.
     """
 
     steps: int
@@ -45,6 +48,7 @@ class Assessment:
     ess_bulk: np.ndarray
     ess_tail: np.ndarray
     tau: np.ndarray
+    complete: bool = True
 
     @property
     def converged(self) -> bool:
@@ -78,13 +82,17 @@ def autocorr_time(chain: np.ndarray) -> np.ndarray:
         logger.setLevel(level)
 
 
-def chain_diagnostics(kept: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def chain_diagnostics(kept: np.ndarray, *, rhat_first: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Rank-normalised split R-hat, bulk ESS and tail ESS of each parameter.
 
     Parameters
     ----------
     kept : ndarray, shape (chains, draws, ndim)
         Draws after burn-in, each walker a chain.
+    rhat_first : bool
+        Compute R-hat first and leave the ESS NaN when some parameter's R-hat already fails
+        (above ``RHAT_MAX`` or NaN): what a look during a run needs to decide to go on, at a
+        third of the cost.
 
     Returns
     -------
@@ -102,21 +110,29 @@ def chain_diagnostics(kept: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndar
     if kept.shape[1] < 4:
         return rhat, bulk, tail
     moving = np.flatnonzero(np.ptp(kept, axis=(0, 1)) > 0)
-    if moving.size:
-        x = kept[:, :, moving]
-        rhat[moving] = array_stats.rhat(x, chain_axis=0, draw_axis=1)
-        bulk[moving] = array_stats.ess(x, chain_axis=0, draw_axis=1, method="bulk")
-        tail[moving] = array_stats.ess(x, chain_axis=0, draw_axis=1, method="tail", prob=(0.05, 0.95))
+    if not moving.size:
+        return rhat, bulk, tail
+    x = kept[:, :, moving]
+    rhat[moving] = array_stats.rhat(x, chain_axis=0, draw_axis=1)
+    if rhat_first and not np.all(rhat <= RHAT_MAX):
+        return rhat, bulk, tail
+    bulk[moving] = array_stats.ess(x, chain_axis=0, draw_axis=1, method="bulk")
+    tail[moving] = array_stats.ess(x, chain_axis=0, draw_axis=1, method="tail", prob=(0.05, 0.95))
     return rhat, bulk, tail
 
 
-def assess(chain: np.ndarray, burn: int | None = None) -> Assessment:
+def assess(chain: np.ndarray, burn: int | None = None, *, rhat_first: bool = False) -> Assessment:
     """Convergence figures of ``chain`` (steps, walkers, ndim) with the first ``burn`` steps dropped.
 
     ``burn`` defaults to half the run.  Parameters that never move (a chain with zero spread)
-    get R-hat NaN and ESS NaN, which fail the criteria.
+    get R-hat NaN and ESS NaN, which fail the criteria.  With ``rhat_first``, a run whose R-hat
+    already fails gets an incomplete assessment (``complete`` False: ESS and tau NaN), which
+    says "not converged" exactly as the complete one would.
     """
     steps = int(chain.shape[0])
     burn = steps // 2 if burn is None else int(burn)
     kept = np.transpose(chain[burn:], (1, 0, 2))  # (walkers, draws, ndim)
-    return Assessment(steps, *chain_diagnostics(kept), autocorr_time(chain))
+    rhat, bulk, tail = chain_diagnostics(kept, rhat_first=rhat_first)
+    if rhat_first and not np.all(rhat <= RHAT_MAX):
+        return Assessment(steps, rhat, bulk, tail, np.full(rhat.size, np.nan), complete=False)
+    return Assessment(steps, rhat, bulk, tail, autocorr_time(chain))

@@ -315,7 +315,7 @@ class _Run:
         """
         assessment = None
         if auto and self.steps in look_points(self.steps):
-            assessment = assess(self.chain(), burn)
+            assessment = assess(self.chain(), burn, rhat_first=True)
             if assessment.converged:
                 return assessment
         look = next_look(self.steps)
@@ -341,7 +341,7 @@ class _Run:
                     done = self.steps + len(buf)
                     if auto and done >= look:
                         self._flush(buf, lp_buf)
-                        assessment = assess(self.chain(), burn)
+                        assessment = assess(self.chain(), burn, rhat_first=True)
                         if assessment.converged:
                             break
                         look = next_look(done)
@@ -363,7 +363,7 @@ class _Run:
         self._flush(buf, lp_buf)
         if self.path is not None and self.steps > self.saved_steps:
             self.save()  # an interrupt during the diagnostics or the writing keeps every draw
-        if auto and (assessment is None or assessment.steps != self.steps):
+        if auto and (assessment is None or assessment.steps != self.steps or not assessment.complete):
             assessment = assess(self.chain(), burn)
         return assessment
 
