@@ -5,7 +5,7 @@ model's angle (or angular velocity) at every sample time.  One set at a time tha
 :func:`escfit.balance.exact.run_angle` with its segment log, a
 :class:`~escfit.balance.solution.RowSolution` around the log and its compiled evaluation at the
 times (:func:`escfit.balance.waveform.sample_state`), with Python between them.  Here the
-same steps run for every set inside one compiled loop: the same kernel with the same
+same steps run for every set inside one compiled ``prange`` loop: the same kernel with the same
 run options (the half swings asked for grow as :func:`~escfit.balance.waveform.sample_state`
 grows them, the log is enlarged as :func:`~escfit.balance.records.with_rows` enlarges it), then
 the same row evaluation (:func:`escfit.balance.solution._states_at`, the closed form of
@@ -19,9 +19,10 @@ release instant: it is sampled at ``times - shift[i]`` (s since its release).
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
-from numba import from_dtype
+from numba import config, from_dtype, get_num_threads, prange, set_num_threads
 
 from ..core.errors import SolverError
 from ..core.kernels import kernel
@@ -43,6 +44,9 @@ SAMPLING = np.dtype([("which", "i8"), ("max_segments", "i8"), ("max_swings", "i8
 #: final time (s), and ``usable`` (1: its samples are what :func:`sample_state` gives with a
 #: status ``ok``, ``banked`` or ``stopped``; 0: anything else, for the one-set path to redo).
 SAMPLED = np.dtype([("status", "i8"), ("n_done", "i8"), ("n_seg", "i8"), ("t", "f8"), ("usable", "i8")])
+
+# sleeping OpenMP workers between parallel regions, as escfit.balance.batch sets them (the reason is there)
+os.environ.setdefault("OMP_WAIT_POLICY", "passive")
 
 _HALF_SWING = from_dtype(HALF_SWING)
 _RUN = from_dtype(RUN)
@@ -121,25 +125,23 @@ def _sample_one(ks, i, spec, times, shift, value, row):
     row.usable = 1 if status == _STOPPED or ((status == _OK or status == _BANKED) and reached) else 0
 
 
-@kernel
+@kernel(parallel=True)
 def sample_many(ks, spec, samples, active, values, summary):
-    """:func:`_sample_one` for every active set ``i``.
+    """:func:`_sample_one` for every active set ``i``, in parallel.
 
     ``samples = (times, shift)``: sample times (s, ascending) and each set's release instant
     (s); ``values`` has shape (sets, times); ``summary`` holds :data:`SAMPLED` records.
-
-    One thread: on the project's 2-core machine a ``prange`` over 16-32 sets of the 120-swing
-    benchmark record (3000 samples, ~75 us a set) was no faster in wall time than this loop and
-    cost more CPU, so the sampler's other work keeps the second core.
     """
     times, shift = samples
-    for i in range(ks.shape[0]):
+    # (records are indexed inside the parallel loop: numba cannot pass one into it)
+    for i in prange(ks.shape[0]):
         if active[i]:
             _sample_one(ks, i, spec[0], times, shift[i], values[i], summary[i])
 
 
 def sample_batch(system: System, times: np.ndarray, shift: np.ndarray, *, which: int = THETA,
-                 max_segments: int | None = None, max_swings: int = 10_000_000) -> tuple[np.ndarray, np.ndarray]:
+                 max_segments: int | None = None, max_swings: int = 10_000_000,
+                 threads: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """theta (rad) or theta' (rad/s) of every set at its own sample times, in one call.
 
     Parameters
@@ -155,6 +157,12 @@ def sample_batch(system: System, times: np.ndarray, shift: np.ndarray, *, which:
         :data:`THETA` or :data:`OMEGA`.
     max_segments, max_swings
         As :func:`escfit.balance.waveform.sample_state` takes them.
+    threads
+        numba threads to use (default: numba's current setting, all cores).  Each set is tens of
+        microseconds of work or more (the 120-swing benchmark record: ~100 us for 3000 samples),
+        far above the ~20 us of waking the workers: measured on the 2-core machine with the
+        other core idle, 16 such sets took 57 us a set in wall time on 2 threads against 105 on
+        one, at the same CPU time.
 
     Returns
     -------
@@ -178,5 +186,11 @@ def sample_batch(system: System, times: np.ndarray, shift: np.ndarray, *, which:
     summary = np.zeros(n, SAMPLED)
     summary["status"] = _REFUSED
     summary["t"] = math.nan
-    sample_many(system.k, spec, (times, shift), active, values, summary)
+    previous = get_num_threads()
+    if threads is not None:
+        set_num_threads(max(1, min(int(threads), config.NUMBA_NUM_THREADS)))
+    try:
+        sample_many(system.k, spec, (times, shift), active, values, summary)
+    finally:
+        set_num_threads(previous)
     return values, summary
