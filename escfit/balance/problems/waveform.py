@@ -24,10 +24,10 @@ from typing import Mapping
 import numpy as np
 
 from .. import BalanceScene
-from ...core.errors import FitError
+from ...core.errors import EscfitError, FitError
 from ..observation.waveform import READINGS, WaveformObservation
 from ...core.params import ParamSet
-from .curves import Curve
+from .curves import Curve, _column
 from .pulses import RecordingProblem
 from .nuisance import centre_priors
 from .release import release_from_record
@@ -111,6 +111,8 @@ class WaveformProblem(RecordingProblem):
         if thin > 1:
             self.notes.append(f"waveform: one sample in {thin} used ({idx.size} of {np.count_nonzero(keep)})")
         self.curves = [Curve("waveform", math.nan, np.arange(idx.size), series.theta[idx], self.sample_time)]
+        # the exact solver's dense solution is sampled for a whole ensemble in one call (log_prob_many)
+        self.vectorized = self.solver == "exact" and set(self.solver_options) <= {"max_segments"}
 
     @property
     def reading_units(self) -> str:
@@ -137,3 +139,77 @@ class WaveformProblem(RecordingProblem):
 
     def _expected(self, pred, vals):
         return self.observation.expected(pred, self.sample_time, vals)
+
+    # -- many parameter vectors at once ------------------------------------------------------
+    def log_prob_many(self, vecs: np.ndarray) -> np.ndarray:
+        """Log posterior of each row of ``vecs``, shape ``(sets, ndim)`` -> ``(sets,)``.
+
+        The same numbers as :meth:`log_prob` row by row (to the rounding of the final sum) and
+        the same failure counts, but with the exact solver the whole ensemble is one array
+        computation: priors and values on arrays, every set's coefficient record in one pass
+        (``scene.system(values, n)``), every set's run and its dense solution at the sample
+        times in one compiled call (:func:`escfit.balance.batch_dense.sample_batch`), and the
+        observation model of every set in another
+        (:func:`escfit.balance.observation.waveform_compiled.waveform_loglike_sets`).  Sets the
+        batch refuses or does not finish (a release after the first sample, a run out of
+        segments, a non-finite likelihood) go through :meth:`log_likelihood` one at a time,
+        which records why.  Other solvers are evaluated row by row.
+        """
+        vecs = np.atleast_2d(np.asarray(vecs, float))
+        out = np.full(vecs.shape[0], -math.inf)
+        lp = self.log_prior_many(vecs)
+        rows = np.flatnonzero(np.isfinite(lp))
+        if rows.size == 0:
+            return out
+        if not self.vectorized:
+            out[rows] = lp[rows] + np.array([self.log_likelihood(self.values(vecs[i])) for i in rows])
+            return out
+        out[rows] = lp[rows] + self._log_likelihood_many(vecs[rows])
+        return out
+
+    def _log_likelihood_many(self, vecs: np.ndarray) -> np.ndarray:
+        from ..batch_dense import OMEGA, THETA, sample_batch
+        from ..observation.waveform_compiled import WAVE_SET, waveform_loglike_sets
+
+        n_sets = vecs.shape[0]
+        vals = self.values_many(vecs)
+        ll = np.full(n_sets, math.nan)
+        try:
+            model, summary = sample_batch(self.scene.system(vals, n_sets), self.sample_time,
+                                          _column(vals["observation.t_release"], n_sets),
+                                          which=OMEGA if self.quantity == "angular_velocity" else THETA,
+                                          max_segments=self.solver_options.get("max_segments"))
+        except (EscfitError, ValueError, ArithmeticError):
+            usable = np.zeros(n_sets, bool)  # every set the one-at-a-time way, which records why
+        else:
+            usable = summary["usable"] == 1
+            sets = np.empty(n_sets, WAVE_SET)
+            sets["sigma"] = vals["observation.sigma"]
+            sets["offset"] = vals["observation.offset"]
+            sets["rate"] = vals["observation.offset_rate"]
+            sets["gain"] = vals.get("observation.gain", 1.0)
+            sets["rho"] = vals.get("observation.rho", 0.0)
+            with np.errstate(all="ignore"):
+                waveform_loglike_sets(model, self._samples(), sets, self._noise(), ll)
+        for i in np.flatnonzero(~(usable & np.isfinite(ll))):
+            ll[i] = self.log_likelihood(self.values(vecs[i]))  # counts the failure as log_prob would
+        return ll
+
+    def _samples(self) -> np.ndarray:
+        """The samples as :data:`~escfit.balance.observation.waveform_compiled.SAMPLE` records (computed once)."""
+        rec = self.__dict__.get("_samples_cache")
+        if rec is None:
+            from ..observation.waveform_compiled import SAMPLE
+
+            rec = np.empty(self.sample_time.size, SAMPLE)
+            rec["y"] = self.curves[0].y
+            rec["dt"] = self.sample_time - self.observation.t_ref
+            self.__dict__["_samples_cache"] = rec
+        return rec
+
+    def _noise(self) -> tuple[int, float]:
+        from ..observation.waveform_compiled import AR1, QUANTISED, WHITE
+
+        obs = self.observation
+        code = QUANTISED if obs.quantum > 0.0 else AR1 if obs.noise == "ar1" else WHITE
+        return code, float(obs.quantum)
