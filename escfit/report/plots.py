@@ -1,5 +1,5 @@
 """The report's figures: the family's data-versus-model figures, a generic one for families
-without their own, the corner plot (ArviZ) and the sampler's trace plots.
+without their own, the corner plot (:mod:`escfit.report.corner`) and the sampler's trace plots.
 
 Every figure is :class:`escfit.core.figures.CaptionedPNG` (PNG bytes with a caption); draws
 are converted to display units (deg, rad/s^2 ...) before plotting.
@@ -8,18 +8,16 @@ are converted to display units (deg, rad/s^2 ...) before plotting.
 from __future__ import annotations
 
 import json
-import warnings
 
 import numpy as np
 
 from ..core.display import load_unit, to_display
 from ..core.names import plain_name
-from ..core.figures import LEGEND_PT, CaptionedPNG, fit_figure, png, pyplot
+from ..core.figures import LEGEND_PT, CaptionedPNG, fit_figure, png, pyplot, wrap_text
 
-__all__ = ["report_figures", "CORNER_MAX_INCHES", "CORNER_DPI"]
+__all__ = ["report_figures", "CORNER_DPI"]
 
 CORNER_DPI = 100
-CORNER_MAX_INCHES = 9.6  # corner plots stay within ~1000 px at CORNER_DPI, whatever the parameter count
 
 
 def report_figures(res) -> tuple[dict[str, CaptionedPNG], dict[str, CaptionedPNG]]:
@@ -118,101 +116,66 @@ def _display_draws(res, names: list[str]) -> tuple[dict[str, np.ndarray], dict[s
 
 
 def _corner(res, names: list[str]) -> CaptionedPNG:
-    """ArviZ pair plot with marginals, medians and 95 % intervals marked, in display units."""
-    import arviz as az
-    import xarray as xr
-    from matplotlib.ticker import MaxNLocator
+    """Corner plot (:mod:`escfit.report.corner`): pairs of draws, marginal histograms, medians and
+    95 % intervals, in display units."""
+    from .corner import MAX_DOTS, corner_figure
 
-    pyplot()  # the file-only Agg backend before ArviZ draws
     draws, labels = _display_draws(res, names)
-    # the cloud and the marginals from at most ~4000 draws (evenly thinned): the picture is the same and
-    # drawing 100,000 dots per panel took seconds; medians and intervals below use every draw
-    first = next(iter(draws.values()))
-    stride = max(1, -(-first.size // 4000))
-    ds = xr.Dataset({k: (("chain", "draw"), v[:, ::stride]) for k, v in draws.items()})
-    k = len(draws)
-    side = min(CORNER_MAX_INCHES, 1.9 * k + 1.2)
-    text = 8.5 if k <= 4 else 7.5
-    n = ds[next(iter(draws))].size
-    with warnings.catch_warnings():  # ArviZ's keyword handling is deprecated in recent matplotlib
-        warnings.simplefilter("ignore", DeprecationWarning)
-        axes = _pair(az, ds, side, text, n)
-    axes = np.atleast_2d(axes)
-    keys = list(draws)
-    for i in range(k):
-        lo, hi = np.quantile(draws[keys[i]], [0.025, 0.975])
-        # with two parameters ArviZ draws a joint plot: the second marginal stands on its side
-        side_on = k == 2 and i == 1
-        diag = axes[i, i]
-        (diag.axhspan if side_on else diag.axvspan)(lo, hi, color="C0", alpha=0.12, lw=0)
-        for v in (lo, hi):
-            (diag.axhline if side_on else diag.axvline)(v, color="C0", ls="--", lw=0.8)
-        if side_on:
-            diag.set_xticks([])
-            diag.set_xlabel("")
-        else:
-            diag.set_yticks([])
-            diag.set_ylabel("")
-    for i in range(k):
-        for j in range(k):
-            axis = axes[i, j]
-            if axis is None or not axis.get_visible() or (k == 2 and i == j == 1):
-                continue
-            axis.xaxis.set_major_locator(MaxNLocator(4))
-            if i != j:
-                axis.yaxis.set_major_locator(MaxNLocator(4))
-            if i == k - 1:
-                axis.set_xlabel(labels[keys[j]], fontsize=text)
-                axis.tick_params(axis="x", labelrotation=40)
-            if j == 0 and i > 0:
-                axis.set_ylabel(labels[keys[i]], fontsize=text)
-    fig = axes[0, 0].figure
-    fig.set_size_inches(side, side)
-    caption = ("Posterior of the sampled parameters, in display units: pairs of draws (one dot per draw) and each "
-               "parameter's marginal density on the diagonal, with the median (red) and the 95 % interval "
+    fig = corner_figure(draws, labels, dpi=CORNER_DPI)
+    n = next(iter(draws.values())).size
+    dots = (f"one dot per draw ({n} draws)" if n <= MAX_DOTS else
+            f"one dot per draw for {MAX_DOTS} draws evenly spread over the {n} kept")
+    caption = ("Posterior of the sampled parameters, in display units: pairs of draws (" + dots + ") and a "
+               "histogram of each parameter's draws on the diagonal, with the median (red) and the 95 % interval "
                "(dashed lines, shaded). A thin slanted cloud means the data fix a combination of the two "
                "parameters better than either alone.")
-    if k == 2:  # ArviZ's joint-plot grid does not suit tight_layout: leave room for the labels
-        fig.subplots_adjust(left=0.2, bottom=0.2, right=0.97, top=0.97)
-    return png(fig, dpi=CORNER_DPI, caption=caption, tight=k != 2)
-
-
-def _pair(az, ds, side: float, text: float, n: int):
-    k = len(ds.data_vars)
-    # ArviZ draws at most plot.max_subplots (40) panels and silently drops parameters beyond: a 9-parameter
-    # waveform fit (81 panels) lost its last row and column, and the report failed
-    with az.rc_context(rc={"plot.max_subplots": max(40, k * k)}):
-        return _pair_plot(az, ds, side, text, n)
-
-
-def _pair_plot(az, ds, side: float, text: float, n: int):
-    return az.plot_pair(ds, marginals=True, kind="scatter", point_estimate="median", figsize=(side, side),
-                        textsize=text, scatter_kwargs={"alpha": 0.15 if n > 2000 else 0.3, "s": 3},
-                        point_estimate_marker_kwargs={"color": "C3", "s": 30},
-                        point_estimate_kwargs={"color": "C3", "lw": 1.0})
+    return png(fig, dpi=CORNER_DPI, caption=caption, tight=False)
 
 
 def _traces(res, names: list[str]) -> CaptionedPNG:
-    """Trace plots: every walker's draws after burn-in, one compact panel per parameter."""
-    plt = pyplot()
+    """Trace plots: every walker's draws after burn-in, one compact panel per parameter, three panels
+    a row.
+
+    The margins are fixed in inches and the titles wrapped to a panel's width (no layout engine:
+    constrained layout measured every tick label and cost as much as the drawing).
+    """
+    from matplotlib.collections import LineCollection
+    from matplotlib.figure import Figure
+    from matplotlib.ticker import ScalarFormatter
+
     draws, labels = _display_draws(res, names)
     k = len(draws)
     cols = min(3, k)
     rows = -(-k // cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(9.0, 1.9 * rows + 0.5), squeeze=False, layout="constrained")
+    width, left, right, gap, bottom, tick_pt = 9.0, 0.62, 0.15, 0.62, 0.5, 8
+    panel_w, panel_h = (width - left - right - gap * (cols - 1)) / cols, 1.3
+    titles = {key: wrap_text(labels[key].replace("\n", " "), panel_w, LEGEND_PT) for key in draws}
+    title_h = max(t.count("\n") + 1 for t in titles.values()) * LEGEND_PT * 1.25 / 72 + 0.08
+    row_h = panel_h + title_h + bottom  # a panel, its title above and its step axis below
+    height = rows * row_h + 0.05
+    fig = Figure(figsize=(width, height))
     burn = int(res.attrs.get("burn", 0) or 0)
-    for axis, (key, values) in zip(axes.ravel(), draws.items()):
-        stride = max(1, values.shape[1] // 600)  # at most ~600 points per walker: the same picture, drawn fast
-        steps = burn + np.arange(values.shape[1])
-        axis.plot(steps[::stride], values[:, ::stride].T, lw=0.4, alpha=0.35, color="C0")
-        med = np.median(values)
-        axis.axhline(med, color="C3", lw=0.9)
-        axis.set_title(labels[key].replace("\n", " "), fontsize=LEGEND_PT)
-        axis.tick_params(labelsize=8)
-        axis.set_xlabel("step", fontsize=8)
-    for extra in axes.ravel()[k:]:
-        extra.set_visible(False)
-    caption = ("Trace plots: each walker's position at every step kept after burn-in (thin lines), with the posterior "
+    n_steps = next(iter(draws.values())).shape[1]
+    # at most ~300 points per walker, about one per pixel column of a panel: the same band, drawn in half the time
+    stride = max(1, n_steps // 300)
+    steps = (burn + np.arange(n_steps))[::stride]
+    for n, (key, values) in enumerate(draws.items()):
+        r, c = divmod(n, cols)
+        axis = fig.add_axes(((left + c * (panel_w + gap)) / width, (height - (r + 1) * row_h + bottom) / height,
+                             panel_w / width, panel_h / height))
+        kept = values[:, ::stride]
+        # one collection of every walker's line: one artist to lay out and draw instead of one per walker;
+        # each line is still drawn on its own, so overlapping walkers darken as they did
+        segments = np.stack([np.broadcast_to(steps, kept.shape), kept], axis=-1)
+        axis.add_collection(LineCollection(segments, lw=0.4, alpha=0.35, color="C0"))
+        axis.autoscale_view()
+        axis.axhline(np.median(values), color="C3", lw=0.9)
+        axis.set_title(titles[key], fontsize=LEGEND_PT)
+        axis.yaxis.set_major_formatter(ScalarFormatter(useOffset=False))  # no offset text under the title
+        axis.tick_params(labelsize=tick_pt)
+        axis.set_xlabel("step", fontsize=tick_pt)
+    every = "every step" if stride == 1 else f"one step in {stride}"
+    caption = (f"Trace plots: each walker's position at {every} after burn-in (thin lines), with the posterior "
                "median (red). Mixed walkers overlap as a band of constant width with no trend; a slow drift or "
                "walkers that stay apart mean the run is too short.")
-    return png(fig, caption=caption)
+    return png(fig, caption=caption, tight=False)
