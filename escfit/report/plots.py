@@ -37,9 +37,10 @@ def report_figures(res) -> tuple[dict[str, CaptionedPNG], dict[str, CaptionedPNG
     post = res.group("posterior")
     names = _sampled(res)
     if post is not None and names:
+        draws, labels = _display_draws(res, names)  # once, for both figures
         if len(names) > 1:
-            figs["corner plot"] = _corner(res, names)
-        diagnostics["trace plots"] = _traces(res, names)
+            figs["corner plot"] = _corner(draws, labels)
+        diagnostics["trace plots"] = _traces(draws, labels, int(res.attrs.get("burn", 0) or 0))
     return figs, diagnostics
 
 
@@ -115,12 +116,11 @@ def _display_draws(res, names: list[str]) -> tuple[dict[str, np.ndarray], dict[s
     return draws, labels
 
 
-def _corner(res, names: list[str]) -> CaptionedPNG:
-    """Corner plot (:mod:`escfit.report.corner`): pairs of draws, marginal histograms, medians and
-    95 % intervals, in display units."""
+def _corner(draws: dict[str, np.ndarray], labels: dict[str, str]) -> CaptionedPNG:
+    """Corner plot (:mod:`escfit.report.corner`) of draws in display units (:func:`_display_draws`):
+    pairs of draws, marginal histograms, medians and 95 % intervals."""
     from .corner import MAX_DOTS, corner_figure
 
-    draws, labels = _display_draws(res, names)
     fig = corner_figure(draws, labels, dpi=CORNER_DPI)
     n = next(iter(draws.values())).size
     dots = (f"one dot per draw ({n} draws)" if n <= MAX_DOTS else
@@ -132,9 +132,9 @@ def _corner(res, names: list[str]) -> CaptionedPNG:
     return png(fig, dpi=CORNER_DPI, caption=caption, tight=False)
 
 
-def _traces(res, names: list[str]) -> CaptionedPNG:
-    """Trace plots: every walker's draws after burn-in, one compact panel per parameter, three panels
-    a row.
+def _traces(draws: dict[str, np.ndarray], labels: dict[str, str], burn: int = 0) -> CaptionedPNG:
+    """Trace plots of draws in display units (:func:`_display_draws`): every walker's draws after the
+    ``burn`` steps of burn-in, one compact panel per parameter, three panels a row.
 
     The margins are fixed in inches and the titles wrapped to a panel's width (no layout engine:
     constrained layout measured every tick label and cost as much as the drawing).
@@ -143,7 +143,6 @@ def _traces(res, names: list[str]) -> CaptionedPNG:
     from matplotlib.figure import Figure
     from matplotlib.ticker import ScalarFormatter
 
-    draws, labels = _display_draws(res, names)
     k = len(draws)
     cols = min(3, k)
     rows = -(-k // cols)
@@ -154,7 +153,6 @@ def _traces(res, names: list[str]) -> CaptionedPNG:
     row_h = panel_h + title_h + bottom  # a panel, its title above and its step axis below
     height = rows * row_h + 0.05
     fig = Figure(figsize=(width, height))
-    burn = int(res.attrs.get("burn", 0) or 0)
     n_steps = next(iter(draws.values())).shape[1]
     # at most ~300 points per walker, about one per pixel column of a panel: the same band, drawn in half the time
     stride = max(1, n_steps // 300)
