@@ -4,8 +4,10 @@ For each results file, ``make_report`` is timed in a fresh Python process for th
 checkout and for an earlier revision (extracted with ``git archive``), in two settings:
 
 * ``after fit``: the modules a finished ``escfit fit`` has loaded are imported first (escfit's
-  command line and fit, ArviZ for R-hat and ESS, which brings matplotlib and pyplot, and the
-  results file read once), as in ``escfit fit ... --report``; then ``make_report`` is timed;
+  command line and fit, R-hat and ESS computed once on a small chain, which imports what the
+  revision uses for them: ArviZ with its plotting layer and matplotlib up to 18d2cf5, arviz-stats
+  after it, and the results file read once), as in ``escfit fit ... --report``; then
+  ``make_report`` is timed;
 * ``escfit report``: the whole ``python -m escfit report`` process, interpreter start to exit.
 
 The runs of the two versions alternate (baseline, current, baseline, ...) so that a change in
@@ -45,7 +47,10 @@ AFTER_FIT = r"""
 import sys, time
 import escfit
 assert escfit.__file__.startswith(sys.argv[3]), (escfit.__file__, sys.argv[3])
-import escfit.cli.main, escfit.inference.fit, arviz  # what a finished fit has loaded (ArviZ brings pyplot)
+import numpy as np
+import escfit.cli.main, escfit.inference.fit
+from escfit.inference.convergence import assess
+assess(np.random.default_rng(0).normal(size=(40, 8, 2)))  # R-hat and ESS: whatever the revision imports for them
 from escfit.results import load_fit
 load_fit(sys.argv[1])  # the fit wrote it: xarray and h5netcdf are warm
 import escfit.report

@@ -1,7 +1,7 @@
 """Reports of saved fits: self-contained HTML (figures embedded) or Markdown (figures beside it).
 
-Reports read the results file only; matplotlib, ArviZ's plotting and Jinja2 are imported when a
-report is made.  The HTML page is rendered from ``templates/report.html.j2`` with autoescaping,
+Reports read the results file only; matplotlib and Jinja2 are imported when a report is made
+(ArviZ is not: the corner plot is drawn with matplotlib, :mod:`escfit.report.corner`).  The HTML page is rendered from ``templates/report.html.j2`` with autoescaping,
 so text from the scene or the recording (titles, notes) is shown, never interpreted.
 
 Sections: title, fit statistics, parameter table (plain names and symbols, held parameters
