@@ -39,6 +39,13 @@ def thin(values: np.ndarray, most: int = MAX_DOTS) -> np.ndarray:
     return values[:, ::stride].ravel()
 
 
+def _finite(values: np.ndarray) -> np.ndarray:
+    """The finite draws (a sampler that records a failed step as inf must not take the axis with it);
+    a single 0 when none is, so that the axes still get a range."""
+    finite = values[np.isfinite(values)]
+    return finite if finite.size else np.zeros(1)
+
+
 def _limits(values: np.ndarray) -> tuple[float, float]:
     lo, hi = float(np.min(values)), float(np.max(values))
     pad = 0.04 * (hi - lo) if hi > lo else max(abs(lo) * 1e-3, 1e-12)
@@ -81,8 +88,8 @@ def corner_figure(draws: dict[str, np.ndarray], labels: dict[str, str], *, dpi: 
     grid = fig.add_gridspec(k, k, left=left / side, bottom=bottom / side, right=1 - RIGHT / side,
                             top=1 - TOP / side, wspace=GAP, hspace=GAP)
     ticks = 4 if panel >= 1.2 else 3  # rotated tick labels of narrow panels would touch
-    flat = {key: np.asarray(v, dtype=float).ravel() for key, v in draws.items()}
-    dots = {key: thin(np.asarray(v, dtype=float)) for key, v in draws.items()}
+    flat = {key: _finite(np.asarray(v, dtype=float).ravel()) for key, v in draws.items()}
+    dots = {key: thin(np.asarray(v, dtype=float)) for key, v in draws.items()}  # a non-finite dot is not drawn
     limits = {key: _limits(v) for key, v in flat.items()}
     median = {key: float(np.median(v)) for key, v in flat.items()}
     alpha = 0.15 if dots[keys[0]].size > 2000 else 0.3
