@@ -119,12 +119,13 @@ def _display_draws(res, names: list[str]) -> tuple[dict[str, np.ndarray], dict[s
 def _corner(draws: dict[str, np.ndarray], labels: dict[str, str]) -> CaptionedPNG:
     """Corner plot (:mod:`escfit.report.corner`) of draws in display units (:func:`_display_draws`):
     pairs of draws, marginal histograms, medians and 95 % intervals."""
-    from .corner import MAX_DOTS, corner_figure
+    from .corner import corner_figure, thin
 
     fig = corner_figure(draws, labels, dpi=CORNER_DPI)
-    n = next(iter(draws.values())).size
-    dots = (f"one dot per draw ({n} draws)" if n <= MAX_DOTS else
-            f"one dot per draw for {MAX_DOTS} draws evenly spread over the {n} kept")
+    first = next(iter(draws.values()))
+    n, shown = first.size, thin(first).size  # the dots of every panel: the same draws of every parameter
+    dots = (f"one dot per draw ({n} draws)" if shown == n else
+            f"one dot per draw for {shown} draws evenly spread over the {n} kept")
     caption = ("Posterior of the sampled parameters, in display units: pairs of draws (" + dots + ") and a "
                "histogram of each parameter's draws on the diagonal, with the median (red) and the 95 % interval "
                "(dashed lines, shaded). A thin slanted cloud means the data fix a combination of the two "
