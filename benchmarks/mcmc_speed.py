@@ -27,6 +27,8 @@ is timed too, ``--repeat`` times each.  Writes ``benchmarks/results/mcmc_speed.{
 
 Run:  python benchmarks/mcmc_speed.py [--baseline 9f98f15] [--repeat 2] [--recipes] [--same-moves]
       python benchmarks/mcmc_speed.py --cases waveform120 --repeat 0 --name mcmc_speed_waveform
+      python benchmarks/mcmc_speed.py --cases string_pendulum_trial1 --moves de --baseline b1a8df2 --repeat 0 \
+          --name mcmc_speed_pendulum
 """
 
 from __future__ import annotations
@@ -100,7 +102,10 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--repeat", type=int, default=2, help="timings of the quick start's whole command")
     ap.add_argument("--recipes", action="store_true", help="also the two real-data emcee recipes (long)")
     ap.add_argument("--same-moves", action="store_true", help="also this checkout with the previous moves (de)")
-    ap.add_argument("--cases", nargs="*", default=None, help=f"subset of {CASES + RECIPES}")
+    ap.add_argument("--cases", nargs="*", default=None,
+                    help=f"subset of {CASES + RECIPES}, or any emcee recipe of fits/real/ by name")
+    ap.add_argument("--moves", default="de-t", help="this checkout's moves (de: the previous version's own, which "
+                                                    "leaves the cost per step as the only difference)")
     ap.add_argument("--out-dir", type=Path, default=ROOT / "benchmarks" / "results")
     ap.add_argument("--name", default="mcmc_speed", help="file name of the results (NAME.md, NAME.json)")
     args = ap.parse_args(argv)
@@ -120,10 +125,11 @@ def main(argv: list[str] | None = None) -> dict:
                                                           for k, v in timings.items()), flush=True)
         for case in cases:
             runs = {"previous (de)": run_in(prev, WORKER, [case, "de", str(work)])}
-            if args.same_moves:
+            if args.same_moves and args.moves != "de":
                 runs["current (de)"] = run_in(None, WORKER, [case, "de", str(work)])
-            runs["current (de-t)"] = run_in(None, WORKER, [case, "de-t", str(work)])
-            record["cases"][case] = {"runs": runs, "agreement": agreement(runs["previous (de)"], runs["current (de-t)"])}
+            current = f"current ({args.moves})"
+            runs[current] = run_in(None, WORKER, [case, args.moves, str(work)])
+            record["cases"][case] = {"runs": runs, "agreement": agreement(runs["previous (de)"], runs[current])}
             _print_case(case, record["cases"][case])
             _write(record, args.out_dir, args.name)  # each case as it ends: a long run stopped early keeps the others
     _write(record, args.out_dir, args.name)

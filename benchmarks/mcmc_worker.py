@@ -56,8 +56,9 @@ def _case(case: str, work: Path):
         return scene, rec, 32, 1, 20000
     path = ROOT / "fits" / "real" / f"{case}.toml"
     doc = tomllib.loads(path.read_text())
-    return (path.parent / doc["scene"], path.parent / doc["data"], int(doc["walkers"]), int(doc["seed"]),
-            int(doc.get("max_steps", 20000)))
+    # (a least-squares recipe names no walkers: emcee's recipes use 32)
+    return (path.parent / doc["scene"], path.parent / doc["data"], int(doc.get("walkers", 32)),
+            int(doc.get("seed", 1)), int(doc.get("max_steps", 20000)))
 
 
 def main() -> None:

@@ -197,7 +197,7 @@ def test_sampled_states_are_those_of_sample_state():
 
 
 def test_other_solvers_keep_the_row_by_row_path():
-    problem = _problem(solver="dop853")
+    problem = _problem(solver="rk4", solver_options={"h": 1e-3})
     assert not problem.vectorized
     vecs = _sets(problem, 3, seed=10)
     np.testing.assert_array_equal(problem.log_prob_many(vecs), [problem.log_prob(v) for v in vecs])

@@ -34,6 +34,9 @@ from .release import release_from_record
 
 __all__ = ["WaveformProblem", "noise_from_samples"]
 
+#: solvers whose dense solution log_prob_many samples for a whole ensemble, and the options it passes on
+_BATCH_OPTIONS = {"exact": {"max_segments"}, "dop853": {"rtol", "atol", "max_segments", "max_steps"}}
+
 
 def noise_from_samples(theta: np.ndarray) -> float:
     """Reading noise (rad) from the second differences of a densely sampled smooth signal.
@@ -111,8 +114,8 @@ class WaveformProblem(RecordingProblem):
         if thin > 1:
             self.notes.append(f"waveform: one sample in {thin} used ({idx.size} of {np.count_nonzero(keep)})")
         self.curves = [Curve("waveform", math.nan, np.arange(idx.size), series.theta[idx], self.sample_time)]
-        # the exact solver's dense solution is sampled for a whole ensemble in one call (log_prob_many)
-        self.vectorized = self.solver == "exact" and set(self.solver_options) <= {"max_segments"}
+        # the exact or dop853 dense solution is sampled for a whole ensemble in one call (log_prob_many)
+        self.vectorized = set(self.solver_options) <= _BATCH_OPTIONS.get(self.solver, set())
 
     @property
     def reading_units(self) -> str:
@@ -145,10 +148,11 @@ class WaveformProblem(RecordingProblem):
         """Log posterior of each row of ``vecs``, shape ``(sets, ndim)`` -> ``(sets,)``.
 
         The same numbers as :meth:`log_prob` row by row (to the rounding of the final sum) and
-        the same failure counts, but with the exact solver the whole ensemble is one array
-        computation: priors and values on arrays, every set's coefficient record in one pass
+        the same failure counts, but with the exact or the dop853 solver the whole ensemble is one
+        array computation: priors and values on arrays, every set's coefficient record in one pass
         (``scene.system(values, n)``), every set's run and its dense solution at the sample
-        times in one compiled call (:func:`escfit.balance.batch_dense.sample_batch`), and the
+        times in one compiled call (:func:`escfit.balance.batch_dense.sample_batch`,
+        :func:`escfit.balance.batch_dop853.sample_batch_dop853`), and the
         observation model of every set in another
         (:func:`escfit.balance.observation.waveform_compiled.waveform_loglike_sets`).  Sets the
         batch refuses or does not finish (a release after the first sample, a run out of
@@ -174,11 +178,13 @@ class WaveformProblem(RecordingProblem):
         n_sets = vecs.shape[0]
         vals = self.values_many(vecs)
         ll = np.full(n_sets, math.nan)
+        if self.solver == "dop853":
+            from ..batch_dop853 import sample_batch_dop853 as sample_batch
         try:
             model, summary = sample_batch(self.scene.system(vals, n_sets), self.sample_time,
                                           _column(vals["observation.t_release"], n_sets),
                                           which=OMEGA if self.quantity == "angular_velocity" else THETA,
-                                          max_segments=self.solver_options.get("max_segments"))
+                                          **self.solver_options)
         except (EscfitError, ValueError, ArithmeticError):
             usable = np.zeros(n_sets, bool)  # every set the one-at-a-time way, which records why
         else:
