@@ -174,7 +174,7 @@ def _traces(draws: dict[str, np.ndarray], labels: dict[str, str], burn: int = 0)
         axis.tick_params(labelsize=tick_pt)
         axis.set_xlabel("step", fontsize=tick_pt)
     every = "every step" if stride == 1 else f"one step in {stride}"
-    caption = (f"Trace plots: each walker's position at {every} after burn-in (thin lines), with the posterior "
+    caption = (f"Each walker's position at {every} after burn-in (thin lines), with the posterior "
                "median (red). Mixed walkers overlap as a band of constant width with no trend; a slow drift or "
                "walkers that stay apart mean the run is too short.")
     return png(fig, caption=caption, tight=False)
