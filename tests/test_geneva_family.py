@@ -260,7 +260,7 @@ def test_shipped_trace_example_emcee_summary_and_report(trace_fit, tmp_path):
     assert js["method"] == "emcee" and js["data_file"].endswith("synthetic_four_pin_trace.csv")
     fitted = load_fit(trace_fit)
     assert fitted.group("posterior").sizes == {"chain": 8, "draw": 100}
-    assert fitted.attrs["moves"] == "de" and fitted.attrs["data_sha256"]
+    assert fitted.attrs["moves"] == "de-t" and fitted.attrs["data_sha256"]
     html = tmp_path / "r.html"
     run("report", trace_fit, "--out", html)
     text = html.read_text(encoding="utf-8")

@@ -1,7 +1,7 @@
 """The verge family on the one inference layer: the shipped example through ``escfit``.
 
 The forward model is expensive (one M739 arming run, ~360 motion phases, takes ~45 ms of CPU),
-so the emcee runs here are short (4 walkers x 10 steps, differential-evolution moves, as the
+so the emcee runs here are short (4 walkers x 10 steps, the family's de-t moves, as the
 recipe says): they check the machinery (draws, resume, summary, report) and that the draws
 sit where the independent Laplace approximation puts the posterior, not the tails.  The
 converging posterior test is in tests/test_verge_inference.py.
@@ -96,7 +96,7 @@ def test_shipped_example_emcee(shipped_emcee, laplace_sd):
     assert np.all(np.isfinite(x))
     assert abs(np.median(x) - mu) < laplace_sd  # the draws sit on the Laplace posterior ...
     assert 0.2 * laplace_sd < x.std() < 2.0 * laplace_sd  # ... and have its width
-    assert res.attrs["moves"] == "de" and res.attrs["walkers"] == 4
+    assert res.attrs["moves"] == "de-t" and res.attrs["walkers"] == 4
     assert "posterior_predictive" in res.tree.children and "log_likelihood" in res.tree.children
     pred = res.group("posterior_predictive")["expected"].values
     assert np.all(np.abs(pred - 25.8) < 5 * 0.26)  # every stored draw arms near the reading
