@@ -125,18 +125,18 @@ def closed_form_z(chain: np.ndarray) -> dict[str, float]:
 
 
 def test_sampling_in_the_coordinates_gives_the_closed_form_distribution():
-    """Seven summaries within 4.5 Monte Carlo standard errors of the closed forms.
+    """Seven summaries within 5 Monte Carlo standard errors of the closed forms.
 
-    The spread of the z-scores, measured over seeds 0-299 (``benchmarks/false_failures.py``-style
-    run of this function, 2100 z-scores): sd 0.95-1.12 per summary, largest |z| 3.7; at sd
-    1.12 the limit 4.5 is 4.0 sd, a two-sided normal tail of 6e-5 per summary, 4.4e-4 for the seven.
-    A missing or wrong Jacobian moves the mean of rho by tens of standard errors.
+    The z-scores measured over seeds 0-299 (2100 of them; every run converged, in 1525 steps at
+    the median): means -0.05 to +0.03, sds 0.98 to 1.14 per summary, largest |z| 3.99.  At sd
+    1.14 the limit 5 is 4.4 sd, a two-sided normal tail of 1.1e-5 per summary, 8e-5 for the
+    seven.  A missing Jacobian moves them by tens of standard errors (the next test).
     """
     res = run_emcee(ScaleCorrelation(), walkers=16, steps="auto", seed=5, moves="de-t", max_steps=20000)
     assert res.converged
     assert np.all(res.chain[..., 0] > 0) and np.all((res.chain[..., 1] >= 0) & (res.chain[..., 1] <= RHO_MAX))
     z = closed_form_z(res.chain)
-    assert all(abs(v) < 4.5 for v in z.values()), z
+    assert all(abs(v) < 5.0 for v in z.values()), z
     # what users see is the x-space log posterior, not the sampler's log density
     np.testing.assert_allclose(res.log_prob, ScaleCorrelation().log_prob_many(res.chain.reshape(-1, 3))
                                .reshape(res.log_prob.shape), rtol=1e-12, atol=1e-12)
