@@ -224,7 +224,9 @@ def run_emcee(problem: Problem, lsq: LeastSquaresResult | None = None, *, walker
         Evaluate each half-ensemble of proposals in one call of
         :meth:`Problem.log_prob_many` (emcee's ``vectorize=True``).  Default: the problem's
         own declaration :attr:`Problem.vectorized` (a whole-array path that gives the same
-        numbers as ``log_prob`` walker by walker, so the draws are identical too).
+        numbers as ``log_prob`` walker by walker, so the draws are identical too).  A problem
+        with declared sampler coordinates (:mod:`escfit.inference.space`) is always evaluated
+        through ``log_prob_many``.
     max_steps
         Cap of an ``"auto"`` run.
     checkpoint_every
