@@ -33,7 +33,8 @@ ROOT = Path(__file__).resolve().parents[1]
 SAMPLING_TESTS = [
     "tests/test_friction_family.py", "tests/test_friction_inference.py", "tests/test_friction_monday.py",
     "tests/test_fit_recovery.py", "tests/test_geneva_family.py", "tests/test_lsq_honest.py",
-    "tests/test_readers_pulses.py", "tests/test_readers_timegrapher.py", "tests/test_sampler_runs.py",
+    "tests/test_readers_pulses.py", "tests/test_readers_timegrapher.py", "tests/test_sampler_coordinates.py",
+    "tests/test_sampler_runs.py",
     "tests/test_shared_mu.py", "tests/test_table1.py", "tests/test_verge_family.py", "tests/test_verge_inference.py",
 ]
 

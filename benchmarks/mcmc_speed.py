@@ -29,6 +29,8 @@ Run:  python benchmarks/mcmc_speed.py [--baseline 9f98f15] [--repeat 2] [--recip
       python benchmarks/mcmc_speed.py --cases waveform120 --repeat 0 --name mcmc_speed_waveform
       python benchmarks/mcmc_speed.py --cases string_pendulum_trial1 --moves de --baseline b1a8df2 --repeat 0 \
           --name mcmc_speed_pendulum
+      python benchmarks/mcmc_speed.py --cases string_pendulum_trial1 --moves de-t --same-moves --baseline fb297d2 \
+          --repeat 0 --name mcmc_speed_pendulum_coords     (likewise pohl_tracker -> mcmc_speed_pohl_coords)
 """
 
 from __future__ import annotations

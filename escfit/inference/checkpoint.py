@@ -16,13 +16,21 @@ difference named.  What it holds is checked before it is used, checksums or not:
 draws, a generator state numpy can continue from (an all-zero key would hang it), counts
 within the run.
 
-Layout (format ``escfit-emcee-checkpoint``, version 2)::
+The chain and log-probabilities are the sampler's own: in the coordinates it moves in
+(:mod:`escfit.inference.space`; ``coordinates`` names them, ``"identity"`` for the problem's
+parameters) and with its log density there, so that they round-trip exactly.
 
-    /chain      float64 (steps, walkers, ndim)
-    /log_prob   float64 (steps, walkers)
+Layout (format ``escfit-emcee-checkpoint``, version 3)::
+
+    /chain      float64 (steps, walkers, ndim)   in the sampler's coordinates
+    /log_prob   float64 (steps, walkers)         the sampler's log density
     /accepted   int64   (walkers,)
     /mt_keys    uint32  (624,)          numpy MT19937 key of emcee's RandomState
-    attrs: format, version, names (JSON), seed, moves, mt_pos, mt_has_gauss, mt_gauss, identity (JSON)
+    attrs: format, version, names (JSON), seed, moves, mt_pos, mt_has_gauss, mt_gauss, identity (JSON),
+           coordinates
+
+Version 2 (without ``coordinates``) was written before sampler coordinates existed: its draws
+are in the problem's parameters and it is read as ``coordinates = "identity"``.
 """
 
 from __future__ import annotations
@@ -41,7 +49,8 @@ from ..core.errors import ResultsError
 __all__ = ["Checkpoint", "save_checkpoint", "load_checkpoint", "check_identity", "run_identity", "FORMAT"]
 
 FORMAT = "escfit-emcee-checkpoint"
-VERSION = 2  # 2: the run's identity is recorded and compared on resume
+VERSION = 3  # 2: the run's identity is recorded and compared on resume; 3: the sampler's coordinates named
+READABLE = (2, 3)
 # Provenance entries that name where things were, not what they were (a moved file is the same run)
 LOCATIONS = ("scene_file", "data_file")
 
@@ -93,6 +102,9 @@ class Checkpoint:
     moves : str
     identity : dict
         :func:`run_identity` of the run.
+    coordinates : str
+        The sampler coordinates ``chain`` and ``log_prob`` are in
+        (:attr:`escfit.inference.space.SamplerSpace.name`; ``"identity"``: the problem's parameters).
     """
 
     chain: np.ndarray
@@ -103,6 +115,7 @@ class Checkpoint:
     seed: int
     moves: str
     identity: dict = field(default_factory=dict)
+    coordinates: str = "identity"
 
     @property
     def steps(self) -> int:
@@ -136,7 +149,8 @@ def save_checkpoint(path: str | Path, ck: Checkpoint) -> None:
         f.attrs.update({"format": FORMAT, "version": VERSION, "names": json.dumps(list(ck.names)),
                         "seed": int(ck.seed), "moves": str(ck.moves), "mt_pos": int(pos),
                         "mt_has_gauss": int(has_gauss), "mt_gauss": float(gauss),
-                        "identity": json.dumps(dict(ck.identity), sort_keys=True)})
+                        "identity": json.dumps(dict(ck.identity), sort_keys=True),
+                        "coordinates": str(ck.coordinates)})
     write_bytes(buf.getvalue(), target, force=True)
 
 
@@ -167,7 +181,8 @@ def load_checkpoint(path: str | Path, walkers: int, names: list[str],
             if f.attrs.get("format") != FORMAT:
                 raise ResultsError("not an escfit sampler checkpoint (written by another program or an older "
                                    "version); pass --force to start again", where)
-            if int(f.attrs.get("version", 0)) != VERSION or "identity" not in f.attrs:
+            version = int(f.attrs.get("version", 0))
+            if version not in READABLE or "identity" not in f.attrs or (version >= 3 and "coordinates" not in f.attrs):
                 raise ResultsError(f"a checkpoint of format version {f.attrs.get('version')} (this escfit writes "
                                    f"{VERSION}) cannot be checked to belong to this run; pass --force to start again",
                                    where)
@@ -175,7 +190,8 @@ def load_checkpoint(path: str | Path, walkers: int, names: list[str],
                             ("MT19937", f["mt_keys"][()], int(f.attrs["mt_pos"]), int(f.attrs["mt_has_gauss"]),
                              float(f.attrs["mt_gauss"])),
                             list(json.loads(f.attrs["names"])), int(f.attrs["seed"]), str(f.attrs["moves"]),
-                            dict(json.loads(f.attrs["identity"])))
+                            dict(json.loads(f.attrs["identity"])),
+                            str(f.attrs["coordinates"]) if version >= 3 else "identity")
     except ResultsError:
         raise
     except (OSError, KeyError, ValueError, TypeError) as exc:  # truncated, checksum failure, missing parts

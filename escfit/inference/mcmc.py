@@ -10,6 +10,11 @@ kept in memory and saved to the checkpoint (:mod:`escfit.inference.checkpoint`) 
 ``checkpoint_every`` seconds (the interval grows if saving would take more than a twentieth
 of the time) and when the run is interrupted (Ctrl-C, SIGTERM, SIGHUP, SIGQUIT), so a resumed run draws
 exactly what the uninterrupted one would have.
+
+A problem that declares sampler coordinates (:mod:`escfit.inference.space`) is sampled in
+them: the checkpoint holds the sampler's own draws (they round-trip exactly), and everything
+else (convergence checks, the draws and log posteriors returned) is in the problem's
+parameters.
 """
 
 from __future__ import annotations
@@ -31,6 +36,7 @@ from .checkpoint import Checkpoint, check_identity, load_checkpoint, run_identit
 from .convergence import Assessment, assess, autocorr_time
 from .lsq import LeastSquaresResult
 from .moves import de_t_moves
+from .space import IDENTITY, SamplerSpace, sampler_space
 
 __all__ = ["McmcResult", "run_emcee", "resumable"]
 
@@ -141,6 +147,10 @@ def resumable(problem: Problem, checkpoint: str | Path, *, walkers: int, moves: 
     """
     where = str(checkpoint)
     previous = load_checkpoint(checkpoint, walkers, list(problem.names))
+    space = sampler_space(problem)
+    if previous.coordinates != space.name:
+        raise ResultsError(f"the checkpoint's draws are in sampler coordinates {previous.coordinates!r}, this run "
+                           f"samples in {space.name!r}; pass --force to start again", where)
     if previous.moves != moves:
         raise ResultsError(f"the checkpoint's run used moves {previous.moves!r}, this one asks for {moves!r}; "
                            "resume with the same moves, or pass --force to start again", where)
@@ -149,21 +159,21 @@ def resumable(problem: Problem, checkpoint: str | Path, *, walkers: int, moves: 
     if target is not None and previous.steps > target:
         raise ResultsError(f"the checkpoint already holds {previous.steps} steps, more than the {target} asked "
                            f"for; resume with --steps {previous.steps} or more, or pass --force to start again", where)
-    _check_support(problem, previous, where)
+    _check_support(problem, previous, where, space)
     return previous
 
 
-def _check_support(problem: Problem, ck: Checkpoint, where: str) -> None:
+def _check_support(problem: Problem, ck: Checkpoint, where: str, space: SamplerSpace = IDENTITY) -> None:
     """Refuse a checkpoint whose last walker positions this posterior does not give the stored
     log-probabilities (outside the bounds, or another posterior): continuing would reuse them."""
     lo, hi = problem.bounds
-    last = ck.chain[-1]
+    last = space.to_problem(ck.chain[-1])
     outside = np.nonzero(np.any((last < lo) | (last > hi), axis=0))[0]
     if outside.size:
         i = int(outside[0])
         raise ResultsError(f"damaged checkpoint: its walkers stand outside the bounds of {problem.names[i]} "
                            f"([{lo[i]:g}, {hi[i]:g}]); pass --force to start again", where)
-    now = np.array([problem.log_prob(x) for x in last])
+    now = np.array([problem.log_prob(x) for x in last]) if not space.transformed else space.log_prob_many(ck.chain[-1])
     tol = 1e-8 * (1.0 + np.abs(ck.log_prob[-1]))  # rounding of another library version, not another posterior
     if not np.all(np.abs(now - ck.log_prob[-1]) <= tol):
         w = int(np.argmax(~(np.abs(now - ck.log_prob[-1]) <= tol)))
@@ -214,7 +224,9 @@ def run_emcee(problem: Problem, lsq: LeastSquaresResult | None = None, *, walker
         Evaluate each half-ensemble of proposals in one call of
         :meth:`Problem.log_prob_many` (emcee's ``vectorize=True``).  Default: the problem's
         own declaration :attr:`Problem.vectorized` (a whole-array path that gives the same
-        numbers as ``log_prob`` walker by walker, so the draws are identical too).
+        numbers as ``log_prob`` walker by walker, so the draws are identical too).  A problem
+        with declared sampler coordinates (:mod:`escfit.inference.space`) is always evaluated
+        through ``log_prob_many``.
     max_steps
         Cap of an ``"auto"`` run.
     checkpoint_every
@@ -250,14 +262,22 @@ def run_emcee(problem: Problem, lsq: LeastSquaresResult | None = None, *, walker
         previous = resumable(problem, checkpoint, walkers=walkers, moves=moves, seed=seed, target=None if auto else target,
                              provenance=provenance, fit_options=fit_options)
     ident = run_identity(provenance, fit_options, walkers=walkers, moves=moves, seed=seed, names=list(problem.names))
-    if vectorize is None:
-        vectorize = bool(getattr(problem, "vectorized", False))
-    fn = problem.log_prob_many if vectorize else problem.log_prob
+    space = sampler_space(problem)
+    if space.transformed:  # the sampler's density, row-wise through the problem's log_prob_many
+        vectorize, fn = True, space.log_prob_many
+    else:
+        if vectorize is None:
+            vectorize = bool(getattr(problem, "vectorized", False))
+        fn = problem.log_prob_many if vectorize else problem.log_prob
     sampler = emcee.EnsembleSampler(walkers, ndim, fn, vectorize=vectorize, moves=MOVES[moves]())
-    run = _Run(problem, sampler, previous, checkpoint, seed, moves, checkpoint_every, ident)
+    run = _Run(problem, sampler, previous, checkpoint, seed, moves, checkpoint_every, ident, space)
     if previous is None:
         sampler.random_state = np.random.RandomState(seed).get_state()
-        run.start(_start(problem, lsq, walkers, np.random.default_rng(seed)))
+        start = space.to_sampler(_start(problem, lsq, walkers, np.random.default_rng(seed)))
+        if not np.all(np.isfinite(start)):
+            raise FitError(f"could not place the walkers in the sampler's coordinates {space.name}: the start lies "
+                           "outside their domain")
+        run.start(start)
     assessment = run.advance(target, auto, progress, burn)
     chain, lp = run.chain(), run.log_prob()
     total = chain.shape[0]
@@ -275,8 +295,9 @@ class _Run:
     """The draws of one run in memory, advanced step by step and saved in chunks."""
 
     def __init__(self, problem: Problem, sampler: emcee.EnsembleSampler, previous: Checkpoint | None,
-                 path: str | Path | None, seed: int, moves: str, every: float, identity: dict) -> None:
-        self.problem, self.sampler, self.path = problem, sampler, path
+                 path: str | Path | None, seed: int, moves: str, every: float, identity: dict,
+                 space: SamplerSpace = IDENTITY) -> None:
+        self.problem, self.sampler, self.path, self.space = problem, sampler, path, space
         self.seed, self.moves, self.every, self.identity = seed, moves, float(every), identity
         self.parts: list[np.ndarray] = []
         self.lp_parts: list[np.ndarray] = []
@@ -295,11 +316,23 @@ class _Run:
     def steps(self) -> int:
         return int(sum(p.shape[0] for p in self.parts))
 
-    def chain(self) -> np.ndarray:
+    def sampler_chain(self) -> np.ndarray:
+        """The draws as the sampler holds them (its coordinates), shape (steps, walkers, ndim)."""
         return np.concatenate(self.parts) if self.parts else np.zeros((0, self.sampler.nwalkers, self.sampler.ndim))
 
-    def log_prob(self) -> np.ndarray:
+    def sampler_log_prob(self) -> np.ndarray:
+        """The sampler's log density of every draw, shape (steps, walkers)."""
         return np.concatenate(self.lp_parts) if self.lp_parts else np.zeros((0, self.sampler.nwalkers))
+
+    def chain(self) -> np.ndarray:
+        """The draws in the problem's parameters."""
+        return self.space.to_problem(self.sampler_chain())
+
+    def log_prob(self) -> np.ndarray:
+        """The problem's log posterior of every draw."""
+        if not self.space.transformed:
+            return self.sampler_log_prob()
+        return self.space.problem_log_prob(self.sampler_chain(), self.sampler_log_prob())
 
     def start(self, coords: np.ndarray) -> None:
         lp, _ = self.sampler.compute_log_prob(coords)
@@ -376,8 +409,9 @@ class _Run:
 
     def save(self) -> None:
         t0 = time.perf_counter()
-        save_checkpoint(self.path, Checkpoint(self.chain(), self.log_prob(), self.accepted, self.state.random_state,
-                                              list(self.problem.names), self.seed, self.moves, self.identity))
+        save_checkpoint(self.path, Checkpoint(self.sampler_chain(), self.sampler_log_prob(), self.accepted,
+                                              self.state.random_state, list(self.problem.names), self.seed, self.moves,
+                                              self.identity, coordinates=self.space.name))
         self.saved_steps = self.steps
         spent = time.perf_counter() - t0
         self.timings["checkpoint_s"] += spent

@@ -186,6 +186,8 @@ class ProblemBase:
     """
 
     vectorized = False
+    #: coordinates emcee samples in (:mod:`escfit.likelihood.coordinates`); None: the parameters themselves
+    sampler_coordinates = None
     notes: tuple[str, ...] = ()  # instances set their own lists
     data_warnings: tuple[str, ...] = ()
 

@@ -118,6 +118,19 @@ class WaveformProblem(RecordingProblem):
         self.vectorized = set(self.solver_options) <= _BATCH_OPTIONS.get(self.solver, set())
 
     @property
+    def sampler_coordinates(self):
+        """With AR(1) noise whose scale and correlation are both free, emcee samples the log
+        innovation scale and atanh(rho) in their place
+        (:class:`~escfit.likelihood.coordinates.AR1Coordinates`): the data fix those two almost
+        independently, while (sigma, rho) lie on a curved ridge that mixes slowly.  None otherwise."""
+        names = list(self.names)
+        if self.observation.noise != "ar1" or not {"observation.sigma", "observation.rho"} <= set(names):
+            return None
+        from ...likelihood.coordinates import AR1Coordinates
+
+        return AR1Coordinates(names.index("observation.sigma"), names.index("observation.rho"))
+
+    @property
     def reading_units(self) -> str:
         """The readings' unit: rad, rad/s or m."""
         return READINGS[self.quantity].unit
