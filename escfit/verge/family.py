@@ -8,7 +8,7 @@ Cost
 One forward run of the M739 mechanism (about 360 motion phases to 26 turns) takes 45 ms
 of CPU at step 0.2, so fits are counted in forward runs: least squares needs about ten per start
 and emcee ``walkers * (steps + 1)`` plus the predictive draws.  The defaults (3 starts;
-8 walkers x 300 steps with differential-evolution moves; 16 predictive draws; ~2500 runs)
+8 walkers x 300 steps with de-t moves; 16 predictive draws; ~2500 runs)
 take about 110 s of CPU and converge on the shipped M739 example (R-hat 1.02).  In one
 dimension emcee's stretch move mixes slowly (autocorrelation ~27 steps against ~5 with
 differential evolution); the ``"de-t"`` mixture (Student-t proposals fitted to the walkers, with
