@@ -93,7 +93,7 @@ def bound_warnings(problem: Problem | None, lsq: LeastSquaresResult) -> list[str
         which = "lower" if flag < 0 else "upper"
         lo95, hi95 = float(lsq.intervals["lo95"][i]), float(lsq.intervals["hi95"][i])
         side = f"[{edge:g}, {hi95:.4g}]" if flag < 0 else f"[{lo95:.4g}, {edge:g}]"
-        one_sided = f"; its interval is one-sided, 95 % {side}"
+        one_sided = f"; its least-squares interval is one-sided, 95 % {side}"
         if flag < 0 and edge == 0.0:
             why = ": the data find no evidence for it (an upper limit is what they give)"
         else:
