@@ -86,3 +86,53 @@ def test_batch_jacobian_is_scipys_two_point_jacobian(case):
         scale = np.max(np.abs(ref), axis=0)
         np.testing.assert_allclose(jac / scale, ref / scale, rtol=0, atol=1e-9)
     assert np.all(np.abs(ref[:, at]) < np.inf) and np.any(ref[:, at] != 0)
+
+
+def _fit(problem, jac=None):
+    problem.lsq_options = {} if jac is None else {"jac": jac}
+    try:
+        return least_squares(problem, n_starts=1)
+    finally:
+        del problem.lsq_options
+
+
+@pytest.mark.parametrize("case", [exact_case, pendulum_case])
+def test_fit_with_the_batch_jacobian_is_the_two_point_fit(case):
+    problem = _problem(case)
+    calls = []
+    many = problem.residuals_many
+    problem.residuals_many = lambda vecs: calls.append(len(vecs)) or many(vecs)
+    batch = _fit(problem)
+    del problem.residuals_many
+    assert calls and all(c >= len(batch.names) for c in calls)
+    ref = _fit(problem, "2-point")
+    start = np.asarray(problem.initial)[[problem.names.index(n) for n in batch.names]]
+    assert np.max(np.abs(batch.value - start) / batch.stderr) > 1.0  # the fit went somewhere
+    assert batch.names == ref.names and batch.success and ref.success
+    np.testing.assert_allclose(batch.value, ref.value, rtol=1e-6, atol=1e-12)
+    np.testing.assert_allclose(batch.stderr, ref.stderr, rtol=1e-6)
+    assert batch.chisqr == pytest.approx(ref.chisqr, rel=1e-9)
+
+
+def test_real_string_pendulum_fit_is_the_two_point_fit():
+    """The 116 s string pendulum recipe (dop853, AR(1) noise: two stages), as ``escfit fit`` builds it."""
+    import tomllib
+    from pathlib import Path
+
+    from escfit.core.scene import load_scene
+    from escfit.inference import registry
+
+    recipe = Path(__file__).resolve().parents[1] / "fits" / "real" / "string_pendulum_lab1.toml"
+    table = tomllib.loads(recipe.read_text())
+    scene = load_scene(str((recipe.parent / table["scene"]).resolve()))
+    fam = registry.family(scene.model)
+    problem = fam.problem(scene, str((recipe.parent / table["data"]).resolve()), **dict(table.get("options", {})))
+    assert problem.vectorized and problem.solver == "dop853"
+    defaults = dict(getattr(fam, "fit_defaults", {}))
+    kw = dict(n_starts=defaults.get("n_starts", 8), n_refine=defaults.get("n_refine"), seed=int(table.get("seed", 0)))
+    batch = least_squares(problem, **kw)
+    problem.lsq_options = {"jac": "2-point"}
+    ref = least_squares(problem, **kw)
+    np.testing.assert_allclose(batch.value, ref.value, rtol=1e-6)
+    np.testing.assert_allclose(batch.stderr, ref.stderr, rtol=1e-6)
+    assert np.all(np.isfinite(batch.stderr)) and batch.chisqr == pytest.approx(ref.chisqr, rel=1e-9)
