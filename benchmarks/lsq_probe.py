@@ -58,8 +58,8 @@ def probe(recipe: Path) -> dict:
     lsq = least_squares(problem, n_starts=defaults.get("n_starts", 8), n_refine=defaults.get("n_refine"), seed=seed)
     lsq, _, _ = reconcile(problem, lsq, seed=seed)
     seconds, cpu = time.perf_counter() - clock, time.process_time() - cpu
-    return {"recipe": recipe.stem, "seconds": seconds, "cpu_seconds": cpu, "evaluations": calls[0], "batch_sets": batch[0],
-            "names": list(lsq.names),
+    return {"recipe": recipe.stem, "seconds": seconds, "cpu_seconds": cpu, "evaluations": calls[0],
+            "batch_sets": batch[0], "names": list(lsq.names),
             "value": [float(v) for v in lsq.value], "stderr": [float(v) for v in lsq.stderr],
             "chisqr": float(lsq.chisqr),
             "rms_reading": float(np.sqrt(np.mean((problem.observed - problem.expected(lsq.values)) ** 2)))}
