@@ -1,7 +1,9 @@
 """Bounded least squares with a multistart, for every model family.
 
 Each start runs scipy's trust-region reflective method (:mod:`escfit.inference.trf`, the
-algorithm lmfit's ``least_squares`` method wraps, called directly).
+algorithm lmfit's ``least_squares`` method wraps, called directly).  Its forward-difference
+Jacobian runs as one batch call when the problem offers ``residuals_many`` (many parameter
+sets at once, :mod:`escfit.inference.fdjac`: the same steps, hence the same fit).
 
 The optimiser sees :meth:`Problem.residuals` (the readings' standardised residuals) plus one
 residual per Gaussian prior of a fitted parameter (see
