@@ -232,11 +232,18 @@ def test_auto_run_stops_when_converged_and_gets_the_closed_form_moments():
     assert np.all(final.rhat <= 1.011) and np.all(final.ess_bulk >= 390)
     z = closed_form_z(res)
     assert np.all(np.abs(z) < 4.5), z
+    # the stop's figures travel with the run (the results' diagnostics use them): they are those of
+    # the kept draws, recomputed here from the draws themselves
+    from escfit.inference.convergence import chain_diagnostics
+
+    for got, again in zip(res.figures, chain_diagnostics(res.chain)):
+        np.testing.assert_allclose(got, again, rtol=1e-12)
 
 
 def test_auto_run_stopped_by_its_cap_says_so():
     res = run_emcee(Gaussian2D(), walkers=8, steps="auto", seed=3, max_steps=60)
     assert res.steps == 60 and res.auto and res.converged is False
+    assert res.figures is not None and np.all(np.isfinite(res.figures[1]))  # complete at the cap too
     assert "after 60 steps" in res.verdict
 
 

@@ -196,11 +196,15 @@ def test_sampled_states_are_those_of_sample_state():
             np.testing.assert_allclose(got[i], theta if which == THETA else omega, rtol=1e-12, atol=1e-15)
 
 
-def test_other_solvers_keep_the_row_by_row_path():
-    problem = _problem(solver="rk4", solver_options={"h": 1e-3})
+@pytest.mark.parametrize("solver, options", [("rk4", {"h": 1e-3}), ("rk4", {}), ("ivp", {})])
+def test_other_solvers_keep_the_row_by_row_path(solver, options):
+    """A solver without a batch path is evaluated set by set with that solver (also without options,
+    where the batch path once ran the exact solver in its place)."""
+    problem = _problem(solver=solver, solver_options=options)
     assert not problem.vectorized
     vecs = _sets(problem, 3, seed=10)
     np.testing.assert_array_equal(problem.log_prob_many(vecs), [problem.log_prob(v) for v in vecs])
+
 
 
 def test_sample_batch_refuses_unsorted_times():

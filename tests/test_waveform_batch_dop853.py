@@ -224,3 +224,17 @@ def test_refusals_of_the_batch_call():
         sample_batch_dop853(system, problem.sample_time, 0.0, rtol=2.0)
     with pytest.raises(SolverError, match="atol"):
         sample_batch_dop853(system, problem.sample_time, 0.0, atol=0.0)
+    # the exact solver's batch refuses a pendulum with drag instead of dropping sin(theta) and the drag
+    from escfit.balance.batch_dense import sample_batch
+
+    with pytest.raises(SolverError):
+        sample_batch(system, problem.sample_time, 0.0)
+
+
+@pytest.mark.parametrize("solver", ["rk4", "ivp"])
+def test_a_pendulum_with_another_solver_is_evaluated_with_that_solver(solver):
+    """rk4 or solve_ivp without options: set by set with that solver, never the exact solver's batch."""
+    problem = _problem(solver=solver, solver_options={})
+    assert not problem.vectorized
+    vecs = _sets(problem, 2, seed=7)
+    np.testing.assert_array_equal(problem.log_prob_many(vecs), [problem.log_prob(v) for v in vecs])

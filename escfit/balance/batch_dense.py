@@ -29,6 +29,7 @@ from ..core.kernels import kernel
 from ..core.status import Status
 from .exact import N_LOG, run_angle
 from .records import HALF_SWING, RUN, ROWS_FULL
+from .solvers import capability
 from .solution import ROW_EXACT, _states_at
 from .steps import N_STAGES
 from .system import System
@@ -174,6 +175,7 @@ def sample_batch(system: System, times: np.ndarray, shift: np.ndarray, *, which:
     """
     if system.switching != "angle":
         raise SolverError("sample_batch runs angle switching only")
+    capability(system, "exact")  # a pendulum or drag needs an integrator: refused, never approximated
     times = np.ascontiguousarray(times, float)
     shift = np.ascontiguousarray(np.broadcast_to(np.asarray(shift, float), (len(system),)))
     if times.ndim != 1 or not times.size or not np.all(np.diff(times) >= 0.0):

@@ -419,9 +419,11 @@ def _diagnostics(post: xr.Dataset, names: list[str], mc: McmcResult) -> xr.Datas
 
     from .convergence import chain_diagnostics
 
-    # (chain, draw, parameter), each parameter's draws as the posterior group holds them
-    rhat, ess_b, ess_t = chain_diagnostics(np.stack([post[n].transpose("chain", "draw").values for n in names],
-                                                    axis=-1))
+    if mc.figures is not None and list(names) == list(mc.names):
+        rhat, ess_b, ess_t = mc.figures  # the automatic stop's figures, of these very draws
+    else:  # (chain, draw, parameter), each parameter's draws as the posterior group holds them
+        rhat, ess_b, ess_t = chain_diagnostics(np.stack([post[n].transpose("chain", "draw").values for n in names],
+                                                        axis=-1))
     return xr.Dataset(
         {"rhat": ("parameter", rhat),
          "ess_bulk": ("parameter", ess_b),

@@ -63,6 +63,9 @@ class McmcResult:
         With ``auto``: the convergence figures at the stop, in one line.
     timings : dict
         Seconds spent sampling and saving checkpoints.
+    figures : tuple of ndarray or None
+        Split R-hat, bulk ESS and tail ESS of the kept draws (per parameter) when the automatic
+        stop already computed them on exactly these draws; None otherwise.
     """
 
     names: list[str]
@@ -82,6 +85,7 @@ class McmcResult:
     converged: bool | None = None
     verdict: str = ""
     timings: dict = field(default_factory=dict)
+    figures: tuple | None = None
 
 
 MOVES = {
@@ -281,6 +285,9 @@ def run_emcee(problem: Problem, lsq: LeastSquaresResult | None = None, *, walker
     assessment = run.advance(target, auto, progress, burn)
     chain, lp = run.chain(), run.log_prob()
     total = chain.shape[0]
+    # the stop's last assessment dropped the same burn-in when it was complete and of this run
+    same = (assessment is not None and assessment.complete and assessment.steps == total
+            and (burn is None or int(burn) <= total - 1))
     burn = total // 2 if burn is None else min(int(burn), total - 1)
     tau = assessment.tau if assessment is not None and assessment.steps == total else autocorr_time(chain)
     kept = chain[burn:].transpose(1, 0, 2)
@@ -288,7 +295,8 @@ def run_emcee(problem: Problem, lsq: LeastSquaresResult | None = None, *, walker
                       total, burn, walkers, seed, bool(np.all(total > 50 * np.asarray(tau))),
                       resumed=previous is not None, failures=dict(problem.failures), moves=moves, auto=auto,
                       converged=None if not auto else bool(assessment is not None and assessment.converged),
-                      verdict="" if assessment is None else assessment.verdict(), timings=run.timings)
+                      verdict="" if assessment is None else assessment.verdict(), timings=run.timings,
+                      figures=(assessment.rhat, assessment.ess_bulk, assessment.ess_tail) if same else None)
 
 
 class _Run:

@@ -115,7 +115,7 @@ class WaveformProblem(RecordingProblem):
             self.notes.append(f"waveform: one sample in {thin} used ({idx.size} of {np.count_nonzero(keep)})")
         self.curves = [Curve("waveform", math.nan, np.arange(idx.size), series.theta[idx], self.sample_time)]
         # the exact or dop853 dense solution is sampled for a whole ensemble in one call (log_prob_many)
-        self.vectorized = set(self.solver_options) <= _BATCH_OPTIONS.get(self.solver, set())
+        self.vectorized = self.solver in _BATCH_OPTIONS and set(self.solver_options) <= _BATCH_OPTIONS[self.solver]
 
     @property
     def sampler_coordinates(self):
