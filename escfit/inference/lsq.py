@@ -201,7 +201,9 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
         last.update(x=np.array(x, float), scale=scale[0], out=out)
         return out
 
-    if callable(getattr(problem, "residuals_many", None)) and "jac" not in options:
+    # the forward differences in one batch call where the problem has one (same steps, same fit)
+    if callable(getattr(problem, "residuals_many", None)) and getattr(problem, "vectorized", True) \
+            and "jac" not in options:
         options["jac"] = _batch_jacobian(problem, names, fixed, priors, n, scale, last, lo, hi,
                                          options.get("diff_step"))
 
