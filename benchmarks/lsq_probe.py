@@ -6,7 +6,8 @@ Run by ``benchmarks/lsq_speed.py`` under the current and the previous version of
 For each recipe: the problem is built as ``escfit fit`` builds it, the model is run once (numba's
 kernels loaded, so the timing is warm), then the least squares ``escfit fit`` runs (the family's
 multistart, then the reconciliation of estimates on bounds) is timed.  Printed: wall-clock and CPU seconds, model
-evaluations (calls of ``problem.residuals``), and every fitted parameter's estimate and standard
+evaluations (calls of ``problem.residuals``; with a batch Jacobian also the parameter sets of
+``problem.residuals_many``, counted apart as ``batch_sets``), and every fitted parameter's estimate and standard
 error.
 """
 
@@ -43,12 +44,22 @@ def probe(recipe: Path) -> dict:
         return inner(vals)
 
     problem.residuals = counted
+    batch = [0]
+    many = getattr(problem, "residuals_many", None)
+    if many is not None:
+        many(np.array([problem.initial]))  # warm: the batch kernels loaded too
+
+        def counted_many(vecs):
+            batch[0] += len(vecs)
+            return many(vecs)
+
+        problem.residuals_many = counted_many
     clock, cpu = time.perf_counter(), time.process_time()
     lsq = least_squares(problem, n_starts=defaults.get("n_starts", 8), n_refine=defaults.get("n_refine"), seed=seed)
     lsq, _, _ = reconcile(problem, lsq, seed=seed)
     seconds, cpu = time.perf_counter() - clock, time.process_time() - cpu
     return {"recipe": recipe.stem, "seconds": seconds, "cpu_seconds": cpu, "evaluations": calls[0],
-            "names": list(lsq.names),
+            "batch_sets": batch[0], "names": list(lsq.names),
             "value": [float(v) for v in lsq.value], "stderr": [float(v) for v in lsq.stderr],
             "chisqr": float(lsq.chisqr),
             "rms_reading": float(np.sqrt(np.mean((problem.observed - problem.expected(lsq.values)) ** 2)))}

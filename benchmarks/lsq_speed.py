@@ -56,11 +56,18 @@ def shift(old: dict, new: dict) -> float:
     return worst
 
 
+def _evals(rec: dict, prefix: str = "") -> str:
+    """One-set evaluations, and the parameter sets batch Jacobians ran (when any)."""
+    sets = rec.get(f"{prefix}batch_sets", 0)
+    return f"{rec[f'{prefix}evaluations']}" + (f" + {sets}" if sets else "")
+
+
 def row(old: dict, new: dict) -> dict:
     return {"recipe": new["recipe"], "previous_s": old["seconds"], "current_s": new["seconds"],
             "previous_cpu_s": old["cpu_seconds"], "current_cpu_s": new["cpu_seconds"],
             "speedup": old["seconds"] / new["seconds"], "cpu_speedup": old["cpu_seconds"] / new["cpu_seconds"],
             "previous_evaluations": old["evaluations"], "current_evaluations": new["evaluations"],
+            "previous_batch_sets": old.get("batch_sets", 0), "current_batch_sets": new.get("batch_sets", 0),
             "max_shift_in_se": shift(old, new), "chisqr_previous": old["chisqr"], "chisqr_current": new["chisqr"]}
 
 
@@ -92,10 +99,10 @@ def main() -> None:
              f"warm), load average {load_before[0]:.1f} before / {os.getloadavg()[0]:.1f} after on "
              f"{os.cpu_count()} CPUs:",
              "",
-             "| run | wall s | CPU s | model evaluations |",
+             "| run | wall s | CPU s | model evaluations (+ sets in batch Jacobians) |",
              "| --- | ---: | ---: | ---: |",
-             f"| previous ({args.baseline}) | {old['seconds']:.2f} | {old['cpu_seconds']:.2f} | {old['evaluations']} |",
-             f"| current | {new['seconds']:.2f} | {new['cpu_seconds']:.2f} | {new['evaluations']} |",
+             f"| previous ({args.baseline}) | {old['seconds']:.2f} | {old['cpu_seconds']:.2f} | {_evals(old)} |",
+             f"| current | {new['seconds']:.2f} | {new['cpu_seconds']:.2f} | {_evals(new)} |",
              f"| scipy peer (solve_ivp LSODA + least_squares, one start) | {peer['seconds']:.2f} | "
              f"{peer['cpu_seconds']:.2f} | {peer['evaluations']} |",
              "",
@@ -107,11 +114,12 @@ def main() -> None:
              "Every fits/real/ recipe with method leastsq (warm, seconds; shift: largest change of an estimate in "
              "the previous standard errors):",
              "",
-             "| recipe | previous s | current s | speed-up | CPU speed-up | evaluations before / after | shift (se) |",
+             "| recipe | previous s | current s | speed-up | CPU speed-up | evaluations before / after "
+             "(+ batch sets) | shift (se) |",
              "| --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for r in rows:
         lines.append(f"| {r['recipe']} | {r['previous_s']:.2f} | {r['current_s']:.2f} | {r['speedup']:.1f}x | "
-                     f"{r['cpu_speedup']:.1f}x | {r['previous_evaluations']} / {r['current_evaluations']} | "
+                     f"{r['cpu_speedup']:.1f}x | {_evals(r, 'previous_')} / {_evals(r, 'current_')} | "
                      f"{r['max_shift_in_se']:.2g} |")
     text = "\n".join(lines) + "\n"
     print(text)

@@ -1,7 +1,9 @@
 """Bounded least squares with a multistart, for every model family.
 
 Each start runs scipy's trust-region reflective method (:mod:`escfit.inference.trf`, the
-algorithm lmfit's ``least_squares`` method wraps, called directly).
+algorithm lmfit's ``least_squares`` method wraps, called directly).  Its forward-difference
+Jacobian runs as one batch call when the problem offers ``residuals_many`` (many parameter
+sets at once, :mod:`escfit.inference.fdjac`: the same steps, hence the same fit).
 
 The optimiser sees :meth:`Problem.residuals` (the readings' standardised residuals) plus one
 residual per Gaussian prior of a fitted parameter (see
@@ -37,6 +39,7 @@ import numpy as np
 
 from ..core.errors import EscfitError, FitError
 from ..likelihood.problem import FAIL_RESIDUAL, Problem, gaussian_prior_residuals
+from .fdjac import batch_jacobian
 from .trf import minimize, single_blas_thread
 
 __all__ = ["LeastSquaresResult", "least_squares", "bounded_interval", "bound_flags", "INTERVAL_Z"]
@@ -189,11 +192,20 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
     options = dict(getattr(problem, "lsq_options", {}) or {})
     scale = [1.0]  # reading residuals are divided by this (the profiled noise over the scene's)
 
+    last = {}  # the latest residual evaluation, which scipy differentiates at next
+
     def residual(x: np.ndarray) -> np.ndarray:
         vals = problem.values({**fixed, **dict(zip(names, (float(v) for v in x)))})
         r = np.asarray(problem.residuals(vals), float)[:n] / scale[0]
-        out = np.concatenate([r, gaussian_prior_residuals(priors, x)])
-        return np.where(np.isfinite(out), out, FAIL_RESIDUAL)
+        out = _stacked(r, priors, x)
+        last.update(x=np.array(x, float), scale=scale[0], out=out)
+        return out
+
+    # the forward differences in one batch call where the problem has one (same steps, same fit)
+    if callable(getattr(problem, "residuals_many", None)) and getattr(problem, "vectorized", True) \
+            and "jac" not in options:
+        options["jac"] = _batch_jacobian(problem, names, fixed, priors, n, scale, last, lo, hi,
+                                         options.get("diff_step"))
 
     with single_blas_thread(), _quiet():
         starts = _ranked(starts, residual, lo, hi, N_REFINE if n_refine is None else n_refine)
@@ -253,6 +265,35 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
     return LeastSquaresResult(names, value, stderr, corr, chisqr, float(redchi), float(sigma_hat), int(n),
                               len(starts), bool(best.success), best.message, vals, profile_noise,
                               lower=lo.copy(), upper=hi.copy(), warnings=cov_warnings)
+
+
+def _stacked(r: np.ndarray, priors, x: np.ndarray) -> np.ndarray:
+    """The readings' residuals and the Gaussian priors' ones, failures made large and finite."""
+    out = np.concatenate([r, gaussian_prior_residuals(priors, x)])
+    return np.where(np.isfinite(out), out, FAIL_RESIDUAL)
+
+
+def _batch_jacobian(problem, names, fixed, priors, n, scale, last, lo, hi, rel_step):
+    """The Jacobian of the least squares' residual vector for a problem with ``residuals_many``:
+    scipy's "2-point" forward differences (:func:`~escfit.inference.fdjac.batch_jacobian`), the
+    stepped points run in one batch call, the base point's residuals reused from the evaluation
+    scipy made there; the same noise-scale division, prior rows and failure values as the
+    residual function."""
+    base = problem.values(dict(fixed))
+    full = np.array([base[nm] for nm in problem.names], float)
+    cols = [problem.names.index(nm) for nm in names]
+
+    def rows(points: np.ndarray) -> np.ndarray:
+        vecs = np.repeat(full[None, :], points.shape[0], axis=0)
+        vecs[:, cols] = points
+        r = np.asarray(problem.residuals_many(vecs), float)[:, :n] / scale[0]
+        return np.array([_stacked(ri, priors, p) for ri, p in zip(r, points)])
+
+    def jac(x: np.ndarray) -> np.ndarray:
+        seen = "x" in last and last["scale"] == scale[0] and np.array_equal(last["x"], x)
+        return batch_jacobian(rows, x, lo, hi, f0=last["out"] if seen else None, rel_step=rel_step)
+
+    return jac
 
 
 def _failures_since(problem: Problem, before: Counter) -> tuple[int, str] | None:

@@ -27,7 +27,7 @@ from .. import BalanceScene
 from ...core.errors import EscfitError, FitError
 from ..observation.waveform import READINGS, WaveformObservation
 from ...core.params import ParamSet
-from .curves import Curve, _column
+from .curves import FAIL_RESIDUAL, Curve, _column
 from .pulses import RecordingProblem
 from .nuisance import centre_priors
 from .release import release_from_record
@@ -185,23 +185,13 @@ class WaveformProblem(RecordingProblem):
         return out
 
     def _log_likelihood_many(self, vecs: np.ndarray) -> np.ndarray:
-        from ..batch_dense import OMEGA, THETA, sample_batch
         from ..observation.waveform_compiled import WAVE_SET, waveform_loglike_sets
 
         n_sets = vecs.shape[0]
         vals = self.values_many(vecs)
         ll = np.full(n_sets, math.nan)
-        if self.solver == "dop853":
-            from ..batch_dop853 import sample_batch_dop853 as sample_batch
-        try:
-            model, summary = sample_batch(self.scene.system(vals, n_sets), self.sample_time,
-                                          _column(vals["observation.t_release"], n_sets),
-                                          which=OMEGA if self.quantity == "angular_velocity" else THETA,
-                                          **self.solver_options)
-        except (EscfitError, ValueError, ArithmeticError):
-            usable = np.zeros(n_sets, bool)  # every set the one-at-a-time way, which records why
-        else:
-            usable = summary["usable"] == 1
+        model, usable = self._model_many(vals, n_sets)
+        if model is not None:
             sets = np.empty(n_sets, WAVE_SET)
             sets["sigma"] = vals["observation.sigma"]
             sets["offset"] = vals["observation.offset"]
@@ -213,6 +203,74 @@ class WaveformProblem(RecordingProblem):
         for i in np.flatnonzero(~(usable & np.isfinite(ll))):
             ll[i] = self.log_likelihood(self.values(vecs[i]))  # counts the failure as log_prob would
         return ll
+
+    def _model_many(self, vals: Mapping, n_sets: int) -> tuple[np.ndarray | None, np.ndarray]:
+        """The model's quantity at the sample times for every set, shape (sets, samples), and which
+        sets the batch finished (the others are for the one-set path); ``(None, all False)`` when
+        the batch refuses the whole ensemble."""
+        from ..batch_dense import OMEGA, THETA, sample_batch
+
+        if self.solver == "dop853":
+            from ..batch_dop853 import sample_batch_dop853 as sample_batch
+        try:
+            model, summary = sample_batch(self.scene.system(vals, n_sets), self.sample_time,
+                                          _column(vals["observation.t_release"], n_sets),
+                                          which=OMEGA if self.quantity == "angular_velocity" else THETA,
+                                          **self.solver_options)
+        except (EscfitError, ValueError, ArithmeticError):
+            return None, np.zeros(n_sets, bool)  # every set the one-at-a-time way, which records why
+        return model, summary["usable"] == 1
+
+    def residuals_many(self, vecs: np.ndarray) -> np.ndarray:
+        """:meth:`residuals` of every row of ``vecs`` (sets, ndim), shape (sets, readings).
+
+        Row by row the numbers of :meth:`residuals` (the same sampled model, bit for bit, and the
+        same element-wise arithmetic of :meth:`WaveformObservation.residuals
+        <escfit.balance.observation.waveform.WaveformObservation.residuals>`: gain, offsets, white
+        or AR(1)-whitened residuals over the noise and rounding spread).  With the exact or the
+        dop853 solver every set's model comes from one batch call; sets it does not finish, and
+        every set with another solver, go through :meth:`residuals` one at a time, which counts
+        the failure and returns its large residuals.
+        """
+        vecs = np.atleast_2d(np.asarray(vecs, float))
+        n_sets = vecs.shape[0]
+        if not self.vectorized:
+            return np.array([self.residuals(self.values(v)) for v in vecs]).reshape(n_sets, self.n_data)
+        vals = self.values_many(vecs)
+        model, usable = self._model_many(vals, n_sets)
+        out = np.empty((n_sets, self.n_data))
+        if model is not None and usable.any():
+            with np.errstate(all="ignore"):
+                out[usable] = self._residual_rows(model[usable], {k: (v[usable] if isinstance(v, np.ndarray) else v)
+                                                                  for k, v in vals.items()})
+        for i in np.flatnonzero(~usable):
+            out[i] = self.residuals(self.values(vecs[i]))
+        return np.where(np.isfinite(out), out, FAIL_RESIDUAL)
+
+    def _residual_rows(self, model: np.ndarray, vals: Mapping) -> np.ndarray:
+        """:meth:`WaveformObservation.residuals` of rows of ``model`` with per-row parameters."""
+        obs = self.observation
+
+        def col(name, default=None):
+            v = vals.get(name, default)
+            return np.asarray(v, float)[:, None] if np.ndim(v) else v
+
+        gain = col("observation.gain", 1.0)
+        mu = gain * model - col("observation.offset") - col("observation.offset_rate") * (self.sample_time - obs.t_ref)
+        r = self.curves[0].y - mu
+        sigma = np.asarray(vals["observation.sigma"], float)
+        if obs.noise == "ar1":
+            rho = np.broadcast_to(np.asarray(vals["observation.rho"], float), (model.shape[0],))
+            sigma = np.broadcast_to(sigma, (model.shape[0],))
+            scale = np.array([s * math.sqrt(max(1.0 - p * p, 1e-300)) for s, p in zip(sigma, rho)])
+            e = r.copy()
+            e[:, 1:] -= rho[:, None] * r[:, :-1]
+            e[:, 0] /= sigma
+            e[:, 1:] /= scale[:, None]
+            return e
+        spread = np.array([math.sqrt(s**2 + obs.quantum**2 / 12.0)
+                           for s in np.broadcast_to(sigma, (model.shape[0],))])
+        return r / spread[:, None]
 
     def _samples(self) -> np.ndarray:
         """The samples as :data:`~escfit.balance.observation.waveform_compiled.SAMPLE` records (computed once)."""
