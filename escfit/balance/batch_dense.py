@@ -176,14 +176,25 @@ def sample_batch(system: System, times: np.ndarray, shift: np.ndarray, *, which:
     if system.switching != "angle":
         raise SolverError("sample_batch runs angle switching only")
     capability(system, "exact")  # a pendulum or drag needs an integrator: refused, never approximated
+    spec = np.zeros(1, SAMPLING)
+    spec[0] = (which, int(max_segments or 0), int(max_swings))
+    return run_sampling(sample_many, system, spec, times, shift, threads)
+
+
+def run_sampling(many, system: System, spec: np.ndarray, times: np.ndarray, shift, threads: int | None
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Check the times, prepare the outputs and run the compiled loop ``many`` over every set.
+
+    Shared by :func:`sample_batch` and :func:`escfit.balance.batch_dop853.sample_batch_dop853`:
+    ``many(ks, spec, (times, shift), active, values, summary)`` fills ``values`` (sets, times)
+    and ``summary`` (:data:`SAMPLED`); sets the one-set solver would refuse stay ``REFUSED``.
+    """
     times = np.ascontiguousarray(times, float)
     shift = np.ascontiguousarray(np.broadcast_to(np.asarray(shift, float), (len(system),)))
     if times.ndim != 1 or not times.size or not np.all(np.diff(times) >= 0.0):
         raise SolverError("sample times must be a non-empty ascending 1-d array")
     n = len(system)
     active = np.array([not m for m in system.refusals()], np.bool_)
-    spec = np.zeros(1, SAMPLING)
-    spec[0] = (which, int(max_segments or 0), int(max_swings))
     values = np.full((n, times.size), np.nan)
     summary = np.zeros(n, SAMPLED)
     summary["status"] = _REFUSED
@@ -192,7 +203,7 @@ def sample_batch(system: System, times: np.ndarray, shift: np.ndarray, *, which:
     if threads is not None:
         set_num_threads(max(1, min(int(threads), config.NUMBA_NUM_THREADS)))
     try:
-        sample_many(system.k, spec, (times, shift), active, values, summary)
+        many(system.k, spec, (times, shift), active, values, summary)
     finally:
         set_num_threads(previous)
     return values, summary

@@ -21,12 +21,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import config, from_dtype, get_num_threads, prange, set_num_threads
+from numba import from_dtype, prange
 
 from ..core.errors import SolverError
 from ..core.kernels import kernel
 from ..core.status import Status
-from .batch_dense import OMEGA, SAMPLED, THETA, _first_swings
+from .batch_dense import OMEGA, THETA, _first_swings, run_sampling
 from .dop853 import run_dop853
 from .records import HALF_SWING, ROWS_FULL, RUN
 from .solution import ROW_DOP853, _states_at
@@ -191,24 +191,7 @@ def sample_batch_dop853(system: System, times: np.ndarray, shift: np.ndarray, *,
     capability(system, "dop853")
     if not 1e-15 <= rtol < 1.0 or (atol is not None and not (atol > 0.0 and math.isfinite(atol))):
         raise SolverError(f"dop853 needs 1e-15 <= rtol < 1 and atol > 0, got rtol={rtol!r}, atol={atol!r}")
-    times = np.ascontiguousarray(times, float)
-    shift = np.ascontiguousarray(np.broadcast_to(np.asarray(shift, float), (len(system),)))
-    if times.ndim != 1 or not times.size or not np.all(np.diff(times) >= 0.0):
-        raise SolverError("sample times must be a non-empty ascending 1-d array")
-    n = len(system)
-    active = np.array([not m for m in system.refusals()], np.bool_)
     spec = np.zeros(1, DOP853_SAMPLING)
     spec[0] = (which, int(max_segments or 0), int(max_steps or 0), int(max_swings), float(rtol),
                math.nan if atol is None else float(atol))
-    values = np.full((n, times.size), np.nan)
-    summary = np.zeros(n, SAMPLED)
-    summary["status"] = _REFUSED
-    summary["t"] = math.nan
-    previous = get_num_threads()
-    if threads is not None:
-        set_num_threads(max(1, min(int(threads), config.NUMBA_NUM_THREADS)))
-    try:
-        sample_many_dop853(system.k, spec, (times, shift), active, values, summary)
-    finally:
-        set_num_threads(previous)
-    return values, summary
+    return run_sampling(sample_many_dop853, system, spec, times, shift, threads)
