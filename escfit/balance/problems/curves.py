@@ -224,31 +224,15 @@ class FitProblem(FreeParameters, BalanceProblem):
         return ll
 
     # -- many parameter vectors at once ------------------------------------------------
-    def log_prob_many(self, vecs: np.ndarray) -> np.ndarray:
-        """Log posterior of each row of ``vecs``, shape ``(sets, ndim)`` -> ``(sets,)``.
-
-        The same numbers as :meth:`log_prob` row by row (and the same failure counts), but
-        with the exact solver the whole ensemble is one array computation: priors, parameter
-        values and the load rule on arrays, the coefficient records of every set assembled in one
-        pass (``scene.system(values, n)``), the forward runs in one call
-        of :func:`escfit.balance.batch.solve_batch` per curve and the observation model on a
-        (sets, readings) array.  Sets the batch refuses or cannot finish go through
-        :meth:`log_likelihood` one at a time, which records why.  Solvers without a batch path are
-        evaluated row by row.
-        """
-        vecs = np.atleast_2d(np.asarray(vecs, float))
-        out = np.full(vecs.shape[0], -math.inf)
-        lp = self.log_prior_many(vecs)
-        rows = np.flatnonzero(np.isfinite(lp))
-        if rows.size == 0:
-            return out
-        if not self.vectorized:
-            out[rows] = lp[rows] + np.array([self.log_likelihood(self.values(vecs[i])) for i in rows])
-            return out
-        out[rows] = lp[rows] + self._log_likelihood_many(vecs[rows])
-        return out
-
     def _log_likelihood_many(self, vecs: np.ndarray) -> np.ndarray:
+        """Log-likelihood of every row (inside the priors) as one array computation.
+
+        Values and the load rule on arrays, the coefficient records of every set assembled in
+        one pass (``scene.system(values, n)``), the forward runs in one call of
+        :func:`escfit.balance.batch.solve_batch` and the observation model on a (sets,
+        readings) array; sets the batch refuses or cannot finish go through
+        :meth:`log_likelihood` one at a time, which records why.
+        """
         n_sets = vecs.shape[0]
         vals = self.values_many(vecs)
         scalar = np.zeros(n_sets, bool)  # sets handed to the one-at-a-time path (refusals, failures)

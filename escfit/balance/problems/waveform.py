@@ -157,34 +157,17 @@ class WaveformProblem(RecordingProblem):
         return self.observation.expected(pred, self.sample_time, vals)
 
     # -- many parameter vectors at once ------------------------------------------------------
-    def log_prob_many(self, vecs: np.ndarray) -> np.ndarray:
-        """Log posterior of each row of ``vecs``, shape ``(sets, ndim)`` -> ``(sets,)``.
-
-        The same numbers as :meth:`log_prob` row by row (to the rounding of the final sum) and
-        the same failure counts, but with the exact or the dop853 solver the whole ensemble is one
-        array computation: priors and values on arrays, every set's coefficient record in one pass
-        (``scene.system(values, n)``), every set's run and its dense solution at the sample
-        times in one compiled call (:func:`escfit.balance.batch_dense.sample_batch`,
-        :func:`escfit.balance.batch_dop853.sample_batch_dop853`), and the
-        observation model of every set in another
-        (:func:`escfit.balance.observation.waveform_compiled.waveform_loglike_sets`).  Sets the
-        batch refuses or does not finish (a release after the first sample, a run out of
-        segments, a non-finite likelihood) go through :meth:`log_likelihood` one at a time,
-        which records why.  Other solvers are evaluated row by row.
-        """
-        vecs = np.atleast_2d(np.asarray(vecs, float))
-        out = np.full(vecs.shape[0], -math.inf)
-        lp = self.log_prior_many(vecs)
-        rows = np.flatnonzero(np.isfinite(lp))
-        if rows.size == 0:
-            return out
-        if not self.vectorized:
-            out[rows] = lp[rows] + np.array([self.log_likelihood(self.values(vecs[i])) for i in rows])
-            return out
-        out[rows] = lp[rows] + self._log_likelihood_many(vecs[rows])
-        return out
-
     def _log_likelihood_many(self, vecs: np.ndarray) -> np.ndarray:
+        """Log-likelihood of every row (inside the priors) as one array computation.
+
+        Every set's run and its dense solution at the sample times in one compiled call
+        (:func:`escfit.balance.batch_dense.sample_batch`,
+        :func:`escfit.balance.batch_dop853.sample_batch_dop853`), the observation model of every
+        set in another (:func:`escfit.balance.observation.waveform_compiled.waveform_loglike_sets`);
+        sets the batch refuses or does not finish (a release after the first sample, a run out of
+        segments, a non-finite likelihood) go through :meth:`log_likelihood` one at a time, which
+        records why.
+        """
         from ..observation.waveform_compiled import WAVE_SET, waveform_loglike_sets
 
         n_sets = vecs.shape[0]
