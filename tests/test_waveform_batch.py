@@ -12,7 +12,6 @@ after the first sample, a run out of segments), with the same failure counts.
 from __future__ import annotations
 
 import math
-from collections import Counter
 
 import numpy as np
 import pytest
@@ -22,6 +21,8 @@ from escfit.balance.recordings.timeseries import TimeSeries
 from escfit.balance.waveform import sample_state
 from escfit.core.scene import load_scene
 from escfit.inference import make_problem
+
+from .batch_checks import compare_many as _compare, scatter, with_values as _set
 
 SCENE = """model = "balance"
 [oscillator]
@@ -65,45 +66,11 @@ def _problem(coulomb: str = "", observation: str = "", **kw):
 
 
 def _sets(problem, n: int, seed: int = 0, spread: float = 0.03) -> np.ndarray:
-    """``n`` parameter sets scattered about the truth (relative spread ``spread``), inside the priors
-    (the release angle and instant, the offset and its drift about the problem's start, which the
-    record's reference turning point gave)."""
-    rng = np.random.default_rng(seed)
-    truth = dict(problem.values(problem.initial))
-    truth.update({"oscillator.omega0": 2 * math.pi, "viscous.C": 0.3, "coulomb.R": 0.5, "observation.sigma": 0.01})
-    centre = np.array([truth[n] for n in problem.names])
-    lo, hi = problem.bounds
-    vecs = centre + spread * rng.standard_normal((n, centre.size)) * np.maximum(np.abs(centre), 1e-2)
-    return np.clip(vecs, np.where(np.isfinite(lo), lo, -np.inf), np.where(np.isfinite(hi), hi, np.inf))
-
-
-def _set(problem, vec: np.ndarray, **values) -> np.ndarray:
-    out = vec.copy()
-    for name, value in values.items():
-        out[problem.names.index(name)] = value
-    return out
-
-
-def _compare(problem, vecs: np.ndarray, one_at_a_time: int = 0) -> tuple[np.ndarray, Counter]:
-    """log_prob_many against log_prob row by row: the same -inf, finite values to 1e-9, the same
-    failures; and only ``one_at_a_time`` sets went the one-set way inside log_prob_many."""
-    problem.failures.clear()
-    calls = []
-    one_set = problem.log_likelihood
-    problem.log_likelihood = lambda vals: calls.append(1) or one_set(vals)
-    try:
-        many = problem.log_prob_many(vecs)
-    finally:
-        del problem.log_likelihood
-    assert len(calls) == one_at_a_time
-    failures_many = Counter(problem.failures)
-    problem.failures.clear()
-    rows = np.array([problem.log_prob(v) for v in vecs])
-    assert np.array_equal(np.isfinite(many), np.isfinite(rows)), (many, rows)
-    ok = np.isfinite(rows)
-    np.testing.assert_allclose(many[ok], rows[ok], rtol=1e-9, atol=0.0)
-    assert failures_many == problem.failures
-    return rows, failures_many
+    """``n`` parameter sets scattered about the truth, inside the priors (the release angle and
+    instant, the offset and its drift about the problem's start, which the record's reference
+    turning point gave)."""
+    truth = {"oscillator.omega0": 2 * math.pi, "viscous.C": 0.3, "coulomb.R": 0.5, "observation.sigma": 0.01}
+    return scatter(problem, truth, n, seed, spread)
 
 
 def test_white_noise_sets_about_the_truth_stops_releases_and_prior_bounds():
