@@ -21,9 +21,9 @@ rise).  The three half swings
 around ``j`` are left out, so an offset step (one half swing) and a glitch (two) change
 neither level.  The gain ``G_j`` has two scales:
 
-- the reading noise of the swings: ``s_p`` from the median absolute second difference of ``p``
-  (white noise of scale ``s`` gives second differences of scale ``sqrt(6) s``), so that the
-  gain of medians of ``a`` and ``b`` swings scatters by ``1.25 s_p sqrt(1/a + 1/b)``;
+- the reading noise of the swings: ``s_p`` from the median absolute second difference of ``p``,
+  carried through the two levels (medians of ``a`` and ``b`` swings: ``1.25 s_p sqrt(1/a + 1/b)``)
+  and through the slope carried across the gap (a median of differences within one side);
 - the spread of ``G`` itself along the record (its median absolute deviation): a wobble gives
   gains of both signs at every position, as large as its depth.
 
@@ -86,17 +86,34 @@ def _robust_scale(values: np.ndarray) -> float:
     return float(MAD * np.median(np.abs(v - np.median(v)))) if v.size else math.nan
 
 
-def swing_gains(series: np.ndarray, side: int = SIDE, *, log: bool = False) -> tuple[np.ndarray, np.ndarray]:
+def _level(side: np.ndarray) -> tuple[float, float]:
+    """Level at the middle of ``side`` and its slope per element: the median of the values
+    about their own median slope (a value out of line moves it by little more than the noise).
+
+    The slope is a decay's, never a rise, and taken only from four differences or more (from
+    fewer, one value out of line sets it)."""
+    slope = min(float(np.median(np.diff(side))), 0.0) if side.size >= 5 else 0.0
+    k = np.arange(side.size) - 0.5 * (side.size - 1)
+    return float(np.median(side - slope * k)), slope
+
+
+def swing_gains(series: np.ndarray, side: int = SIDE, *, noise_ratio: float, log: bool = False
+                ) -> tuple[np.ndarray, np.ndarray]:
     """Level change of ``series`` across each position and its noise standard error.
 
     Returns ``(gain, stderr)``, one value per element of ``series`` (``nan`` where a side holds
-    fewer than :data:`MIN_SIDE` values).  ``gain[j]`` is the median of ``series[j+2 : j+2+side]``
-    minus the median of ``series[j-1-side : j-1]`` less the local trend over the gap; the
-    three elements ``j-1 .. j+1`` are left out (see the module docstring).  With ``log`` the
-    levels are compared as logarithms (a relative gain; ``series`` positive): a decay that loses
-    in proportion to its size is then a straight line, and a straight line carried across the
-    gap never predicts less than the decay does (no gain from the curvature of an exponential).
-    The noise is that of ``series`` itself, so with ``log`` the error grows as the level falls.
+    fewer than :data:`MIN_SIDE` values).  ``gain[j]`` is the level of ``series[j+2 : j+2+side]``
+    minus that of ``series[j-1-side : j-1]`` (:func:`_level`), less the slower of the two
+    sides' slopes (never a rise) times the gap; the three elements ``j-1 .. j+1`` are left out
+    (see the module docstring).  The slower slope: a gain must not come from carrying a steep
+    side's loss across the gap (a drive switched off), nor be excused by a hand's pull.
+
+    ``noise_ratio`` is the scale of the series' second differences over that of its own noise
+    (they are not independent: see :func:`find_events`).  With ``log`` the levels are compared
+    as logarithms (a relative gain; ``series`` positive): a decay that loses in proportion to
+    its size is then a straight line, and a straight line carried across the gap never predicts
+    less than such a decay does.  The noise is that of ``series`` itself, so with ``log`` the
+    error grows as the level falls.
     """
     p = np.asarray(series, float)
     n = p.size
@@ -104,27 +121,24 @@ def swing_gains(series: np.ndarray, side: int = SIDE, *, log: bool = False) -> t
     err = np.full(n, np.nan)
     if n < 2 * MIN_SIDE + 3:
         return gain, err
-    s_p = _robust_scale(np.diff(p, 2)) / math.sqrt(6.0)
+    s_p = _robust_scale(np.diff(p, 2)) / noise_ratio
     q = np.log(p) if log else p
-    trend_all = float(np.median(np.diff(q)))
     for j in range(n):
         b0, b1 = max(0, j - 1 - side), max(0, j - 1)
         a0, a1 = min(n, j + 2), min(n, j + 2 + side)
         nb, na = b1 - b0, a1 - a0
         if nb < MIN_SIDE or na < MIN_SIDE:
             continue
-        before, after = q[b0:b1], q[a0:a1]
-        # the slower of the two sides' trends, never a rise: a gain must not come from carrying a
-        # steep side's loss across the gap (a drive switched off), nor be excused by a hand's pull
-        sides = [float(np.median(np.diff(w))) for w in (before, after) if w.size >= 3]
-        trend = min(max(sides) if sides else trend_all, 0.0)
+        (lb, sb), (la, sa) = _level(q[b0:b1]), _level(q[a0:a1])
         gap = 0.5 * (a0 + a1 - 1) - 0.5 * (b0 + b1 - 1)
-        gain[j] = float(np.median(after) - np.median(before) - trend * gap)
-        if log:
-            lb, la = math.exp(float(np.median(before))), math.exp(float(np.median(after)))
-            err[j] = MEDIAN_SE * s_p * math.sqrt(1.0 / (nb * lb * lb) + 1.0 / (na * la * la))
-        else:
-            err[j] = MEDIAN_SE * s_p * math.sqrt(1.0 / nb + 1.0 / na)
+        slower = 0 if sb >= sa else 1
+        gain[j] = la - lb - min((sb, sa)[slower], 0.0) * gap
+        # each value's noise (relative with log), and the slope's from the median of the
+        # differences of the side it came from, carried across the gap
+        nb_s, na_s = (math.exp(-lb), math.exp(-la)) if log else (1.0, 1.0)
+        n_side, s_side = (nb, nb_s) if slower == 0 else (na, na_s)
+        slope_var = 2.0 * (s_side * s_side) / max(n_side - 1, 1)
+        err[j] = MEDIAN_SE * s_p * math.sqrt(nb_s * nb_s / nb + na_s * na_s / na + gap * gap * slope_var)
     return gain, err
 
 
@@ -135,6 +149,23 @@ def _centres(values: np.ndarray) -> np.ndarray:
     if v.size >= 3:
         c[:-1] = 0.25 * (v[:-2] + 2.0 * v[1:-1] + v[2:])
     return c
+
+
+def _grown_half_swing(v: np.ndarray, j: int) -> int:
+    """The half swing near ``j`` over which the amplitude grew the most (the one with the push).
+
+    Amplitudes are taken about the mean of the two neighbouring turning points' midpoints, so
+    an unknown centre cancels; the half swing ``k`` ends at turning point ``k + 1``.
+    """
+    lo, hi = max(j - 2, 1), min(j + 2, v.size - 3)
+    best, k_best = -math.inf, j
+    for k in range(lo, hi + 1):
+        centre = 0.25 * (v[k - 1] + 2.0 * v[k] + v[k + 1])
+        after = 0.25 * (v[k] + 2.0 * v[k + 1] + v[k + 2])
+        grew = abs(v[k + 1] - after) - abs(v[k] - centre)
+        if grew > best:
+            best, k_best = grew, k
+    return k_best
 
 
 def _spans_jump(v: np.ndarray, p: np.ndarray, k: int, jump: float) -> bool:
@@ -185,7 +216,9 @@ def find_events(times: np.ndarray, values: np.ndarray, *, resolution: float,
     p = np.abs(np.diff(v))
     floor = 2.0 * resolution
     events: list[SwingEvent] = []
-    gain, err = swing_gains(np.fmax(p, 0.5 * floor if floor > 0 else 1e-300), log=True)
+    # p_k and p_(k+1) share a turning point: turning points of noise s give p a noise of
+    # sqrt(2) s and second differences of p one of 2 s
+    gain, err = swing_gains(np.fmax(p, 0.5 * floor if floor > 0 else 1e-300), noise_ratio=math.sqrt(2.0), log=True)
     spread = _robust_scale(gain)
     scale = np.fmax(err, spread if math.isfinite(spread) else 0.0)
     level = np.array([np.median(p[max(0, j - 1 - SIDE):max(1, j - 1)]) for j in range(p.size)])
@@ -193,8 +226,7 @@ def find_events(times: np.ndarray, values: np.ndarray, *, resolution: float,
     pushes = np.isfinite(gain) & (gain > Z_PUSH * scale) & (absolute > floor)
     for run in _clusters(pushes):
         j = int(run[np.argmax(gain[run])])
-        lo, hi = max(j - 1, 1), min(j + 1, p.size - 1)
-        k = lo + int(np.argmax(p[lo:hi + 1] - p[lo - 1:hi]))  # the half swing that grew the most
+        k = _grown_half_swing(v, j)
         score = float(gain[j] / scale[j]) if scale[j] > 0 else math.inf
         events.append(SwingEvent(
             "push", k, float(t[k + 1]), float(absolute[j]), score,
@@ -202,7 +234,8 @@ def find_events(times: np.ndarray, values: np.ndarray, *, resolution: float,
             f"ending at t = {t[k + 1]:.4g} s and keeps it: {score:.0f} times the larger of its reading noise "
             f"({100 * err[j]:.2g} %) and the rise and fall of the swing elsewhere in the record ({100 * spread:.2g} %)"))
     c = _centres(v)
-    step, step_err = swing_gains(c)
+    # c_k = (v_k + 2 v_(k+1) + v_(k+2)) / 4 and its second differences scatter alike (sqrt(6)/4 s)
+    step, step_err = swing_gains(c, noise_ratio=1.0)
     c_spread = _robust_scale(step)
     c_scale = np.fmax(step_err, c_spread if math.isfinite(c_spread) else 0.0)
     moved = np.isfinite(step) & (np.abs(step) > Z_PUSH * c_scale) & (np.abs(step) > floor) & ~pushes
