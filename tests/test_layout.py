@@ -22,7 +22,7 @@ PACKAGE = "escfit"
 # Lowest first.  An import may go to the same or a lower layer; the model families share a layer
 # but must not import each other.  The top-level escfit/__init__.py (the public facade) is exempt.
 # results (the schema every layer may read or write) stands on core only
-LAYERS = [("core",), ("results",), ("likelihood",), ("balance", "friction", "geneva", "verge"), ("inference",),
+LAYERS = [("core",), ("analysis",), ("results",), ("likelihood",), ("balance", "friction", "geneva", "verge"), ("inference",),
           ("report",), ("study",), ("cli",), ("__main__",)]
 FACADE = PACKAGE
 

@@ -281,7 +281,7 @@ def _survey_samples(s: Survey, series: TimeSeries, restoring: str) -> None:
         notes = rate.notes
     else:
         tp = reduce_series(series, strict=False)
-        notes = list(tp.notes)
+        notes = [f"warning: {w}" for w in tp.warnings] + list(tp.notes)
     s.quantity = series.quantity
     s.kind, s.tp = "waveform", tp
     s.period = float(tp.period)

@@ -104,6 +104,7 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
     # irregular interval late in the record is a note there, not a refusal
     tp = reduce_series(series, strict=model != "waveform")
     notes += list(getattr(tp, "notes", []))
+    series = _without_steps(series, tp)
     _refuse_sustained(scene, tp, series.source)
     mp = measured_period(tp, series.source)
     check_scene_omega0(scene, mp)
@@ -114,6 +115,7 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
         problem = WaveformProblem(scene, series, tp, solver, solver_options)
         problem.notes = notes + [_count_note(tp)] + problem.notes
         problem.measured_period = mp
+        problem.data_warnings = list(getattr(problem, "data_warnings", [])) + list(tp.warnings)
         return problem
     held = hold_omega0(scene, mp)
     curve = turning_point_curve(series, tp)
@@ -124,7 +126,17 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
     problem.notes = notes
     problem.measured_period = mp
     problem.held = ("oscillator.omega0",) if held else ()
+    problem.data_warnings = list(getattr(problem, "data_warnings", [])) + list(tp.warnings)
     return problem
+
+
+def _without_steps(series, tp):
+    """The series with the offset steps the analysis found taken out (the record itself if none)."""
+    if not getattr(tp, "steps", ()):
+        return series
+    from ..recordings.turning_points import remove_steps
+
+    return replace(series, theta=remove_steps(series.time, series.theta, tp.steps))
 
 
 def _amplitude_rows_problem(scene: BalanceScene, series, notes: list[str], solver: str, solver_options):
@@ -197,6 +209,7 @@ def _sampled_problem(scene: BalanceScene, series, notes: list, solver, solver_op
         tp = reduce_series(series, strict=False)
         centre, noise = tp, None
         notes += list(tp.notes)
+        series = _without_steps(series, tp)
     _refuse_sustained(scene, tp, series.source)
     mp = measured_period(tp, series.source)
     check_scene_omega0(scene, mp)
@@ -204,6 +217,7 @@ def _sampled_problem(scene: BalanceScene, series, notes: list, solver, solver_op
     problem = WaveformProblem(scene, series, tp, solver, solver_options, centre=centre, noise=noise)
     problem.notes = notes + [_count_note(tp, series.quantity)] + problem.notes
     problem.measured_period = mp
+    problem.data_warnings = list(getattr(problem, "data_warnings", [])) + list(getattr(tp, "warnings", []))
     return problem
 
 

@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...core.errors import DataError
+from ...analysis.segments import find_events
 from .extrema import vertex_at
 
 __all__ = ["Turn", "Start", "reference", "faded_end", "growth_tolerance", "growth_steps", "find_start", "levels_off",
@@ -48,7 +49,9 @@ SUSTAIN_BLOCK = 4  # half swings per block of the loss-law checks
 # a cubic after a release: a quartic's freedom trades the release instant against the first
 # curvature when the noise is some 1 % of the swing (errors of 0.6 s on a 9 s period)
 RELEASE_DEGREE = 3
-START_TURN_PERIODS = 0.03  # a turn this close before the first sample counts as a start at a turn
+START_TURN_PERIODS = 0.03
+EARLY_TURNS = 4  # half swings at the start judged by plain growth: too few before them for the step test
+CUT_WARNING = 0.25  # leaving out more than this share of the record is a warning, not a note  # a turn this close before the first sample counts as a start at a turn
 
 
 @dataclass(frozen=True)
@@ -362,12 +365,7 @@ def find_start(rec, turns: list[Turn], end: int, *, at_start: bool = False) -> S
     times = np.array([turns[i].time if turns[i].time is not None else np.nan for i in range(end)])
     values = np.array([turns[i].value if turns[i].value is not None else np.nan for i in range(end)])
     tol = growth_tolerance(rec, values[first_ok:])
-    grow = growth_steps(values[first_ok:], tol) + first_ok
-    r = first_ok
-    why = ""
-    if grow.size:
-        r = int(grow[-1])
-        why = f"the swing grows after the turning point at t = {times[r]:.4g} s (a push or pull)"
+    r, why = _last_push(rec, times, values, first_ok, end, tol)
     # a hold within the run (a long interval after a flat turn) ends it backwards: the last one is the release
     for i in range(end - 1, r, -1):
         half = _local_half(times, i, end, 0.5 * rec.period)
@@ -388,6 +386,7 @@ def find_start(rec, turns: list[Turn], end: int, *, at_start: bool = False) -> S
     elif r > first_ok:
         rec.notes.append(f"the record before t = {times[r]:.4g} s is not a free decay ({why}); the free decay is "
                          "taken from there")
+        _warn_if_large_cut(rec, times, first_ok, r, end, why)
     amplitude = 0.5 * abs(values[r + 1] - values[r]) if r + 1 < end else math.inf
     held = held_release(rec, turns[r], amplitude)
     if held is not None and r + 1 < end \
@@ -397,6 +396,59 @@ def find_start(rec, turns: list[Turn], end: int, *, at_start: bool = False) -> S
     if r == first_ok and not (at_start and r == 0):
         _note_pull(rec, turns[r])
     return Start(float(times[r]), float(values[r]), r + 1, "turn")
+
+
+def _last_push(rec, times: np.ndarray, values: np.ndarray, first_ok: int, end: int, tol: float) -> tuple[int, str]:
+    """The turning point after the last push among ``turns[first_ok:end]`` and why (``first_ok, ""``: none).
+
+    Along the record a push is energy gained and kept, beyond the reading noise of the swings
+    and beyond their rise and fall elsewhere (:func:`escfit.analysis.segments.find_events`); a
+    wobble, an offset step or a glitch is none.  The first half swings have too few before them
+    for that test: there a swing larger than the one before it by more than ``tol`` (a hand's
+    start, a swing-up) is the evidence.  Offset steps found are kept on ``rec.steps``.
+    """
+    events = find_events(times[first_ok:end], values[first_ok:end], resolution=rec.step,
+                         show=lambda v: rec.show(v, 2))
+    for e in events:
+        if e.kind == "offset step" and rec.find_steps:
+            k = first_ok + e.half_swing  # searched from the turning point before to the one after
+            at = _jump_instant(rec, times[max(k - 1, first_ok)], times[min(k + 2, end - 1)], e.size)
+            rec.steps.append((at, e.size, f"{e.evidence}: not a push; the samples from t = {at:.4g} s on are moved "
+                                          f"back by {rec.show(e.size, 2, signed=True)} and the record is kept whole"))
+    pushes = [e for e in events if e.kind == "push"]
+    if pushes:
+        last = pushes[-1]
+        return first_ok + last.half_swing + 1, last.evidence
+    early = growth_steps(values[first_ok:min(end, first_ok + EARLY_TURNS + 2)], tol)
+    if early.size:
+        r = first_ok + int(early[-1])
+        return r, f"the swing grows after the turning point at t = {times[r]:.4g} s (a push or pull)"
+    return first_ok, ""
+
+
+def _jump_instant(rec, t0: float, t1: float, size: float) -> float:
+    """Time (s) of the first sample after a jump of ``size`` between ``t0`` and ``t1``.
+
+    The jump is the sample-to-sample change that departs most, in the jump's sign, from the
+    median of the changes around it (the motion's own changes vary slowly from sample to sample).
+    """
+    lo, hi = np.searchsorted(rec.t, [t0, t1])
+    lo, hi = max(lo - 3, 0), min(hi + 3, rec.t.size - 1)
+    d = np.diff(rec.x[lo:hi + 1])
+    if d.size < 3:
+        return float(rec.t[min(hi, rec.t.size - 1)])
+    near = np.array([np.median(np.r_[d[max(0, i - 3):i], d[i + 1:i + 4]]) for i in range(d.size)])
+    i = int(np.argmax(np.sign(size) * (d - near)))
+    return float(rec.t[lo + i + 1])
+
+
+def _warn_if_large_cut(rec, times: np.ndarray, first: int, r: int, end: int, why: str) -> None:
+    """A warning when the free decay kept starts after more than a quarter of the record's turning points' span."""
+    span = times[end - 1] - times[first]
+    if span > 0 and (times[r] - times[first]) > CUT_WARNING * span:
+        rec.warnings.append(f"{100 * (times[r] - times[first]) / span:.0f} % of the record (t = {times[first]:.4g} to "
+                            f"{times[r]:.4g} s) is left out as not a free decay: {why}; if that part is free, set "
+                            f"[recording] start (or --start) to keep it")
 
 
 def _note_pull(rec, turn: Turn) -> None:

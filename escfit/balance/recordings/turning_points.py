@@ -57,7 +57,7 @@ them); ``release_theta - offset`` is the signed release angle about the centre.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -120,6 +120,12 @@ class TurningPoints:
     sustained_from : float
         Instant (s) from which the swing stops decaying while a free decay could not (a
         drive or an escapement keeps it going); ``nan`` when it decays to the end.
+    warnings : list of str
+        What the user must know before trusting a fit (a large part of the record left out).
+    steps : tuple of (float, float, str)
+        Offset steps of the centre removed from the samples: the time of the first sample
+        moved (s), the jump (the samples' unit) and the note; apply them to the series with
+        :func:`remove_steps` before comparing a model with the samples.
     """
 
     swing: np.ndarray
@@ -139,6 +145,8 @@ class TurningPoints:
     offset_rate_measured: float = 0.0
     noise: float = math.nan
     sustained_from: float = math.nan
+    warnings: list = field(default_factory=list)
+    steps: tuple = ()
 
     @property
     def count(self) -> int:
@@ -169,6 +177,9 @@ class _Record:
     sigma: float = 0.0  # reading noise, rad
     quantum: float = 0.0  # sensor step, rad
     quantity: str = "angle"  # what the samples are (the units of the notes)
+    warnings: list = field(default_factory=list)  # what the user must know (a large part left out)
+    steps: list = field(default_factory=list)  # offset steps found: (first sample moved, s; jump; note)
+    find_steps: bool = True  # look for offset steps (not in a record they were already taken out of)
 
     def show(self, value: float, digits: int = 3, *, signed: bool = False) -> str:
         """A value of the record's quantity for a note (angles in degrees)."""
@@ -278,12 +289,25 @@ def reduce_series(series: TimeSeries, *, window: float | None = None, degree: in
         rate needed), a growing amplitude, wrapped angles, too few turning points, or
         (``strict``) irregularly spaced turning points.
     """
+    first = _reduce(series, window, degree, strict, min_noise, find_steps=True)
+    if not first.steps:
+        return first
+    # the centre jumped (a moved origin): the same analysis of the samples with the jumps taken back
+    fixed = replace(series, theta=remove_steps(series.time, series.theta, first.steps))
+    found = _reduce(fixed, window, degree, strict, min_noise, find_steps=False)
+    return replace(found, notes=[note for *_, note in first.steps] + found.notes, steps=first.steps)
+
+
+def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool, min_noise: float, *,
+            find_steps: bool) -> TurningPoints:
+    """:func:`reduce_series`; with ``find_steps`` False no offset step is looked for."""
     where = series.source
     if not 2 <= degree <= 6:
         raise DataError(f"degree must be 2 to 6, got {degree!r}", where)
     t = np.asarray(series.time, dtype=float)
     x = np.asarray(series.theta, dtype=float)
     rec = prepare(t, x, window, degree, where, series.quantity, min_noise)
+    rec.find_steps = find_steps
     i_rest, rest_theta = resting_tail(rec)
     if i_rest < t.size:
         period, prominence = _working_period(t[:i_rest], x[:i_rest], min_cycles=1.5)
@@ -341,7 +365,15 @@ def reduce_series(series: TimeSeries, *, window: float | None = None, degree: in
                          float(rest_theta) if math.isfinite(stop_time) else math.nan, rec.notes,
                          period_stderr=period_se, offset_stderr=centre.offset_stderr,
                          offset_rate_stderr=centre.rate_stderr, offset_rate_measured=centre.measured_rate,
-                         noise=rec.sigma, sustained_from=sustained)
+                         noise=rec.sigma, sustained_from=sustained, warnings=rec.warnings, steps=tuple(rec.steps))
+
+
+def remove_steps(time: np.ndarray, values: np.ndarray, steps) -> np.ndarray:
+    """``values`` with each offset step ``(t_jump, size)`` taken back from ``t_jump`` on."""
+    out = np.asarray(values, float).copy()
+    for t_jump, size, *_ in steps:
+        out[np.asarray(time) >= t_jump] -= size
+    return out
 
 
 def period_of(times: np.ndarray, amplitudes: np.ndarray) -> tuple[float, float]:

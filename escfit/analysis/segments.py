@@ -1,0 +1,258 @@
+"""What happened between the turning points of a record: pushes, centre steps, out-of-line turns.
+
+A free decay's peak-to-peak swing ``p_k = |v_(k+1) - v_k|`` (turning points ``v_k``) shrinks
+smoothly: friction and damping take energy out, never in.  Four things make it look otherwise,
+and only the first is a reason to cut the record:
+
+- a **push** (a hand, a second release, a drive switched on): energy gained and kept: every
+  swing after it stands above where the decay before it was heading;
+- a slow **wobble** (a bob that does not swing in a plane, a phone turning in the hand): the
+  swing rises and falls by a few percent over tens of swings, smoothly and both ways;
+- an **offset step** (a tracked origin or a sensor's zero that moved): the centre jumps while
+  the swing keeps its size, so only the one half swing that spans the step looks larger;
+- a **glitch** (a tracker that jumped for a few frames): one turning point out of line, so the
+  two half swings that touch it change and the rest do not.
+
+The test is a step model with evidence.  At each half swing ``j`` the level of the swings
+after it (``p_(j+2) .. p_(j+1+m)``) is compared with the level before it
+(``p_(j-1-m) .. p_(j-2)``), each by its median, carried across the gap by the local loss per
+half swing (the median of the differences within each side: the slower of the two, never a
+rise).  The three half swings
+around ``j`` are left out, so an offset step (one half swing) and a glitch (two) change
+neither level.  The gain ``G_j`` has two scales:
+
+- the reading noise of the swings: ``s_p`` from the median absolute second difference of ``p``,
+  carried through the two levels (medians of ``a`` and ``b`` swings: ``1.25 s_p sqrt(1/a + 1/b)``)
+  and through the slope carried across the gap (a median of differences within one side);
+- the spread of ``G`` itself along the record (its median absolute deviation): a wobble gives
+  gains of both signs at every position, as large as its depth.
+
+A push is a gain above :data:`Z_PUSH` times the larger scale and above twice the record's
+resolution: it stands out of the noise and out of whatever else the swing does along the
+record.  The centre is tested the same way, with the mean of three neighbouring turning
+points (``(v_k + 2 v_(k+1) + v_(k+2)) / 4``, which cancels the alternation of a decaying swing)
+in place of ``p``: a step there with no gain in ``p`` is an offset step.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+__all__ = ["SwingEvent", "swing_gains", "find_events", "SIDE", "Z_PUSH"]
+
+SIDE = 6  # half swings on each side of a candidate (a median of 6 tolerates two that are out of line)
+MIN_SIDE = 3  # fewer on either side: no verdict there (a median of 3 tolerates one out of line)
+Z_PUSH = 5.0  # evidence a push needs: gain over the larger of its two scales
+MAD = 1.4826  # median absolute deviation -> standard deviation of a normal sample
+MEDIAN_SE = math.sqrt(math.pi / 2.0)  # standard error of a median over that of a mean, normal samples
+
+
+@dataclass(frozen=True)
+class SwingEvent:
+    """One departure from a free decay found between turning points.
+
+    Attributes
+    ----------
+    kind : str
+        ``"push"`` (energy gained and kept) or ``"offset step"`` (the centre jumps, the swing
+        keeps its size).
+    half_swing : int
+        Index ``k`` of the half swing (from turning point ``k`` to ``k + 1``) it happened in.
+    time : float
+        Time of turning point ``k + 1``, s: the first turning point after the event.
+    size : float
+        Gain of the peak-to-peak swing (push) or jump of the centre (offset step, signed), in the
+        record's unit (rad for an angle).
+    score : float
+        ``size`` over the larger of its two noise scales (see the module docstring).
+    evidence : str
+        The decision in one sentence, with its numbers.
+    """
+
+    kind: str
+    half_swing: int
+    time: float
+    size: float
+    score: float
+    evidence: str
+
+
+def _robust_scale(values: np.ndarray) -> float:
+    v = values[np.isfinite(values)]
+    return float(MAD * np.median(np.abs(v - np.median(v)))) if v.size else math.nan
+
+
+def _level(side: np.ndarray) -> tuple[float, float]:
+    """Level at the middle of ``side`` and its slope per element: the median of the values
+    about their own median slope (a value out of line moves it by little more than the noise).
+
+    The slope is a decay's, never a rise, and taken only from four differences or more (from
+    fewer, one value out of line sets it)."""
+    slope = min(float(np.median(np.diff(side))), 0.0) if side.size >= 5 else 0.0
+    k = np.arange(side.size) - 0.5 * (side.size - 1)
+    return float(np.median(side - slope * k)), slope
+
+
+def swing_gains(series: np.ndarray, side: int = SIDE, *, noise_ratio: float, log: bool = False
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """Level change of ``series`` across each position and its noise standard error.
+
+    Returns ``(gain, stderr)``, one value per element of ``series`` (``nan`` where a side holds
+    fewer than :data:`MIN_SIDE` values).  ``gain[j]`` is the level of ``series[j+2 : j+2+side]``
+    minus that of ``series[j-1-side : j-1]`` (:func:`_level`), less the slower of the two
+    sides' slopes (never a rise) times the gap; the three elements ``j-1 .. j+1`` are left out
+    (see the module docstring).  The slower slope: a gain must not come from carrying a steep
+    side's loss across the gap (a drive switched off), nor be excused by a hand's pull.
+
+    ``noise_ratio`` is the scale of the series' second differences over that of its own noise
+    (they are not independent: see :func:`find_events`).  With ``log`` the levels are compared
+    as logarithms (a relative gain; ``series`` positive): a decay that loses in proportion to
+    its size is then a straight line, and a straight line carried across the gap never predicts
+    less than such a decay does.  The noise is that of ``series`` itself, so with ``log`` the
+    error grows as the level falls.
+    """
+    p = np.asarray(series, float)
+    n = p.size
+    gain = np.full(n, np.nan)
+    err = np.full(n, np.nan)
+    if n < 2 * MIN_SIDE + 3:
+        return gain, err
+    s_p = _robust_scale(np.diff(p, 2)) / noise_ratio
+    q = np.log(p) if log else p
+    for j in range(n):
+        b0, b1 = max(0, j - 1 - side), max(0, j - 1)
+        a0, a1 = min(n, j + 2), min(n, j + 2 + side)
+        nb, na = b1 - b0, a1 - a0
+        if nb < MIN_SIDE or na < MIN_SIDE:
+            continue
+        (lb, sb), (la, sa) = _level(q[b0:b1]), _level(q[a0:a1])
+        gap = 0.5 * (a0 + a1 - 1) - 0.5 * (b0 + b1 - 1)
+        slower = 0 if sb >= sa else 1
+        gain[j] = la - lb - min((sb, sa)[slower], 0.0) * gap
+        # each value's noise (relative with log), and the slope's from the median of the
+        # differences of the side it came from, carried across the gap
+        nb_s, na_s = (math.exp(-lb), math.exp(-la)) if log else (1.0, 1.0)
+        n_side, s_side = (nb, nb_s) if slower == 0 else (na, na_s)
+        slope_var = 2.0 * (s_side * s_side) / max(n_side - 1, 1)
+        err[j] = MEDIAN_SE * s_p * math.sqrt(nb_s * nb_s / nb + na_s * na_s / na + gap * gap * slope_var)
+    return gain, err
+
+
+def _centres(values: np.ndarray) -> np.ndarray:
+    """Centre of each half swing, ``(v_k + 2 v_(k+1) + v_(k+2)) / 4`` at index ``k`` (the last: nan)."""
+    v = np.asarray(values, float)
+    c = np.full(max(v.size - 1, 0), np.nan)
+    if v.size >= 3:
+        c[:-1] = 0.25 * (v[:-2] + 2.0 * v[1:-1] + v[2:])
+    return c
+
+
+def _grown_half_swing(v: np.ndarray, j: int) -> int:
+    """The half swing near ``j`` over which the amplitude grew the most (the one with the push).
+
+    Amplitudes are taken about the mean of the two neighbouring turning points' midpoints, so
+    an unknown centre cancels; the half swing ``k`` ends at turning point ``k + 1``.
+    """
+    lo, hi = max(j - 2, 1), min(j + 2, v.size - 3)
+    best, k_best = -math.inf, j
+    for k in range(lo, hi + 1):
+        centre = 0.25 * (v[k - 1] + 2.0 * v[k] + v[k + 1])
+        after = 0.25 * (v[k] + 2.0 * v[k + 1] + v[k + 2])
+        grew = abs(v[k + 1] - after) - abs(v[k] - centre)
+        if grew > best:
+            best, k_best = grew, k
+    return k_best
+
+
+def _spans_jump(v: np.ndarray, p: np.ndarray, k: int, jump: float) -> bool:
+    """Whether half swing ``k`` alone carries the jump: longer (or shorter) than its neighbours'
+    mean by the jump, as a move of the centre within it makes it, within a third of the jump.
+
+    A rising half swing (``v_(k+1) > v_k``) is lengthened by an upward jump, a falling one
+    shortened; beating or a changing swing moves the centre estimates without that signature.
+    """
+    if k < 1 or k + 1 >= p.size:
+        return False
+    odd = p[k] - 0.5 * (p[k - 1] + p[k + 1])
+    expected = jump if v[k + 1] > v[k] else -jump
+    return abs(odd - expected) < abs(jump) / 3.0
+
+
+def _clusters(flags: np.ndarray) -> list[np.ndarray]:
+    """Runs of consecutive True indices."""
+    idx = np.flatnonzero(flags)
+    if not idx.size:
+        return []
+    breaks = np.flatnonzero(np.diff(idx) > 1) + 1
+    return np.split(idx, breaks)
+
+
+def find_events(times: np.ndarray, values: np.ndarray, *, resolution: float,
+                show: Callable[[float], str] = lambda v: f"{v:.3g}") -> list[SwingEvent]:
+    """Pushes and offset steps among alternating turning points ``values`` at ``times`` (s).
+
+    Parameters
+    ----------
+    times, values
+        Turning points in order, maxima and minima alternating (rad for an angle).
+    resolution
+        Smallest change the record resolves (the extremum search's hysteresis), same unit.
+    show
+        Writes a value of the record's quantity for the evidence sentences.
+
+    Returns
+    -------
+    list of SwingEvent
+        In time order.  A wobble, a glitch and noise give none.
+    """
+    t = np.asarray(times, float)
+    v = np.asarray(values, float)
+    if v.size < 2 * MIN_SIDE + 4:
+        return []
+    p = np.abs(np.diff(v))
+    floor = 2.0 * resolution
+    events: list[SwingEvent] = []
+    # p_k and p_(k+1) share a turning point: turning points of noise s give p a noise of
+    # sqrt(2) s and second differences of p one of 2 s
+    gain, err = swing_gains(np.fmax(p, 0.5 * floor if floor > 0 else 1e-300), noise_ratio=math.sqrt(2.0), log=True)
+    spread = _robust_scale(gain)
+    scale = np.fmax(err, spread if math.isfinite(spread) else 0.0)
+    level = np.array([np.median(p[max(0, j - 1 - SIDE):max(1, j - 1)]) for j in range(p.size)])
+    absolute = level * np.expm1(np.nan_to_num(gain))  # the gain in the record's unit
+    pushes = np.isfinite(gain) & (gain > Z_PUSH * scale) & (absolute > floor)
+    for run in _clusters(pushes):
+        j = int(run[np.argmax(gain[run])])
+        k = _grown_half_swing(v, j)
+        score = float(gain[j] / scale[j]) if scale[j] > 0 else math.inf
+        events.append(SwingEvent(
+            "push", k, float(t[k + 1]), float(absolute[j]), score,
+            f"the swing gains {100 * np.expm1(gain[j]):.0f} % ({show(absolute[j])} peak to peak) in the half swing "
+            f"ending at t = {t[k + 1]:.4g} s and keeps it: {score:.0f} times the larger of its reading noise "
+            f"({100 * err[j]:.2g} %) and the rise and fall of the swing elsewhere in the record ({100 * spread:.2g} %)"))
+    c = _centres(v)
+    # c_k = (v_k + 2 v_(k+1) + v_(k+2)) / 4 and its second differences scatter alike (sqrt(6)/4 s)
+    step, step_err = swing_gains(c, noise_ratio=1.0)
+    c_spread = _robust_scale(step)
+    c_scale = np.fmax(step_err, c_spread if math.isfinite(c_spread) else 0.0)
+    moved = np.isfinite(step) & (np.abs(step) > Z_PUSH * c_scale) & (np.abs(step) > floor) & ~pushes
+    for run in _clusters(moved):
+        j = int(run[np.argmax(np.abs(step[run]))])
+        if any(abs(e.half_swing - j) <= 2 for e in events):
+            continue
+        # a jump in half swing k moves c by a quarter at k-1, three quarters at k and whole from k+1
+        # on: the largest change of c is from k-1 to k
+        lo, hi = max(j - 2, 1), min(j + 2, c.size - 2)
+        k = lo + int(np.argmax(np.sign(step[j]) * np.diff(c[lo - 1:hi + 1])))
+        if not _spans_jump(v, p, k, float(step[j])):
+            continue
+        score = float(abs(step[j]) / c_scale[j]) if c_scale[j] > 0 else math.inf
+        events.append(SwingEvent(
+            "offset step", k, float(t[k + 1]), float(step[j]), score,
+            f"the centre jumps by {show(step[j])} in the half swing ending at t = {t[k + 1]:.4g} s while the swing "
+            f"keeps its size ({score:.0f} times the scatter of the centre): the tracked origin or the sensor's zero "
+            "moved"))
+    return sorted(events, key=lambda e: e.time)
