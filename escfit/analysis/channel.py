@@ -59,6 +59,12 @@ class ChannelChoice:
     key: str = "angle_column"
     shapes: dict[str, SwingShape] = field(default_factory=dict, repr=False)
     positions: dict[str, int] = field(default_factory=dict)  # label -> 1-based column, where the reader knows it
+    units: dict[str, str | None] = field(default_factory=dict)
+
+    def key_of(self, label: str) -> str:
+        """The key that names ``label``: ``displacement_column`` or ``velocity_column`` where its unit says so."""
+        said = label_quantity(label, self.units.get(label))
+        return {"displacement": "displacement_column", "angular_velocity": "velocity_column"}.get(said, self.key)
 
     def listing(self) -> str:
         """``'ch2' 0.98 (a decaying oscillation ...), 'ch1' 0.03 (...)``, best first."""
@@ -75,7 +81,8 @@ class ChannelChoice:
     def refusal(self) -> str:
         """The one-line reason no column was chosen, naming the key to set."""
         best = max(self.scores, key=self.scores.get) if self.scores else "..."
-        return (f"{self.reason}: {self.listing()}; set [recording] {self.key} = {best!r} (or another column's name)")
+        value = self.positions[best] if best.startswith("column ") and best in self.positions else repr(best)
+        return f"{self.reason}: {self.listing()}; set [recording] {self.key} = {value} (or another column)"
 
 
 def _words(shape: SwingShape, score: float) -> str:
@@ -147,9 +154,9 @@ def choose_channel(time: np.ndarray | dict[str, np.ndarray], columns: dict[str, 
     best = order[0] if order else None
     second = scores[order[1]] if len(order) > 1 else 0.0
     if best is not None and scores[best] >= MIN_SCORE and second <= MARGIN * scores[best]:
-        return ChannelChoice(best, scores, why, "clear winner", key, shapes)
+        return ChannelChoice(best, scores, why, "clear winner", key, shapes, units=dict(units))
     if best is None or scores[best] < MIN_SCORE:
         reason = f"no column has the shape of a free decay (a score of {MIN_SCORE:g} at least)"
     else:
         reason = (f"no clear free decay: the runner-up scores more than {MARGIN:g} of the best's score")
-    return ChannelChoice(None, scores, why, reason, key, shapes)
+    return ChannelChoice(None, scores, why, reason, key, shapes, units=dict(units))

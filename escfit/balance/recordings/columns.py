@@ -27,6 +27,7 @@ from ...core.units import ureg
 from .rawsteps import build_series, file_options, merge_file_meta
 from .recording_spec import COUNT_WORDS, RecordingSpec, header_role, rad_per_unit, safe_unit_text, seconds_per_unit
 from .series import TimeSeries
+from ...analysis.quantity import label_quantity
 
 __all__ = ["Columns", "series_from_columns", "signal_role"]
 
@@ -454,6 +455,11 @@ def _si_factor(cols: Columns, col: int, spec: RecordingSpec, opts: dict, reader:
             factor = rad_per_unit(unit, cpt, cols.where)
     except DataError as exc:
         msg = f"column {name!r}: {exc.message}" if head_unit and not given else exc.message
+        said = label_quantity(name, head_unit)
+        if said in ("acceleration", "energy", "velocity", "displacement") and "not an angle unit" in msg:
+            msg = msg.replace("not an angle unit", f"not an angle unit ({'an' if said[0] in 'ae' else 'a'} {said}"
+                              + ("" if said == "displacement" else ": escfit fits angles, angular velocities and "
+                                 "displacements") + ")")
         raise DataError(msg, exc.where) from None
     reader["angle_unit"] = unit + (f" ({cpt:g} per turn)" if cpt is not None and unit.lower() in COUNT_WORDS else "")
     if scale != 1.0:
