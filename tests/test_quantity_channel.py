@@ -180,8 +180,8 @@ def test_two_equally_good_decays_are_refused_listing_both_with_scores(tmp_path):
     t, theta, _ = _decay()
     other = 0.8 * theta + 0.0005 * RNG.standard_normal(t.size)
     data = _write(tmp_path / "twin.csv", ["t (s)", "angle 1 (rad)", "angle 2 (rad)"], [t, theta, other])
-    with pytest.raises(DataError, match=r"several columns could be the angle.*by shape: 'theta_\d \(rad\)' 1\.00 "
-                                        r"\(a decaying.*'theta_\d \(rad\)' 1\.00 \(a decaying") as info:
+    with pytest.raises(DataError, match=r"several columns could be the angle.*by shape: 'angle \d \(rad\)' 1\.00 "
+                                        r"\(a decaying.*'angle \d \(rad\)' 1\.00 \(a decaying") as info:
         read_data(data)
     assert "\n" not in str(info.value)
     choice = choose_channel(t, {"a": theta, "b": other})
