@@ -29,9 +29,9 @@ from .quantity import ENERGY_FLOOR, SwingShape, label_quantity, swing_shape
 
 __all__ = ["ChannelChoice", "choose_channel", "decay_score", "MIN_SCORE", "MARGIN", "FULL_FALL"]
 
-MIN_SCORE = 0.5
+MIN_SCORE = 0.2
 MARGIN = 0.5
-FULL_FALL = 0.1  # a swing losing a tenth of its amplitude over the record counts fully as a decay
+FULL_FALL = 0.5  # a swing losing half its amplitude over the record counts fully as a decay
 
 
 @dataclass(frozen=True)
@@ -69,13 +69,13 @@ class ChannelChoice:
     def listing(self) -> str:
         """``'ch2' 0.98 (a decaying oscillation ...), 'ch1' 0.03 (...)``, best first."""
         order = sorted(self.scores, key=lambda c: -self.scores[c])
-        return ", ".join(f"{c!r} {self.scores[c]:.2f} ({self.why[c]})" for c in order)
+        return ", ".join(f"{_shown(c)} {self.scores[c]:.2f} ({self.why[c]})" for c in order)
 
     def note(self) -> str:
         """The sentence said when a column was chosen."""
         rest = [c for c in sorted(self.scores, key=lambda c: -self.scores[c]) if c != self.chosen]
-        others = "; ".join(f"{c!r} {100 * self.scores[c]:.0f} %: {self.why[c]}" for c in rest)
-        return (f"column {self.chosen!r} chosen: {self.why[self.chosen]}, score {self.scores[self.chosen]:.2f}"
+        others = "; ".join(f"{_shown(c)} {100 * self.scores[c]:.0f} %: {self.why[c]}" for c in rest)
+        return (f"{_shown(self.chosen, 'column ')} chosen: {self.why[self.chosen]}, score {self.scores[self.chosen]:.2f}"
                 + (f"; {others}" if others else "") + f" ([recording] {self.key} chooses another)")
 
     def refusal(self) -> str:
@@ -83,6 +83,11 @@ class ChannelChoice:
         best = max(self.scores, key=self.scores.get) if self.scores else "..."
         value = self.positions[best] if best.startswith("column ") and best in self.positions else repr(best)
         return f"{self.reason}: {self.listing()}; set [recording] {self.key} = {value} (or another column)"
+
+
+def _shown(label: str, prefix: str = "") -> str:
+    """A column in a sentence: ``column 3`` for a table without a header, else its quoted name."""
+    return label if label.startswith("column ") and label[7:].isdigit() else f"{prefix}{label!r}"
 
 
 def _words(shape: SwingShape, score: float) -> str:

@@ -173,7 +173,8 @@ def _help(path, table: dict, exc: DataError, fmt) -> tuple[str, object, str] | N
             key = choice.key_of(choice.chosen)
             if key in table:
                 return None
-            return key, value, f"the file does not say which column is the signal: {choice.note()}"
+            return key, value, (f"the file does not say which column is the signal: column {value} swings; "
+                                f"{choice.note()}")
         if choice is not None and max(choice.scores.values(), default=0.0) > 0.0:
             raise DataError(choice.refusal(), exc.where) from None  # oscillating columns, none clearly the decay
         found = _swinging_column(path, table, fmt, amplitudes_only=choice is not None)

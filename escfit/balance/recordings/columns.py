@@ -192,7 +192,9 @@ def _choose(cols: Columns, spec: RecordingSpec, rate: float | None) -> tuple[int
         if a is None:
             if len(numeric) > 2 or (len(numeric) == 2 and clocks):
                 rest = [i for i in numeric if i != t and (clocks or uniform or i != numeric[0])]
-                choice = _shape_choice(cols, rest, [None] * n, key) if quantity == "angle" else None
+                clock = t if t is not None else (numeric[0] if not (clocks or uniform) else None)
+                roles0 = ["time" if i == clock else None for i in range(n)]
+                choice = _shape_choice(cols, rest, roles0, key) if quantity == "angle" else None
                 example = cols.label(rest[0]) if choice is None or choice.chosen is None else choice.chosen
                 shapes = f"; by shape: {choice.listing()}" if choice is not None and choice.scores else ""
                 exc = DataError(f"{n} columns and no header: cannot tell which is the angle; {hint}, e.g. "
@@ -269,7 +271,7 @@ def _provisional_time(cols: Columns, roles: list[str | None], candidates: list[i
     if len(times) == 1:
         try:
             values = _floats(cols, times[0])
-            unit = cols.unit(times[0])
+            unit = cols.unit(times[0]) if cols.names is not None else None
             values = values * (seconds_per_unit(unit, cols.where) if unit else 1.0)
             if np.all(np.diff(values[np.isfinite(values)]) > 0):
                 return values
