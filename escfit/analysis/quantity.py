@@ -174,7 +174,8 @@ def swing_shape(time: np.ndarray, x: np.ndarray) -> SwingShape:
         return empty
     period = 1.0 / f
     dt = float(np.median(np.diff(t)))
-    length = max(_CHUNK_PERIODS * period, _MIN_CHUNK * dt)
+    # stretches of 3 periods; a short record (under 12 periods) in 4 stretches of at least a period each
+    length = max(min(_CHUNK_PERIODS * period, (t[-1] - t[0]) / 4), period, _MIN_CHUNK * dt)
     nchunks = max(1, int((t[-1] - t[0]) // length))
     edges = np.searchsorted(t, t[0] + length * np.arange(nchunks + 1))
     edges[-1] = t.size
