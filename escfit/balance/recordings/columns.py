@@ -459,9 +459,9 @@ def _si_factor(cols: Columns, col: int, spec: RecordingSpec, opts: dict, reader:
         msg = f"column {name!r}: {exc.message}" if head_unit and not given else exc.message
         said = label_quantity(name, head_unit)
         if said in ("acceleration", "energy", "velocity", "displacement") and "not an angle unit" in msg:
-            msg = msg.replace("not an angle unit", f"not an angle unit ({'an' if said[0] in 'ae' else 'a'} {said}"
-                              + ("" if said == "displacement" else ": escfit fits angles, angular velocities and "
-                                 "displacements") + ")")
+            msg += (f" (a length: read it as a displacement with [recording] displacement_column = {name!r})"
+                    if said == "displacement" else f" ({'an' if said[0] in 'ae' else 'a'} {said}: escfit fits "
+                    "angles, angular velocities and displacements)")
         raise DataError(msg, exc.where) from None
     reader["angle_unit"] = unit + (f" ({cpt:g} per turn)" if cpt is not None and unit.lower() in COUNT_WORDS else "")
     if scale != 1.0:
