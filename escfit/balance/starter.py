@@ -96,6 +96,7 @@ class Survey:
     tp: object = None
     quantity: str = "angle"  # what a sampled record measured: angle, angular_velocity, displacement
     counts_extra: dict = field(default_factory=dict)
+    checks: list = field(default_factory=list)  # what the reader judged of the column and its unit (said aloud)
 
 
 # -- reading -------------------------------------------------------------------------------------
@@ -165,17 +166,32 @@ def _help(path, table: dict, exc: DataError, fmt) -> tuple[str, object, str] | N
     if "gives no unit: set [recording] displacement_unit" in message and "displacement_unit" not in table:
         return "displacement_unit", "m", "the file names no unit for the displacement: m assumed; CHECK it (cm, mm)"
     if "angle_column" in message and "angle_column" not in table:
-        found = _swinging_column(path, table, fmt)
+        choice = getattr(exc, "channel_choice", None)
+        if choice is not None and choice.chosen is not None:
+            value = choice.positions.get(choice.chosen, choice.chosen) if choice.chosen.startswith("column ") \
+                else choice.chosen
+            key = choice.key_of(choice.chosen)
+            if key in table:
+                return None
+            return key, value, (f"the file does not say which column is the signal: column {value} swings; "
+                                f"{choice.note()}")
+        if choice is not None and max(choice.scores.values(), default=0.0) > 0.0:
+            raise DataError(choice.refusal(), exc.where) from None  # oscillating columns, none clearly the decay
+        found = _swinging_column(path, table, fmt, amplitudes_only=choice is not None)
         if found is not None:
             return "angle_column", found[0], found[1]
-    if "angle_unit" in message and '"deg"' in message and "angle_unit" not in table:
+    if "angle_unit" in message and '"deg"' in message and "no unit given" in message and "angle_unit" not in table:
         return "angle_unit", "deg", ("the readings span more than a turn if read as radians; degrees, as the reader "
                                      "suggested")
     return None
 
 
-def _swinging_column(path, table: dict, fmt) -> tuple[int, str] | None:
-    """The 1-based column that holds a decaying swing (or amplitude readings), and why."""
+def _swinging_column(path, table: dict, fmt, *, amplitudes_only: bool = False) -> tuple[int, str] | None:
+    """The 1-based column that holds a decaying swing (or amplitude readings), and why.
+
+    Tried column by column where the reader could not score the columns' shapes (a MATLAB file);
+    ``amplitudes_only`` where it did and found no free decay: only a column of amplitude readings
+    (one per half swing) is looked for then."""
     best = None
     for col in range(1, MAX_COLUMNS + 1):
         if table.get("time_column") == col:
@@ -190,11 +206,15 @@ def _swinging_column(path, table: dict, fmt) -> tuple[int, str] | None:
                 if _PAST_LAST.search(str(exc)):
                     data = "end"
                     break
+                if "not an angle unit" in str(exc) or "labelled" in str(exc):
+                    break  # a column whose label says another quantity is not read as degrees
         if data == "end":
             break
         if not isinstance(data, TimeSeries):
             continue
         score, what = _swing_score(data)
+        if amplitudes_only and score != 0.5:
+            continue
         if score > 0 and (best is None or score > best[0]):
             best = (score, col, what)
     if best is None:
@@ -283,6 +303,7 @@ def _survey_samples(s: Survey, series: TimeSeries, restoring: str) -> None:
         tp = reduce_series(series, strict=False)
         notes = [f"warning: {w}" for w in tp.warnings] + list(tp.notes)
     s.quantity = series.quantity
+    s.checks = [n for n in str(series.meta.get("analysis", "")).split("; ") if n]  # column and unit judged
     s.kind, s.tp = "waveform", tp
     s.period = float(tp.period)
     times = np.concatenate([[tp.release_time], np.asarray(tp.time, float)])

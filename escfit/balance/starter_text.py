@@ -244,7 +244,7 @@ def _summary(s: Survey) -> list[str]:
     what = {"waveform": "every sample fitted (waveform)", "amplitude": "one amplitude per half swing",
             "notches": "notch counts per half swing", "timegrapher": "timegrapher readings"}[s.kind]
     out = [f"read {Path(s.path).name}: {s.format_words}; {s.columns_words}", *_record_lines(s)[:2],
-           f"observation: {what}"]
+           f"observation: {what}", *s.checks]
     if s.kind == "timegrapher":
         out.append("a timegrapher starter is only a starting geometry (an impulse over the lift angle, the first "
                    "amplitude shown as the release): give your escapement's windows and the release amplitude if you "

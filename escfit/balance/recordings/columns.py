@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -27,6 +27,7 @@ from ...core.units import ureg
 from .rawsteps import build_series, file_options, merge_file_meta
 from .recording_spec import COUNT_WORDS, RecordingSpec, header_role, rad_per_unit, safe_unit_text, seconds_per_unit
 from .series import TimeSeries
+from ...analysis.quantity import label_quantity
 
 __all__ = ["Columns", "series_from_columns", "signal_role"]
 
@@ -190,9 +191,18 @@ def _choose(cols: Columns, spec: RecordingSpec, rate: float | None) -> tuple[int
     if cols.names is None:
         if a is None:
             if len(numeric) > 2 or (len(numeric) == 2 and clocks):
-                raise DataError(f"{n} columns and no header: cannot tell which is the angle; {hint}, e.g. "
-                                f"{key} = {numeric[1] + 1} (column {numeric[0] + 1} is taken as the time unless "
-                                f"time_column or sample_rate says otherwise)", first)
+                rest = [i for i in numeric if i != t and (clocks or uniform or i != numeric[0])]
+                clock = t if t is not None else (numeric[0] if not (clocks or uniform) else None)
+                roles0 = ["time" if i == clock else None for i in range(n)]
+                choice = _shape_choice(cols, rest, roles0, key) if quantity == "angle" else None
+                example = cols.label(rest[0]) if choice is None or choice.chosen is None else choice.chosen
+                shapes = f"; by shape: {choice.listing()}" if choice is not None and choice.scores else ""
+                exc = DataError(f"{n} columns and no header: cannot tell which is the angle; {hint}, e.g. "
+                                f"{key} = {int(example.split()[-1]) if example.startswith('column ') else example!r} "
+                                f"(column {numeric[0] + 1} is taken as the time unless time_column or sample_rate "
+                                f"says otherwise){shapes}", first)
+                exc.channel_choice = _by_position(cols, choice)
+                raise exc
             if not numeric:
                 raise DataError(f"no column of numbers to read; {hint}", first)
             a = numeric[-1] if t != numeric[-1] else numeric[0]
@@ -211,11 +221,24 @@ def _choose(cols: Columns, spec: RecordingSpec, rate: float | None) -> tuple[int
                 hits = [0]
             if len(hits) > 1:
                 hits = _measured_candidates(cols, hits)
+            choice = None
+            if len(hits) > 1:  # names cannot tell: the shapes may
+                choice = _shape_choice(cols, hits, roles, key)
+                hits = [hits[[cols.label(i) for i in hits].index(choice.chosen)]] if choice.chosen else hits
             if len(hits) != 1:
                 what = "no column looks like" if not hits else "several columns could be"
                 other = _hint_other_quantities(cols, roles) if quantity == "angle" and not hits else ""
-                raise DataError(f"{what} the {quantity.replace('_', ' ')} in the header {_shown(cols)}; {hint}{other}",
-                                f"{where}:{cols.header_line}" if cols.header_line else where)
+                if not hits and quantity == "angle" and not other:
+                    choice = _shape_choice(cols, [i for i, r in enumerate(roles) if r is None and i != t
+                                                  and i not in clocks and i not in texts], roles, key)
+                shapes = f"; by shape: {choice.listing()}" if choice is not None and choice.scores else ""
+                exc = DataError(f"{what} the {quantity.replace('_', ' ')} in the header {_shown(cols)}; {hint}"
+                                f"{other}{shapes}", f"{where}:{cols.header_line}" if cols.header_line else where)
+                exc.channel_choice = _by_position(cols, choice)
+                raise exc
+            if choice is not None:
+                cols.notes.append(choice.note())
+                cols.meta["analysis"] = choice.note()
             a = hits[0]
         if t is None and not uniform:
             hits = [i for i, r in enumerate(roles) if r == "time" and i != a and i not in texts]
@@ -240,6 +263,49 @@ def _choose(cols: Columns, spec: RecordingSpec, rate: float | None) -> tuple[int
     if cols.kind(a) in _TEXT_KINDS + ("clock", "datetime"):
         raise DataError(f"column {cols.label(a)!r} holds {cols.kind(a)}s, not numbers; {hint}", where)
     return t, a
+
+
+def _provisional_time(cols: Columns, roles: list[str | None], candidates: list[int]) -> np.ndarray:
+    """Times for scoring candidate columns' shapes: the one time column's readings in s, else the row number."""
+    times = [i for i, r in enumerate(roles) if r == "time" and i not in candidates and cols.kind(i) == "number"]
+    if len(times) == 1:
+        try:
+            values = _floats(cols, times[0])
+            unit = cols.unit(times[0]) if cols.names is not None else None
+            values = values * (seconds_per_unit(unit, cols.where) if unit else 1.0)
+            if np.all(np.diff(values[np.isfinite(values)]) > 0):
+                return values
+        except DataError:
+            pass
+    return np.arange(len(cols.lines) if cols.lines else max(len(v) for v in cols.values.values()), dtype=float)
+
+
+def _shape_choice(cols: Columns, candidates: list[int], roles: list[str | None], key: str):
+    """:func:`~escfit.analysis.channel.choose_channel` over candidate columns (those that parse as numbers)."""
+    from ...analysis.channel import choose_channel
+
+    values = {}
+    for i in candidates:
+        try:
+            v = _floats(cols, i)
+        except DataError:
+            continue
+        if np.isfinite(v).sum() >= 20:
+            values[cols.label(i)] = v
+    if not values:
+        return None
+    time = _provisional_time(cols, roles, candidates)
+    if time.size != next(iter(values.values())).size:
+        return None
+    units = {cols.label(i): cols.unit(i) for i in candidates}
+    return choose_channel(time, values, units=units, key=key)
+
+
+def _by_position(cols: Columns, choice):
+    """The choice with 1-based positions for a table without a header (for ``escfit init``)."""
+    if choice is None:
+        return None
+    return replace(choice, positions={cols.label(i): i + 1 for i in range(cols.ncols)})
 
 
 _SPECTRUM_WORDS = ("fft", "fourier", "spektrum", "spectrum", "spectra", "psd", "frequenz", "frequency", "periodogram")
@@ -391,6 +457,11 @@ def _si_factor(cols: Columns, col: int, spec: RecordingSpec, opts: dict, reader:
             factor = rad_per_unit(unit, cpt, cols.where)
     except DataError as exc:
         msg = f"column {name!r}: {exc.message}" if head_unit and not given else exc.message
+        said = label_quantity(name, head_unit)
+        if said in ("acceleration", "energy", "velocity", "displacement") and "not an angle unit" in msg:
+            msg += (f" (a length: read it as a displacement with [recording] displacement_column = {name!r})"
+                    if said == "displacement" else f" ({'an' if said[0] in 'ae' else 'a'} {said}: escfit fits "
+                    "angles, angular velocities and displacements)")
         raise DataError(msg, exc.where) from None
     reader["angle_unit"] = unit + (f" ({cpt:g} per turn)" if cpt is not None and unit.lower() in COUNT_WORDS else "")
     if scale != 1.0:
@@ -456,7 +527,9 @@ def series_from_columns(cols: Columns, spec: RecordingSpec | None, *, sha256: st
         return f"{line} [{label}]" if label is not None else line
 
     meta = merge_file_meta(cols.meta, reader)
+    from_file = cols.unit(a_col) or (opts.get("angle_unit") if spec.quantity == "angle" else None)
+    unit_from = "option" if spec.signal_unit else ("file" if from_file else "assumed")
     series = build_series(time, signal, spec, source=cols.where, sha256=sha256, meta=meta, notes=cols.notes,
-                          where_of_row=row_where, release_s=release_s)
+                          where_of_row=row_where, release_s=release_s, label=cols.label(a_col), unit_from=unit_from)
     series.quantity = spec.quantity
     return series

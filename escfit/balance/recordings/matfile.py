@@ -291,4 +291,5 @@ def read_mat_series(path: str | Path, spec: RecordingSpec | None = None) -> Time
         reader["scale"] = f"{scale:g}"
     loc: Callable[[int], str] = locate
     return build_series(time, theta, spec, source=where, sha256=hashlib.sha256(raw).hexdigest(), meta=reader,
-                        notes=notes, where_of_row=loc)
+                        notes=notes, where_of_row=loc, label=reader.get("angle_column", ""),
+                        unit_from="option" if spec.angle_unit is not None else "assumed")

@@ -90,12 +90,15 @@ def regular_times(time: np.ndarray, where_of_row: Callable[[int], str], notes: l
 
 def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, source: str, sha256: str,
                  meta: dict[str, str], notes: list[str], where_of_row: Callable[[int], str],
-                 release_s: float = math.nan) -> TimeSeries:
+                 release_s: float = math.nan, label: str = "", unit_from: str = "file") -> TimeSeries:
     """Check and window converted samples (time s, theta rad) and wrap them in a TimeSeries.
 
     Non-finite values, decreasing or repeated times are refused (burst stamps re-timed, see
     :func:`regular_times`); the window ``start <= t <= stop`` is applied and must keep
-    :data:`MIN_SAMPLES` samples.  ``meta`` gets ``window`` and ``notes``.
+    :data:`MIN_SAMPLES` samples.  The samples' shape is held against the quantity and unit they
+    are read as (:func:`~escfit.analysis.quantity.check_quantity`, for the column ``label`` whose
+    unit came from ``unit_from``: ``"file"``, ``"option"`` or ``"assumed"``): a refusal is a
+    DataError naming the key to set, a suspicion a note.  ``meta`` gets ``window`` and ``notes``.
     """
     for name, values in (("time", time), ("angle", theta)):
         bad = np.flatnonzero(~np.isfinite(values))
@@ -118,6 +121,8 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
         raise DataError(f"the angles span {np.ptp(theta):.4g} with no unit given (rad assumed): more than a turn, so "
                         "not radians of a swinging balance; if they are degrees set [recording] angle_unit = \"deg\" "
                         "(or --angle-unit deg)", source)
+    if spec.readings == "samples":
+        _check_quantity(time, theta, spec, meta, notes, source, label, unit_from)
     if spec.readings == "samples" and spec.quantity == "angle":
         theta = unwrap_angles(theta, notes)
     if spec.start is not None or spec.stop is not None:
@@ -139,6 +144,31 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
         meta["notes"] = "; ".join(n.replace(";", ",") for n in notes)
     return TimeSeries(time=time, theta=np.asarray(theta, dtype=float), release_s=release_s, source=source,
                       sha256=sha256, meta=meta)
+
+
+def _check_quantity(time: np.ndarray, values: np.ndarray, spec: RecordingSpec, meta: dict, notes: list[str],
+                    source: str, label: str, unit_from: str) -> None:
+    """Hold the samples' shape against what they are read as (within the window); refuse or note."""
+    from ...analysis.quantity import check_quantity
+
+    keep = np.ones(time.size, bool)
+    if spec.start is not None:
+        keep &= time >= spec.start
+    if spec.stop is not None:
+        keep &= time <= spec.stop
+    if keep.sum() < MIN_SAMPLES:
+        return  # the window's own refusal says it
+    unit_key = {"angle": "angle_unit", "angular_velocity": "velocity_unit", "displacement": "displacement_unit"}
+    unit = str(meta.get(unit_key[spec.quantity], "")).split(" (")[0]
+    scale = float(meta.get("scale", "1") or 1)
+    check = check_quantity(time[keep], values[keep], claimed=spec.quantity, unit=unit, name=label,
+                           given_by="assumed" if meta.get("angle_unit_assumed") else unit_from, scale=scale)
+    if check.verdict == "refuse":
+        raise DataError(check.sentence(label), source)
+    if check.verdict == "suspect":
+        said = check.sentence(label)
+        notes.append(said.replace(";", ","))
+        meta["analysis"] = "; ".join(filter(None, [meta.get("analysis", ""), said.replace(";", ",")]))
 
 
 def _drop_repeated_rows(time: np.ndarray, theta: np.ndarray, rows: np.ndarray, notes: list[str],

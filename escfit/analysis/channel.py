@@ -1,0 +1,167 @@
+"""Which of several columns is the free decay: each scored by its shape, a clear winner or none.
+
+When a file holds several columns that could be the signal and no ``[recording]`` key names one,
+each candidate is scored as a free decay (:func:`decay_score`)::
+
+    score = explained * min(1, fall / FULL_FALL)
+
+``explained`` is the fraction of the column's variance a sinusoid near its periodogram peak
+explains, stretch by stretch (:func:`~escfit.analysis.quantity.swing_shape`); ``fall`` is how much
+that sinusoid's amplitude falls from the first quarter of the record to the last.  A free decay
+scores near 1; a function generator's steady sine (no fall), white noise (no sinusoid explains
+it), a clock or a running total (no oscillation) score near 0; an energy column (troughs pinned at
+its minimum, or a one-sided column at twice a neighbour's frequency), an acceleration and any
+column whose label says another quantity score 0.
+
+Margin rule: the best column is chosen only if it scores at least :data:`MIN_SCORE` and every
+other at most :data:`MARGIN` times its score; otherwise :class:`ChannelChoice` has no ``chosen``
+and :meth:`ChannelChoice.refusal` names the candidates with their scores and the key to set.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .quantity import ENERGY_FLOOR, SwingShape, label_quantity, swing_shape
+
+__all__ = ["ChannelChoice", "choose_channel", "decay_score", "MIN_SCORE", "MARGIN", "FULL_FALL"]
+
+MIN_SCORE = 0.2
+MARGIN = 0.5
+FULL_FALL = 0.5  # a swing losing half its amplitude over the record counts fully as a decay
+
+
+@dataclass(frozen=True)
+class ChannelChoice:
+    """The column chosen as the free decay, with every candidate's score and why.
+
+    Attributes
+    ----------
+    chosen : str or None
+        The chosen column's label (None: no clear winner).
+    scores : dict of str to float
+        Each candidate's score, 0-1.
+    why : dict of str to str
+        Each candidate's shape in words.
+    reason : str
+        The note (a choice) or the refusal's reason.
+    key : str
+        The ``[recording]`` key that names the column.
+    """
+
+    chosen: str | None
+    scores: dict[str, float]
+    why: dict[str, str]
+    reason: str
+    key: str = "angle_column"
+    shapes: dict[str, SwingShape] = field(default_factory=dict, repr=False)
+    positions: dict[str, int] = field(default_factory=dict)  # label -> 1-based column, where the reader knows it
+    units: dict[str, str | None] = field(default_factory=dict)
+
+    def key_of(self, label: str) -> str:
+        """The key that names ``label``: ``displacement_column`` or ``velocity_column`` where its unit says so."""
+        said = label_quantity(label, self.units.get(label))
+        return {"displacement": "displacement_column", "angular_velocity": "velocity_column"}.get(said, self.key)
+
+    def listing(self) -> str:
+        """``'ch2' 0.98 (a decaying oscillation ...), 'ch1' 0.03 (...)``, best first."""
+        order = sorted(self.scores, key=lambda c: -self.scores[c])
+        return ", ".join(f"{_shown(c)} {self.scores[c]:.2f} ({self.why[c]})" for c in order)
+
+    def note(self) -> str:
+        """The sentence said when a column was chosen."""
+        rest = [c for c in sorted(self.scores, key=lambda c: -self.scores[c]) if c != self.chosen]
+        others = "; ".join(f"{_shown(c)} {100 * self.scores[c]:.0f} %: {self.why[c]}" for c in rest)
+        return (f"{_shown(self.chosen, 'column ')} chosen: {self.why[self.chosen]}, score {self.scores[self.chosen]:.2f}"
+                + (f"; {others}" if others else "") + f" ([recording] {self.key} chooses another)")
+
+    def refusal(self) -> str:
+        """The one-line reason no column was chosen, naming the key to set."""
+        best = max(self.scores, key=self.scores.get) if self.scores else "..."
+        value = self.positions[best] if best.startswith("column ") and best in self.positions else repr(best)
+        return f"{self.reason}: {self.listing()}; set [recording] {self.key} = {value} (or another column)"
+
+
+def _shown(label: str, prefix: str = "") -> str:
+    """A column in a sentence: ``column 3`` for a table without a header, else its quoted name."""
+    return label if label.startswith("column ") and label[7:].isdigit() else f"{prefix}{label!r}"
+
+
+def _words(shape: SwingShape, score: float) -> str:
+    if shape.monotone:
+        return "monotone, no oscillation (a clock? a total?)"
+    if not math.isfinite(shape.frequency) or shape.explained < 0.2:
+        return f"no dominant oscillation, {100 * shape.explained:.0f} % of its variance a sinusoid (noise?)"
+    if shape.fall < 0.02:
+        return (f"a steady sine at {shape.frequency:.4g} Hz, {100 * shape.explained:.0f} % of its variance, "
+                f"amplitude not falling (a drive?)")
+    if shape.fall < 0:
+        return f"an oscillation at {shape.frequency:.4g} Hz growing, not decaying"
+    return (f"a decaying oscillation at {shape.frequency:.4g} Hz explains {100 * shape.explained:.0f} % of its "
+            f"variance, its amplitude falling {100 * shape.fall:.0f} %")
+
+
+def decay_score(time: np.ndarray, values: np.ndarray, *, name: str = "", unit: str | None = None,
+                shape: SwingShape | None = None) -> tuple[float, str, SwingShape]:
+    """``(score, words, shape)`` of one column as a free decay (see the module docstring)."""
+    shape = shape if shape is not None else swing_shape(time, values)
+    said = label_quantity(name, unit)
+    if said in ("acceleration", "energy", "velocity", "time"):
+        return 0.0, f"labelled {unit or name!r}: {'an' if said[0] in 'aeiou' else 'a'} {said}", shape
+    if shape.energy_like:
+        return 0.0, "an energy (two peaks per swing, never negative)", shape
+    score = shape.explained * min(1.0, max(0.0, shape.fall) / FULL_FALL)
+    return float(score), _words(shape, score), shape
+
+
+def _double_of_a_neighbour(label: str, shapes: dict[str, SwingShape], values: dict[str, np.ndarray]) -> bool:
+    """A one-sided column (troughs at its minimum) oscillating at twice another candidate's frequency."""
+    me = shapes[label]
+    if not math.isfinite(me.frequency) or me.trough_floor > ENERGY_FLOOR:
+        return False
+    return any(other != label and math.isfinite(s.frequency) and abs(me.frequency / s.frequency - 2.0) < 0.05
+               and s.explained > 0.5 for other, s in shapes.items())
+
+
+def choose_channel(time: np.ndarray | dict[str, np.ndarray], columns: dict[str, np.ndarray], *,
+                   units: dict[str, str | None] | None = None, key: str = "angle_column") -> ChannelChoice:
+    """Score each candidate column as a free decay and choose a clear winner, if there is one.
+
+    Parameters
+    ----------
+    time : ndarray, or dict of label to ndarray
+        Sample times, s (one clock for all, or each column's own).
+    columns : dict of str to ndarray
+        Candidate label -> values (any unit; rows without a reading may be nan).
+    units : dict, optional
+        Candidate label -> unit as the file gives it.
+    key : str
+        The ``[recording]`` key that names the column (said in the note and the refusal).
+
+    Returns
+    -------
+    ChannelChoice
+    """
+    units = units or {}
+    scores, why, shapes = {}, {}, {}
+    for label, values in columns.items():
+        t = time[label] if isinstance(time, dict) else time
+        v = np.asarray(values, float)
+        ok = np.isfinite(v) & np.isfinite(t)
+        scores[label], why[label], shapes[label] = decay_score(t[ok], v[ok], name=label, unit=units.get(label))
+    for label in columns:
+        if scores[label] > 0 and _double_of_a_neighbour(label, shapes, columns):
+            scores[label], why[label] = 0.0, "an energy (never below its minimum, at twice a neighbour's frequency)"
+    order = sorted(scores, key=lambda c: -scores[c])
+    best = order[0] if order else None
+    second = scores[order[1]] if len(order) > 1 else 0.0
+    if best is not None and scores[best] >= MIN_SCORE and second <= MARGIN * scores[best]:
+        return ChannelChoice(best, scores, why, "clear winner", key, shapes, units=dict(units))
+    if best is None or scores[best] < MIN_SCORE:
+        reason = f"no column has the shape of a free decay (a score of {MIN_SCORE:g} at least)"
+    else:
+        reason = (f"no clear free decay: the runner-up scores more than {MARGIN:g} of the best's score")
+    return ChannelChoice(None, scores, why, reason, key, shapes, units=dict(units))
