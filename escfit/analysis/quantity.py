@@ -217,8 +217,7 @@ def _dimension(unit: str | None) -> str | None:
     """``"angle"``, ``"angular_velocity"``, ``"length"``, ``"acceleration"``, ``"energy"``, ``"time"`` or None."""
     if not unit:
         return None
-    from ..balance.recordings.recording_spec import COUNT_WORDS, safe_unit_text
-    from ..core.units import ureg
+    from ..core.units import COUNT_WORDS, safe_unit_text, ureg
 
     text = unit.strip().replace("°", "deg").replace("²", "^2")
     if text.lower() in COUNT_WORDS or not safe_unit_text(text):

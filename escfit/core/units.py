@@ -22,7 +22,7 @@ import pint
 
 from .errors import UnitError
 
-__all__ = ["ureg", "UnsafeUnitText", "to_canonical", "CANONICAL", "safe_unit_text", "quantity", "MAX_UNIT_TEXT", "BARE_ANGLE_LIMIT",
+__all__ = ["ureg", "COUNT_WORDS", "UnsafeUnitText", "to_canonical", "CANONICAL", "safe_unit_text", "quantity", "MAX_UNIT_TEXT", "BARE_ANGLE_LIMIT",
            "check_bare_angle"]
 
 class UnsafeUnitText(pint.errors.PintError, ValueError):
@@ -270,3 +270,6 @@ def quantity(text: str, where: str) -> "pint.Quantity":
 
 
 ureg._guarded = True  # after the module's own definitions (see _GuardedRegistry)
+
+#: words a column's unit uses for an encoder's counts (not a pint unit: they need counts per turn)
+COUNT_WORDS = frozenset({"count", "counts", "cts", "ticks"})

@@ -44,13 +44,12 @@ from dataclasses import dataclass, fields, replace
 from typing import Any, Callable, Mapping
 
 from ...core.errors import DataError, SceneError
-from ...core.units import to_canonical, ureg
+from ...core.units import COUNT_WORDS, to_canonical, ureg
 
 __all__ = ["RecordingSpec", "recording_spec_from_table", "merge_spec", "parse_option", "safe_unit_text",
            "is_angle_unit", "rad_per_unit", "seconds_per_unit", "header_role", "COUNT_WORDS"]
 
 Column = str | int | tuple[str, ...]
-COUNT_WORDS = frozenset({"count", "counts", "cts", "ticks"})
 TIME_WORDS = frozenset({"t", "time", "zeit", "sec", "secs", "seconds", "s", "timestamp", "time_stamp", "elapsed"})
 UNIT_WORDS = frozenset({"deg", "degree", "degrees", "rad", "radian", "radians"} | COUNT_WORDS)
 ANGLE_WORDS = frozenset({"theta", "angle", "phi", "alpha", "position", "pos", "winkel", "encoder", "θ", "φ", "α"}
