@@ -324,15 +324,15 @@ def _stalls(t, idx, bursty: bool, where, repairs):
     breaks = np.flatnonzero((np.diff(good) > 1) | cut[good[:-1]]) + 1
     pieces = np.split(good, breaks)
     best = max(pieces, key=len)
-    what = "; ".join(events[:3]) + (f" (and {len(events) - 3} more)" if len(events) > 3 else "")
+    what = ", ".join(events[:3]) + (f" and {len(events) - 3} more" if len(events) > 3 else "")
     if best.size < max(2, KEEP_FRACTION * n):
         first = int(starts[runs >= 2][0]) + 1 if (runs >= 2).any() else int(np.flatnonzero(cut)[0]) + 1
-        raise _refuse(f"the clock stalls: {what}; no stretch of {max(2, math.ceil(KEEP_FRACTION * n))} rows keeps time",
+        raise _refuse(f"the clock stalls ({what}) and no stretch of {max(2, math.ceil(KEEP_FRACTION * n))} rows keeps time",
                       where(idx[min(first, n - 1)]), t)
     dropped = n - best.size
     repairs.append(Repair("stall", dropped,
-                          f"the clock stalls: {what}; the record is cut there and the longest stretch that keeps "
-                          f"time kept, t = {t[best[0]]:g} to {t[best[-1]]:g} s ({best.size} of {n} rows; "
+                          f"the clock stalls ({what}): the record is cut there, keeping the longest stretch that "
+                          f"keeps time, t = {t[best[0]]:g} to {t[best[-1]]:g} s ({best.size} of {n} rows, "
                           "[recording] start and stop choose another)"))
     return t[best], idx[best]
 
@@ -412,7 +412,7 @@ def _finish(t, idx, repairs, where, rows_read: int) -> TimeBase:
                                         f"t = {t[big]:g} s"))
     if jitter > JITTER_NOTE * h:
         repairs.append(Repair("jitter", 0, f"the sampling interval jitters: {h:.4g} s +- {jitter:.2g} s "
-                                           f"({100.0 * jitter / h:.0f} %); each row keeps its own time"))
+                                           f"({100.0 * jitter / h:.0f} %), each row keeps its own time"))
     return TimeBase(t, idx, tuple(repairs), h, jitter, rows_read)
 
 
