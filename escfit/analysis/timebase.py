@@ -428,7 +428,7 @@ def _rate_guess(t) -> float:
     """Samples per second the stamps imply, or nan when they do not say: the rows per stamp
     (bursts, a stall left out) over the median step between stamps."""
     t = t[np.isfinite(t)]
-    if t.size < 3:
+    if t.size < 3 or np.mean(np.diff(t) < 0) > 0.1:  # stamps mostly out of order say nothing of a rate
         return math.nan
     _, runs = _runs(t)
     runs = runs[runs < max(STALL_ROWS, STALL_BURSTS * float(np.median(runs)))]
