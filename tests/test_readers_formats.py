@@ -356,11 +356,11 @@ def test_a_title_line_naming_one_run_is_not_a_header_of_runs(tmp_path):
     assert ts.time.size == t.size and ts.theta[0] == pytest.approx(0.2, abs=1e-3)
 
 
-def test_a_stalled_clock_at_the_end_is_named_and_cut_by_stop(tmp_path):
+def test_a_stalled_clock_at_the_end_is_cut_with_a_warning(tmp_path):
     """An encoder log whose time column stops advancing for its last rows (the logger's clock
-    stalled while the angle went on): refused naming the row and the `stop` that reads the rest,
-    which then reads."""
-    from escfit.balance.recordings.rawseries import read_raw_series
+    stalled while the angle went on): the record is cut at the stall, with a warning (a fifth of
+    the rows go) naming it; `stop` cuts it as before."""
+    from escfit.balance.recordings.rawseries import read_raw_series, warnings_of
     from escfit.balance.recordings.recording_spec import RecordingSpec
 
     t = np.arange(0, 30, 0.02)
@@ -369,8 +369,12 @@ def test_a_stalled_clock_at_the_end_is_named_and_cut_by_stop(tmp_path):
     path = tmp_path / "enc.csv"
     path.write_text("time, angle\n" + "\n".join(f"{a:.3f}, {b:.5f}" for a, b in zip(t, x)))
     spec = dict(time_column=1, angle_column=2, angle_unit="rad")
-    with pytest.raises(DataError, match=r"enc.csv:1203 .*last 300 rows.*stop = \"23.98 s\""):
-        read_raw_series(path, RecordingSpec(**spec))
+    ts = read_raw_series(path, RecordingSpec(**spec))
+    assert ts.time.size == 1201 and ts.time[-1] == pytest.approx(24.0)  # the stall's first row keeps its stamp
+    np.testing.assert_allclose(ts.theta, np.round(x[:1201], 5))
+    assert warnings_of(ts.meta) == ["the clock stalls (the stamp 24 s repeats over 300 rows): the record is cut there, "
+                                    "keeping the longest stretch that keeps time, t = 0 to 24 s (1201 of 1500 rows, "
+                                    "[recording] start and stop choose another)"]
     ts = read_raw_series(path, RecordingSpec(**spec, stop=23.98))
     assert ts.time.size == 1200 and ts.time[-1] == pytest.approx(23.98)
 

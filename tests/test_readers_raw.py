@@ -7,12 +7,13 @@ must name the file and the line, column, variable or key, and the value or optio
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
 
 from escfit.core.errors import DataError, SceneError
-from escfit.balance.recordings.rawseries import notes_of, read_raw_series
+from escfit.balance.recordings.rawseries import warnings_of, notes_of, read_raw_series
 from escfit.balance.recordings.recording_spec import (RecordingSpec, header_role, merge_spec, recording_spec_from_table,
                                               safe_unit_text)
 
@@ -269,21 +270,38 @@ def test_burst_stamps_are_retimed_by_a_line(tmp_path):
     fitted = 1.0 / np.mean(np.diff(ts.time))
     assert fitted == pytest.approx(rate, rel=1e-3)
     np.testing.assert_allclose(np.diff(ts.time), 1 / rate, rtol=1e-3)
-    note = notes_of(ts.meta)[0]
-    assert note.startswith("time stamps repeat in bursts of ~13 rows, re-timed by a line fit of stamp on row number")
-    assert float(note.split(": ")[-1].split()[0]) == pytest.approx(rate, rel=1e-3)
+    # every row re-timed: more than 5 % of the rows, so a warning rather than a note
+    warning = warnings_of(ts.meta)[0]
+    assert warning.startswith("time stamps repeat in bursts of ~13 rows: all 1300 rows re-timed by a straight line")
+    assert float(re.search(r"([\d.]+) Hz", warning).group(1)) == pytest.approx(rate, rel=1e-3)
 
 
-def test_decreasing_and_duplicate_stamps_are_refused(tmp_path):
+def test_a_row_out_of_order_and_a_repeated_stamp_are_repaired(tmp_path):
+    """A row stamped before its predecessor is dropped; a stamp repeated on the next row (another
+    reading) is re-timed between its neighbours; both are notes (one row of 400)."""
     t, a = decay()
     back = t.copy()
     back[50] = back[48]
-    refused(DataError, write(tmp_path, "back.csv", table(back, a, header=["t_s", "theta_rad"])), None,
-            "back.csv:52 [t_s]", "time goes backwards: 0.245 then 0.24")
+    ts = read_raw_series(write(tmp_path, "back.csv", table(back, a, header=["t_s", "theta_rad"])))
+    np.testing.assert_array_equal(ts.time, np.delete(t, 50))
+    np.testing.assert_array_equal(ts.theta, np.delete(a, 50))
+    assert "1 row(s) out of time order dropped (time going backwards for one row: the first stamped 0.24 s after " \
+           "0.245 s)" in notes_of(ts.meta) and not warnings_of(ts.meta)
     dup = t.copy()
     dup[50] = dup[49]
-    refused(DataError, write(tmp_path, "dup.csv", table(dup, a, header=["t_s", "theta_rad"])), None,
-            "dup.csv:52 [t_s]", "repeats the previous row")
+    ts = read_raw_series(write(tmp_path, "dup.csv", table(dup, a, header=["t_s", "theta_rad"])))
+    np.testing.assert_allclose(ts.time, t, rtol=0, atol=1e-12)  # the true times of rows 49 and 50
+    assert any(n.startswith("2 row(s) sharing a stamp with a neighbour") for n in notes_of(ts.meta))
+
+
+def test_a_clock_reset_is_refused_naming_sample_rate(tmp_path):
+    t, a = decay()
+    reset = t.copy()
+    reset[200:] -= reset[200]  # the clock starts again from 0 at row 200
+    msg = refused(DataError, write(tmp_path, "reset.csv", table(reset, a, header=["t_s", "theta_rad"])), None,
+                  "reset.csv:202 [t_s]", "time goes backwards: 0.995 then 0.0 s",
+                  "set [recording] sample_rate (or --sample-rate) to the logger's rate (about 200 Hz")
+    assert msg.count("sample_rate") == 1
 
 
 # --- angle units -------------------------------------------------------------------------------

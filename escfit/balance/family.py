@@ -64,6 +64,7 @@ def make_problem(scene, data, *, solver: str | None = None, solver_options: dict
     from .recordings.timeseries import TimeSeries
     from .problems.curves import FitProblem
     from .problems.recorded import problem_from_series
+    from .recordings.rawsteps import warnings_of
 
     sc = load_scene(scene) if not hasattr(scene, "model") else scene
     solver = solver or default_solver(sc)
@@ -78,6 +79,9 @@ def make_problem(scene, data, *, solver: str | None = None, solver_options: dict
         readings = spec.readings if spec is not None else "samples"
         problem = problem_from_series(sc, data, solver=solver, solver_options=options, readings=readings)
         problem.notes += _override_notes(sc, recording)
+        reading_warnings = warnings_of(data.meta)  # large repairs of the time base
+        if reading_warnings:
+            problem.data_warnings = list(getattr(problem, "data_warnings", [])) + reading_warnings
         if data.meta.get("angle_unit_assumed"):
             problem.data_warnings = list(getattr(problem, "data_warnings", [])) + [
                 "the recording gives no angle unit and radians were assumed: if the angles are in another unit "

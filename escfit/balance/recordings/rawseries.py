@@ -3,18 +3,17 @@
 :func:`read_raw_series` dispatches on content: MATLAB files (a ``MATLAB`` header, HDF5 v7.3 or
 a ``.mat`` name) go to :mod:`escfit.balance.recordings.matfile`, everything else to the text-table
 reader :mod:`escfit.balance.recordings.rawtable`.  Both hand their converted columns (time s, angle
-rad) to :func:`~escfit.balance.recordings.rawsteps.build_series`, which re-times stamps written in
-bursts (:func:`~escfit.balance.recordings.rawsteps.regular_times`), applies the ``start``/``stop``
-window and checks what is left.  The shared steps live in :mod:`escfit.balance.recordings.rawsteps`
+rad) to :func:`~escfit.balance.recordings.rawsteps.build_series`, which repairs the time base
+(:mod:`escfit.analysis.timebase`), applies the ``start``/``stop`` window and checks what is left.  The shared steps live in :mod:`escfit.balance.recordings.rawsteps`
 (so the readers need not import this module) and are re-exported here.
 
 Metadata convention
 -------------------
 Readers fill :attr:`TimeSeries.meta` with strings only (so it survives
 :func:`~escfit.balance.recordings.timeseries.write_timeseries` and HDF5 attributes):
-``source_format``, ``time_column``, ``angle_column``, ``angle_unit``, ``window`` and ``notes``,
-one string of sentences joined by ``"; "`` (:func:`~escfit.balance.recordings.rawsteps.notes_of`
-splits it), next to the file's own ``# key: value`` metadata (a file key that collides is kept as
+``source_format``, ``time_column``, ``angle_column``, ``angle_unit``, ``window``, ``notes`` and
+``warnings``, each one string of sentences joined by ``"; "``
+(:func:`~escfit.balance.recordings.rawsteps.notes_of` splits it), next to the file's own ``# key: value`` metadata (a file key that collides is kept as
 ``file_<key>``).
 """
 
@@ -25,12 +24,12 @@ from pathlib import Path
 from ...core.errors import DataError
 from .foreign import refuse_foreign
 from .matfile import read_mat_series
-from .rawsteps import FILE_OPTIONS, MIN_SAMPLES, build_series, file_options, merge_file_meta, notes_of, regular_times
+from .rawsteps import FILE_OPTIONS, MIN_SAMPLES, build_series, file_options, merge_file_meta, notes_of, warnings_of
 from .rawtable import read_raw_table
 from .recording_spec import RecordingSpec
 from .series import TimeSeries
 
-__all__ = ["read_raw_series", "build_series", "regular_times", "notes_of", "merge_file_meta", "file_options",
+__all__ = ["read_raw_series", "build_series", "notes_of", "warnings_of", "merge_file_meta", "file_options",
            "FILE_OPTIONS", "MIN_SAMPLES"]
 
 _HDF5 = b"\x89HDF\r\n\x1a\n"

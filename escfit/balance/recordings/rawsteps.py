@@ -1,8 +1,10 @@
 """The steps every raw-recording reader shares: checking, re-timing and windowing samples.
 
 :mod:`~escfit.balance.recordings.rawtable` and :mod:`~escfit.balance.recordings.matfile` hand their
-converted columns (time s, angle rad) to :func:`build_series`, which re-times stamps written in
-bursts (:func:`regular_times`), applies the ``start``/``stop`` window and checks what is left.
+converted columns (time s, angle rad) to :func:`build_series`, which passes the stamps through the
+time-base stage (:func:`repaired_times`, :mod:`escfit.analysis.timebase`: rows out of order,
+repeated rows, a stalled clock, stamps in bursts), applies the ``start``/``stop`` window and
+checks what is left.
 The entry point that picks the reader is :func:`~escfit.balance.recordings.rawseries.read_raw_series`
 (which re-exports these names); this module imports neither reader.
 
@@ -10,8 +12,9 @@ Metadata convention
 -------------------
 Readers fill :attr:`TimeSeries.meta` with strings only (so it survives
 :func:`~escfit.balance.recordings.timeseries.write_timeseries` and HDF5 attributes):
-``source_format``, ``time_column``, ``angle_column``, ``angle_unit``, ``window`` and ``notes``,
-one string of sentences joined by ``"; "`` (:func:`notes_of` splits it), next to the file's own
+``source_format``, ``time_column``, ``angle_column``, ``angle_unit``, ``window``, ``notes`` and
+``warnings`` (large repairs of the time base), each one string of sentences joined by ``"; "``
+(:func:`notes_of` and :func:`warnings_of` split them), next to the file's own
 ``# key: value`` metadata (a file key that collides is kept as ``file_<key>``).
 """
 
@@ -22,11 +25,12 @@ from typing import Callable, Mapping
 
 import numpy as np
 
+from ...analysis.timebase import time_base
 from ...core.errors import DataError, SceneError
 from .recording_spec import RecordingSpec, parse_option
 from .series import TimeSeries
 
-__all__ = ["build_series", "regular_times", "notes_of", "merge_file_meta", "file_options", "unwrap_angles",
+__all__ = ["build_series", "repaired_times", "notes_of", "warnings_of", "merge_file_meta", "file_options", "unwrap_angles",
            "FILE_OPTIONS", "MIN_SAMPLES"]
 
 MIN_SAMPLES = 20
@@ -38,54 +42,37 @@ FILE_OPTIONS = {"rate": "sample_rate", "sample_rate": "sample_rate", "samplerate
                 "scale": "scale"}
 
 
-def notes_of(meta: Mapping) -> list[str]:
-    """The reader's notes of a series' ``meta`` as a list of sentences."""
-    text = meta.get("notes", "")
+def notes_of(meta: Mapping, key: str = "notes") -> list[str]:
+    """The reader's notes (or, with ``key="warnings"``, warnings) of a series' ``meta`` as a list of sentences."""
+    text = meta.get(key, "")
     return [s for s in text.split("; ") if s] if isinstance(text, str) else list(text)
 
 
-def regular_times(time: np.ndarray, where_of_row: Callable[[int], str], notes: list[str]) -> np.ndarray:
-    """Check that ``time`` (s) increases; re-time stamps written in bursts.
+def warnings_of(meta: Mapping) -> list[str]:
+    """The reader's warnings of a series' ``meta`` (large repairs of its time base) as a list of sentences."""
+    return notes_of(meta, "warnings")
 
-    A logger may stamp rows in bursts: the same stamp repeated over many rows while the
-    sensor samples uniformly.  When at least half the steps are zero, none negative and
-    there are at least three distinct stamps, the times are replaced by a least-squares line
-    of stamp on row number, accepted when no stamp is further from it than the longest burst
-    spans (plus one sample).  A note gives the burst length and the fitted rate.
+
+def repaired_times(time: np.ndarray, theta: np.ndarray, where_of_row: Callable[[int], str], notes: list[str],
+                   warnings: list[str], source: str) -> tuple[np.ndarray, np.ndarray]:
+    """``(time, theta)`` of the rows the time base keeps, repaired (:func:`~escfit.analysis.timebase.time_base`).
+
+    Its notes are appended to ``notes``, its warnings (repairs of more than 5 % of the rows) to
+    ``warnings``.
 
     Raises
     ------
     DataError
-        Decreasing stamps (naming the row and both values), a repeated stamp that is not a
-        burst pattern, or bursts that do not follow a line.
+        Stamps that cannot be repaired, naming the row and ``[recording] sample_rate``.
     """
-    step = np.diff(time)
-    back = np.flatnonzero(step < 0)
-    if back.size:
-        i = int(back[0]) + 1
-        raise DataError(f"time goes backwards: {float(time[i - 1])!r} then {float(time[i])!r}", where_of_row(i))
-    same = step == 0
-    if not same.any():
-        return time
-    starts = np.flatnonzero(np.r_[True, ~same])
-    runs = np.diff(np.r_[starts, time.size])
-    if same.mean() < 0.5 or starts.size < 3:
-        i = int(np.flatnonzero(same)[0]) + 1
-        tail = i > 1 and bool(np.all(time[i:] == time[i]))
-        hint = (f" (the time stops there for the last {time.size - i + 1} rows: a logger's stalled clock? set "
-                f"[recording] stop = \"{float(time[i - 2]):g} s\" to read the rows before it)") if tail else ""
-        raise DataError(f"time {float(time[i])!r} repeats the previous row's; times must increase{hint}",
-                        where_of_row(i))
-    rows = np.arange(time.size, dtype=float)
-    slope, intercept = np.polyfit(rows, time, 1)
-    fitted = intercept + slope * rows
-    worst = int(np.argmax(np.abs(time - fitted)))
-    if not slope > 0 or abs(time[worst] - fitted[worst]) > (runs.max() + 1) * slope:
-        raise DataError(f"time stamps repeat in bursts but do not follow a straight line (stamp {float(time[worst])!r} "
-                        f"is {abs(time[worst] - fitted[worst]):.3g} s from it)", where_of_row(worst))
-    notes.append(f"time stamps repeat in bursts of ~{np.median(runs):.0f} rows, re-timed by a line fit of stamp "
-                 f"on row number: {1.0 / slope:.6g} Hz")
-    return fitted
+    tb = time_base(time, theta, where_of_row=where_of_row, source=source)
+    notes += tb.notes
+    warnings += tb.warnings
+    return tb.time, np.asarray(theta, dtype=float)[tb.rows]
+
+
+def _joined(sentences: list[str]) -> str:
+    return "; ".join(n.replace(";", ",") for n in sentences)
 
 
 def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, source: str, sha256: str,
@@ -93,12 +80,13 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
                  release_s: float = math.nan, label: str = "", unit_from: str = "file") -> TimeSeries:
     """Check and window converted samples (time s, theta rad) and wrap them in a TimeSeries.
 
-    Non-finite values, decreasing or repeated times are refused (burst stamps re-timed, see
-    :func:`regular_times`); the window ``start <= t <= stop`` is applied and must keep
-    :data:`MIN_SAMPLES` samples.  The samples' shape is held against the quantity and unit they
-    are read as (:func:`~escfit.analysis.quantity.check_quantity`, for the column ``label`` whose
-    unit came from ``unit_from``: ``"file"``, ``"option"`` or ``"assumed"``): a refusal is a
-    DataError naming the key to set, a suspicion a note.  ``meta`` gets ``window`` and ``notes``.
+    Non-finite values are refused; the stamps are repaired by the time-base stage (see
+    :func:`repaired_times`), which refuses what it cannot repair; the window
+    ``start <= t <= stop`` is applied and must keep :data:`MIN_SAMPLES` samples.  The samples'
+    shape is held against the quantity and unit they are read as
+    (:func:`~escfit.analysis.quantity.check_quantity`, for the column ``label`` whose unit came
+    from ``unit_from``: ``"file"``, ``"option"`` or ``"assumed"``): a refusal is a DataError
+    naming the key to set, a suspicion a note.  ``meta`` gets ``window``, ``notes`` and ``warnings``.
     """
     for name, values in (("time", time), ("angle", theta)):
         bad = np.flatnonzero(~np.isfinite(values))
@@ -115,8 +103,8 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
                  (time <= (math.inf if spec.stop is None else spec.stop))
         if inside.sum() >= 2:
             time, theta, rows = time[inside], theta[inside], rows[inside]
-    time, theta, rows = _drop_repeated_rows(time, theta, rows, notes, where_of_row)
-    time = regular_times(time, lambda i: where_of_row(int(rows[i])), notes)
+    warnings: list[str] = []
+    time, theta = repaired_times(time, theta, lambda i: where_of_row(int(rows[i])), notes, warnings, source)
     if meta.get("angle_unit_assumed") and np.ptp(theta) > 2.0 * math.pi:
         raise DataError(f"the angles span {np.ptp(theta):.4g} with no unit given (rad assumed): more than a turn, so "
                         "not radians of a swinging balance; if they are degrees set [recording] angle_unit = \"deg\" "
@@ -141,7 +129,9 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
         what = "samples" if spec.readings == "samples" else "amplitude readings"
         raise DataError(f"only {time.size} {what}; a decay needs at least {need}", source)
     if notes:
-        meta["notes"] = "; ".join(n.replace(";", ",") for n in notes)
+        meta["notes"] = _joined(notes)
+    if warnings:
+        meta["warnings"] = _joined(warnings)
     return TimeSeries(time=time, theta=np.asarray(theta, dtype=float), release_s=release_s, source=source,
                       sha256=sha256, meta=meta)
 
@@ -169,22 +159,6 @@ def _check_quantity(time: np.ndarray, values: np.ndarray, spec: RecordingSpec, m
         said = check.sentence(label)
         notes.append(said.replace(";", ","))
         meta["analysis"] = "; ".join(filter(None, [meta.get("analysis", ""), said.replace(";", ",")]))
-
-
-def _drop_repeated_rows(time: np.ndarray, theta: np.ndarray, rows: np.ndarray, notes: list[str],
-                        where_of_row: Callable[[int], str]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Rows that repeat the previous row exactly (time and reading: a spreadsheet's pasted copy)
-    left out, with a note; a repeated time with another reading stays (and is refused).
-    ``rows`` are the samples' row numbers in the file (for messages)."""
-    if time.size < 2:
-        return time, theta, rows
-    same = np.r_[False, (np.diff(time) == 0.0) & (np.diff(theta) == 0.0)]
-    if not same.any():
-        return time, theta, rows
-    first = int(rows[np.flatnonzero(same)[0]])
-    notes.append(f"{int(same.sum())} row(s) repeating the previous row exactly left out, the first at "
-                 f"{where_of_row(first)}")
-    return time[~same], theta[~same], rows[~same]
 
 
 def unwrap_angles(theta: np.ndarray, notes: list[str]) -> np.ndarray:

@@ -30,9 +30,10 @@ Conversions
 ``theta (rad) = raw * scale * rad_per_unit`` where ``rad_per_unit`` is pint's factor of the
 angle unit, or ``2*pi / counts_per_turn`` for ``counts``; ``scale`` turns volts (or any
 sensor reading) into the unit, so a sensor of 0.5 rad/V is ``angle_unit = "rad"``,
-``scale = 0.5``.  Times are converted to s; a column of time stamps written in bursts
-(the same stamp repeated over many rows) is re-timed by a straight line
-(:func:`~escfit.balance.recordings.rawsteps.regular_times`).  Unit strings are parsed only if they fit a small grammar
+``scale = 0.5``.  Times are converted to s; a logger's faulty stamps (written in bursts, a row
+out of order, a stalled clock) are repaired by the time-base stage
+(:mod:`escfit.analysis.timebase`), and what it cannot repair is refused naming
+``sample_rate``, which replaces the time column by row number / rate.  Unit strings are parsed only if they fit a small grammar
 (:func:`safe_unit_text`), because pint evaluates arithmetic and ``9**9**9`` never returns.
 """
 

@@ -3,7 +3,8 @@
 CSV format
 ----------
 Columns ``time_s`` and one angle column ``theta_rad``, ``theta_deg`` or ``theta_<unit>`` (any
-angle unit pint knows), sampled at increasing times.  The record may start with the balance
+angle unit pint knows), sampled at increasing times (a logger's faulty stamps are repaired by
+the time-base stage, :mod:`escfit.analysis.timebase`, with notes).  The record may start with the balance
 held and then released, at a turning point or mid-swing, and may end at rest; the analysis
 finds which.  A ``# release_s: <t>`` metadata line fixes the release instant instead.  The
 samples may carry noise, quantisation (an encoder's steps), a zero offset and its drift.
@@ -26,6 +27,7 @@ import numpy as np
 from ...core.errors import DataError
 from ...core.units import ureg
 from ...core.csvtable import read_table
+from .rawsteps import notes_of, repaired_times, warnings_of
 from .series import TimeSeries
 from .sniff import canonical_header, did_you_mean, refuse_unless_csv
 from .turning_points import TurningPoints, reduce_series, turning_points
@@ -42,7 +44,7 @@ def read_timeseries(path: str | Path) -> TimeSeries:
     ------
     DataError
         JSON, binary or empty files, missing or ambiguous columns, unknown or non-angle
-        units, text or non-finite numbers, times that do not increase.
+        units, text or non-finite numbers, times the time-base stage cannot repair.
     """
     refuse_unless_csv(path, "a time series")
     t = canonical_header(read_table(path))
@@ -64,12 +66,13 @@ def read_timeseries(path: str | Path) -> TimeSeries:
         raise DataError(f"column {angle[0]!r}: {unit!r} is not an angle unit", where)
     factor = float(q.to("rad").magnitude)
     time = np.array(t.floats("time_s"))
-    bad = np.flatnonzero(np.diff(time) <= 0)
-    if bad.size:
-        i = int(bad[0]) + 1
-        raise DataError(f"times must increase: {t.rows[i - 1][t.header.index('time_s')]} then "
-                        f"{t.rows[i][t.header.index('time_s')]}", f"{where}:{t.lines[i]} [time_s]")
     theta = np.array(t.floats(angle[0])) * factor
+    meta = dict(t.meta)
+    notes, warnings = notes_of(meta), warnings_of(meta)
+    time, theta = repaired_times(time, theta, lambda i: f"{where}:{t.lines[i]} [time_s]", notes, warnings, where)
+    for key, sentences in (("notes", notes), ("warnings", warnings)):
+        if sentences:
+            meta[key] = "; ".join(n.replace(";", ",") for n in sentences)
     release = math.nan
     if "release_s" in t.meta:
         try:
@@ -81,7 +84,7 @@ def read_timeseries(path: str | Path) -> TimeSeries:
             raise DataError(f"release_s must be a finite time, got {t.meta['release_s']!r}", f"{where} [release_s]")
     if time.size < 20:
         raise DataError(f"only {time.size} samples; a decay needs many samples per period", where)
-    return TimeSeries(time, theta, release, where, t.sha256, dict(t.meta))
+    return TimeSeries(time, theta, release, where, t.sha256, meta)
 
 
 def write_timeseries(path: str | Path, series: TimeSeries, *, unit: str = "rad", decimals: int = 6,
