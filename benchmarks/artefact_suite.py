@@ -9,7 +9,8 @@ folder and run exactly as a new user would::
 
 with the code under test (``--code PATH`` puts PATH first on PYTHONPATH; default: the installed
 escfit).  The records themselves are made by this process (its own escfit's forward simulator), so
-every code under test sees the same files.  Each run is classified:
+every code under test sees the same files.  Each run is classified (tests/artefacts/score.py,
+shared with tests/test_artefacts.py):
 
 RIGHT
     exit 0, omega0 within 0.5 % of the truth, C and R each within the larger of 3 standard errors
@@ -25,18 +26,8 @@ NOT-DETERMINED
 ERROR
     any other exit, a crash or a timeout.
 
-Why these tolerances: omega0 of a free decay is fixed by hundreds of zero crossings to a few ppm,
-so 0.5 % only catches a wrong window, a wrong unit or a wrong model (a pendulum read as degrees
-when in radians is off by A**2/16, 0.8 % at 20 deg).  C and R are strongly anticorrelated in a
-30-100 period decay (r ~ -0.99): 3 standard errors is the statistical allowance when the fit's
-errors are honest; the 15 % floor allows for noise models that understate the errors (white
-noise assumed on correlated residuals) and is still tight enough that a wrong window, a wrong
-quantity or an unmodelled push (which moves C or R by tens of per cent or by factors) fails.
-
-The window: the fit's release instant (``observation.t_release``, else the reference turning
-point of its notes) must lie within a quarter period of a true window's start (up to three
-quarters after it where that start is not a turning point), the last fitted sample no later than
-half a period after that window's end, and the span fitted at least half of the window.
+The tolerances (omega0 0.5 %; C and R the larger of 3 standard errors and 15 %) and the window
+rule are justified in tests/artefacts/score.py.
 
 ``--false-push N`` runs only the record analysis (``escfit init`` in process, which writes the
 analysis' notes into the starter scene) on N clean decays with a 1-3 % slow amplitude wobble and
@@ -69,11 +60,7 @@ sys.path.insert(0, str(ROOT))
 
 from tests.artefacts import CLASSES, make  # noqa: E402
 from tests.artefacts.make import Pendulum, angle_csv, draw, free_record, grid  # noqa: E402
-
-PUSH_NOTE = re.compile(r"not a free decay|swing grows", re.I)
-REF_NOTE = re.compile(r"reference one at t = ([-+0-9.eE]+) s")
-ACCEPTS = {"RIGHT": "fit", "REFUSED-WITH-REASON": "refuse", "NOT-DETERMINED": "not determined"}
-
+from tests.artefacts.score import ACCEPTS, PUSH_NOTE, classify, estimates_right, read_result  # noqa: E402
 
 def environment(code: str | None) -> dict:
     env = dict(os.environ)
@@ -89,68 +76,6 @@ def run_cli(args: list[str], cwd: Path, env: dict, timeout: float) -> tuple[int,
         return p.returncode, p.stdout + p.stderr
     except subprocess.TimeoutExpired:
         return -1, f"timeout after {timeout:.0f} s"
-
-
-def read_result(path: Path) -> dict:
-    """Estimates, standard errors, the fitted span and the notes of a fit file."""
-    from escfit.results import load_fit
-
-    res = load_fit(path)
-    rows = res.summary()
-
-    def est(name):
-        if name not in rows:
-            return 0.0, 0.0  # the scene left the effect out: the fit says it is zero
-        return float(rows[name]["estimate"]), float(rows[name].get("stderr", rows[name].get("sd", 0.0)) or 0.0)
-
-    t = res.group("observed_data")["time"].values
-    out = {"omega0": est("oscillator.omega0"), "C": est("viscous.C"), "R": est("coulomb.R"),
-           "t_first": float(np.min(t)), "t_last": float(np.max(t)), "notes": list(res.notes),
-           "warnings": list(res.warnings), "ref": None}
-    if "observation.t_release" in rows:
-        out["ref"] = float(rows["observation.t_release"]["estimate"])
-    else:
-        for note in res.notes:
-            m = REF_NOTE.search(note)
-            if m:
-                out["ref"] = float(m.group(1))
-    return out
-
-
-def window_right(truth, ref: float | None, t_first: float, t_last: float) -> bool:
-    """See the module docstring."""
-    period = truth.period
-    start_fit = ref if ref is not None else t_first
-    for k, (a, b) in enumerate(truth.all_windows()):
-        late = 0.25 if (k == 0 and truth.release_angle_deg is not None) else 0.75
-        if a - 0.25 * period <= start_fit <= a + late * period and t_last <= b + 0.5 * period \
-                and t_last - start_fit >= 0.5 * (b - a):
-            return True
-    return False
-
-
-def estimates_right(truth, r: dict) -> tuple[bool, dict]:
-    w, _ = r["omega0"]
-    errs = {"omega0": (w - truth.omega0) / truth.omega0}
-    ok = abs(errs["omega0"]) <= 0.005
-    for key, true in (("C", truth.C), ("R", truth.R)):
-        v, se = r[key]
-        errs[key] = (v - true) / true
-        ok &= abs(v - true) <= max(3.0 * se, truth.rel_tol * true)
-    return bool(ok), errs
-
-
-def classify(truth, code: int, text: str, r: dict | None) -> str:
-    if code == 0 and r is not None:
-        good, _ = estimates_right(truth, r)
-        if not good:
-            return "WRONG-SILENT"
-        return "RIGHT" if window_right(truth, r["ref"], r["t_first"], r["t_last"]) else "WRONG-WINDOW"
-    if code == 2:
-        return "REFUSED-WITH-REASON" if truth.reason and re.search(truth.reason, text, re.I) else "REFUSED-OTHER"
-    if code == 3:
-        return "NOT-DETERMINED"
-    return "ERROR"
 
 
 def one(name: str, seed: int, env: dict, timeout: float, periods: int | None) -> dict:

@@ -283,30 +283,33 @@ def glitch(seed: int, periods: int | None = None):
 
 def _pushed(p: Pendulum, fractions: list[float], push_half_swings: int = 2):
     """A record of free decays each ended by a push that brings the amplitude back to about |A0|
-    over ``push_half_swings`` half swings; ``fractions`` of the total free time per decay.
-    Returns t, theta and the list of free windows."""
-    total = p.duration
-    t_all, th_all, windows = [], [], []
+    over ``push_half_swings`` half swings; ``fractions`` of the total free time per decay, each
+    but the last ending at a turning point.  Returns t, theta and the list of free windows."""
+    pieces, windows = [], []  # (start, end, theta0 or hand arguments)
     t0, a = 0.0, p.a0
     for i, frac in enumerate(fractions):
-        turns_t, turns_a = turning_times(p, a, frac * total + p.period)
-        last = i == len(fractions) - 1
-        k = np.searchsorted(turns_t, frac * total) if not last else None
-        t_end = t0 + (turns_t[k] if not last else frac * total)
-        tt = grid(p, t_end - t0) + t0 if i == 0 else t0 + np.arange(0.0, t_end - t0, 1.0 / p.rate)
-        th_all.append(free_record(p, t0, a, tt))
-        t_all.append(tt)
-        windows.append((t0, t_end))
-        if last:
+        if i == len(fractions) - 1:
+            windows.append((t0, t0 + frac * p.duration))
+            pieces.append(("free", t0, t0 + frac * p.duration, a))
             break
-        a_turn = turns_a[k]
+        turns_t, turns_a = turning_times(p, a, frac * p.duration + p.period)
+        k = int(np.searchsorted(turns_t, frac * p.duration))
+        t_end, a_turn = t0 + turns_t[k], float(turns_a[k])
+        windows.append((t0, t_end))
+        pieces.append(("free", t0, t_end, a))
         a_new = math.copysign(abs(p.a0) * p.rng.uniform(0.9, 1.0), a_turn * (-1) ** push_half_swings)
         t1 = t_end + push_half_swings * 0.5 * p.period
-        tt = t_end + np.arange(1.0 / p.rate, t1 - t_end, 1.0 / p.rate)
-        t_all.append(tt)
-        th_all.append(hand(tt, t_end, t1, a_turn, a_new, push_half_swings))
+        pieces.append(("hand", t_end, t1, (a_turn, a_new)))
         t0, a = t1, a_new
-    return np.concatenate(t_all), np.concatenate(th_all), windows
+    t = grid(p, windows[-1][1])
+    theta = np.zeros(t.size)
+    for kind, start, end, arg in pieces:
+        sel = (t >= start) & (t < end) if end < t[-1] else t >= start
+        if kind == "free":
+            theta[sel] = free_record(p, start, arg, t[sel])
+        else:
+            theta[sel] = hand(t[sel], start, end, arg[0], arg[1], push_half_swings)
+    return t, theta, windows
 
 
 def push_middle(seed: int, periods: int | None = None):
@@ -458,7 +461,7 @@ def two_runs(seed: int, periods: int | None = None):
 
 
 def long_jitter(seed: int, periods: int | None = None):
-    p = draw(seed, periods or 300)
+    p = draw(seed, max(periods or 0, 300))  # long by definition: the length override does not shorten it
     p = replace(p, rate=min(p.rate, 30.0))  # phone video
     t = grid(p, p.duration, jitter=0.1)
     return angle_csv(t, noisy(p, free_record(p, 0.0, p.a0, t))), truth(
