@@ -51,6 +51,7 @@ import sys
 import tempfile
 import time
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
@@ -238,6 +239,8 @@ def main(argv=None) -> None:
     text = table(rows, label)
     print(text)
     if args.out:
+        raw = [{**{k: v for k, v in row.items() if k != "truth"}, "truth": asdict(row["truth"])} for row in rows]
+        args.out.with_suffix(".json").write_text(json.dumps(raw, indent=1, default=float))
         args.out.parent.mkdir(parents=True, exist_ok=True)
         args.out.write_text(f"# Artefact suite\n\nCommand: `python benchmarks/artefact_suite.py "
                             f"{' '.join(sys.argv[1:] if argv is None else argv)}`\n\n" + text)

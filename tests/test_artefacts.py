@@ -22,8 +22,8 @@ from escfit.cli.main import cli
 from .artefacts import CLASSES, make
 from .artefacts.score import ACCEPTS, classify, estimates_right, read_result
 
-SEED = 3  # a 1.17 s period sampled at 28 Hz: about a thousand rows in 30 periods, a short fit
-PERIODS = 30
+SEED = 3  # a 1.17 s period sampled at 28 Hz: about 650 rows in 20 periods, a short fit
+PERIODS = 20
 
 # what today's analysis does with the classes it gets wrong (the lead removes a mark when its fix lands)
 FAILS_TODAY: dict[str, str] = {}

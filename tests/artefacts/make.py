@@ -253,8 +253,8 @@ def wobble(seed: int, periods: int | None = None):
     swings = p.rng.uniform(10.0, 30.0)
     mod = 1.0 + 0.03 * np.sin(2 * math.pi * t / (swings * p.period) + p.rng.uniform(0, 2 * math.pi))
     return angle_csv(t, noisy(p, mod * free_record(p, 0.0, p.a0, t))), truth(
-        p, 0.0, t[-1], p.a0, rel_tol=0.30,
-        expect="fit the whole record: a 3 % slow modulation of the projected amplitude (a bob not in a "
+        p, 0.0, t[-1], p.a0, rel_tol=0.30, accept=("fit", "not determined"),
+        expect="fit the whole record (or say C and R are not separately determined): a 3 % slow modulation of the projected amplitude (a bob not in a "
         "plane) is no push; C and R get 30 %, since the modulation alone can move the start-to-end "
         "amplitude ratio by 6 %, about a tenth of the decrement, and the C/R split amplifies it")
 

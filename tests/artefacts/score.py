@@ -17,9 +17,14 @@ when the fit's errors are honest, and the 15 % floor allows for a noise model th
 them, while a wrong window, quantity or an unmodelled push (tens of per cent, or factors) fails.
 
 Window: the fit's release instant (``observation.t_release``, else the reference turning point of
-its notes) within a quarter period of a true window's start (up to three quarters after it when
-that start is not a release at rest), the last fitted sample at most half a period after that
-window's end, and the fitted span at least half the window.
+its notes) no earlier than a quarter period before a true window's start, the last fitted sample
+at most half a period after that window's end, and the fitted span at least half the window: a
+window starting inside the free decay is right (it only wastes data), one reaching into the
+hand, the hold, the drive or another decay is wrong.
+
+Units: where the record is a length (the fit's ``coulomb.R`` in m/s**2 or mm/s**2, the pendulum
+tracked as the bob's position ``x = L sin(theta)``), the true R is compared as ``L R`` in that
+unit, with ``L = g/omega0**2``.
 """
 
 from __future__ import annotations
@@ -28,6 +33,8 @@ import re
 from pathlib import Path
 
 import numpy as np
+
+from .make import G
 
 __all__ = ["read_result", "window_right", "estimates_right", "classify", "ACCEPTS", "PUSH_NOTE"]
 
@@ -52,6 +59,7 @@ def read_result(path: str | Path) -> dict:
 
     t = res.group("observed_data")["time"].values
     out = {"omega0": est("oscillator.omega0"), "C": est("viscous.C"), "R": est("coulomb.R"),
+           "R_unit": rows.get("coulomb.R", {}).get("unit", ""),
            "t_first": float(np.min(t)), "t_last": float(np.max(t)), "notes": list(res.notes),
            "warnings": list(res.warnings), "ref": None}
     if "observation.t_release" in rows:
@@ -68,10 +76,8 @@ def window_right(truth, ref: float | None, t_first: float, t_last: float) -> boo
     """Whether the fitted span is one of the truth's free windows (see the module docstring)."""
     period = truth.period
     start = ref if ref is not None else t_first
-    for k, (a, b) in enumerate(truth.all_windows()):
-        late = 0.25 if (k == 0 and truth.release_angle_deg is not None) else 0.75
-        if a - 0.25 * period <= start <= a + late * period and t_last <= b + 0.5 * period \
-                and t_last - start >= 0.5 * (b - a):
+    for a, b in truth.all_windows():
+        if a - 0.25 * period <= start and t_last <= b + 0.5 * period and t_last - start >= 0.5 * (b - a):
             return True
     return False
 
@@ -81,7 +87,9 @@ def estimates_right(truth, r: dict) -> tuple[bool, dict]:
     w, _ = r["omega0"]
     errs = {"omega0": (w - truth.omega0) / truth.omega0}
     ok = abs(errs["omega0"]) <= 0.005
-    for key, true in (("C", truth.C), ("R", truth.R)):
+    length = {"m": 1.0, "cm": 100.0, "mm": 1000.0}.get(r.get("R_unit", "").split("/")[0].strip(), 0.0)
+    r_true = truth.R * length * G / truth.omega0**2 if length else truth.R  # L R in the record's length unit
+    for key, true in (("C", truth.C), ("R", r_true)):
         v, se = r[key]
         errs[key] = (v - true) / true
         ok &= abs(v - true) <= max(3.0 * se, truth.rel_tol * true)
