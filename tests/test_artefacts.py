@@ -26,7 +26,16 @@ SEED = 3  # a 1.17 s period sampled at 28 Hz: about 650 rows in 20 periods, a sh
 PERIODS = 20
 
 # what today's analysis does with the classes it gets wrong (the lead removes a mark when its fix lands)
-FAILS_TODAY: dict[str, str] = {}
+FAILS_TODAY: dict[str, str] = {
+    "wobble": "a 3 % slow amplitude wobble moves C by +150 % and R to 0 with standard errors that do not cover it",
+    "drive_off": "the two driven swings before the switch-off are fitted as free (C -70 %, R +50 %)",
+    "burst_stamps": "ten rows on one time stamp are refused ('times must increase') instead of spread or dropped",
+    "backwards_row": "one backwards time stamp is refused ('time goes backwards') instead of dropped",
+    "stalled_clock": "a stalled second of time stamps is refused ('times must increase') instead of dropped",
+    "noise_column_sine": "a function generator's steady sine in the first data column is fitted instead of the decay",
+    "three_pushes": "the last of three free decays is fitted, not the longest",
+    "radians_as_degrees": "radians in a column labelled degrees are fitted as degrees (R 57 times too small)",
+}
 SLOW = {"long_jitter"}
 
 
