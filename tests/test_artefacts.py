@@ -29,11 +29,6 @@ PERIODS = 20
 FAILS_TODAY: dict[str, str] = {
     "wobble": "a 3 % slow amplitude wobble moves C by +150 % and R to 0 with standard errors that do not cover it",
     "drive_off": "the two driven swings before the switch-off are fitted as free (C -70 %, R +50 %)",
-    "burst_stamps": "ten rows on one time stamp are refused ('times must increase') instead of spread or dropped",
-    "backwards_row": "one backwards time stamp is refused ('time goes backwards') instead of dropped",
-    "stalled_clock": "a stalled second of time stamps is refused ('times must increase') instead of dropped",
-    "noise_column_sine": "a function generator's steady sine in the first data column is fitted instead of the decay",
-    "three_pushes": "the last of three free decays is fitted, not the longest",
     "radians_as_degrees": "radians in a column labelled degrees are fitted as degrees (R 57 times too small)",
 }
 SLOW = {"long_jitter"}

@@ -61,7 +61,8 @@ class SwingEvent:
         ``"push"`` (energy gained and kept) or ``"offset step"`` (the centre jumps, the swing
         keeps its size).
     half_swing : int
-        Index ``k`` of the half swing (from turning point ``k`` to ``k + 1``) it happened in.
+        Index ``k`` of the half swing (from turning point ``k`` to ``k + 1``) it happened in (a
+        push: the last half swing it still grew in).
     time : float
         Time of turning point ``k + 1``, s: the first turning point after the event.
     size : float
@@ -151,21 +152,29 @@ def _centres(values: np.ndarray) -> np.ndarray:
     return c
 
 
-def _grown_half_swing(v: np.ndarray, j: int) -> int:
-    """The half swing near ``j`` over which the amplitude grew the most (the one with the push).
+def _growth(v: np.ndarray, k: int) -> float:
+    """How much the amplitude grew over half swing ``k`` (from turning point ``k`` to ``k + 1``).
 
-    Amplitudes are taken about the mean of the two neighbouring turning points' midpoints, so
-    an unknown centre cancels; the half swing ``k`` ends at turning point ``k + 1``.
+    Both amplitudes are taken about one centre, that of the three turning points after the
+    half swing (``(v_(k+1) + 2 v_(k+2) + v_(k+3)) / 4``): those are all on the far side of a
+    push that ended in it, and an unknown centre cancels.
     """
-    lo, hi = max(j - 2, 1), min(j + 2, v.size - 3)
-    best, k_best = -math.inf, j
-    for k in range(lo, hi + 1):
-        centre = 0.25 * (v[k - 1] + 2.0 * v[k] + v[k + 1])
-        after = 0.25 * (v[k] + 2.0 * v[k + 1] + v[k + 2])
-        grew = abs(v[k + 1] - after) - abs(v[k] - centre)
-        if grew > best:
-            best, k_best = grew, k
-    return k_best
+    centre = 0.25 * (v[k + 1] + 2.0 * v[k + 2] + v[k + 3])
+    return abs(v[k + 1] - centre) - abs(v[k] - centre)
+
+
+def _pushed_half_swings(v: np.ndarray, j: int, noise: float) -> tuple[int, int]:
+    """First and last half swing of the push found at ``j``: the one near ``j`` over which the
+    amplitude grew the most, and the ones after it that still grew by over three times the
+    noise of a growth (``noise``): a hand that pushes over a whole swing."""
+    lo, hi = max(j - 2, 0), min(j + 2, v.size - 4)
+    if hi < lo:
+        return j, j
+    first = max(range(lo, hi + 1), key=lambda k: _growth(v, k))
+    last = first
+    while last + 1 <= v.size - 4 and _growth(v, last + 1) > 3.0 * noise:
+        last += 1
+    return first, last
 
 
 def _spans_jump(v: np.ndarray, p: np.ndarray, k: int, jump: float) -> bool:
@@ -219,6 +228,7 @@ def find_events(times: np.ndarray, values: np.ndarray, *, resolution: float,
     # p_k and p_(k+1) share a turning point: turning points of noise s give p a noise of
     # sqrt(2) s and second differences of p one of 2 s
     gain, err = swing_gains(np.fmax(p, 0.5 * floor if floor > 0 else 1e-300), noise_ratio=math.sqrt(2.0), log=True)
+    s_p = _robust_scale(np.diff(p, 2)) / math.sqrt(2.0)
     spread = _robust_scale(gain)
     scale = np.fmax(err, spread if math.isfinite(spread) else 0.0)
     level = np.array([np.median(p[max(0, j - 1 - SIDE):max(1, j - 1)]) for j in range(p.size)])
@@ -226,7 +236,9 @@ def find_events(times: np.ndarray, values: np.ndarray, *, resolution: float,
     pushes = np.isfinite(gain) & (gain > Z_PUSH * scale) & (absolute > floor)
     for run in _clusters(pushes):
         j = int(run[np.argmax(gain[run])])
-        k = _grown_half_swing(v, j)
+        # turning points of noise s_p / sqrt(2) and centres of noise sqrt(6)/4 of it: a growth's
+        # noise is about that of one peak-to-peak swing
+        _, k = _pushed_half_swings(v, j, s_p)
         score = float(gain[j] / scale[j]) if scale[j] > 0 else math.inf
         events.append(SwingEvent(
             "push", k, float(t[k + 1]), float(absolute[j]), score,
