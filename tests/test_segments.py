@@ -102,3 +102,22 @@ def test_too_few_turning_points_give_no_verdict():
     t, v = turns(n=8, seed=7)
     v[5:] *= 1.5
     assert find_events(t, v, resolution=1e-4) == []
+
+
+@pytest.mark.parametrize("steady", [1, 2, 3])
+def test_a_drive_switched_off_after_a_swing_or_two_is_found(steady):
+    """The swing held at its amplitude for ``steady`` half swings (a drive), then free: the
+    leading half swings lost nothing, so the free decay starts after them."""
+    from escfit.analysis.segments import driven_start
+
+    t, v = turns(seed=8, ratio=0.97, noise=1e-4)
+    kept = np.r_[np.full(steady, abs(v[0])), np.abs(v)] * (-1.0) ** np.arange(steady + v.size)
+    assert driven_start(kept) == steady  # from turning point steady + 1: one half swing late
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_a_free_start_is_never_taken_for_a_driven_one(seed):
+    from escfit.analysis.segments import driven_start
+
+    t, v = turns(seed=seed, ratio=0.97, noise=1e-3)
+    assert driven_start(v) == 0

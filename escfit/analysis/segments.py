@@ -42,7 +42,7 @@ from typing import Callable
 
 import numpy as np
 
-__all__ = ["SwingEvent", "swing_gains", "find_events", "SIDE", "Z_PUSH"]
+__all__ = ["SwingEvent", "swing_gains", "find_events", "driven_start", "SIDE", "Z_PUSH"]
 
 SIDE = 6  # half swings on each side of a candidate (a median of 6 tolerates two that are out of line)
 MIN_SIDE = 3  # fewer on either side: no verdict there (a median of 3 tolerates one out of line)
@@ -98,6 +98,16 @@ def _level(side: np.ndarray) -> tuple[float, float]:
     return float(np.median(side - slope * k)), slope
 
 
+def _full_levels(q: np.ndarray, side: int) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_level` of every window of ``side`` values of ``q``, by window start (all at once)."""
+    if q.size < side:
+        return np.zeros(0), np.zeros(0)
+    w = np.lib.stride_tricks.sliding_window_view(q, side)
+    slope = np.minimum(np.median(np.diff(w, axis=1), axis=1), 0.0) if side >= 5 else np.zeros(w.shape[0])
+    k = np.arange(side) - 0.5 * (side - 1)
+    return np.median(w - slope[:, None] * k, axis=1), slope
+
+
 def swing_gains(series: np.ndarray, side: int = SIDE, *, noise_ratio: float, log: bool = False
                 ) -> tuple[np.ndarray, np.ndarray]:
     """Level change of ``series`` across each position and its noise standard error.
@@ -124,13 +134,18 @@ def swing_gains(series: np.ndarray, side: int = SIDE, *, noise_ratio: float, log
         return gain, err
     s_p = _robust_scale(np.diff(p, 2)) / noise_ratio
     q = np.log(p) if log else p
+    full_level, full_slope = _full_levels(q, side)
+
+    def level(lo: int, hi: int) -> tuple[float, float]:
+        return (float(full_level[lo]), float(full_slope[lo])) if hi - lo == side else _level(q[lo:hi])
+
     for j in range(n):
         b0, b1 = max(0, j - 1 - side), max(0, j - 1)
         a0, a1 = min(n, j + 2), min(n, j + 2 + side)
         nb, na = b1 - b0, a1 - a0
         if nb < MIN_SIDE or na < MIN_SIDE:
             continue
-        (lb, sb), (la, sa) = _level(q[b0:b1]), _level(q[a0:a1])
+        (lb, sb), (la, sa) = level(b0, b1), level(a0, a1)
         gap = 0.5 * (a0 + a1 - 1) - 0.5 * (b0 + b1 - 1)
         slower = 0 if sb >= sa else 1
         gain[j] = la - lb - min((sb, sa)[slower], 0.0) * gap
@@ -268,3 +283,35 @@ def find_events(times: np.ndarray, values: np.ndarray, *, resolution: float,
             f"keeps its size ({score:.0f} times the scatter of the centre): the tracked origin or the sensor's zero "
             "moved"))
     return sorted(events, key=lambda e: e.time)
+
+
+def driven_start(values: np.ndarray, *, most: int = 4, reference: int = 6) -> int:
+    """Half swings at the start of ``values`` (alternating turning points) that a drive kept up.
+
+    A free swing loses at every half swing, and at nearly the same amplitude it loses nearly the
+    same amount.  The losses ``l_k = p_k - p_(k+1)`` of the first half swings (at most ``most``)
+    are compared with the median loss ``L`` of the ``reference`` half swings after them: leading
+    losses under three quarters of ``L`` were made up by a drive (or a hand) that was then
+    switched off (the half swing in which it stops loses about ``L / 2``, so the start found is
+    the turning point after the drive's last one: one half swing late at most).  Decided only
+    where ``L / 4`` stands three noise scales above the losses' noise (from the second
+    differences of ``p``), so that no free start is taken for a driven one by chance.
+
+    Returns
+    -------
+    int
+        ``m`` (0: none): the free decay is taken from turning point ``m + 1``.
+    """
+    v = np.asarray(values, float)
+    p = np.abs(np.diff(v))
+    if p.size < most + reference + 2:
+        return 0
+    loss = -np.diff(p)
+    typical = float(np.median(loss[most + 1:most + 1 + reference]))
+    s_l = _robust_scale(np.diff(p, 2))  # the losses are first differences of p: their noise
+    if not (0.25 * typical > 3.0 * s_l):
+        return 0
+    m = 0
+    while m < most and loss[m] < 0.75 * typical:
+        m += 1
+    return m

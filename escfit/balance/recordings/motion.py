@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...core.errors import DataError
-from ...analysis.segments import find_events
+from ...analysis.segments import driven_start, find_events
 from .extrema import vertex_at
 
 __all__ = ["Turn", "Start", "reference", "faded_end", "growth_tolerance", "growth_steps", "find_start", "levels_off",
@@ -378,6 +378,12 @@ def find_start(rec, turns: list[Turn], end: int, *, at_start: bool = False) -> S
         why = (f"the swing keeps its amplitude until t = {times[r + driven]:.4g} s and then decays at that same "
                "amplitude (a drive switched off)")
         r += driven
+    elif r == first_ok:
+        steady = driven_start(values[r:end])
+        if steady:
+            r += steady + 1
+            why = (f"the first {steady} half swing(s) lose less than half of what the swing loses freely just after, "
+                   f"at the same amplitude: driven (or guided) until t = {times[r]:.4g} s")
     pulled = r == first_ok + 1 and held_release(rec, turns[first_ok]) is not None
     if pulled:
         rec.notes.append(f"held at {rec.show(values[first_ok], 4)}, then moved to "
