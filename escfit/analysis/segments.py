@@ -294,8 +294,9 @@ def driven_start(values: np.ndarray, *, most: int = 4, reference: int = 6) -> in
     losses under three quarters of ``L`` were made up by a drive (or a hand) that was then
     switched off (the half swing in which it stops loses about ``L / 2``, so the start found is
     the turning point after the drive's last one: one half swing late at most).  Decided only
-    where ``L / 4`` stands three noise scales above the losses' noise (from the second
-    differences of ``p``), so that no free start is taken for a driven one by chance.
+    where the mean of those leading losses falls short of ``L`` by four standard errors (the
+    losses' noise from the second differences of ``p``), so that no free start is taken for a
+    driven one by chance.
 
     Returns
     -------
@@ -308,10 +309,11 @@ def driven_start(values: np.ndarray, *, most: int = 4, reference: int = 6) -> in
         return 0
     loss = -np.diff(p)
     typical = float(np.median(loss[most + 1:most + 1 + reference]))
-    s_l = _robust_scale(np.diff(p, 2))  # the losses are first differences of p: their noise
-    if not (0.25 * typical > 3.0 * s_l):
-        return 0
+    # the second differences of p are differences of successive losses: sqrt(2) times their noise
+    s_l = _robust_scale(np.diff(p, 2)) / math.sqrt(2.0)
     m = 0
     while m < most and loss[m] < 0.75 * typical:
         m += 1
+    if m == 0 or typical - float(np.mean(loss[:m])) < 4.0 * MEDIAN_SE * s_l * math.sqrt(1.0 / m + 1.0 / reference):
+        return 0
     return m
