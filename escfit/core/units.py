@@ -272,6 +272,8 @@ def _per_time(q: "pint.Quantity", value: Any, kind: str, where: str) -> float:
                                      "cycles: 1 Hz = 2 pi rad/s)",
                 "frequency": "a frequency; give it in Hz (e.g. '500 Hz')",
                 "rate_per_s": "a rate per second; give it in 1/s (e.g. '0.05/s' or a bare number)"}[kind]
+        if q.dimensionality != _PER_TIME:
+            raise UnitError(f"{value!r} has dimension {q.dimensionality}, not {what}", where)
         raise UnitError(f"{value!r} is not {what}" + ("; it mixes Hz (cycles) with an angle" if how else ""), where)
     per_second = float(q.to("1/s").magnitude)
     if kind == "angular_frequency":
