@@ -326,7 +326,8 @@ def test_phase_limit_bounds_the_run(scene):
 
 @pytest.mark.parametrize("key,value,match", [
     ("spin", "30000", "unit"),
-    ("spin", '"500 Hz"', "ambiguous"),
+    ("spin", '"500 turn"', "not an angular frequency"),
+    ("spin", '"2 rad*Hz"', "mixes Hz"),
     ("mu", "-0.1", "physical range"),
     ("restitution", "1.5", "physical range"),
     ("rp2", '"0.05706 in"', "tooth ratio"),

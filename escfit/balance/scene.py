@@ -242,7 +242,7 @@ def _read_omega0(osc: Mapping, inertia: float | None, where: str) -> Param:
     if "omega0" in osc:
         if "stiffness" in osc:
             raise SceneError("give 'omega0' or 'stiffness' (with inertia), not both", where)
-        return read_param(osc["omega0"], name="oscillator.omega0", kind="rate_per_s", lower=OMEGA0_RANGE[0],
+        return read_param(osc["omega0"], name="oscillator.omega0", kind="angular_frequency", lower=OMEGA0_RANGE[0],
                           upper=OMEGA0_RANGE[1], meaning=meaning, where=f"{where}.omega0")
     if "stiffness" not in osc:
         raise SceneError("give 'omega0' (rad/s) or 'stiffness' with 'inertia'", where)

@@ -22,8 +22,9 @@ import pint
 
 from .errors import UnitError
 
-__all__ = ["ureg", "COUNT_WORDS", "UnsafeUnitText", "to_canonical", "CANONICAL", "safe_unit_text", "quantity", "MAX_UNIT_TEXT", "BARE_ANGLE_LIMIT",
-           "check_bare_angle"]
+__all__ = ["ureg", "COUNT_WORDS", "UnsafeUnitText", "to_canonical", "CANONICAL", "safe_unit_text", "quantity",
+           "MAX_UNIT_TEXT", "BARE_ANGLE_LIMIT", "check_bare_angle", "angular_frequency", "angular_frequency_factor",
+           "ANGULAR_FREQUENCY_UNITS"]
 
 class UnsafeUnitText(pint.errors.PintError, ValueError):
     """Text pint was asked to parse that is not a number and a unit of :func:`safe_unit_text`'s grammar."""
@@ -88,13 +89,18 @@ def _registry() -> _GuardedRegistry:
 
 ureg = _registry()
 ureg.define("gf = gram * g_0 = gram_force")  # gram-force, as in Monday's fixture data
+# A watch's beat is half a period of its balance: f = bph / 7200 Hz (18000 bph = 2.5 Hz)
+ureg.define("beats_per_hour = turn / 7200 / second = bph = vph")
 
 # Canonical unit of each kind of quantity escfit reads.  Per-inertia quantities
 # (C, R, X, omega0**2) are the model's working units.
 CANONICAL: dict[str, str] = {
     "angle": "rad",
     "time": "s",
-    "rate_per_s": "1/s",  # C (viscous per inertia), omega0 (rad/s)
+    "rate_per_s": "1/s",  # C (viscous per inertia): a rate, not a frequency (Hz, rpm refused)
+    # omega0, a spin, an angular velocity: rad/s, stored as "1/s" (rad is dimensionless in
+    # pint); read by angular_frequency (Hz is cycles per second, times 2 pi)
+    "angular_frequency": "1/s",
     "angular_acceleration": "1/s**2",  # R, X: torque per inertia, rad/s^2
     "inertia": "kg*m**2",
     "torque": "N*m",
@@ -107,7 +113,7 @@ CANONICAL: dict[str, str] = {
     "mass": "kg",
     "force": "N",
     "dimensionless": "",
-    "frequency": "1/s",
+    "frequency": "1/s",  # cycles or events per second (a sample rate): Hz; an angle per time refused
 }
 
 
@@ -157,7 +163,11 @@ def to_canonical(value: Any, kind: str, where: str, *, bare_limit: float | None 
     value
         A number (already canonical) or a string ``"<number> <unit>"``.
     kind
-        Key of :data:`CANONICAL` naming the expected dimension.
+        Key of :data:`CANONICAL` naming the expected dimension.  The three kinds per unit of
+        time are read by one rule (see :func:`angular_frequency`): ``"angular_frequency"``
+        (rad/s: Hz counts cycles, times 2 pi; rpm, turn/s, bph, deg/s by pint; a bare 1/s is
+        rad/s), ``"frequency"`` (Hz, 1/s: an angle per time is refused) and ``"rate_per_s"``
+        (1/s, a damping rate: Hz and angles per time are refused).
     where
         ``"file [key]"`` used in error messages.
     bare_limit
@@ -172,8 +182,8 @@ def to_canonical(value: Any, kind: str, where: str, *, bare_limit: float | None 
     Raises
     ------
     UnitError
-        Unknown unit, wrong dimension, non-finite number, a non-numeric value or a bare
-        number beyond ``bare_limit``.
+        Unknown unit, wrong dimension, non-finite number, a non-numeric value, a bare
+        number beyond ``bare_limit``, or a frequency unit the kind refuses.
     """
     if bare_limit is not None:
         check_bare_angle(value, where, bare_limit)
@@ -182,27 +192,158 @@ def to_canonical(value: Any, kind: str, where: str, *, bare_limit: float | None 
     if isinstance(value, (int, float)):
         out = float(value)
     elif isinstance(value, str):
-        try:
-            q = ureg.Quantity(value)
-        except Exception as exc:  # pint raises several types for bad strings
-            raise UnitError(f"cannot read {value!r} as a quantity ({exc})", where) from None
-        target = _unit(kind)
-        if not isinstance(q, pint.Quantity):
-            q = ureg.Quantity(float(q))
-        try:
-            out = float(q.to(target).magnitude)
-        except pint.DimensionalityError:
-            expect = CANONICAL[kind] or "dimensionless"
-            raise UnitError(
-                f"{value!r} has dimension {q.dimensionality}, expected {_article(kind)} "
-                f"(e.g. in {expect})",
-                where,
-            ) from None
+        q = _parse(value, where)
+        if kind in _PER_TIME_KINDS:
+            out = _per_time(q, value, kind, where)
+        else:
+            try:
+                out = float(q.to(_unit(kind)).magnitude)
+            except pint.DimensionalityError:
+                expect = CANONICAL[kind] or "dimensionless"
+                raise UnitError(
+                    f"{value!r} has dimension {q.dimensionality}, expected {_article(kind)} "
+                    f"(e.g. in {expect})",
+                    where,
+                ) from None
     else:
         raise UnitError(f"expected a number or a string with a unit, got {value!r}", where)
     if not math.isfinite(out):
         raise UnitError(f"value {value!r} is not finite", where)
     return out
+
+
+# "15.7 1/s": the safe grammar takes no number inside a unit, so a leading "1/" is read as "/"
+_ONE_OVER = re.compile(r"^(\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s+1\s*/(?=\s*[A-Za-z_(])")
+
+
+def _parse(value: str, where: str) -> Any:
+    """pint's reading of ``value`` as a Quantity (dimensionless for a string without a unit)."""
+    try:
+        q = ureg.Quantity(_ONE_OVER.sub(r"\1 /", value))
+    except Exception as exc:  # pint raises several types for bad strings
+        raise UnitError(f"cannot read {value!r} as a quantity ({exc})", where) from None
+    return q if isinstance(q, pint.Quantity) else ureg.Quantity(float(q))
+
+
+# --- frequencies: one rule for every key that takes a rate per unit of time ----------------------
+
+#: the units suggested when a value is not an angular frequency
+ANGULAR_FREQUENCY_UNITS = "rad/s (or a bare number), Hz, rpm, turn/s or bph"
+_PER_TIME_KINDS = frozenset({"angular_frequency", "frequency", "rate_per_s"})
+_TIME = ureg.second.dimensionality
+_PER_TIME = (1 / ureg.second).dimensionality
+
+
+def _frequency_kind(q: "pint.Quantity") -> str | None:
+    """How the unit of ``q`` counts per unit of time.
+
+    Returns
+    -------
+    str or None
+        ``"cycles"`` (hertz with any prefix: cycles per second), ``"angle"`` (an angle per
+        time: rad/s, deg/s, turn/s, cycle/s, rpm, bph), ``"plain"`` (1/s, s^-1, /min: no
+        cycle and no angle), ``"mixed"`` (hertz times an angle: ambiguous) or ``None``: not
+        one rate per time (another dimension; a dimensionless factor such as percent or
+        count; a becquerel; a power of hertz or of an angle).
+    """
+    if q.dimensionality != _PER_TIME:
+        return None
+    hertz = angle = 0
+    for name, power in q.unit_items():
+        if any(unit == "hertz" for _prefix, unit, _suffix in ureg.parse_unit_name(name)):
+            hertz += power
+            continue
+        radians = dict((1 * ureg.get_root_units(name)[1]).unit_items()).get("radian", 0)
+        if radians:
+            angle += radians * power
+        elif ureg.Unit(name).dimensionality != _TIME:
+            return None
+    if hertz and angle:
+        return "mixed"
+    if hertz not in (0, 1) or angle not in (0, 1):
+        return None
+    return "cycles" if hertz else "angle" if angle else "plain"
+
+
+def _per_time(q: "pint.Quantity", value: Any, kind: str, where: str) -> float:
+    """``q`` (read from ``value``) in the canonical unit of a per-time ``kind`` (see :func:`to_canonical`)."""
+    how = _frequency_kind(q)
+    if how in (None, "mixed"):
+        what = {"angular_frequency": f"an angular frequency; give it in {ANGULAR_FREQUENCY_UNITS} (Hz counts "
+                                     "cycles: 1 Hz = 2 pi rad/s)",
+                "frequency": "a frequency; give it in Hz (e.g. '500 Hz')",
+                "rate_per_s": "a rate per second; give it in 1/s (e.g. '0.05/s' or a bare number)"}[kind]
+        if q.dimensionality != _PER_TIME:
+            raise UnitError(f"{value!r} has dimension {q.dimensionality}, not {what}", where)
+        raise UnitError(f"{value!r} is not {what}" + ("; it mixes Hz (cycles) with an angle" if how else ""), where)
+    per_second = float(q.to("1/s").magnitude)
+    if kind == "angular_frequency":
+        return 2 * math.pi * per_second if how == "cycles" else per_second
+    if kind == "frequency":
+        if how == "angle":
+            raise UnitError(f"{value!r} is an angle per time, but this key counts cycles or events per second; "
+                            "give it in Hz (e.g. '500 Hz')", where)
+        return per_second
+    if how != "plain":
+        raise UnitError(f"{value!r}: this key is a rate per second (1/s), not a frequency; give it in 1/s "
+                        "(e.g. '0.05/s' or a bare number), not in Hz, rpm or rad/s", where)
+    return per_second
+
+
+def angular_frequency(value: Any, where: str) -> float:
+    """Read an angular frequency or angular velocity (omega0, a spin, a rate) in rad/s.
+
+    The one rule of escfit for a value per unit of time that turns an angle:
+
+    * a unit counting cycles is multiplied by 2 pi: ``"2.5 Hz"`` (also kHz, mHz) is
+      ``2 pi * 2.5`` rad/s;
+    * an angle per time is converted by pint: ``"2.5 turn/s"``, ``"2.5 cycles/s"``,
+      ``"150 rpm"``, ``"2.5 rps"``, ``"900 deg/s"`` and ``"18000 bph"`` (beats per hour of a
+      watch: a beat is half a period, so f = bph/7200 Hz; also ``vph``) are all
+      ``2 pi * 2.5`` rad/s;
+    * a bare number, and a unit with neither cycles nor an angle (``"15.7 1/s"``,
+      ``"15.7 s^-1"``, ``"942 /min"``), is read as rad/s, the physics convention for an
+      angular frequency;
+    * anything else is refused: another dimension (``"2.5 turn"``, ``"2.5 s"``), a
+      dimensionless factor per time (``"5 percent/s"``, ``"5 count/s"``, ``"5 Bq"``), hertz
+      mixed with an angle (``"2 rad*Hz"``) or an angle squared per time.
+
+    Parameters
+    ----------
+    value
+        A number (rad/s) or a string ``"<number> <unit>"``.
+    where
+        ``"file [table].key"`` (or the option) used in error messages.
+
+    Returns
+    -------
+    float
+        The value in rad/s.
+
+    Raises
+    ------
+    UnitError
+        One line naming ``where``, the value and the units to use.
+    """
+    return to_canonical(value, "angular_frequency", where)
+
+
+def angular_frequency_factor(unit: str, where: str) -> float:
+    """rad/s per one ``unit`` (a column's or an option's unit of angular velocity), by :func:`angular_frequency`.
+
+    ``"rad/s"`` is 1, ``"deg/s"`` pi/180, ``"rpm"`` 2 pi/60, ``"Hz"`` 2 pi, ``"1/s"`` 1.
+
+    Raises
+    ------
+    UnitError
+        ``unit`` is not a unit of the safe grammar (:func:`safe_unit_text`) or not an
+        angular frequency.
+    """
+    text = unit.strip()
+    text = text[1:].lstrip() if text.startswith("1") and text[1:].lstrip().startswith("/") else text
+    if not text or not safe_unit_text(text):
+        raise UnitError(f"{unit!r} is not an angular frequency unit; give {ANGULAR_FREQUENCY_UNITS}", where)
+    return angular_frequency(f"1 {text}", where)
 
 
 MAX_UNIT_TEXT = 40

@@ -35,8 +35,8 @@ import pint
 from ..core.csvtable import refuses_unreadable
 from ..core.atomic import atomic_path
 from ..core.csvtable import Table, read_table
-from ..core.errors import DataError
-from ..core.units import ureg
+from ..core.errors import DataError, UnitError
+from ..core.units import angular_frequency_factor, ureg
 
 __all__ = ["SpeedTrace", "TerminalSpeeds", "read_speed_trace", "read_terminal_speeds", "write_speed_trace",
            "detect_format", "read_data", "FORMATS"]
@@ -194,15 +194,29 @@ def _columns(table: Table, allowed: dict[str, tuple[str, str]], what: str) -> di
             raise DataError(f"column {name!r} appears twice", where)
         target, dimension = allowed[name]
         try:
-            q = ureg.Quantity(1.0, unit if unit not in ("", "1") else "dimensionless")
-            factor = float(q.to(target or "dimensionless").magnitude)
+            if target == "rad/s":  # an angular speed: Hz counts turns, as for every angular frequency
+                factor = _angular_speed_factor(unit, dimension, name, where)
+            else:
+                q = ureg.Quantity(1.0, unit if unit not in ("", "1") else "dimensionless")
+                factor = float(q.to(target or "dimensionless").magnitude)
         except pint.DimensionalityError:
             raise DataError(f"column {name!r}: unit {unit!r} is not {dimension} ({target or 'dimensionless'})",
                             where) from None
+        except DataError:
+            raise
         except Exception as exc:  # pint raises several types for unknown units
             raise DataError(f"column {name!r}: unknown unit {unit!r} ({exc})", where) from None
         out[name] = (cell, factor)
     return out
+
+
+def _angular_speed_factor(unit: str, dimension: str, name: str, where: str) -> float:
+    """rad/s per ``unit`` (rad/s, rpm, deg/s; Hz is turns per second): :func:`~escfit.core.units.angular_frequency`'s rule."""
+    try:
+        return angular_frequency_factor(unit, where)
+    except UnitError:
+        raise DataError(f"column {name!r}: unit {unit!r} is not {dimension} (rad/s, rpm, deg/s or Hz = turn/s)",
+                        where) from None
 
 
 def _values(table: Table, cols: dict[str, tuple[str, float]], name: str, **checks) -> np.ndarray:

@@ -157,7 +157,7 @@ class GenevaProblem(FreeParameters, ProblemBase):
         table = scene.extra.get("observation")
         if table is not None:
             check_keys(table, OBSERVATION_KEYS, f"{where} [observation]", OBSERVATION_KEYS)
-            params.add(read_param(table["sigma"], name=SIGMA, kind="rate_per_s", unit="rad/s", lower=0.0,
+            params.add(read_param(table["sigma"], name=SIGMA, kind="angular_frequency", unit="rad/s", lower=0.0,
                                   lower_open=True, meaning="reading noise: standard deviation of each speed reading",
                                   where=f"{where} [observation].sigma"))
             self.noise_source = "scene"

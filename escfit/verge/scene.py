@@ -7,7 +7,7 @@ friction, restitution, cut-off angle).  Layout (see ``datasets/verge/m739.toml``
     model = "verge"
     [verge]                        # operating point and fuze layout
     configuration = 2              # 1 or 2 (figures 1 and 2 of the report)
-    spin = "30000 rpm"             # a unit is required (rpm, rev/s or rad/s)
+    spin = "30000 rpm"             # a unit is required (rpm, rps, Hz = rev/s, or rad/s)
     mu = 0.10                      # gear teeth, gear pivots, escape-wheel pivot
     mu1 = 0.10                     # verge faces and verge pivot; "mu" ties it to mu
     restitution = 0.0
@@ -34,7 +34,6 @@ Parameters are named ``verge.<key>`` (``verge.mu``, ``verge.a``, ``verge.caprb1`
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass, field, replace
 from typing import Any, Mapping
 
@@ -58,13 +57,13 @@ _TO_REPORT = {
     "mass": INCH / LBF,
     "inertia": 1.0 / (LBF * INCH),
     "angle": 1.0,
-    "frequency": 1.0,
+    "angular_frequency": 1.0,
     "dimensionless": 1.0,
 }
 
 # key -> (table, kind, meaning, lower, upper, lower_open)
 PARAM_SPECS: dict[str, tuple[str, str, str, float, float, bool]] = {
-    "spin": ("verge", "frequency", "spin rate of the fuze body (stored in rad/s)", 0.0, math.inf, True),
+    "spin": ("verge", "angular_frequency", "spin rate of the fuze body (stored in rad/s)", 0.0, math.inf, True),
     "mu": ("verge", "dimensionless", "friction coefficient of gear teeth, gear pivots and escape-wheel pivot",
            0.0, 1.0, False),
     "mu1": ("verge", "dimensionless", "friction coefficient of the verge faces and the verge pivot", 0.0, 1.0, False),
@@ -232,13 +231,11 @@ def _read_int(table: Mapping[str, Any], key: str, where: str) -> int:
 
 
 def _spin_raw(raw: Any, where: str) -> Any:
-    """Insist on a unit for the spin rate and refuse the ambiguous hertz."""
+    """Insist on a unit for the spin rate (read by :func:`escfit.core.units.angular_frequency`:
+    ``"500 Hz"`` is 500 turns per second, 30000 rpm)."""
     value = raw.get("value") if isinstance(raw, Mapping) else raw
     if not isinstance(value, str):
         raise UnitError(f"give the spin rate with its unit, e.g. '30000 rpm', got {value!r}", where)
-    if re.search(r"(?i)\b(k|m)?(hz|hertz)\b", value):
-        raise UnitError(f"{value!r} is ambiguous for a spin rate (cycles or radians per second?); "
-                        "use rpm, rev/s or rad/s", where)
     return raw
 
 

@@ -50,7 +50,7 @@ class Hairspring:
         if any(b <= a for a, b in zip(ang, ang[1:])):
             raise SceneError(f"'angles' must increase strictly, got {angles!r}", f"{where}.angles")
         params = [
-            read_param(w, name=f"hairspring.omega0[{i}]", kind="rate_per_s", lower=OMEGA0_RANGE[0], upper=OMEGA0_RANGE[1],
+            read_param(w, name=f"hairspring.omega0[{i}]", kind="angular_frequency", lower=OMEGA0_RANGE[0], upper=OMEGA0_RANGE[1],
                        meaning=f"natural frequency of hairspring piece {i} (rad/s)", where=f"{where}.omega0[{i}]")
             for i, w in enumerate(omegas, 1)
         ]

@@ -63,7 +63,7 @@ def noise_params(table: Mapping, where: str, default_sigma: float) -> list[Param
 
 def drift_param(table: Mapping, where: str) -> Param:
     """``observation.offset_rate``: linear drift of the scale's zero (rad/s), fixed at 0 by default."""
-    return read_param(table.get("offset_rate", 0.0), name="observation.offset_rate", kind="rate_per_s",
+    return read_param(table.get("offset_rate", 0.0), name="observation.offset_rate", kind="angular_frequency",
                       meaning="drift of the zero offset (rad/s, positive: the centre moves towards +theta)",
                       where=f"{where}.offset_rate", unit="rad/s")
 

@@ -70,8 +70,8 @@ class Readings:
 
 
 READINGS = {
-    "angle": Readings("rad", "angle", "rad/s", "rate_per_s", "angle", BARE_ANGLE_LIMIT),
-    "angular_velocity": Readings("rad/s", "rate_per_s", "rad/s**2", "angular_acceleration", "angular velocity"),
+    "angle": Readings("rad", "angle", "rad/s", "angular_frequency", "angle", BARE_ANGLE_LIMIT),
+    "angular_velocity": Readings("rad/s", "angular_frequency", "rad/s**2", "angular_acceleration", "angular velocity"),
     "displacement": Readings("m", "length", "m/s", "speed", "displacement"),
 }
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from ...core.errors import DataError
 from ...core.tabletext import column_floats, parse_number, time_seconds
-from ...core.units import ureg
+from ...core.units import angular_frequency_factor, ureg
 from .rawsteps import build_series, file_options, merge_file_meta
 from .recording_spec import COUNT_WORDS, RecordingSpec, header_role, rad_per_unit, safe_unit_text, seconds_per_unit
 from .series import TimeSeries
@@ -432,7 +432,12 @@ def _si_factor(cols: Columns, col: int, spec: RecordingSpec, opts: dict, reader:
         try:
             q = ureg.parse_expression(unit.strip().replace("°", "deg")) if safe_unit_text(unit) else None
             volts = q is not None and q.dimensionality == ureg.volt.dimensionality
-            factor = 1.0 if volts else float(q.to(target).magnitude)  # volts: scale is the SI value per volt
+            if volts:
+                factor = 1.0  # scale is the SI value per volt
+            elif quantity == "angular_velocity":  # Hz counts turns, as for every angular frequency
+                factor = angular_frequency_factor(unit.strip().replace("°", "deg"), at)
+            else:
+                factor = float(q.to(target).magnitude)
         except Exception:
             raise DataError(f"column {name!r}: {unit!r} is not a unit of {quantity.replace('_', ' ')}; set "
                             f"[recording] {key} (and scale)", at) from None

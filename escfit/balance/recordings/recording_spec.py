@@ -14,7 +14,7 @@ the angle, in which units, and which part of the record to keep::
     stop = "60 s"
     readings = "samples"           # or "amplitudes": one amplitude per half swing per row
     velocity_column = "Gyroscope x (rad/s)"   # instead of angle_column: an angular velocity
-    velocity_unit = "rad/s"        # any pint angular velocity; or "V" with scale in rad/s per V
+    velocity_unit = "rad/s"        # an angular velocity (deg/s, rpm; Hz = turn/s); or "V" with scale in rad/s per V
     displacement_column = "Position (m)"      # instead of angle_column: a linear coordinate
     displacement_unit = "m"        # any pint length; or "V" with scale in m per V
     format = "phyphox"             # the file's format where detection cannot decide (see detect.FORMATS)
@@ -45,7 +45,7 @@ from dataclasses import dataclass, fields, replace
 from typing import Any, Callable, Mapping
 
 from ...core.errors import DataError, SceneError
-from ...core.units import COUNT_WORDS, to_canonical, ureg
+from ...core.units import COUNT_WORDS, angular_frequency_factor, to_canonical, ureg
 
 __all__ = ["RecordingSpec", "recording_spec_from_table", "merge_spec", "parse_option", "safe_unit_text",
            "is_angle_unit", "rad_per_unit", "seconds_per_unit", "header_role", "COUNT_WORDS"]
@@ -347,8 +347,15 @@ def _signal_unit(dimension: str, what: str):
                 dim = q.dimensionality if hasattr(q, "dimensionality") else None
             except Exception:
                 dim = None
-            if dim is not None and (dim == ureg.parse_expression(dimension).dimensionality or
-                                    dim == ureg.volt.dimensionality):
+            if dim is not None and dim == ureg.volt.dimensionality:
+                return value.strip()
+            if dimension == "rad/s":  # an angular velocity: the rule of every angular frequency (Hz = turn/s)
+                try:
+                    angular_frequency_factor(value, where)
+                    return value.strip()
+                except SceneError:
+                    pass
+            elif dim is not None and dim == ureg.parse_expression(dimension).dimensionality:
                 return value.strip()
         raise SceneError(f"expected {what} (e.g. {dimension}) or a voltage (V, mV) with scale, got {value!r}", where)
     return parse
