@@ -227,7 +227,7 @@ def _growing():
 
 
 def _sparse():
-    t = np.arange(0.0, 20.0, 1 / 10)
+    t = np.arange(0.0, 20.0, 1 / 6)
     return series(t, decay(t, 1.0)[0])
 
 
@@ -245,7 +245,7 @@ def _gap():
 @pytest.mark.parametrize("make, message", [
     (_noise, r"synthetic.csv: no oscillation found: the spectrum has no clear peak"),
     (_growing, r"the swing grows from .* not a free decay"),
-    (_sparse, r"spans only 10.0 samples; .* at least 16: sample at 16 Hz or faster"),
+    (_sparse, r"spans only 6.0 samples; .* at least 8: sample at 16 Hz or faster"),
     (_wrapped, r"the angle jumps by .* a wrapped angle\? unwrap it"),
     (_gap, r"irregular interval.* from t = 5 s to 6.5 s, is 3.00 local half periods.*an extremum was missed"),
 ])
@@ -321,3 +321,21 @@ def test_real_large_amplitude_pendulum_starting_mid_swing():
     assert tp.swing.size == 18 and np.all(np.diff(np.sign(tp.theta)) != 0)
     half = np.diff(np.r_[tp.release_time, tp.time])
     assert np.all(np.abs(half / np.median(half) - 1) < 0.1)
+
+
+@pytest.mark.parametrize("rate", [9.0, 11.0, 13.0])
+def test_a_coarse_record_is_read_with_a_note(rate):
+    """9 to 13 samples a period (a 30 fps video of a fast swing): the turning points come from
+    sinusoid arcs through the few samples at each turn; against the exact decay their times are
+    within 2 % of a period and their angles within 2 % of the first swing, and the period within
+    0.5 %; a note says what the coarse sampling costs."""
+    rng = np.random.default_rng(int(rate))
+    t = np.arange(0.0, 20.0, 1.0 / rate) + rng.uniform(0, 0.05)
+    y, tt, tv = decay(t, 1.0)
+    tp = reduce_series(series(t, y))
+    assert any("spans only" in n and "arc" in n for n in tp.notes), tp.notes
+    period = 2 * math.pi / W0
+    assert tp.period == pytest.approx(period, rel=5e-3)
+    for time, value in zip(tp.time, tp.theta):
+        k = int(np.argmin(np.abs(tt - time)))
+        assert abs(time - tt[k]) < 0.02 * period and abs(value - tv[k]) < 0.02

@@ -8,7 +8,8 @@ Steps
 1. **Period** from the periodogram peak of the detrended series
    (:func:`~escfit.balance.recordings.extrema.spectral_period`): robust to noise, quantisation, a
    drifting centre and a resting tail.  Below :data:`MIN_SAMPLES_PER_PERIOD` samples per
-   period the record is refused.
+   period the turning points are placed by sinusoid arcs, with a note saying what that costs;
+   below :data:`COARSE_SAMPLES_PER_PERIOD` the record is refused.
 2. **Resolution**: the noise scale about a smoothing (a tenth of a period) and the
    quantisation step of an encoder; they set the hysteresis of the extremum search and the
    band within which the balance counts as at rest.
@@ -63,15 +64,15 @@ import numpy as np
 
 from ...core.errors import DataError
 from .centre import measure_centre
-from .extrema import (alternating_extrema, extrema_period, kinked_vertex, local_amplitude,
-                      power_near, resolution, second_mode, smooth, smoothing_share, smoothing_window, spectral_period,
-                      vertex_at)
+from .extrema import (alternating_extrema, extrema_period, local_amplitude, power_near, resolution, second_mode, smooth,
+                      smoothing_share, smoothing_window, spectral_period, vertex_at)
 from .motion import INTERVAL_RANGE, Turn, faded_end, growth_tolerance, levels_off, reference, steady_tail
-from .series import TimeSeries, quantity_words, show_value
+from .sampled import MIN_SAMPLES_PER_PERIOD, SampledRecord
+from .series import TimeSeries, quantity_words
 
 __all__ = ["TurningPoints", "reduce_series", "turning_points", "period_of", "MIN_SAMPLES_PER_PERIOD", "MIN_TURNS"]
 
-MIN_SAMPLES_PER_PERIOD = 16  # the local fits need some 5 samples each side of a turn
+COARSE_SAMPLES_PER_PERIOD = 8  # from here to 16: sinusoid arcs through the few samples at each turn, with a note
 MIN_PROMINENCE = 50.0  # periodogram peak over median power; white noise alone gives ~log2(n)
 MIN_TURNS = 3  # turning points (the reference included) a decay needs: one whole period
 MOVING_SIGMAS = 6.0  # a window's swing above this many of its noise scales is motion
@@ -156,105 +157,6 @@ class TurningPoints:
     def centre(self, t: np.ndarray | float) -> np.ndarray | float:
         """Centre of oscillation (rad) at times ``t`` (s)."""
         return self.offset + self.offset_rate * (np.asarray(t) - self.release_time)
-
-
-@dataclass
-class _Record:
-    """The samples and what the first steps learnt about them."""
-
-    t: np.ndarray
-    x: np.ndarray
-    xs: np.ndarray  # smoothed
-    period: float
-    dt: float
-    band: float  # half width of the rest band, rad
-    step: float  # hysteresis of the extremum search, rad
-    window: float
-    degree: int
-    where: str
-    notes: list
-    shared: bool  # noise or quantisation dominate: only the curvature kinked at a turn
-    sigma: float = 0.0  # reading noise, rad
-    quantum: float = 0.0  # sensor step, rad
-    quantity: str = "angle"  # what the samples are (the units of the notes)
-    warnings: list = field(default_factory=list)  # what the user must know (a large part left out)
-    steps: list = field(default_factory=list)  # offset steps found: (first sample moved, s; jump; note)
-    find_steps: bool = True  # look for offset steps (not in a record they were already taken out of)
-
-    def show(self, value: float, digits: int = 3, *, signed: bool = False) -> str:
-        """A value of the record's quantity for a note (angles in degrees)."""
-        return show_value(value, self.quantity, digits, signed=signed)
-
-    def half_width(self) -> float:
-        """Half width of a local vertex fit, s: ``window`` periods, at least 4.5 samples."""
-        return min(max(self.window * self.period, 4.5 * self.dt), 0.3 * self.period)
-
-    def refine(self, first: int, last: int, *, is_max: bool | None = None, flat: str = "",
-               degree: int | None = None) -> tuple[float, float] | None:
-        """Time (s) and value (rad) of the vertex spanning samples ``first..last``.
-
-        ``None`` when the fit window does not fit in the record.  A failed fit of an extremum
-        (``is_max`` given) falls back to the smoothed extremum with a note, because the
-        numbering depends on keeping it; a failed fit of a release or stop gives ``None``.
-        ``degree`` overrides the record's polynomial degree.
-        """
-        t, x = self.t, self.x
-        tc = 0.5 * (t[first] + t[last])
-        half = max(self.half_width(), 0.5 * (t[last] - t[first]) + 3 * self.dt)
-        got = None
-        for _ in range(4):  # recentre on a vertex found off-centre
-            if min(tc - t[0], t[-1] - tc) < 0.4 * half:
-                return None
-            lo, hi = np.searchsorted(t, [tc - half, tc + half], side="right")
-            fit = kinked_vertex((t[lo:hi] - tc) / half, x[lo:hi], degree or self.degree, flat=flat,
-                                shared=self.shared)
-            if fit is None:
-                break
-            tc += fit[0] * half
-            if abs(fit[0]) < 0.3:
-                got = (tc, fit[1])
-                break
-        else:
-            if fit is not None and abs(fit[0]) < 0.7:
-                got = (tc, fit[1])
-        if is_max is None:
-            return got
-        if got is not None and self._plausible(first, last, is_max, *got):
-            return got
-        # noise can make the kinked fit prefer a corner away from the turn: a plain parabola then
-        para = self._parabola(first, last, is_max)
-        if para is not None:
-            return para
-        span = self.xs[first:last + 1]
-        i = first + int(np.argmax(span) if is_max else np.argmin(span))
-        self.notes.append(f"the local fit near t = {t[i]:.4g} s failed; the smoothed extremum is used there")
-        return float(t[i]), float(self.xs[i])
-
-    def _plausible(self, first: int, last: int, is_max: bool, tc: float, value: float) -> bool:
-        """Whether a vertex lies near the smoothed extremum, in time and in value."""
-        t = self.t
-        centre = 0.5 * (t[first] + t[last])
-        span = self.xs[first:last + 1]
-        ext = float(np.max(span) if is_max else np.min(span))
-        near = abs(tc - centre) <= 0.15 * self.period + 0.5 * (t[last] - t[first])
-        return near and abs(value - ext) <= self.step
-
-    def _parabola(self, first: int, last: int, is_max: bool) -> tuple[float, float] | None:
-        """Vertex of a parabola through the samples within an eighth of a period of the smoothed extremum."""
-        t, x = self.t, self.x
-        centre = 0.5 * (t[first] + t[last])
-        half = max(0.125 * self.period + 0.5 * (t[last] - t[first]), 3.5 * self.dt)
-        sel = np.abs(t - centre) <= half
-        if np.count_nonzero(sel & (t < centre)) < 3 or np.count_nonzero(sel & (t > centre)) < 3:
-            return None
-        c2, c1, c0 = np.polyfit(t[sel] - centre, x[sel], 2)
-        if (c2 >= 0) if is_max else (c2 <= 0):
-            return None
-        s = -c1 / (2.0 * c2)
-        if abs(s) > half:
-            return None
-        got = (centre + s, c0 - c1 * c1 / (4.0 * c2))
-        return got if self._plausible(first, last, is_max, *got) else None
 
 
 def reduce_series(series: TimeSeries, *, window: float | None = None, degree: int = 4,
@@ -399,7 +301,7 @@ def period_of(times: np.ndarray, amplitudes: np.ndarray) -> tuple[float, float]:
     return 2.0 * float(coef[0]), 2.0 * math.sqrt(max(float(cov[0, 0]), 0.0))
 
 
-def _refine_all(rec: "_Record", cands: list, t_end: float) -> list[Turn]:
+def _refine_all(rec: "SampledRecord", cands: list, t_end: float) -> list[Turn]:
     """The candidates before ``t_end`` refined on the raw samples; stops at one too close to the end."""
     t = rec.t
     late = [c for c in cands if t[c[0]] > t_end]
@@ -416,7 +318,7 @@ def _refine_all(rec: "_Record", cands: list, t_end: float) -> list[Turn]:
     return out
 
 
-def _given_release(rec: "_Record", release_s: float) -> tuple[float, float, list]:
+def _given_release(rec: "SampledRecord", release_s: float) -> tuple[float, float, list]:
     """The series' own release instant, its angle from the samples after it, and the extrema after it."""
     t, x = rec.t, rec.x
     i0 = int(np.searchsorted(t, release_s))
@@ -432,7 +334,7 @@ turning_points = reduce_series  # the earlier name
 
 
 def prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, where: str,
-            quantity: str = "angle", min_noise: float = 0.0) -> _Record:
+            quantity: str = "angle", min_noise: float = 0.0) -> SampledRecord:
     """Check the samples; period, smoothing and resolution (steps 1 and 2).
 
     ``quantity`` is what the samples are (:data:`~escfit.balance.recordings.series.QUANTITIES`):
@@ -468,10 +370,15 @@ def prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, whe
                         "two coupled oscillators, not one oscillator's free decay; isolate one mode before fitting",
                         where)
     spp = period / dt
-    if spp < MIN_SAMPLES_PER_PERIOD:
+    if spp < COARSE_SAMPLES_PER_PERIOD:
         raise DataError(f"the period of {period:.4g} s spans only {spp:.1f} samples; the turning-point fits need at "
-                        f"least {MIN_SAMPLES_PER_PERIOD}: sample at {MIN_SAMPLES_PER_PERIOD / period:.3g} Hz or faster",
-                        where)
+                        f"least {COARSE_SAMPLES_PER_PERIOD}: sample at {MIN_SAMPLES_PER_PERIOD / period:.3g} Hz or "
+                        "faster", where)
+    if spp < MIN_SAMPLES_PER_PERIOD:  # a coarse record: sinusoid arcs through the few samples at each turn
+        notes.append(f"the period of {period:.4g} s spans only {spp:.1f} samples: each turning point is placed by an "
+                     "arc of a sinusoid through the few samples around it, so turning times and amplitudes are less precise "
+                     f"than at {MIN_SAMPLES_PER_PERIOD} samples a period or more (a waveform fit, [observation] model "
+                     "= \"waveform\", uses every sample)")
     xs = smooth(x, spp)
     sigma, quantum = resolution(x, xs)
     if xs.size >= smoothing_window(spp):  # the scatter about the smoothing understates white noise
@@ -484,7 +391,7 @@ def prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, whe
     if window is None:
         window = 0.2 if resolution_ratio > 2e-4 or 0.125 * spp < 6 else 0.125
     shared = resolution_ratio > 2e-3
-    return _Record(t, x, xs, period, dt, band, step, window, degree, where, notes, shared, sigma, quantum, quantity)
+    return SampledRecord(t, x, xs, period, dt, band, step, window, degree, where, notes, shared, sigma, quantum, quantity)
 
 
 def _working_period(t: np.ndarray, x: np.ndarray, min_cycles: float = 2.0) -> tuple[float, float]:
@@ -505,7 +412,7 @@ def _working_period(t: np.ndarray, x: np.ndarray, min_cycles: float = 2.0) -> tu
     return period, prominence
 
 
-def resting_tail(rec: _Record) -> tuple[int, float]:
+def resting_tail(rec: SampledRecord) -> tuple[int, float]:
     """Index of the first sample at rest (``t.size`` when the record ends in motion) and the rest angle.
 
     At rest means within the rest band of the final level for at least a period *and* no
@@ -534,7 +441,7 @@ def resting_tail(rec: _Record) -> tuple[int, float]:
     return i, float(np.median(rec.x[i:]))
 
 
-def _final_turn(rec: _Record, i_rest: int, rest: float, t_ref: float, theta_ref: float, times: list,
+def _final_turn(rec: SampledRecord, i_rest: int, rest: float, t_ref: float, theta_ref: float, times: list,
                 values: list) -> float:
     """Stop instant; appends the stop as the last turning point when a half swing runs into it."""
     t = rec.t
@@ -570,7 +477,7 @@ def _pendulum_stretch(values: np.ndarray) -> np.ndarray:
     return ellipk(np.sin(0.5 * amp) ** 2) / (0.5 * math.pi)
 
 
-def _check_intervals(rec: _Record, times: np.ndarray, values: np.ndarray, strict: bool) -> None:
+def _check_intervals(rec: SampledRecord, times: np.ndarray, values: np.ndarray, strict: bool) -> None:
     """Each interval between turning points within :data:`INTERVAL_RANGE` local half periods.
 
     An angle record's interval also passes when it is regular once each half swing is scaled by

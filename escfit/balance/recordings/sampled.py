@@ -1,0 +1,151 @@
+"""A sampled record as the turning-point analysis holds it, and the local fits that place a turn.
+
+:class:`SampledRecord` carries the samples, their smoothing and what the first steps of
+:func:`~escfit.balance.recordings.turning_points.reduce_series` learnt about them (period,
+noise, quantisation, the rest band and the extremum search's hysteresis), and places a turning
+point from the raw samples around it: a kinked polynomial (the curvature jumps where Coulomb
+friction reverses), a plain parabola when that fails, or, for a coarse record of fewer than
+``MIN_SAMPLES_PER_PERIOD`` samples a period, the arc of a sinusoid of the record's period.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .extrema import kinked_vertex
+from .series import show_value
+
+__all__ = ["SampledRecord", "MIN_SAMPLES_PER_PERIOD"]
+
+MIN_SAMPLES_PER_PERIOD = 16  # the local fits need some 5 samples each side of a turn
+
+
+@dataclass
+class SampledRecord:
+    """The samples and what the first steps learnt about them."""
+
+    t: np.ndarray
+    x: np.ndarray
+    xs: np.ndarray  # smoothed
+    period: float
+    dt: float
+    band: float  # half width of the rest band, rad
+    step: float  # hysteresis of the extremum search, rad
+    window: float
+    degree: int
+    where: str
+    notes: list
+    shared: bool  # noise or quantisation dominate: only the curvature kinked at a turn
+    sigma: float = 0.0  # reading noise, rad
+    quantum: float = 0.0  # sensor step, rad
+    quantity: str = "angle"  # what the samples are (the units of the notes)
+    warnings: list = field(default_factory=list)  # what the user must know (a large part left out)
+    steps: list = field(default_factory=list)  # offset steps found: (first sample moved, s; jump; note)
+    find_steps: bool = True  # look for offset steps (not in a record they were already taken out of)
+
+    def show(self, value: float, digits: int = 3, *, signed: bool = False) -> str:
+        """A value of the record's quantity for a note (angles in degrees)."""
+        return show_value(value, self.quantity, digits, signed=signed)
+
+    def half_width(self) -> float:
+        """Half width of a local vertex fit, s: ``window`` periods, at least 4.5 samples."""
+        return min(max(self.window * self.period, 4.5 * self.dt), 0.3 * self.period)
+
+    def refine(self, first: int, last: int, *, is_max: bool | None = None, flat: str = "",
+               degree: int | None = None) -> tuple[float, float] | None:
+        """Time (s) and value (rad) of the vertex spanning samples ``first..last``.
+
+        ``None`` when the fit window does not fit in the record.  A failed fit of an extremum
+        (``is_max`` given) falls back to the smoothed extremum with a note, because the
+        numbering depends on keeping it; a failed fit of a release or stop gives ``None``.
+        ``degree`` overrides the record's polynomial degree.
+        """
+        t, x = self.t, self.x
+        if self.period / self.dt < MIN_SAMPLES_PER_PERIOD and is_max is not None:
+            got = self._arc(first, last, is_max)
+            if got is not None:
+                return got
+        tc = 0.5 * (t[first] + t[last])
+        half = max(self.half_width(), 0.5 * (t[last] - t[first]) + 3 * self.dt)
+        got = None
+        for _ in range(4):  # recentre on a vertex found off-centre
+            if min(tc - t[0], t[-1] - tc) < 0.4 * half:
+                return None
+            lo, hi = np.searchsorted(t, [tc - half, tc + half], side="right")
+            fit = kinked_vertex((t[lo:hi] - tc) / half, x[lo:hi], degree or self.degree, flat=flat,
+                                shared=self.shared)
+            if fit is None:
+                break
+            tc += fit[0] * half
+            if abs(fit[0]) < 0.3:
+                got = (tc, fit[1])
+                break
+        else:
+            if fit is not None and abs(fit[0]) < 0.7:
+                got = (tc, fit[1])
+        if is_max is None:
+            return got
+        if got is not None and self._plausible(first, last, is_max, *got):
+            return got
+        # noise can make the kinked fit prefer a corner away from the turn: a plain parabola then
+        para = self._parabola(first, last, is_max)
+        if para is not None:
+            return para
+        span = self.xs[first:last + 1]
+        i = first + int(np.argmax(span) if is_max else np.argmin(span))
+        self.notes.append(f"the local fit near t = {t[i]:.4g} s failed; the smoothed extremum is used there")
+        return float(t[i]), float(self.xs[i])
+
+    def _arc(self, first: int, last: int, is_max: bool) -> tuple[float, float] | None:
+        """Vertex of a sinusoid of the record's period through the samples within a third of a
+        period of the smoothed extremum: ``c + a cos(w (t - t0))``, linear in ``c``, ``a cos``
+        and ``a sin``.  For a coarse record: a polynomial through the few samples of a turn
+        either misses its curvature (a parabola over a third of a period flattens the top by
+        several percent) or follows the noise; damping changes the arc little over that span."""
+        t, x = self.t, self.x
+        centre = 0.5 * (t[first] + t[last])
+        sel = np.abs(t - centre) <= self.period / 3.0
+        if np.count_nonzero(sel) < 5:
+            return None
+        w = 2.0 * math.pi / self.period
+        ts = t[sel] - centre
+        design = np.stack([np.ones_like(ts), np.cos(w * ts), np.sin(w * ts)], axis=1)
+        (c, p, q), *_ = np.linalg.lstsq(design, x[sel], rcond=None)
+        amp = math.hypot(p, q)
+        t0 = math.atan2(q, p) / w if is_max else math.atan2(-q, -p) / w
+        got = (centre + t0, c + amp if is_max else c - amp)
+        # the vertex lies beyond the nearest sample by at most what the arc rises over one interval
+        sign = 1.0 if is_max else -1.0
+        beyond = sign * (got[1] - (np.max(x[sel]) if is_max else np.min(x[sel])))
+        near = abs(t0) <= 0.15 * self.period + 0.5 * (t[last] - t[first])
+        ok = near and -self.step <= beyond <= amp * (1.0 - math.cos(w * self.dt)) + self.step
+        return got if ok else None
+
+    def _plausible(self, first: int, last: int, is_max: bool, tc: float, value: float) -> bool:
+        """Whether a vertex lies near the smoothed extremum, in time and in value."""
+        t = self.t
+        centre = 0.5 * (t[first] + t[last])
+        span = self.xs[first:last + 1]
+        ext = float(np.max(span) if is_max else np.min(span))
+        near = abs(tc - centre) <= 0.15 * self.period + 0.5 * (t[last] - t[first])
+        return near and abs(value - ext) <= self.step
+
+    def _parabola(self, first: int, last: int, is_max: bool) -> tuple[float, float] | None:
+        """Vertex of a parabola through the samples within an eighth of a period of the smoothed extremum."""
+        t, x = self.t, self.x
+        centre = 0.5 * (t[first] + t[last])
+        half = max(0.125 * self.period + 0.5 * (t[last] - t[first]), 3.5 * self.dt)
+        sel = np.abs(t - centre) <= half
+        if np.count_nonzero(sel & (t < centre)) < 3 or np.count_nonzero(sel & (t > centre)) < 3:
+            return None
+        c2, c1, c0 = np.polyfit(t[sel] - centre, x[sel], 2)
+        if (c2 >= 0) if is_max else (c2 <= 0):
+            return None
+        s = -c1 / (2.0 * c2)
+        if abs(s) > half:
+            return None
+        got = (centre + s, c0 - c1 * c1 / (4.0 * c2))
+        return got if self._plausible(first, last, is_max, *got) else None
