@@ -207,7 +207,7 @@ def _swing_score(series: TimeSeries) -> tuple[float, str]:
     from .recordings.turning_points import reduce_series
 
     try:
-        tp = reduce_series(series, strict=False)
+        tp = reduce_series(series, strict=False, user_window=series.window)
     except DataError:
         return (0.5, "holds one amplitude per row, decreasing") if _looks_like_amplitudes(series.theta) else (0.0, "")
     return 1.0 + len(tp.theta), f"swings ({len(tp.theta)} turning points)"
@@ -229,7 +229,7 @@ def _amplitude_rows(path, series: TimeSeries, table: dict, why: dict, fmt) -> Ti
     if "readings" in table:
         return series
     try:
-        reduce_series(series, strict=False)
+        reduce_series(series, strict=False, user_window=series.window)
         return series
     except DataError:
         if not _looks_like_amplitudes(series.theta):
@@ -270,17 +270,22 @@ def survey(path: str | Path, *, restoring: str = "spring", recording: dict | Non
 
 def _survey_samples(s: Survey, series: TimeSeries, restoring: str) -> None:
     from .problems.period import implied_omega0, measured_period
+    from .recordings.rawseries import notes_of
     from .recordings.turning_points import reduce_series
+    from .recordings.window import relative_clock
+
+    series = relative_clock(series)  # times after the first sample, as [recording] start reads them
+    s.data = series
 
     if series.quantity == "angular_velocity":  # the angle's turning points are the rate's zeros
         from .recordings.rate import reduce_rate
 
-        rate = reduce_rate(series)
+        rate = reduce_rate(series, user_window=series.window)
         tp = rate.turns
         s.counts_extra = {"rate zero": rate.offset, "rate zero se": rate.offset_stderr}
         notes = rate.notes
     else:
-        tp = reduce_series(series, strict=False)
+        tp = reduce_series(series, strict=False, user_window=series.window)
         notes = list(tp.notes)
     s.quantity = series.quantity
     s.kind, s.tp = "waveform", tp
@@ -295,7 +300,7 @@ def _survey_samples(s: Survey, series: TimeSeries, restoring: str) -> None:
                 "centre": float(tp.offset), "centre rate": float(tp.offset_rate),
                 "omega0": implied_omega0(restoring, measured_period(tp, series.source))}
     s.counts.update(s.counts_extra)
-    s.notes = notes
+    s.notes = [n for n in notes_of(series.meta) if n.startswith("times in these notes")] + notes
     s.format_words = series.meta.get("source_format", "escfit time series (time_s, theta)")
     s.columns_words = _columns_words(series.meta)
     s.lag1 = _excess_lag1(np.asarray(series.theta, float), s.period / np.median(np.diff(t)))

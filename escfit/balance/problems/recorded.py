@@ -10,6 +10,11 @@ its drift, the end of motion.  Then, by the scene's ``[observation] model``:
   :class:`~escfit.balance.problems.curves.FitProblem`;
 - ``"waveform"``: every sample, fitted by :class:`~escfit.balance.problems.waveform.WaveformProblem`.
 
+The record is first put on the clock of its first sample
+(:func:`~escfit.balance.recordings.window.relative_clock`): an epoch clock's 1.407e9 s become
+0 s, so notes and results speak of times after the first sample, as ``[recording] start``,
+``stop`` and ``release`` do; those keys reach the analysis as the series' ``window``.
+
 Either way the release angle comes from the record (:func:`~escfit.balance.problems.release.release_from_record`)
 and what was done is kept as plain-sentence ``notes``.
 
@@ -31,6 +36,7 @@ from .. import BalanceScene
 from ...core.params import ParamSet
 from ..recordings import UnitCurve
 from ..recordings.rawseries import notes_of
+from ..recordings.window import relative_clock
 from .amplitude_rows import amplitude_readings_curve
 from .curves import FitProblem
 from .nuisance import centre_priors
@@ -90,6 +96,7 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
         With ``notes`` saying what was done to the record.
     """
     scene = replace(scene, params=ParamSet(dict(scene.params.params)))  # the release is set on a copy
+    series = relative_clock(series)  # times from the first sample, in the analysis, its notes and the fit
     notes = notes_of(series.meta)
     quantity = getattr(series, "quantity", "angle")
     _check_quantity(scene, quantity, series.source)
@@ -102,7 +109,7 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
 
     # a waveform fit uses the turning points only for its start (reference, period, centre): an
     # irregular interval late in the record is a note there, not a refusal
-    tp = reduce_series(series, strict=model != "waveform")
+    tp = reduce_series(series, strict=model != "waveform", user_window=series.window)
     notes += list(getattr(tp, "notes", []))
     _refuse_sustained(scene, tp, series.source)
     mp = measured_period(tp, series.source)
@@ -188,13 +195,13 @@ def _sampled_problem(scene: BalanceScene, series, notes: list, solver, solver_op
     if series.quantity == "angular_velocity":
         from ..recordings.rate import reduce_rate
 
-        rate = reduce_rate(series)
+        rate = reduce_rate(series, user_window=series.window)
         tp, centre, noise = rate.turns, rate, rate.noise
         notes += rate.notes
     else:
         from ..recordings.turning_points import reduce_series
 
-        tp = reduce_series(series, strict=False)
+        tp = reduce_series(series, strict=False, user_window=series.window)
         centre, noise = tp, None
         notes += list(tp.notes)
     _refuse_sustained(scene, tp, series.source)

@@ -23,8 +23,9 @@ from typing import Callable, Mapping
 import numpy as np
 
 from ...core.errors import DataError, SceneError
-from .recording_spec import RecordingSpec, parse_option
+from .recording_spec import RecordingSpec, parse_option, parse_seconds
 from .series import TimeSeries
+from .window import resolve_window
 
 __all__ = ["build_series", "regular_times", "notes_of", "merge_file_meta", "file_options", "unwrap_angles",
            "FILE_OPTIONS", "MIN_SAMPLES"]
@@ -73,7 +74,7 @@ def regular_times(time: np.ndarray, where_of_row: Callable[[int], str], notes: l
         i = int(np.flatnonzero(same)[0]) + 1
         tail = i > 1 and bool(np.all(time[i:] == time[i]))
         hint = (f" (the time stops there for the last {time.size - i + 1} rows: a logger's stalled clock? set "
-                f"[recording] stop = \"{float(time[i - 2]):g} s\" to read the rows before it)") if tail else ""
+                f"[recording] stop = \"{float(time[i - 2] - time[0]):g} s\" to read the rows before it)") if tail else ""
         raise DataError(f"time {float(time[i])!r} repeats the previous row's; times must increase{hint}",
                         where_of_row(i))
     rows = np.arange(time.size, dtype=float)
@@ -95,7 +96,9 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
 
     Non-finite values, decreasing or repeated times are refused (burst stamps re-timed, see
     :func:`regular_times`); the window ``start <= t <= stop`` is applied and must keep
-    :data:`MIN_SAMPLES` samples.  ``meta`` gets ``window`` and ``notes``.
+    :data:`MIN_SAMPLES` samples.  ``meta`` gets ``window`` and ``notes``.  The ``start``, ``stop`` and
+    ``release`` keys are read on the file's clock from its first row (the clock rule of
+    :mod:`~escfit.balance.recordings.window`); the series carries them (``window``) for the analysis.
     """
     for name, values in (("time", time), ("angle", theta)):
         bad = np.flatnonzero(~np.isfinite(values))
@@ -105,11 +108,16 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
         raise DataError(f"only {np.size(time)} samples; a decay needs at least {MIN_SAMPLES}", source)
     time, theta = np.asarray(time, dtype=float), np.asarray(theta, dtype=float)
     rows = np.arange(time.size)
-    if (spec.start is not None or spec.stop is not None) and np.any(np.diff(time) <= 0.0):
+    # the keys are read on the clock as the file gives it (its first row the origin), before any re-timing
+    window, clock_notes = resolve_window(spec, time, source)
+    notes += clock_notes
+    lo = -math.inf if window.start is None else window.start
+    hi = math.inf if window.stop is None else window.stop
+    cut = window.start is not None or window.stop is not None
+    if cut and np.any(np.diff(time) <= 0.0):
         # rows stamped outside the window go before the stamps are checked (a logger's clock that
         # stalls after the decay is cut by `stop`); the window is applied again to the times read
-        inside = (time >= (-math.inf if spec.start is None else spec.start)) & \
-                 (time <= (math.inf if spec.stop is None else spec.stop))
+        inside = (time >= lo) & (time <= hi)
         if inside.sum() >= 2:
             time, theta, rows = time[inside], theta[inside], rows[inside]
     time, theta, rows = _drop_repeated_rows(time, theta, rows, notes, where_of_row)
@@ -120,17 +128,16 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
                         "(or --angle-unit deg)", source)
     if spec.readings == "samples" and spec.quantity == "angle":
         theta = unwrap_angles(theta, notes)
-    if spec.start is not None or spec.stop is not None:
-        lo = -math.inf if spec.start is None else spec.start
-        hi = math.inf if spec.stop is None else spec.stop
+    if cut:
         keep = (time >= lo) & (time <= hi)
-        window = f"{'' if spec.start is None else f'{lo:g} s <= '}t{'' if spec.stop is None else f' <= {hi:g} s'}"
+        shown = f"{'' if window.start is None else f'{window.after_first(lo):g} s <= '}t" \
+                f"{'' if window.stop is None else f' <= {window.after_first(hi):g} s'}"
         if keep.sum() < MIN_SAMPLES:
-            raise DataError(f"the window {window} keeps {int(keep.sum())} of {time.size} samples (the file spans "
-                            f"{time[0]:g} to {time[-1]:g} s); at least {MIN_SAMPLES} are needed",
-                            f"{source} [recording].start/stop")
+            raise DataError(f"the window {shown} (after the first sample) keeps {int(keep.sum())} of {time.size} "
+                            f"samples (the record spans 0 to {time[-1] - window.origin:g} s after its first sample); "
+                            f"at least {MIN_SAMPLES} are needed", f"{source} [recording].start/stop")
         time, theta = time[keep], theta[keep]
-        meta["window"] = window
+        meta["window"] = shown
     need = MIN_SAMPLES if spec.readings == "samples" else MIN_AMPLITUDE_ROWS
     if time.size < need:
         what = "samples" if spec.readings == "samples" else "amplitude readings"
@@ -138,7 +145,7 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
     if notes:
         meta["notes"] = "; ".join(n.replace(";", ",") for n in notes)
     return TimeSeries(time=time, theta=np.asarray(theta, dtype=float), release_s=release_s, source=source,
-                      sha256=sha256, meta=meta)
+                      sha256=sha256, meta=meta, window=window)
 
 
 def _drop_repeated_rows(time: np.ndarray, theta: np.ndarray, rows: np.ndarray, notes: list[str],
@@ -200,7 +207,7 @@ def file_options(given: Mapping[str, tuple[str, str]]) -> dict:
             continue
         try:
             if target == "dt":
-                dt = parse_option("start", value, where)
+                dt = parse_seconds(value, where)
                 if not dt > 0:
                     raise SceneError(f"the sample interval must be positive, got {value!r}", where)
                 out["sample_rate"] = 1.0 / dt

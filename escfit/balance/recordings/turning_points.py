@@ -19,7 +19,8 @@ Steps
    dry friction the balance stops at a turning point short of the centre, so when the last
    half swing runs into the rest that stop is the last turning point.
 4. **Reference** (``release_time``, ``release_theta``, the instant the model is released at
-   rest): the series' ``release_s`` when given; else the start of the record's **last** free
+   rest): where the user set it (``[recording] release`` or ``start``, passed as ``user_window``:
+   :mod:`~escfit.balance.recordings.given_start`); else the series' ``release_s`` when given; else the start of the record's **last** free
    decay (:mod:`escfit.balance.recordings.motion`): after the last push, pull, hold or drive,
    the release from a hold (the angle flat for a tenth of a period or more, then moving
    freely: the release is where motion starts and its angle the held one) or a turning point
@@ -247,7 +248,7 @@ class _Record:
 
 
 def reduce_series(series: TimeSeries, *, window: float | None = None, degree: int = 4,
-                  strict: bool = True, min_noise: float = 0.0) -> TurningPoints:
+                  strict: bool = True, min_noise: float = 0.0, user_window=None) -> TurningPoints:
     """Turning points of a sampled free decay (see the module docstring for the method).
 
     Parameters
@@ -266,6 +267,11 @@ def reduce_series(series: TimeSeries, *, window: float | None = None, degree: in
         A floor for the noise scale the rest band and the hysteresis are set from (rad): for a
         series whose slow wander the scatter about a smoothing does not show (the running
         integral of a rate, :mod:`escfit.balance.recordings.rate`).
+    user_window
+        The user's ``[recording]`` window on the series' clock
+        (:class:`~escfit.balance.recordings.window.RecordWindow`, usually ``series.window``): a
+        ``release`` or ``start`` in it fixes where the free decay starts, over the series' own
+        ``release_s`` and the automatic search (:mod:`~escfit.balance.recordings.given_start`).
 
     Returns
     -------
@@ -291,13 +297,14 @@ def reduce_series(series: TimeSeries, *, window: float | None = None, degree: in
             rec.period = period
             rec.xs = smooth(x, period / rec.dt)
     t_end = t[i_rest] if i_rest < t.size else math.inf
-    if math.isfinite(series.release_s):
+    given = user_window is not None and user_window.given
+    if math.isfinite(series.release_s) and not given:
         t_ref, theta_ref, cands = _given_release(rec, series.release_s)
         turns = _refine_all(rec, cands, t_end)
     else:
         cands = alternating_extrema(rec.xs, rec.step, 0)
         turns = _refine_all(rec, cands, t_end)
-        t_ref, theta_ref, turns = reference(rec, turns)
+        t_ref, theta_ref, turns = reference(rec, turns, user_window=user_window if given else None)
     times = [u.time for u in turns]
     values = [u.value for u in turns]
     stop_time = math.nan
