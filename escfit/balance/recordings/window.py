@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -60,7 +60,7 @@ class Instant:
 
     seconds: float
     absolute: bool = False
-    text: str = ""
+    text: str = field(default="", compare=False)
 
     def __float__(self) -> float:
         return float(self.seconds)
@@ -200,7 +200,7 @@ def relative_clock(series):
         return series if getattr(series, "window", None) is window else replace(series, window=window)
     zero = float(getattr(series, "clock_zero", 0.0)) + window.origin
     meta = dict(series.meta)
-    note = (f"times in these notes are counted from the record's first sample (t = 0 s there; {zero:.10g} s on the "
+    note = (f"times in these notes are counted from the record's first sample (t = 0 s there, {zero:.10g} s on the "
             "file's clock)")
     meta["notes"] = "; ".join([note] + [s for s in str(meta.get("notes", "")).split("; ") if s])
     return replace(series, time=np.asarray(series.time, float) - window.origin, window=window.shifted(-window.origin),
