@@ -29,6 +29,7 @@ from escfit.balance.recordings.window import relative_clock
 from escfit.cli.main import cli
 from escfit.core.errors import DataError
 from escfit.inference import fit
+from escfit.results import load_fit
 
 from .conftest import DATASETS
 
@@ -137,7 +138,8 @@ def test_init_writes_the_window_and_a_fit_of_the_edited_scene_recovers_the_truth
     result = _cli(["fit", path, "--scene", "s.toml", "--out", "s.h5", "--quiet"], tmp_path)
     assert result.exit_code == 0, result.output
     assert "window set by [recording] start" in result.output
-    assert "79 turning points after the reference one at t = 0.5" in result.output.replace("\n", " ")
+    assert "78 turning points after the reference one at t = 0.5" in result.output.replace("\n", " ")
+    _covers(load_fit(tmp_path / "s.h5"))
 
 
 def test_the_command_line_release_recovers_the_truth_the_automatic_window_misses(tmp_path):
