@@ -167,7 +167,7 @@ def _window_keys(s: Survey) -> tuple[list[str], list[str]]:
         elif w["left_out"]:
             start = max(ref - 0.25 * period, w["first"])
             active.append(f"start = {_seconds(start)}    # the record before {ref:.6g} s (the reference turning point) "
-                          "was taken as not a free decay (held, pushed or driven: see the notes above): set start "
+                          "was taken as not a free decay (held, pushed or driven: the notes at the top of the scene say which): set start "
                           "earlier to keep it")
         else:
             commented.append(f"# start = {_seconds(w['first'])}    # the free decay starts at the record's first "
@@ -311,4 +311,7 @@ def _summary(s: Survey) -> list[str]:
     for key, value in s.recording.items():
         if key in s.why:
             out.append(f"[recording] {key} = {value!r}: {s.why[key]}")
-    return out
+    for line in _window_keys(s)[0]:  # the window the analysis chose where it left part of the record out
+        key, _, why = line.partition("    # ")
+        out.append(f"[recording] {key}: {why}")
+    return [_one_line(line) for line in out]
