@@ -160,8 +160,8 @@ def _window_keys(s: Survey) -> tuple[list[str], list[str]]:
             line = (f"release = {_seconds(ref)}    # the analysis found the oscillator held at "
                     f"{math.degrees(w['held']):.4g} deg until {ref:.6g} s: the model is released there")
             if w["left_out"]:
-                active.append(line + "; the record before it was taken as not free (held, pushed or driven: see the "
-                              "notes above): set release (or start) earlier to keep it")
+                active.append(line + "; the record before it was taken as not free (held, pushed or driven: the notes "
+                              "at the top of the scene say which): set release (or start) earlier to keep it")
             else:
                 commented.append("# " + line)
         elif w["left_out"]:
