@@ -21,7 +21,8 @@ import click
 __all__ = ["init", "offer_starter", "write_starter", "interactive"]
 
 RECORDING_OPTIONS = ("time_column", "sample_rate", "angle_column", "angle_unit", "counts_per_turn", "scale", "start",
-                     "stop", "release", "readings", "velocity_column", "velocity_unit", "displacement_column", "displacement_unit", "run")
+                     "stop", "release", "readings", "velocity_column", "velocity_unit", "displacement_column",
+                     "displacement_unit", "run")
 
 
 def interactive() -> bool:
