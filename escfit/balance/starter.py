@@ -297,12 +297,7 @@ def survey(path: str | Path, *, restoring: str = "spring", recording: dict | Non
 
 def _survey_samples(s: Survey, series: TimeSeries, restoring: str) -> None:
     from .problems.period import implied_omega0, measured_period
-    from .recordings.rawseries import notes_of
     from .recordings.turning_points import reduce_series
-    from .recordings.window import relative_clock
-
-    series = relative_clock(series)  # times after the first sample, as [recording] start reads them
-    s.data = series
 
     if series.quantity == "angular_velocity":  # the angle's turning points are the rate's zeros
         from .recordings.rate import reduce_rate
@@ -327,7 +322,7 @@ def _survey_samples(s: Survey, series: TimeSeries, restoring: str) -> None:
                 "centre": float(tp.offset), "centre rate": float(tp.offset_rate),
                 "omega0": implied_omega0(restoring, measured_period(tp, series.source))}
     s.counts.update(s.counts_extra)
-    s.notes = [n for n in notes_of(series.meta) if n.startswith("times in these notes")] + notes
+    s.notes = notes
     s.format_words = series.meta.get("source_format", "escfit time series (time_s, theta)")
     s.columns_words = _columns_words(series.meta)
     s.lag1 = _excess_lag1(np.asarray(series.theta, float), s.period / np.median(np.diff(t)))
@@ -336,7 +331,7 @@ def _survey_samples(s: Survey, series: TimeSeries, restoring: str) -> None:
 
 
 def window_found(series: TimeSeries, tp) -> dict:
-    """Where the analysis took the free decay, on the clock of the record's first sample (s).
+    """Where the analysis took the free decay, in s after the file's first sample.
 
     Keys: ``first`` and ``last`` (the record's first and last sample), ``reference`` (the
     reference instant), ``held`` (the held angle, rad, when the record is flat over the tenth of
@@ -354,9 +349,10 @@ def window_found(series: TimeSeries, tp) -> dict:
         level = float(np.median(x[before]))
         if np.all(np.abs(x[before] - level) <= band):
             held = float(tp.release_theta)
-    return {"first": float(t[0]), "last": float(t[-1]), "reference": ref, "held": held,
-            "left_out": bool(ref - t[0] > period), "stop": float(tp.stop_time), "period": period,
-            "last_turn": float(tp.time[-1]) if len(tp.time) else ref}
+    zero = float(getattr(tp, "origin", 0.0))  # the keys count from the file's first sample
+    return {"first": float(t[0]) - zero, "last": float(t[-1]) - zero, "reference": ref - zero, "held": held,
+            "left_out": bool(ref - t[0] > period), "stop": float(tp.stop_time) - zero, "period": period,
+            "last_turn": (float(tp.time[-1]) if len(tp.time) else ref) - zero}
 
 
 def _survey_amplitude_rows(s: Survey, series: TimeSeries) -> None:

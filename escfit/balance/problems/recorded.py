@@ -10,10 +10,9 @@ its drift, the end of motion.  Then, by the scene's ``[observation] model``:
   :class:`~escfit.balance.problems.curves.FitProblem`;
 - ``"waveform"``: every sample, fitted by :class:`~escfit.balance.problems.waveform.WaveformProblem`.
 
-The record is first put on the clock of its first sample
-(:func:`~escfit.balance.recordings.window.relative_clock`): an epoch clock's 1.407e9 s become
-0 s, so notes and results speak of times after the first sample, as ``[recording] start``,
-``stop`` and ``release`` do; those keys reach the analysis as the series' ``window``.
+Notes speak of times after the file's first sample (an epoch clock's 1.407e9 s is 0 s there), as
+``[recording] start``, ``stop`` and ``release`` do (the analysis counts time so: ``tp.after_first``);
+those keys reach the analysis as the series' ``window``.  The fit itself keeps the file's clock.
 
 Either way the release angle comes from the record (:func:`~escfit.balance.problems.release.release_from_record`)
 and what was done is kept as plain-sentence ``notes``.
@@ -36,7 +35,6 @@ from .. import BalanceScene
 from ...core.params import ParamSet
 from ..recordings import UnitCurve
 from ..recordings.rawseries import notes_of
-from ..recordings.window import relative_clock
 from .amplitude_rows import amplitude_readings_curve
 from .curves import FitProblem
 from .nuisance import centre_priors
@@ -96,7 +94,6 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
         With ``notes`` saying what was done to the record.
     """
     scene = replace(scene, params=ParamSet(dict(scene.params.params)))  # the release is set on a copy
-    series = relative_clock(series)  # times from the first sample, in the analysis, its notes and the fit
     notes = notes_of(series.meta)
     quantity = getattr(series, "quantity", "angle")
     _check_quantity(scene, quantity, series.source)
@@ -159,7 +156,7 @@ def _count_note(tp, quantity: str = "angle") -> str:
     where = tp.release_theta - tp.offset
     shown = f"{where:+.4g} m" if quantity == "displacement" else f"{math.degrees(where):+.2f} deg"
     how = " (zeros of the angular velocity)" if quantity == "angular_velocity" else ""
-    return (f"{tp.swing.size} turning points{how} after the reference one at t = {tp.release_time:.4g} s "
+    return (f"{tp.swing.size} turning points{how} after the reference one at t = {tp.after_first(tp.release_time):.4g} s "
             f"({shown} from the centre); period {tp.period:.5g} s")
 
 
@@ -221,6 +218,6 @@ def _refuse_sustained(scene: BalanceScene, tp, source: str) -> None:
         return
     from ...core.errors import DataError
 
-    raise DataError(f"from t = {when:.4g} s the swing keeps its amplitude where a free decay would go on losing: "
+    raise DataError(f"from t = {tp.after_first(when):.4g} s the swing keeps its amplitude where a free decay would go on losing: "
                     "something drives it (a motor, an escapement), and the scene has no drive, so it cannot be fitted "
                     "as a free decay; cut the record before that with [recording] stop, or model the drive", source)

@@ -2,8 +2,9 @@
 
 The user always wins over the automatic search of :mod:`escfit.balance.recordings.motion`: with
 a window (:class:`~escfit.balance.recordings.window.RecordWindow`) whose ``release`` or ``start``
-is set, :func:`~escfit.balance.recordings.motion.reference` hands over to :func:`user_reference`
-at its entry, and no push, pull, hold or drive before that instant is looked for.
+is set, :func:`~escfit.balance.recordings.turning_points.reduce_series` calls :func:`user_reference`
+instead of :func:`~escfit.balance.recordings.motion.reference`, and no push, pull, hold or drive
+before that instant is looked for.
 
 - ``release`` at ``T``: the model is released at rest there.  When the record is flat over the
   tenth of a period before ``T`` (held), the release is at ``T`` from the held angle (the

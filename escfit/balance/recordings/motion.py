@@ -415,17 +415,9 @@ def _note_pull(rec, turn: Turn) -> None:
                          f"({rec.show(turn.value, 4)} on the sensor's scale)")
 
 
-def reference(rec, turns: list[Turn], *, user_window=None) -> tuple[float, float, list[Turn]]:
+def reference(rec, turns: list[Turn]) -> tuple[float, float, list[Turn]]:
     """The reference instant and angle of a record without a given release, and the turning
-    points after it (see the module docstring and :mod:`escfit.balance.recordings.turning_points`).
-
-    ``user_window``: a :class:`~escfit.balance.recordings.window.RecordWindow` whose ``release`` or
-    ``start`` is set replaces the search (:func:`~escfit.balance.recordings.given_start.user_reference`).
-    """
-    if user_window is not None and user_window.given:
-        from .given_start import user_reference
-
-        return user_reference(rec, turns, user_window)
+    points after it (see the module docstring and :mod:`escfit.balance.recordings.turning_points`)."""
     if not turns:
         raise DataError(f"no turning point found: the {rec.quantity.replace('_', ' ')} never comes back by more than "
                         f"{rec.show(rec.step, 3)}", rec.where)

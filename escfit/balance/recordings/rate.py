@@ -146,7 +146,7 @@ def _extrema_centre(rec, stop: int) -> float:
 def _path(series: TimeSeries, t: np.ndarray, angle: np.ndarray) -> TimeSeries:
     """The running integral as an angle series (the analysis' input), with the record's release and name."""
     return TimeSeries(t, angle, series.release_s, series.source, series.sha256, dict(series.meta), "angle",
-                      series.window, series.clock_zero)
+                      series.window)
 
 
 def _running_integral(t: np.ndarray, v: np.ndarray) -> np.ndarray:

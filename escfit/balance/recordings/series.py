@@ -60,9 +60,6 @@ class TimeSeries:
         The ``[recording]`` start, stop and release the reader resolved on this clock, and the
         file's first sample (:mod:`~escfit.balance.recordings.window`); ``None``: none given and
         the first sample is ``time[0]``.
-    clock_zero : float
-        The file's clock reading at this series' ``t = 0``, s (0 unless the series was moved to
-        the clock of its first sample: :func:`~escfit.balance.recordings.window.relative_clock`).
     """
 
     time: np.ndarray
@@ -73,7 +70,6 @@ class TimeSeries:
     meta: dict = field(default_factory=dict)
     quantity: str = "angle"
     window: RecordWindow | None = None
-    clock_zero: float = 0.0
     kind = "timeseries"
 
     def __post_init__(self):

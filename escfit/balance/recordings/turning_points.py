@@ -68,7 +68,9 @@ from .extrema import (alternating_extrema, extrema_period, kinked_vertex, local_
                       power_near, resolution, second_mode, smooth, smoothing_share, smoothing_window, spectral_period,
                       vertex_at)
 from .motion import INTERVAL_RANGE, Turn, faded_end, growth_tolerance, levels_off, reference, steady_tail
+from .given_start import user_reference
 from .series import TimeSeries, quantity_words, show_value
+from .window import window_of
 
 __all__ = ["TurningPoints", "reduce_series", "turning_points", "period_of", "MIN_SAMPLES_PER_PERIOD", "MIN_TURNS"]
 
@@ -121,6 +123,9 @@ class TurningPoints:
     sustained_from : float
         Instant (s) from which the swing stops decaying while a free decay could not (a
         drive or an escapement keeps it going); ``nan`` when it decays to the end.
+    origin : float
+        The file's first sample on the series' clock, s: the zero of the times in ``notes``
+        (and of ``[recording] start``, ``stop``, ``release``).
     """
 
     swing: np.ndarray
@@ -140,11 +145,16 @@ class TurningPoints:
     offset_rate_measured: float = 0.0
     noise: float = math.nan
     sustained_from: float = math.nan
+    origin: float = 0.0
 
     @property
     def count(self) -> int:
         """Turning points after the reference."""
         return int(self.swing.size)
+
+    def after_first(self, t: float) -> float:
+        """``t`` (s, the series' clock) as a time after the file's first sample, as notes show times."""
+        return t - self.origin
 
     def centre(self, t: np.ndarray | float) -> np.ndarray | float:
         """Centre of oscillation (rad) at times ``t`` (s)."""
@@ -287,9 +297,14 @@ def reduce_series(series: TimeSeries, *, window: float | None = None, degree: in
     where = series.source
     if not 2 <= degree <= 6:
         raise DataError(f"degree must be 2 to 6, got {degree!r}", where)
-    t = np.asarray(series.time, dtype=float)
+    # the analysis, and so its notes, count time from the file's first sample: shifted back at the end
+    origin = window_of(series).origin
+    t = np.asarray(series.time, dtype=float) - origin
     x = np.asarray(series.theta, dtype=float)
     rec = prepare(t, x, window, degree, where, series.quantity, min_noise)
+    if origin != 0.0:
+        rec.notes.insert(0, f"times in these notes are counted from the record's first sample (t = 0 s there, "
+                            f"{origin:.10g} s on the file's clock)")
     i_rest, rest_theta = resting_tail(rec)
     if i_rest < t.size:
         period, prominence = _working_period(t[:i_rest], x[:i_rest], min_cycles=1.5)
@@ -299,12 +314,15 @@ def reduce_series(series: TimeSeries, *, window: float | None = None, degree: in
     t_end = t[i_rest] if i_rest < t.size else math.inf
     given = user_window is not None and user_window.given
     if math.isfinite(series.release_s) and not given:
-        t_ref, theta_ref, cands = _given_release(rec, series.release_s)
+        t_ref, theta_ref, cands = _given_release(rec, series.release_s - origin)
         turns = _refine_all(rec, cands, t_end)
     else:
         cands = alternating_extrema(rec.xs, rec.step, 0)
         turns = _refine_all(rec, cands, t_end)
-        t_ref, theta_ref, turns = reference(rec, turns, user_window=user_window if given else None)
+        if given:  # the user's start or release wins over the search for the free decay
+            t_ref, theta_ref, turns = user_reference(rec, turns, user_window.shifted(-origin))
+        else:
+            t_ref, theta_ref, turns = reference(rec, turns)
     times = [u.time for u in turns]
     values = [u.value for u in turns]
     stop_time = math.nan
@@ -343,12 +361,12 @@ def reduce_series(series: TimeSeries, *, window: float | None = None, degree: in
         rec.notes.append(f"from t = {sustained:.4g} s the swing no longer decays as a free oscillator's would (it "
                          "keeps its amplitude): something keeps it going")
     swing = np.arange(1, len(times) + 1, dtype=np.int64)
-    return TurningPoints(swing, np.array(times, dtype=float), np.array(values, dtype=float), float(period),
-                         float(centre.offset), float(centre.rate), float(t_ref), float(theta_ref), float(stop_time),
-                         float(rest_theta) if math.isfinite(stop_time) else math.nan, rec.notes,
-                         period_stderr=period_se, offset_stderr=centre.offset_stderr,
+    return TurningPoints(swing, np.array(times, dtype=float) + origin, np.array(values, dtype=float), float(period),
+                         float(centre.offset), float(centre.rate), float(t_ref) + origin, float(theta_ref),
+                         float(stop_time) + origin, float(rest_theta) if math.isfinite(stop_time) else math.nan,
+                         rec.notes, period_stderr=period_se, offset_stderr=centre.offset_stderr,
                          offset_rate_stderr=centre.rate_stderr, offset_rate_measured=centre.measured_rate,
-                         noise=rec.sigma, sustained_from=sustained)
+                         noise=rec.sigma, sustained_from=sustained + origin, origin=origin)
 
 
 def period_of(times: np.ndarray, amplitudes: np.ndarray) -> tuple[float, float]:

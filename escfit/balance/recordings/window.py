@@ -21,7 +21,8 @@ A time the user gives is read on the record's own clock **measured from its firs
 
 A value that lies beyond the record on both readings is refused in one line naming the key,
 the value and the record's span.  The analysis and its notes count time from the first sample
-too (:func:`relative_clock`), so a time read off a note can be written back as a key unchanged.
+too (:func:`~escfit.balance.recordings.turning_points.reduce_series` works on that clock), so a
+time read off a note can be written back as a key unchanged.
 """
 
 from __future__ import annotations
@@ -35,8 +36,7 @@ import numpy as np
 
 from ...core.errors import DataError
 
-__all__ = ["Instant", "RecordWindow", "parse_instant", "resolve_window", "window_of", "relative_clock",
-           "WINDOW_KEYS", "ABS_PREFIX"]
+__all__ = ["Instant", "RecordWindow", "parse_instant", "resolve_window", "window_of", "WINDOW_KEYS", "ABS_PREFIX"]
 
 WINDOW_KEYS = ("start", "stop", "release")
 ABS_PREFIX = "abs"
@@ -185,23 +185,3 @@ def window_of(series) -> RecordWindow:
         return window
     t = np.asarray(series.time, float)
     return RecordWindow(origin=float(t[0]) if t.size else 0.0)
-
-
-def relative_clock(series):
-    """The series on a clock that reads 0 at the file's first sample, and its window on it.
-
-    The one place where times become relative: the analysis, its notes and the fit all run on
-    this clock, so a note's ``t = 12.3 s`` is 12.3 s after the first sample and can be written
-    back as ``[recording] start = "12.3 s"``.  A series already on it is returned as it is.
-    When the clock moved, a note gives the file's reading at the first sample.
-    """
-    window = window_of(series)
-    if window.origin == 0.0:
-        return series if getattr(series, "window", None) is window else replace(series, window=window)
-    zero = float(getattr(series, "clock_zero", 0.0)) + window.origin
-    meta = dict(series.meta)
-    note = (f"times in these notes are counted from the record's first sample (t = 0 s there, {zero:.10g} s on the "
-            "file's clock)")
-    meta["notes"] = "; ".join([note] + [s for s in str(meta.get("notes", "")).split("; ") if s])
-    return replace(series, time=np.asarray(series.time, float) - window.origin, window=window.shifted(-window.origin),
-                   clock_zero=zero, meta=meta, release_s=series.release_s - window.origin)
