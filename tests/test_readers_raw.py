@@ -402,7 +402,13 @@ def test_window(tmp_path):
     np.testing.assert_array_equal(ts.time, t[(t >= 0.5) & (t <= 1.0)])
     assert ts.meta["window"] == "0.5 s <= t <= 1 s"
     refused(DataError, p, RecordingSpec(start=0.5, stop=0.55), "w.csv [recording].start/stop", "keeps 11 of 400")
-    refused(DataError, p, RecordingSpec(start=5.0), "w.csv [recording].start/stop", "keeps 0 of 400")
+    refused(DataError, p, RecordingSpec(start=5.0), "w.csv [recording].start",
+            "start = 5 s lies beyond the record, which spans 0 to 1.995 s after its first sample")
+    late = write(tmp_path, "late.csv", table(t + 100.0, a, header=["t_s", "theta_rad"]))  # a clock not at 0
+    ts = read_raw_series(late, RecordingSpec(start=0.5, stop=1.0))  # after the first sample
+    np.testing.assert_array_equal(ts.time, t[(t >= 0.5) & (t <= 1.0)] + 100.0)
+    ts = read_raw_series(late, RecordingSpec.from_options(start="abs 100.5 s", stop="101 s"))  # the file's clock
+    np.testing.assert_array_equal(ts.time, t[(t >= 0.5) & (t <= 1.0)] + 100.0)
 
 
 # --- MATLAB files ------------------------------------------------------------------------------

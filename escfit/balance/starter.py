@@ -97,6 +97,7 @@ class Survey:
     quantity: str = "angle"  # what a sampled record measured: angle, angular_velocity, displacement
     counts_extra: dict = field(default_factory=dict)
     checks: list = field(default_factory=list)  # what the reader judged of the column and its unit (said aloud)
+    window: dict = field(default_factory=dict)  # where the analysis took the free decay (:func:`window_found`)
 
 
 # -- reading -------------------------------------------------------------------------------------
@@ -180,10 +181,30 @@ def _help(path, table: dict, exc: DataError, fmt) -> tuple[str, object, str] | N
         found = _swinging_column(path, table, fmt, amplitudes_only=choice is not None)
         if found is not None:
             return "angle_column", found[0], found[1]
+    if _TOO_FEW.search(message) and "readings" not in table:
+        return _few_rows(path, table, fmt, exc)
     if "angle_unit" in message and '"deg"' in message and "no unit given" in message and "angle_unit" not in table:
         return "angle_unit", "deg", ("the readings span more than a turn if read as radians; degrees, as the reader "
                                      "suggested")
     return None
+
+
+_TOO_FEW = re.compile(r"only \d+ samples; a decay needs")
+READINGS_HINT = "--readings amplitudes ([recording] readings = \"amplitudes\")"
+
+
+def _few_rows(path, table: dict, fmt, exc: DataError) -> tuple[str, object, str]:
+    """Too few rows for samples in time: amplitude readings if the rows look like them, else refused
+    in one line naming the option that reads them as amplitudes."""
+    try:
+        data = read_data(path, recording={**table, "readings": "amplitudes"}, fmt=fmt)
+    except DataError:
+        data = None
+    if isinstance(data, TimeSeries) and _looks_like_amplitudes(data.theta):
+        return "readings", "amplitudes", (f"only {data.time.size} rows, each one amplitude (one sign or alternating, "
+                                          f"falling): read as amplitudes, as {READINGS_HINT} asks")
+    raise DataError(f"{exc.message}; if each row is one amplitude (a peak per period or per half swing) give "
+                    f"{READINGS_HINT}", exc.where) from None
 
 
 def _swinging_column(path, table: dict, fmt, *, amplitudes_only: bool = False) -> tuple[int, str] | None:
@@ -227,17 +248,22 @@ def _swing_score(series: TimeSeries) -> tuple[float, str]:
     from .recordings.turning_points import reduce_series
 
     try:
-        tp = reduce_series(series, strict=False)
+        tp = reduce_series(series, strict=False, user_window=series.window)
     except DataError:
         return (0.5, "holds one amplitude per row, decreasing") if _looks_like_amplitudes(series.theta) else (0.0, "")
     return 1.0 + len(tp.theta), f"swings ({len(tp.theta)} turning points)"
 
 
 def _looks_like_amplitudes(values: np.ndarray) -> bool:
-    """One sign, mostly falling, too few rows per swing to be samples: amplitude readings."""
+    """One sign (or signs alternating row by row: a turning point each side), magnitudes mostly
+    falling, too few rows per swing to be samples: amplitude readings."""
     v = np.asarray(values, float)
     v = v[np.isfinite(v)]
-    if v.size < 4 or not (np.all(v > 0) or np.all(v < 0)):
+    if v.size < 4 or np.any(v == 0):
+        return False
+    one_sign = np.all(v > 0) or np.all(v < 0)
+    alternating = bool(np.all(np.sign(v[1:]) == -np.sign(v[:-1])))
+    if not (one_sign or alternating):
         return False
     return bool(np.mean(np.diff(np.abs(v)) < 0) >= 0.7)
 
@@ -249,13 +275,14 @@ def _amplitude_rows(path, series: TimeSeries, table: dict, why: dict, fmt) -> Ti
     if "readings" in table:
         return series
     try:
-        reduce_series(series, strict=False)
+        reduce_series(series, strict=False, user_window=series.window)
         return series
     except DataError:
         if not _looks_like_amplitudes(series.theta):
             raise
     table["readings"] = "amplitudes"
-    why["readings"] = "each row is the amplitude of one half swing (one sign, falling, no oscillation in the rows)"
+    why["readings"] = ("each row is one amplitude (one sign or alternating, falling, no oscillation in the rows): "
+                       f"read as amplitudes, as {READINGS_HINT} asks")
     return series
 
 
@@ -295,12 +322,12 @@ def _survey_samples(s: Survey, series: TimeSeries, restoring: str) -> None:
     if series.quantity == "angular_velocity":  # the angle's turning points are the rate's zeros
         from .recordings.rate import reduce_rate
 
-        rate = reduce_rate(series)
+        rate = reduce_rate(series, user_window=series.window)
         tp = rate.turns
         s.counts_extra = {"rate zero": rate.offset, "rate zero se": rate.offset_stderr}
         notes = rate.notes
     else:
-        tp = reduce_series(series, strict=False)
+        tp = reduce_series(series, strict=False, user_window=series.window)
         notes = [f"warning: {w}" for w in tp.warnings] + list(tp.notes)
     s.quantity = series.quantity
     s.checks = [n for n in str(series.meta.get("analysis", "")).split("; ") if n]  # column and unit judged
@@ -321,6 +348,32 @@ def _survey_samples(s: Survey, series: TimeSeries, restoring: str) -> None:
     s.columns_words = _columns_words(series.meta)
     s.lag1 = _excess_lag1(np.asarray(series.theta, float), s.period / np.median(np.diff(t)))
     s.noise_ar1 = bool(s.lag1 > AR1_EXCESS)
+    s.window = window_found(series, tp)
+
+
+def window_found(series: TimeSeries, tp) -> dict:
+    """Where the analysis took the free decay, in s after the file's first sample.
+
+    Keys: ``first`` and ``last`` (the record's first and last sample), ``reference`` (the
+    reference instant), ``held`` (the held angle, rad, when the record is flat over the tenth of
+    a period before the reference: a release from a hold; else ``None``), ``left_out`` (whether
+    more than a period before the reference was not taken as free), ``stop`` (where motion
+    stopped or faded, ``nan`` when the record ends in motion) and ``last_turn``.
+    """
+    t, x = np.asarray(series.time, float), np.asarray(series.theta, float)
+    ref, period = float(tp.release_time), float(tp.period)
+    before = (t >= ref - 0.1 * period) & (t <= ref)
+    amplitude = float(np.max(np.abs(np.asarray(tp.theta, float) - tp.offset), initial=0.0))
+    band = max(4.0 * float(tp.noise) if math.isfinite(tp.noise) else 0.0, 1e-3 * amplitude)
+    held = None
+    if np.count_nonzero(before) >= 3 and t[0] <= ref - 0.1 * period:
+        level = float(np.median(x[before]))
+        if np.all(np.abs(x[before] - level) <= band):
+            held = float(tp.release_theta)
+    zero = float(getattr(tp, "origin", 0.0))  # the keys count from the file's first sample
+    return {"first": float(t[0]) - zero, "last": float(t[-1]) - zero, "reference": ref - zero, "held": held,
+            "left_out": bool(ref - t[0] > period), "stop": float(tp.stop_time) - zero, "period": period,
+            "last_turn": (float(tp.time[-1]) if len(tp.time) else ref) - zero}
 
 
 def _survey_amplitude_rows(s: Survey, series: TimeSeries) -> None:
@@ -333,6 +386,12 @@ def _survey_amplitude_rows(s: Survey, series: TimeSeries) -> None:
                 "omega0": 2 * math.pi / s.period if math.isfinite(s.period) else math.nan}
     s.format_words = series.meta.get("source_format", "table")
     s.columns_words = _columns_words(series.meta)
+    v = np.asarray(series.theta, float)
+    if math.isfinite(s.period) and (np.all(v > 0) or np.all(v < 0)):
+        # magnitudes read each side, or the peaks of one side: the rows cannot say which
+        s.notes.append(f"the readings have one sign: taken as one per half swing (period {s.period:.4g} s, twice their "
+                       f"spacing); if they are one per period (the peaks on one side), the period is "
+                       f"{s.period / 2:.4g} s: set omega0 = {4 * math.pi / s.period:.5g}")
 
 
 def _survey_unit_curve(s: Survey, curve: UnitCurve) -> None:

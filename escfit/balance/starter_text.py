@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +20,7 @@ __all__ = ["starter_scene", "toml_number"]
 
 OMEGA0_SPAN = (0.8, 1.25)  # free omega0 within these factors of the measured period's value
 BOUND_TEXT = "three times"  # in words: escfit.balance.starter.BOUND_FACTOR
+_CONTROL = re.compile(r"[\x00-\x08\x0a-\x1f\x7f\x85\u2028\u2029]+")  # TOML comments may hold a tab, no other control
 
 
 def toml_number(x: float, digits: int = 4) -> str:
@@ -76,14 +78,18 @@ def starter_scene(path: str | Path, *, restoring: str = "spring", recording: dic
              f"# The record: {s.format_words}; {s.columns_words}."]
     lines += [f"#   {line}" for line in _record_lines(s)]
     lines += ["model = \"balance\"", f"title = {_quote(f'{name}: free decay (starter scene)')}", ""]
-    if s.recording:
-        lines += _recording_table(s)
+    lines += _recording_table(s)
     if s.kind == "timegrapher":
         lines += _timegrapher_body(s)
     else:
         lines += _decay_body(s, restoring, restoring_said)
-    text = "\n".join(lines).rstrip() + "\n"
+    text = "\n".join(_one_line(line) for line in lines).rstrip() + "\n"
     return text, _summary(s), s
+
+
+def _one_line(text: str) -> str:
+    """A line of the scene without line breaks or control characters (a file's own text in a comment)."""
+    return _CONTROL.sub(" ", str(text))
 
 
 def _record_lines(s: Survey) -> list[str]:
@@ -116,12 +122,65 @@ def _record_lines(s: Survey) -> list[str]:
 
 
 def _recording_table(s: Survey) -> list[str]:
-    out = ["[recording]", "# how to read the file: detection alone could not decide all of this"]
+    """The ``[recording]`` table: the options that read the file, and the window the analysis chose
+    (active keys where it left part of the record out, commented ones to edit otherwise)."""
+    active, commented = _window_keys(s)
+    if not s.recording and not active:
+        if not commented:
+            return []
+        return ["# [recording]    # the window the analysis chose: uncomment a key (and this line) to set it"] + \
+            commented + [""]
+    out = ["[recording]"]
+    if s.recording:
+        out.append("# how to read the file: detection alone could not decide all of this")
     for key, value in s.recording.items():
         why = s.why.get(key, "given on the command line")
         rendered = value if isinstance(value, (int, float)) and not isinstance(value, bool) else _quote(value)
         out.append(f"{key} = {rendered}    # {why}")
-    return out + [""]
+    if active or commented:
+        out.append("# the free decay's window, in s after the record's first sample (\"abs <time>\": the file's clock)")
+    return out + active + commented + [""]
+
+
+def _seconds(t: float) -> str:
+    return _quote(f"{t:.6g} s")
+
+
+def _window_keys(s: Survey) -> tuple[list[str], list[str]]:
+    """``start``/``release`` and ``stop`` lines for what the analysis found (keys the user gave are kept as given)."""
+    w = s.window
+    if not w:
+        return [], []
+    active: list[str] = []
+    commented: list[str] = []
+    ref, period = w["reference"], w["period"]
+    user = any(k in s.recording for k in ("start", "release"))
+    if not user:
+        if w["held"] is not None:
+            line = (f"release = {_seconds(ref)}    # the analysis found the oscillator held at "
+                    f"{math.degrees(w['held']):.4g} deg until {ref:.6g} s: the model is released there")
+            if w["left_out"]:
+                active.append(line + "; the record before it was taken as not free (held, pushed or driven: the notes "
+                              "at the top of the scene say which): set release (or start) earlier to keep it")
+            else:
+                commented.append("# " + line)
+        elif w["left_out"]:
+            start = max(ref - 0.25 * period, w["first"])
+            active.append(f"start = {_seconds(start)}    # the record before {ref:.6g} s (the reference turning point) "
+                          "was taken as not a free decay (held, pushed or driven: the notes at the top of the scene say which): set start "
+                          "earlier to keep it")
+        else:
+            commented.append(f"# start = {_seconds(w['first'])}    # the free decay starts at the record's first "
+                             f"turning point ({ref:.6g} s): nothing before it was left out")
+    if "stop" not in s.recording:
+        if math.isfinite(w["stop"]):
+            commented.append(f"# stop = {_seconds(w['stop'])}    # motion stopped (or faded into the noise) at "
+                             f"{w['stop']:.6g} s; the record runs on to {w['last']:.6g} s")
+        else:
+            last = math.floor(w["last"] * 1e3) / 1e3  # rounded inwards: a stop past the last sample is refused
+            commented.append(f"# stop = {_seconds(last)}    # the record ends in motion (last turning point used "
+                             f"at {w['last_turn']:.6g} s): set stop earlier to leave its end out")
+    return active, commented
 
 
 def _decay_body(s: Survey, restoring: str, said: str) -> list[str]:
@@ -257,4 +316,7 @@ def _summary(s: Survey) -> list[str]:
         from .recordings.rawsteps import notes_of, warnings_of
 
         out += [f"note: {n}" for n in notes_of(meta)] + [f"warning: {w}" for w in warnings_of(meta)]
-    return out
+    for line in _window_keys(s)[0]:  # the window the analysis chose where it left part of the record out
+        key, _, why = line.partition("    # ")
+        out.append(f"[recording] {key}: {why}")
+    return [_one_line(line) for line in out]

@@ -21,7 +21,8 @@ import click
 __all__ = ["init", "offer_starter", "write_starter", "interactive"]
 
 RECORDING_OPTIONS = ("time_column", "sample_rate", "angle_column", "angle_unit", "counts_per_turn", "scale", "start",
-                     "stop", "velocity_column", "velocity_unit", "displacement_column", "displacement_unit", "run")
+                     "stop", "release", "readings", "velocity_column", "velocity_unit", "displacement_column",
+                     "displacement_unit", "run")
 
 
 def interactive() -> bool:
@@ -126,8 +127,15 @@ def next_command(data: str, scene: Path) -> str:
 @click.option("--angle-unit", default=None, help="[recording] angle_unit: deg, rad, ... or counts.")
 @click.option("--counts-per-turn", type=float, default=None, help="[recording] counts_per_turn (with counts).")
 @click.option("--scale", type=float, default=None, help="[recording] scale: multiplies the raw readings.")
-@click.option("--start", "start", default=None, help="[recording] start of the window, e.g. '13 s'.")
-@click.option("--stop", "stop", default=None, help="[recording] end of the window, e.g. '60 s'.")
+@click.option("--start", "start", default=None,
+              help="[recording] start: the free decay starts at the first turning point from here, e.g. '13 s' "
+                   "(after the record's first sample; 'abs 1407000013 s' on the file's own clock).")
+@click.option("--stop", "stop", default=None, help="[recording] stop: end of the window, e.g. '60 s'.")
+@click.option("--release", "release", default=None,
+              help="[recording] release: the model is released here (a turning point or the end of a hold).")
+@click.option("--readings", type=click.Choice(["samples", "amplitudes"]), default=None,
+              help="[recording] readings: 'amplitudes' for a table of one amplitude per row (a peak per period "
+                   "or per half swing) instead of samples in time.")
 @click.option("--velocity-column", default=None,
               help="[recording] velocity_column: the column of an angular velocity (a gyroscope, a velocity pickup).")
 @click.option("--velocity-unit", default=None, help="[recording] velocity_unit: rad/s, deg/s, rpm, or V with --scale.")

@@ -387,8 +387,13 @@ def _read_recipe(path: Path) -> dict:
 @click.option("--angle-unit", default=None, help="[recording] angle_unit: deg, rad, ... or counts.")
 @click.option("--counts-per-turn", type=FiniteFloat(0.0, low_open=True), default=None, help="[recording] counts_per_turn (with counts).")
 @click.option("--scale", type=FiniteFloat(), default=None, help="[recording] scale: multiplies the raw readings.")
-@click.option("--start", "start_time", default=None, help="[recording] start of the window, e.g. '13 s'.")
-@click.option("--stop", "stop_time", default=None, help="[recording] end of the window, e.g. '60 s'.")
+@click.option("--start", "start_time", default=None,
+              help="[recording] start: the free decay starts at the first turning point from here, e.g. '13 s' "
+                   "(after the record's first sample; 'abs 1407000013 s' on the file's own clock).")
+@click.option("--stop", "stop_time", default=None, help="[recording] stop: end of the window, e.g. '60 s'.")
+@click.option("--release", "release_time", default=None,
+              help="[recording] release: the model is released here (a turning point or the end of a hold), "
+                   "e.g. '14.2 s'; no push or hold before it is looked for.")
 @click.option("--solver", default=None, help="Forward solver (default: exact, or dop853 for a pendulum).")
 @click.option("--moves", type=click.Choice(["stretch", "de", "de-t"]), default=None,
               help="emcee proposal: stretch, de (differential evolution: coupled parameters, one-parameter "
@@ -401,8 +406,8 @@ def _read_recipe(path: Path) -> dict:
 @click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None, help="Also write a report.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoint_every, burn, unit_id, material, fmt, time_column, sample_rate,
-        angle_column, angle_unit, counts_per_turn, scale, start_time, stop_time, solver, moves, notch_deg, resume,
-        force, report_path, quiet):
+        angle_column, angle_unit, counts_per_turn, scale, start_time, stop_time, release_time, solver, moves, notch_deg,
+        resume, force, report_path, quiet):
     """Fit DATA (a recording) with --scene SCENE, or run a fit RECIPE.toml.
 
     Without a scene, `escfit init DATA` writes a starter scene (on a terminal this command offers to).
@@ -429,7 +434,8 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoi
         fmt_raw = fmt if fmt in FORMAT_NAMES else None
         scene_path = offer_starter(data, recording_table(
             time_column=time_column, sample_rate=sample_rate, angle_column=angle_column, angle_unit=angle_unit,
-            counts_per_turn=counts_per_turn, scale=scale, start=start_time, stop=stop_time), fmt_raw)
+            counts_per_turn=counts_per_turn, scale=scale, start=start_time, stop=stop_time, release=release_time),
+            fmt_raw)
     pick = lambda cli_value, key, default: cli_value if cli_value is not None else recipe.get(key, default)  # noqa: E731
     method = pick(method, "method", "leastsq")
     out = pick(out, "out", None) or f"{Path(data).stem}_fit.h5"
@@ -454,7 +460,7 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoi
                    "recording": {"time_column": _column(time_column), "sample_rate": sample_rate,
                                  "angle_column": _column(angle_column), "angle_unit": angle_unit,
                                  "counts_per_turn": counts_per_turn, "scale": scale, "start": start_time,
-                                 "stop": stop_time}}
+                                 "stop": stop_time, "release": release_time}}
     if scene.model == "friction_rig" and pick(material, "material", None) is not None:
         options["material"] = pick(material, "material", None)
     elif pick(material, "material", None) is not None:
@@ -467,7 +473,7 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoi
                  "--unit": pick(unit_id, "unit", None), "--solver": pick(solver, "solver", None),
                  "--time-column": time_column, "--sample-rate": sample_rate, "--angle-column": angle_column,
                  "--angle-unit": angle_unit, "--counts-per-turn": counts_per_turn, "--scale": scale,
-                 "--start": start_time, "--stop": stop_time}
+                 "--start": start_time, "--stop": stop_time, "--release": release_time}
         used = sorted(k for k, v in given.items() if v is not None)
         if used:
             raise SceneError(f"{', '.join(used)} appl{'ies' if len(used) == 1 else 'y'} to balance recordings; "

@@ -10,6 +10,10 @@ its drift, the end of motion.  Then, by the scene's ``[observation] model``:
   :class:`~escfit.balance.problems.curves.FitProblem`;
 - ``"waveform"``: every sample, fitted by :class:`~escfit.balance.problems.waveform.WaveformProblem`.
 
+Notes speak of times after the file's first sample (an epoch clock's 1.407e9 s is 0 s there), as
+``[recording] start``, ``stop`` and ``release`` do (the analysis counts time so: ``tp.after_first``);
+those keys reach the analysis as the series' ``window``.  The fit itself keeps the file's clock.
+
 Either way the release angle comes from the record (:func:`~escfit.balance.problems.release.release_from_record`)
 and what was done is kept as plain-sentence ``notes``.
 
@@ -102,7 +106,7 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
 
     # a waveform fit uses the turning points only for its start (reference, period, centre): an
     # irregular interval late in the record is a note there, not a refusal
-    tp = reduce_series(series, strict=model != "waveform")
+    tp = reduce_series(series, strict=model != "waveform", user_window=series.window)
     notes += list(getattr(tp, "notes", []))
     series = _without_steps(series, tp)
     _refuse_sustained(scene, tp, series.source)
@@ -164,7 +168,7 @@ def _count_note(tp, quantity: str = "angle") -> str:
     where = tp.release_theta - tp.offset
     shown = f"{where:+.4g} m" if quantity == "displacement" else f"{math.degrees(where):+.2f} deg"
     how = " (zeros of the angular velocity)" if quantity == "angular_velocity" else ""
-    return (f"{tp.swing.size} turning points{how} after the reference one at t = {tp.release_time:.4g} s "
+    return (f"{tp.swing.size} turning points{how} after the reference one at t = {tp.after_first(tp.release_time):.4g} s "
             f"({shown} from the centre); period {tp.period:.5g} s")
 
 
@@ -200,13 +204,13 @@ def _sampled_problem(scene: BalanceScene, series, notes: list, solver, solver_op
     if series.quantity == "angular_velocity":
         from ..recordings.rate import reduce_rate
 
-        rate = reduce_rate(series)
+        rate = reduce_rate(series, user_window=series.window)
         tp, centre, noise = rate.turns, rate, rate.noise
         notes += rate.notes
     else:
         from ..recordings.turning_points import reduce_series
 
-        tp = reduce_series(series, strict=False)
+        tp = reduce_series(series, strict=False, user_window=series.window)
         centre, noise = tp, None
         notes += list(tp.notes)
         series = _without_steps(series, tp)
@@ -228,6 +232,6 @@ def _refuse_sustained(scene: BalanceScene, tp, source: str) -> None:
         return
     from ...core.errors import DataError
 
-    raise DataError(f"from t = {when:.4g} s the swing keeps its amplitude where a free decay would go on losing: "
+    raise DataError(f"from t = {tp.after_first(when):.4g} s the swing keeps its amplitude where a free decay would go on losing: "
                     "something drives it (a motor, an escapement), and the scene has no drive, so it cannot be fitted "
                     "as a free decay; cut the record before that with [recording] stop, or model the drive", source)

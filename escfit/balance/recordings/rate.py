@@ -78,8 +78,11 @@ class RateAnalysis:
         return self.turns.release_time
 
 
-def reduce_rate(series: TimeSeries) -> RateAnalysis:
+def reduce_rate(series: TimeSeries, *, user_window=None) -> RateAnalysis:
     """The analysis of a sampled angular velocity (see the module docstring).
+
+    ``user_window``: the user's ``[recording]`` window, as for
+    :func:`~escfit.balance.recordings.turning_points.reduce_series` (the swept angle's reference).
 
     Raises
     ------
@@ -102,10 +105,11 @@ def reduce_rate(series: TimeSeries) -> RateAnalysis:
     # smoothing does not show: over a period it strays by noise * sqrt(dt * period)
     wander = 0.5 * rec.sigma * math.sqrt(rec.dt * rec.period)
     try:
-        first = reduce_series(_path(series, t[moving], angle), strict=False, min_noise=wander)
+        first = reduce_series(_path(series, t[moving], angle), strict=False, min_noise=wander, user_window=user_window)
         # again about the centre found, so that the angles in the notes are the swing's (the
         # offset only: removing a drift too would tilt a hold)
-        turns = reduce_series(_path(series, t[moving], angle - first.offset), strict=False, min_noise=wander)
+        turns = reduce_series(_path(series, t[moving], angle - first.offset), strict=False, min_noise=wander,
+                              user_window=user_window)
     except DataError as exc:
         raise DataError(f"{getattr(exc, 'message', exc)} (the angle's turning points are the zeros of the "
                         "angular velocity, found on its running integral)", exc.where) from None
@@ -141,7 +145,8 @@ def _extrema_centre(rec, stop: int) -> float:
 
 def _path(series: TimeSeries, t: np.ndarray, angle: np.ndarray) -> TimeSeries:
     """The running integral as an angle series (the analysis' input), with the record's release and name."""
-    return TimeSeries(t, angle, series.release_s, series.source, series.sha256, dict(series.meta), "angle")
+    return TimeSeries(t, angle, series.release_s, series.source, series.sha256, dict(series.meta), "angle",
+                      series.window)
 
 
 def _running_integral(t: np.ndarray, v: np.ndarray) -> np.ndarray:

@@ -27,8 +27,9 @@ import numpy as np
 
 from ...analysis.timebase import time_base
 from ...core.errors import DataError, SceneError
-from .recording_spec import RecordingSpec, parse_option
+from .recording_spec import RecordingSpec, parse_option, parse_seconds
 from .series import TimeSeries
+from .window import resolve_window
 
 __all__ = ["build_series", "repaired_times", "notes_of", "warnings_of", "merge_file_meta", "file_options", "unwrap_angles",
            "FILE_OPTIONS", "MIN_SAMPLES"]
@@ -87,6 +88,9 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
     (:func:`~escfit.analysis.quantity.check_quantity`, for the column ``label`` whose unit came
     from ``unit_from``: ``"file"``, ``"option"`` or ``"assumed"``): a refusal is a DataError
     naming the key to set, a suspicion a note.  ``meta`` gets ``window``, ``notes`` and ``warnings``.
+    The ``start``, ``stop`` and ``release`` keys are read on the file's clock from its first row
+    (the clock rule of :mod:`~escfit.balance.recordings.window`); the series carries them
+    (``window``) for the analysis.
     """
     for name, values in (("time", time), ("angle", theta)):
         bad = np.flatnonzero(~np.isfinite(values))
@@ -96,11 +100,16 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
         raise DataError(f"only {np.size(time)} samples; a decay needs at least {MIN_SAMPLES}", source)
     time, theta = np.asarray(time, dtype=float), np.asarray(theta, dtype=float)
     rows = np.arange(time.size)
-    if (spec.start is not None or spec.stop is not None) and np.any(np.diff(time) <= 0.0):
+    # the keys are read on the clock as the file gives it (its first row the origin), before any re-timing
+    window, clock_notes = resolve_window(spec, time, source)
+    notes += clock_notes
+    lo = -math.inf if window.start is None else window.start
+    hi = math.inf if window.stop is None else window.stop
+    cut = window.start is not None or window.stop is not None
+    if cut and np.any(np.diff(time) <= 0.0):
         # rows stamped outside the window go before the stamps are checked (a logger's clock that
         # stalls after the decay is cut by `stop`); the window is applied again to the times read
-        inside = (time >= (-math.inf if spec.start is None else spec.start)) & \
-                 (time <= (math.inf if spec.stop is None else spec.stop))
+        inside = (time >= lo) & (time <= hi)
         if inside.sum() >= 2:
             time, theta, rows = time[inside], theta[inside], rows[inside]
     warnings: list[str] = []
@@ -110,20 +119,19 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
                         "not radians of a swinging balance; if they are degrees set [recording] angle_unit = \"deg\" "
                         "(or --angle-unit deg)", source)
     if spec.readings == "samples":
-        _check_quantity(time, theta, spec, meta, notes, source, label, unit_from)
+        _check_quantity(time, theta, (lo, hi), spec, meta, notes, source, label, unit_from)
     if spec.readings == "samples" and spec.quantity == "angle":
         theta = unwrap_angles(theta, notes)
-    if spec.start is not None or spec.stop is not None:
-        lo = -math.inf if spec.start is None else spec.start
-        hi = math.inf if spec.stop is None else spec.stop
+    if cut:
         keep = (time >= lo) & (time <= hi)
-        window = f"{'' if spec.start is None else f'{lo:g} s <= '}t{'' if spec.stop is None else f' <= {hi:g} s'}"
+        shown = f"{'' if window.start is None else f'{window.after_first(lo):g} s <= '}t" \
+                f"{'' if window.stop is None else f' <= {window.after_first(hi):g} s'}"
         if keep.sum() < MIN_SAMPLES:
-            raise DataError(f"the window {window} keeps {int(keep.sum())} of {time.size} samples (the file spans "
-                            f"{time[0]:g} to {time[-1]:g} s); at least {MIN_SAMPLES} are needed",
-                            f"{source} [recording].start/stop")
+            raise DataError(f"the window {shown} (after the first sample) keeps {int(keep.sum())} of {time.size} "
+                            f"samples (the record spans 0 to {time[-1] - window.origin:g} s after its first sample); "
+                            f"at least {MIN_SAMPLES} are needed", f"{source} [recording].start/stop")
         time, theta = time[keep], theta[keep]
-        meta["window"] = window
+        meta["window"] = shown
     need = MIN_SAMPLES if spec.readings == "samples" else MIN_AMPLITUDE_ROWS
     if time.size < need:
         what = "samples" if spec.readings == "samples" else "amplitude readings"
@@ -133,19 +141,15 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
     if warnings:
         meta["warnings"] = _joined(warnings)
     return TimeSeries(time=time, theta=np.asarray(theta, dtype=float), release_s=release_s, source=source,
-                      sha256=sha256, meta=meta)
+                      sha256=sha256, meta=meta, window=window)
 
 
-def _check_quantity(time: np.ndarray, values: np.ndarray, spec: RecordingSpec, meta: dict, notes: list[str],
-                    source: str, label: str, unit_from: str) -> None:
+def _check_quantity(time: np.ndarray, values: np.ndarray, bounds: tuple[float, float], spec: RecordingSpec,
+                    meta: dict, notes: list[str], source: str, label: str, unit_from: str) -> None:
     """Hold the samples' shape against what they are read as (within the window); refuse or note."""
     from ...analysis.quantity import check_quantity
 
-    keep = np.ones(time.size, bool)
-    if spec.start is not None:
-        keep &= time >= spec.start
-    if spec.stop is not None:
-        keep &= time <= spec.stop
+    keep = (time >= bounds[0]) & (time <= bounds[1])
     if keep.sum() < MIN_SAMPLES:
         return  # the window's own refusal says it
     unit_key = {"angle": "angle_unit", "angular_velocity": "velocity_unit", "displacement": "displacement_unit"}
@@ -204,7 +208,7 @@ def file_options(given: Mapping[str, tuple[str, str]]) -> dict:
             continue
         try:
             if target == "dt":
-                dt = parse_option("start", value, where)
+                dt = parse_seconds(value, where)
                 if not dt > 0:
                     raise SceneError(f"the sample interval must be positive, got {value!r}", where)
                 out["sample_rate"] = 1.0 / dt

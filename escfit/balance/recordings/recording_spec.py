@@ -10,8 +10,9 @@ the angle, in which units, and which part of the record to keep::
     angle_unit = "deg"             # any pint angle unit, or "counts" with counts_per_turn
     counts_per_turn = 40000        # only with angle_unit = "counts"
     scale = 1.0                    # multiplies the raw readings before the unit applies
-    start = "13 s"                 # optional window, in the file's clock
-    stop = "60 s"
+    start = "13 s"                 # optional window: 13 s after the record's first sample
+    stop = "60 s"                  # (or "abs 1407000060 s": the file's own clock; see below)
+    release = "14.2 s"             # optional: the model is released here (the free decay starts here)
     readings = "samples"           # or "amplitudes": one amplitude per half swing per row
     velocity_column = "Gyroscope x (rad/s)"   # instead of angle_column: an angular velocity
     velocity_unit = "rad/s"        # an angular velocity (deg/s, rpm; Hz = turn/s); or "V" with scale in rad/s per V
@@ -24,6 +25,25 @@ the angle, in which units, and which part of the record to keep::
 
 Every key is optional; what is not given is detected from the file where that is safe.
 The command line overrides the table key by key (:func:`merge_spec`).
+
+The window: start, stop, release
+--------------------------------
+Times are read on the record's clock **measured from its first sample**: ``start = "13 s"``
+is 13 s after the first sample, also when the file's clock reads 1.407e9 s there (an epoch
+clock).  The file's own clock is named by the prefix ``abs`` (``start = "abs 1407000013 s"``),
+or by a bare value that exceeds the record's span but lies within the file's clock range
+(``start = 1407000013.0``); a value that fits both readings is a time after the first sample
+(a note names the ``abs`` form).  A value beyond the record is refused, naming the key, the
+value and the record's span.  Every format that yields a sampled series applies them, in one
+place (:func:`~escfit.balance.recordings.rawsteps.build_series`, through
+:func:`~escfit.balance.recordings.window.resolve_window`).
+
+The user's choice wins over the analysis' own search for the free decay
+(:func:`~escfit.balance.recordings.turning_points.reduce_series`): with ``release`` the model is
+released at that instant (at the turning point there, or at the held angle when the record is
+flat up to it; an instant more than a tenth of a period from both takes the next turning point,
+with a note); with ``start`` alone the free decay starts at the first turning point at or after
+it, and no push, hold or drive before it is looked for.  ``stop`` ends the record.
 
 Conversions
 -----------
@@ -46,8 +66,9 @@ from typing import Any, Callable, Mapping
 
 from ...core.errors import DataError, SceneError
 from ...core.units import COUNT_WORDS, angular_frequency_factor, to_canonical, ureg
+from .window import WINDOW_KEYS, Instant, parse_instant
 
-__all__ = ["RecordingSpec", "recording_spec_from_table", "merge_spec", "parse_option", "safe_unit_text",
+__all__ = ["RecordingSpec", "recording_spec_from_table", "merge_spec", "parse_option", "parse_seconds", "safe_unit_text",
            "is_angle_unit", "rad_per_unit", "seconds_per_unit", "header_role", "COUNT_WORDS"]
 
 Column = str | int | tuple[str, ...]
@@ -75,8 +96,11 @@ class RecordingSpec:
         Encoder counts per revolution (only with ``angle_unit = "counts"``).
     scale : float or None
         Factor applied to the raw readings before the unit (``None``: 1).
-    start, stop : float or None
-        Window of the file's clock to keep, s (inclusive).
+    start, stop : Instant or None
+        Window to keep (inclusive), s after the first sample or on the file's clock (see
+        "The window" above; a plain number given here is a time after the first sample).
+    release : Instant or None
+        Where the free decay starts: the model is released there (same clock rule).
     readings : str
         ``"samples"`` (default): the angle sampled in time; ``"amplitudes"``: each row is
         already the amplitude of one half swing (a pointer read at every turning point), row 0
@@ -105,8 +129,8 @@ class RecordingSpec:
     angle_unit: str | None = None
     counts_per_turn: float | None = None
     scale: float | None = None
-    start: float | None = None
-    stop: float | None = None
+    start: Instant | None = None
+    stop: Instant | None = None
     readings: str = "samples"
     velocity_column: Column | None = None
     velocity_unit: str | None = None
@@ -116,6 +140,13 @@ class RecordingSpec:
     run: int | None = None
     lift_angle: float | None = None
     bph: int | None = None
+    release: Instant | None = None
+
+    def __post_init__(self):
+        for key in WINDOW_KEYS:  # a plain number is a time after the first sample
+            value = getattr(self, key)
+            if value is not None and not isinstance(value, Instant):
+                object.__setattr__(self, key, Instant(float(value), False, f"{float(value):g} s"))
 
     @property
     def quantity(self) -> str:
@@ -391,8 +422,9 @@ _PARSE: dict[str, Callable[[Any, str, bool], Any]] = {
     "angle_unit": _angle_unit,
     "counts_per_turn": lambda v, w, cli: _positive(v, "dimensionless", w),
     "scale": _number,
-    "start": lambda v, w, cli: _quantity(v, "time", w),
-    "stop": lambda v, w, cli: _quantity(v, "time", w),
+    "start": lambda v, w, cli: _instant(v, w),
+    "stop": lambda v, w, cli: _instant(v, w),
+    "release": lambda v, w, cli: _instant(v, w),
     "readings": lambda v, w, cli: _readings(v, w),
     "velocity_column": _column,
     "velocity_unit": _signal_unit("rad/s", "an angular velocity unit"),
@@ -403,6 +435,13 @@ _PARSE: dict[str, Callable[[Any, str, bool], Any]] = {
     "lift_angle": _lift,
     "bph": lambda v, w, cli: _bph(v, w, cli),
 }
+
+
+def _instant(value: Any, where: str) -> Instant:
+    """A window key: a time (``"13 s"``, a number in s) or ``"abs <time>"`` (the file's own clock)."""
+    if isinstance(value, bool) or not isinstance(value, (str, int, float)):
+        raise SceneError(f"expected a time such as \"13 s\" or \"abs 1407000013 s\", got {value!r}", where)
+    return parse_instant(value, where, lambda v, w: _quantity(v, "time", w))
 
 
 def _bph(value: Any, where: str, cli: bool) -> int:
@@ -417,6 +456,11 @@ def _readings(value: Any, where: str) -> str:
     if value not in ("samples", "amplitudes"):
         raise SceneError(f"readings must be 'samples' or 'amplitudes', got {value!r}", where)
     return value
+
+
+def parse_seconds(value: Any, where: str) -> float:
+    """A duration given as text or a number (s): ``"2 ms"``, ``0.002``; SceneError if bad."""
+    return _quantity(value, "time", where)
 
 
 def parse_option(key: str, value: Any, where: str) -> Any:
@@ -446,8 +490,12 @@ def _check(spec: RecordingSpec, where_of: Callable[[str], str]) -> RecordingSpec
                 and spec.scale is None:
             raise SceneError(f"{unit_key} = {unit!r} is the sensor's reading: give scale, the SI value per {unit} "
                              f"({'rad/s' if col_key.startswith('velocity') else 'm'} per {unit})", where_of(unit_key))
-    if spec.start is not None and spec.stop is not None and not spec.start < spec.stop:
-        raise SceneError(f"start ({spec.start:g} s) must come before stop ({spec.stop:g} s)", where_of("stop"))
+    for early, late, strict in (("start", "stop", True), ("start", "release", False), ("release", "stop", False)):
+        a, b = getattr(spec, early), getattr(spec, late)
+        if a is None or b is None or a.absolute != b.absolute:
+            continue  # across clocks they are compared by the reader, which knows the file's clock
+        if a.seconds > b.seconds or (strict and a.seconds == b.seconds):
+            raise SceneError(f"{early} ({a.shown()}) must come before {late} ({b.shown()})", where_of(late))
     return spec
 
 

@@ -29,6 +29,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .window import RecordWindow
+
 __all__ = ["TimeSeries", "QUANTITIES", "show_value", "quantity_words"]
 
 #: quantity -> SI unit of the samples
@@ -54,6 +56,10 @@ class TimeSeries:
         File name, content hash and metadata (strings: how the file was read, its notes).
     quantity : str
         ``"angle"`` (rad), ``"angular_velocity"`` (rad/s) or ``"displacement"`` (m).
+    window : RecordWindow or None
+        The ``[recording]`` start, stop and release the reader resolved on this clock, and the
+        file's first sample (:mod:`~escfit.balance.recordings.window`); ``None``: none given and
+        the first sample is ``time[0]``.
     """
 
     time: np.ndarray
@@ -63,6 +69,7 @@ class TimeSeries:
     sha256: str = ""
     meta: dict = field(default_factory=dict)
     quantity: str = "angle"
+    window: RecordWindow | None = None
     kind = "timeseries"
 
     def __post_init__(self):

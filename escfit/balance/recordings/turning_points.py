@@ -20,7 +20,8 @@ Steps
    dry friction the balance stops at a turning point short of the centre, so when the last
    half swing runs into the rest that stop is the last turning point.
 4. **Reference** (``release_time``, ``release_theta``, the instant the model is released at
-   rest): the series' ``release_s`` when given; else the start of the record's **last** free
+   rest): where the user set it (``[recording] release`` or ``start``, passed as ``user_window``:
+   :mod:`~escfit.balance.recordings.given_start`); else the series' ``release_s`` when given; else the start of the record's **last** free
    decay (:mod:`escfit.balance.recordings.motion`): after the last push, pull, hold or drive,
    the release from a hold (the angle flat for a tenth of a period or more, then moving
    freely: the release is where motion starts and its angle the held one) or a turning point
@@ -67,8 +68,10 @@ from .centre import measure_centre
 from .extrema import (alternating_extrema, extrema_period, local_amplitude, power_near, resolution, second_mode, smooth,
                       smoothing_share, smoothing_window, spectral_period, vertex_at)
 from .motion import INTERVAL_RANGE, Turn, faded_end, growth_tolerance, levels_off, reference, steady_tail
+from .given_start import user_reference
 from .sampled import MIN_SAMPLES_PER_PERIOD, SampledRecord
 from .series import TimeSeries, quantity_words
+from .window import window_of
 
 __all__ = ["TurningPoints", "reduce_series", "turning_points", "period_of", "MIN_SAMPLES_PER_PERIOD", "MIN_TURNS"]
 
@@ -127,6 +130,9 @@ class TurningPoints:
         Offset steps of the centre removed from the samples: the time of the first sample
         moved (s), the jump (the samples' unit) and the note; apply them to the series with
         :func:`remove_steps` before comparing a model with the samples.
+    origin : float
+        The file's first sample on the series' clock, s: the zero of the times in ``notes``
+        (and of ``[recording] start``, ``stop``, ``release``).
     """
 
     swing: np.ndarray
@@ -148,6 +154,11 @@ class TurningPoints:
     sustained_from: float = math.nan
     warnings: list = field(default_factory=list)
     steps: tuple = ()
+    origin: float = 0.0
+
+    def after_first(self, t: float) -> float:
+        """``t`` (s, the series' clock) as a time after the file's first sample, as notes show times."""
+        return t - self.origin
 
     @property
     def count(self) -> int:
@@ -160,7 +171,7 @@ class TurningPoints:
 
 
 def reduce_series(series: TimeSeries, *, window: float | None = None, degree: int = 4,
-                  strict: bool = True, min_noise: float = 0.0) -> TurningPoints:
+                  strict: bool = True, min_noise: float = 0.0, user_window=None) -> TurningPoints:
     """Turning points of a sampled free decay (see the module docstring for the method).
 
     Parameters
@@ -179,6 +190,11 @@ def reduce_series(series: TimeSeries, *, window: float | None = None, degree: in
         A floor for the noise scale the rest band and the hysteresis are set from (rad): for a
         series whose slow wander the scatter about a smoothing does not show (the running
         integral of a rate, :mod:`escfit.balance.recordings.rate`).
+    user_window
+        The user's ``[recording]`` window on the series' clock
+        (:class:`~escfit.balance.recordings.window.RecordWindow`, usually ``series.window``): a
+        ``release`` or ``start`` in it fixes where the free decay starts, over the series' own
+        ``release_s`` and the automatic search (:mod:`~escfit.balance.recordings.given_start`).
 
     Returns
     -------
@@ -191,25 +207,30 @@ def reduce_series(series: TimeSeries, *, window: float | None = None, degree: in
         rate needed), a growing amplitude, wrapped angles, too few turning points, or
         (``strict``) irregularly spaced turning points.
     """
-    first = _reduce(series, window, degree, strict, min_noise, find_steps=True)
+    first = _reduce(series, window, degree, strict, min_noise, user_window, find_steps=True)
     if not first.steps:
         return first
     # the centre jumped (a moved origin): the same analysis of the samples with the jumps taken back
     fixed = replace(series, theta=remove_steps(series.time, series.theta, first.steps))
-    found = _reduce(fixed, window, degree, strict, min_noise, find_steps=False)
+    found = _reduce(fixed, window, degree, strict, min_noise, user_window, find_steps=False)
     return replace(found, notes=[note for *_, note in first.steps] + found.notes, steps=first.steps)
 
 
-def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool, min_noise: float, *,
+def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool, min_noise: float, user_window, *,
             find_steps: bool) -> TurningPoints:
     """:func:`reduce_series`; with ``find_steps`` False no offset step is looked for."""
     where = series.source
     if not 2 <= degree <= 6:
         raise DataError(f"degree must be 2 to 6, got {degree!r}", where)
-    t = np.asarray(series.time, dtype=float)
+    # the analysis, and so its notes, count time from the file's first sample: shifted back at the end
+    origin = window_of(series).origin
+    t = np.asarray(series.time, dtype=float) - origin
     x = np.asarray(series.theta, dtype=float)
     rec = prepare(t, x, window, degree, where, series.quantity, min_noise)
     rec.find_steps = find_steps
+    if origin != 0.0:
+        rec.notes.insert(0, f"times in these notes are counted from the record's first sample (t = 0 s there, "
+                            f"{origin:.10g} s on the file's clock)")
     i_rest, rest_theta = resting_tail(rec)
     if i_rest < t.size:
         period, prominence = _working_period(t[:i_rest], x[:i_rest], min_cycles=1.5)
@@ -217,13 +238,17 @@ def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool,
             rec.period = period
             rec.xs = smooth(x, period / rec.dt)
     t_end = t[i_rest] if i_rest < t.size else math.inf
-    if math.isfinite(series.release_s):
-        t_ref, theta_ref, cands = _given_release(rec, series.release_s)
+    given = user_window is not None and user_window.given
+    if math.isfinite(series.release_s) and not given:
+        t_ref, theta_ref, cands = _given_release(rec, series.release_s - origin)
         turns = _refine_all(rec, cands, t_end)
     else:
         cands = alternating_extrema(rec.xs, rec.step, 0)
         turns = _refine_all(rec, cands, t_end)
-        t_ref, theta_ref, turns = reference(rec, turns)
+        if given:  # the user's start or release wins over the search for the free decay
+            t_ref, theta_ref, turns = user_reference(rec, turns, user_window.shifted(-origin))
+        else:
+            t_ref, theta_ref, turns = reference(rec, turns)
     times = [u.time for u in turns]
     values = [u.value for u in turns]
     stop_time = math.nan
@@ -262,12 +287,13 @@ def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool,
         rec.notes.append(f"from t = {sustained:.4g} s the swing no longer decays as a free oscillator's would (it "
                          "keeps its amplitude): something keeps it going")
     swing = np.arange(1, len(times) + 1, dtype=np.int64)
-    return TurningPoints(swing, np.array(times, dtype=float), np.array(values, dtype=float), float(period),
-                         float(centre.offset), float(centre.rate), float(t_ref), float(theta_ref), float(stop_time),
-                         float(rest_theta) if math.isfinite(stop_time) else math.nan, rec.notes,
-                         period_stderr=period_se, offset_stderr=centre.offset_stderr,
+    return TurningPoints(swing, np.array(times, dtype=float) + origin, np.array(values, dtype=float), float(period),
+                         float(centre.offset), float(centre.rate), float(t_ref) + origin, float(theta_ref),
+                         float(stop_time) + origin, float(rest_theta) if math.isfinite(stop_time) else math.nan,
+                         rec.notes, period_stderr=period_se, offset_stderr=centre.offset_stderr,
                          offset_rate_stderr=centre.rate_stderr, offset_rate_measured=centre.measured_rate,
-                         noise=rec.sigma, sustained_from=sustained, warnings=rec.warnings, steps=tuple(rec.steps))
+                         noise=rec.sigma, sustained_from=sustained + origin, origin=origin,
+                         warnings=rec.warnings, steps=tuple((at + origin, size, note) for at, size, note in rec.steps))
 
 
 def remove_steps(time: np.ndarray, values: np.ndarray, steps) -> np.ndarray:
