@@ -232,6 +232,8 @@ def kinked_vertex(u: np.ndarray, x: np.ndarray, degree: int = 4, *, flat: str = 
     """
     from scipy.optimize import minimize_scalar
 
+    from .vertex_fit import kinked_design, kinked_lstsq
+
     n_left, n_right = int(np.sum(u < 0)), int(np.sum(u > 0))
     if min(n_left, n_right) < 2 or n_left + n_right < 6:
         return None
@@ -239,20 +241,15 @@ def kinked_vertex(u: np.ndarray, x: np.ndarray, degree: int = 4, *, flat: str = 
     deg_right = 0 if flat == "right" else min(degree, max(2, n_right - 2))
     shared = shared and not flat and deg_left == deg_right
 
+    u = np.ascontiguousarray(u, dtype=float)
+    x = np.ascontiguousarray(x, dtype=float)
+
     def solve(uc: float) -> tuple[float, float]:
-        s = u - uc
-        left = s < 0
-        cols = [np.ones_like(s)]
-        for p in range(2, max(deg_left, deg_right) + 1):
-            sp = s**p
-            if shared and p > 2:
-                cols.append(sp)
-                continue
-            if p <= deg_left:
-                cols.append(np.where(left, sp, 0.0))
-            if p <= deg_right:
-                cols.append(np.where(left, 0.0, sp))
-        a = np.stack(cols, axis=1)
+        rss, value, solved = kinked_lstsq(u, x, float(uc), deg_left, deg_right, shared)
+        if solved:
+            return rss, value
+        # rank deficient: numpy's minimum-norm solution
+        a = kinked_design(u, float(uc), deg_left, deg_right, shared)
         coef, *_ = np.linalg.lstsq(a, x, rcond=None)
         r = a @ coef - x
         return float(r @ r), float(coef[0])
