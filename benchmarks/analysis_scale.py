@@ -141,8 +141,8 @@ def worker(phase: str, path: Path, limit_mb: float) -> dict:
 
 def run_worker(phase: str, path: Path, code: Path, limit_mb: float) -> dict:
     env = {**os.environ, "PYTHONPATH": str(code), "ESCFIT_QUIET_COMPILE": "1"}
-    res = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--worker", phase, str(path), "--memory-limit", str(limit_mb)],
-                         env=env, capture_output=True, text=True, cwd=code)
+    cmd = [sys.executable, str(Path(__file__).resolve()), "--worker", phase, str(path), "--memory-limit", str(limit_mb)]
+    res = subprocess.run(cmd, env=env, capture_output=True, text=True, cwd=code)
     if res.returncode != 0:
         return {"phase": phase, "error": f"exit {res.returncode}: {res.stderr.strip().splitlines()[-1:]}"}
     return json.loads(res.stdout.strip().splitlines()[-1])

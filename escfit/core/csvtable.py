@@ -14,7 +14,9 @@ from __future__ import annotations
 
 import csv
 import hashlib
+import io
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -22,7 +24,7 @@ from .errors import DataError
 from .tabletext import numbered_lines, split_fields
 from .textfile import decode_text
 
-__all__ = ["refuses_unreadable", "Table", "read_table"]
+__all__ = ["refuses_unreadable", "Table", "NumericTable", "read_table", "read_numbers"]
 
 
 def refuses_unreadable(reader):
@@ -118,3 +120,81 @@ def read_table(path: str | Path) -> Table:
     if not data:
         raise DataError("header only, no data rows", where)
     return Table(where, header, data, lines, meta, hashlib.sha256(raw).hexdigest())
+
+
+@dataclass
+class NumericTable:
+    """A table whose every data row is plain numbers: its header, its metadata and one float array.
+
+    ``values`` has one row per data row and one column per header name.
+    """
+
+    path: str
+    header: list[str]
+    values: "np.ndarray"
+    meta: dict[str, str] = field(default_factory=dict)
+    sha256: str = ""
+
+    def column(self, name: str) -> "np.ndarray":
+        return self.values[:, self.header.index(name)]
+
+
+# what a data row of plain numbers is made of: digits, signs, points, exponents, commas, spaces
+_PLAIN_NUMBERS = re.compile(r"[0-9eE+\-.,\s]*")
+
+
+def read_numbers(path: str | Path) -> NumericTable | None:
+    """The table of :func:`read_table` as numbers, read in one pass by numpy; ``None`` unless
+    every line after the header is comma-separated plain numbers (no comment, quote or text).
+
+    :func:`read_table` keeps every cell as a string with its line (some 30 times the file's
+    size in memory, a few seconds per million rows); a long record of plain numbers needs
+    neither.  ``None`` means: read it with :func:`read_table`, whose messages name the line and
+    the cell of any problem.  The numbers are parsed as :func:`float` parses them.
+    """
+    import numpy as np
+
+    p = Path(path)
+    where = str(path)
+    if not p.is_file():
+        return None
+    raw = p.read_bytes()
+    text = decode_text(raw, where, what="a CSV table")
+    meta: dict[str, str] = {}
+    pos = 0
+    header_line = None
+    while pos < len(text):  # the comments and metadata before the header
+        end = text.find("\n", pos)
+        end = len(text) if end < 0 else end
+        line = text[pos:end]
+        pos = end + 1
+        s = line.strip()
+        if not s:
+            continue
+        if s.startswith("#"):
+            key, sep, value = s[1:].partition(":")
+            if sep and key.strip() and " " not in key.strip():
+                meta[key.strip().lower()] = value.strip()
+            continue
+        header_line = line
+        break
+    if header_line is None or "\r" in header_line.rstrip("\r") or '"' in header_line:
+        return None
+    body = text[pos:]
+    del text
+    if "\r" in body:  # CRLF (and CR CR LF) lines; a lone CR is left to read_table
+        body = body.replace("\r\r\n", "\n").replace("\r\n", "\n")
+        if "\r" in body:
+            return None
+    if not body.strip() or _PLAIN_NUMBERS.fullmatch(body) is None:
+        return None
+    header = [h.strip() for h in header_line.split(",")]
+    if len(set(header)) != len(header):
+        return None
+    try:
+        values = np.loadtxt(io.StringIO(body), delimiter=",", ndmin=2, dtype=float, comments=None)
+    except ValueError:
+        return None
+    if values.shape[1] != len(header) or not values.shape[0]:
+        return None
+    return NumericTable(where, header, values, meta, hashlib.sha256(raw).hexdigest())

@@ -14,8 +14,8 @@ exist: a cubic, so that a decay whose per-swing loss changes along the record, a
 makes it, leaves no alternating bias), and the centre estimate is the mean of the two sides.
 The drift is the Theil-Sen slope of these estimates against time (:func:`theil_sen`: the
 median of the pairwise slopes, exact up to :data:`MAX_PAIRS` pairs, over that many pairs drawn
-at random with a fixed seed beyond), kept when its 95 % interval excludes zero and it moves the centre by more than a quarter of the rest band over the
-record; the centre is the median of the estimates carried back to the reference instant.
+at random with a fixed seed beyond), kept when its 95 % interval excludes zero and it moves
+the centre by more than a quarter of the rest band over the record; the centre is the median of the estimates carried back to the reference instant.
 Standard errors come from the scatter of the estimates about that line, with the sample
 counted at half its size because neighbouring estimates share turning points.
 """

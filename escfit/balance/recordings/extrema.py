@@ -174,31 +174,18 @@ def alternating_extrema(xs: np.ndarray, threshold: float, start: int = 0, stop: 
         Sample indices of the first and last sample of each extremum's plateau (equal for a
         single sample); its centre is the candidate turning point.
     """
+    from .compiled import extremum_scan
+
     stop = xs.size if stop is None else stop
     eps = 1e-12 * (float(np.max(np.abs(xs[start:stop]))) or 1.0)
-    hi = lo = float(xs[start])
-    hi_a = hi_b = lo_a = lo_b = start
-    out: list[tuple[int, int, bool]] = []
-    for i in range(start + 1, stop):
-        v = float(xs[i])
-        if seek >= 0:
-            if v > hi + eps:
-                hi, hi_a, hi_b = v, i, i
-            elif v >= hi - eps:
-                hi_b = i
-            elif v < hi - threshold:
-                out.append((hi_a, hi_b, True))
-                seek, lo, lo_a, lo_b = -1, v, i, i
-                continue
-        if seek <= 0:
-            if v < lo - eps:
-                lo, lo_a, lo_b = v, i, i
-            elif v <= lo + eps:
-                lo_b = i
-            elif v > lo + threshold:
-                out.append((lo_a, lo_b, False))
-                seek, hi, hi_a, hi_b = 1, v, i, i
-    return out
+    if stop - start < 2:
+        return []
+    xs = np.ascontiguousarray(xs, dtype=float)
+    first, last, is_max = extremum_scan(xs, float(threshold), int(start), int(stop), int(seek), eps)
+    return list(zip(first.tolist(), last.tolist(), is_max.tolist()))
+
+
+_VERTEX_GRID = np.linspace(-0.75, 0.75, 21)  # trial vertex times of kinked_vertex, scaled
 
 
 def kinked_vertex(u: np.ndarray, x: np.ndarray, degree: int = 4, *, flat: str = "",
@@ -232,7 +219,7 @@ def kinked_vertex(u: np.ndarray, x: np.ndarray, degree: int = 4, *, flat: str = 
     """
     from scipy.optimize import minimize_scalar
 
-    from .vertex_fit import kinked_design, kinked_lstsq
+    from .compiled import kinked_design, kinked_grid, kinked_lstsq
 
     n_left, n_right = int(np.sum(u < 0)), int(np.sum(u > 0))
     if min(n_left, n_right) < 2 or n_left + n_right < 6:
@@ -256,8 +243,11 @@ def kinked_vertex(u: np.ndarray, x: np.ndarray, degree: int = 4, *, flat: str = 
 
     # the residual is not unimodal in u_c when the sides differ much (a stop, a release, an
     # encoder's staircase): a grid first, then a bounded search around its best point
-    grid = np.linspace(-0.75, 0.75, 21)
-    best = int(np.argmin([solve(g)[0] for g in grid]))
+    grid = _VERTEX_GRID
+    costs = kinked_grid(u, x, grid, deg_left, deg_right, shared)
+    for g in np.flatnonzero(np.isnan(costs)):
+        costs[g] = solve(grid[g])[0]
+    best = int(np.argmin(costs))
     lo, hi = grid[max(best - 1, 0)], grid[min(best + 1, grid.size - 1)]
     res = minimize_scalar(lambda uc: solve(uc)[0], bounds=(lo, hi), method="bounded", options={"xatol": 1e-7})
     return float(res.x), solve(float(res.x))[1]

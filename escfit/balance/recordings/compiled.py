@@ -1,6 +1,10 @@
-"""The linear least squares of a kinked vertex fit, compiled.
+"""The loops of the record analysis that run per sample or per trial vertex, compiled.
 
-:func:`~escfit.balance.recordings.extrema.kinked_vertex` fits, for each trial vertex time, a
+**Extremum scan** (:func:`extremum_scan`): the hysteresis search of
+:func:`~escfit.balance.recordings.extrema.alternating_extrema`, one pass over the samples
+(a second per million samples in Python).
+
+**Kinked vertex**: :func:`~escfit.balance.recordings.extrema.kinked_vertex` fits, for each trial vertex time, a
 polynomial each side of the vertex without a linear term, and searches the time that leaves the
 smallest residual: some 30 small least-squares problems (a few dozen samples, at most 11
 columns) per turning point.  Through numpy each costs some 100 us of call overhead, which at
@@ -21,11 +25,46 @@ import numpy as np
 
 from ...core.kernels import kernel
 
-__all__ = ["kinked_design", "kinked_lstsq"]
+__all__ = ["extremum_scan", "kinked_design", "kinked_lstsq", "kinked_grid"]
 
 # a column whose part outside the earlier columns' span is below this share of its norm makes
 # the problem rank deficient for the purpose here (numpy's lstsq would drop a direction)
 _RANK_TOL = 1e-11
+
+
+@kernel
+def extremum_scan(xs: np.ndarray, threshold: float, start: int, stop: int, seek: int,
+                  eps: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """First and last sample of each extremum's plateau and whether it is a maximum, for
+    :func:`~escfit.balance.recordings.extrema.alternating_extrema` (which documents the rule)."""
+    first = np.empty(stop - start, np.int64)
+    last = np.empty(stop - start, np.int64)
+    is_max = np.empty(stop - start, np.bool_)
+    n = 0
+    hi = lo = xs[start]
+    hi_a = hi_b = lo_a = lo_b = start
+    for i in range(start + 1, stop):
+        v = xs[i]
+        if seek >= 0:
+            if v > hi + eps:
+                hi, hi_a, hi_b = v, i, i
+            elif v >= hi - eps:
+                hi_b = i
+            elif v < hi - threshold:
+                first[n], last[n], is_max[n] = hi_a, hi_b, True
+                n += 1
+                seek, lo, lo_a, lo_b = -1, v, i, i
+                continue
+        if seek <= 0:
+            if v < lo - eps:
+                lo, lo_a, lo_b = v, i, i
+            elif v <= lo + eps:
+                lo_b = i
+            elif v > lo + threshold:
+                first[n], last[n], is_max[n] = lo_a, lo_b, False
+                n += 1
+                seek, hi, hi_a, hi_b = 1, v, i, i
+    return first[:n], last[:n], is_max[:n]
 
 
 @kernel
@@ -120,3 +159,15 @@ def kinked_lstsq(u: np.ndarray, x: np.ndarray, uc: float, deg_left: int, deg_rig
             acc -= w[c, j] * coef[c]
         coef[j] = acc / w[j, j]
     return rss, coef[0], True
+
+
+@kernel
+def kinked_grid(u: np.ndarray, x: np.ndarray, grid: np.ndarray, deg_left: int, deg_right: int,
+                shared: bool) -> np.ndarray:
+    """Residual sum of squares of the fit with its vertex at each of ``grid`` (nan where the
+    design matrix is rank deficient)."""
+    out = np.empty(grid.size)
+    for g in range(grid.size):
+        rss, _, solved = kinked_lstsq(u, x, grid[g], deg_left, deg_right, shared)
+        out[g] = rss if solved else math.nan
+    return out
