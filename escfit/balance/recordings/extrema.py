@@ -15,9 +15,16 @@ __all__ = ["periodogram", "spectral_period", "extrema_period", "power_near", "sm
            "local_amplitude", "second_mode"]
 
 
+# the longest zero-padded transform of a periodogram (32 MB of input, as much of spectrum): a
+# record of more than 2^22 / 8 samples (half a million) is padded less, not at all beyond 2^22
+# samples; its frequency grid, 1 / (samples * dt), is then finer than any working period needs
+MAX_FFT = 1 << 22
+
+
 def periodogram(t: np.ndarray, x: np.ndarray, oversample: int) -> tuple[np.ndarray, np.ndarray]:
     """Frequencies (Hz) and power of ``x`` resampled on a uniform grid, its mean and linear trend
-    removed, under a Tukey window (10 % tapers), zero-padded ``oversample`` times."""
+    removed, under a Tukey window (10 % tapers), zero-padded ``oversample`` times (less beyond
+    :data:`MAX_FFT` points)."""
     from scipy.fft import next_fast_len, rfft, rfftfreq
     from scipy.signal.windows import tukey
 
@@ -26,8 +33,15 @@ def periodogram(t: np.ndarray, x: np.ndarray, oversample: int) -> tuple[np.ndarr
     xu = np.interp(t[0] + dt * np.arange(n), t, x)
     s = np.arange(n) - 0.5 * (n - 1)
     xu = xu - xu.mean() - s * (s @ xu) / (s @ s)
-    nfft = next_fast_len(oversample * n)
-    return rfftfreq(nfft, dt), np.abs(rfft(xu * tukey(n, 0.1), nfft)) ** 2
+    del s
+    nfft = next_fast_len(oversample * n if oversample * n <= MAX_FFT else max(n, MAX_FFT))
+    xu *= tukey(n, 0.1)
+    spectrum = rfft(xu, nfft)
+    del xu
+    power = np.abs(spectrum)
+    del spectrum
+    power **= 2
+    return rfftfreq(nfft, dt), power
 
 
 def spectral_period(t: np.ndarray, x: np.ndarray, *, min_cycles: float = 2.0) -> tuple[float, float]:
@@ -35,7 +49,8 @@ def spectral_period(t: np.ndarray, x: np.ndarray, *, min_cycles: float = 2.0) ->
 
     The series is resampled on a uniform grid, detrended (a drifting centre), tapered at
     its ends only (a Hann window would hide a decay that lasts a small part of the record) and
-    zero-padded eightfold; the peak is refined by a parabola through the log powers.
+    zero-padded eightfold (less beyond half a million samples: :data:`MAX_FFT`); the peak is
+    refined by a parabola through the log powers.
     Noise, quantisation and a resting tail spread their power over all frequencies, so the
     oscillation's peak stands out; only periods that fit ``min_cycles`` times in the record
     are considered.
@@ -51,10 +66,12 @@ def spectral_period(t: np.ndarray, x: np.ndarray, *, min_cycles: float = 2.0) ->
     n = t.size
     dt = (t[-1] - t[0]) / (n - 1)
     freq, power = periodogram(t, x, 8)
-    band = np.flatnonzero((freq >= min_cycles / (n * dt)) & (freq <= 0.45 / dt))
-    if band.size < 5:
+    # the band of frequencies searched: a run of the increasing grid (a view, not a copy)
+    first = int(np.searchsorted(freq, min_cycles / (n * dt), side="left"))
+    stop = int(np.searchsorted(freq, 0.45 / dt, side="right"))
+    if stop - first < 5:
         return math.nan, 0.0
-    p = power[band]
+    p = power[first:stop]
     interior = np.flatnonzero((p[1:-1] >= p[:-2]) & (p[1:-1] >= p[2:])) + 1
     if not interior.size:
         return math.nan, 0.0
@@ -62,7 +79,7 @@ def spectral_period(t: np.ndarray, x: np.ndarray, *, min_cycles: float = 2.0) ->
     y0, y1, y2 = np.log(p[k - 1:k + 2] + 1e-300)
     denom = y0 - 2 * y1 + y2
     shift = 0.5 * (y0 - y2) / denom if denom < 0 else 0.0
-    f = freq[band[k]] + shift * (freq[1] - freq[0])
+    f = freq[first + k] + shift * (freq[1] - freq[0])
     median = float(np.median(p))
     if median <= 0.0:
         return 1.0 / f, math.inf if p[k] > 0 else 0.0
