@@ -219,6 +219,13 @@ def table(current: list[dict], baseline: list[dict] | None) -> str:
     return "\n".join(lines)
 
 
+def _uptime() -> str:
+    try:
+        return subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
+    except OSError:
+        return "load average " + " ".join(f"{v:.2f}" for v in os.getloadavg())
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--rows", default="1e5,1e6", help="comma-separated record lengths (rows)")
@@ -230,6 +237,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--memory-limit", type=float, default=3000.0, help="address space limit per worker, MB (0: none)")
     p.add_argument("--folder", type=Path, default=None, help="where the records are written (default: a temp folder)")
     p.add_argument("--out", type=Path, default=None, help="write the figures as JSON here")
+    p.add_argument("--md", type=Path, default=None, help="write the command, the load and the table as Markdown here")
     p.add_argument("--worker", nargs=2, metavar=("PHASE", "FILE"), help=argparse.SUPPRESS)
     args = p.parse_args(argv)
     if args.worker:
@@ -246,12 +254,22 @@ def main(argv: list[str] | None = None) -> int:
         print(f"record of {n} rows: {paths[n]} ({paths[n].stat().st_size / 2**20:.0f} MB, "
               f"{time.perf_counter() - clock:.1f} s to make)", flush=True)
     load = os.getloadavg()
+    uptime_before = _uptime()
     print(f"load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f} on {os.cpu_count()} CPUs")
     current = measure(ROOT, paths, phases, args.memory_limit)
     baseline = measure(args.baseline.resolve(), paths, phases, args.memory_limit) if args.baseline else None
     text = table(current, baseline)
     print()
     print(text)
+    if args.md:
+        command = "python benchmarks/analysis_scale.py " + " ".join(sys.argv[1:] if argv is None else argv)
+        args.md.write_text("\n".join([
+            "# Analysis of a sampled decay against its length", "",
+            f"Command: `{command}`", "",
+            f"Machine: {os.cpu_count()} CPUs, shared; `uptime` before: {uptime_before}; after: {_uptime()}.", "",
+            f"Records: {args.rate:g} Hz, noise {args.noise:g} rad, period {PERIOD} s (5000 turning points per "
+            "10^6 rows).  Peak MB: the process's peak resident memory, imports included.", "",
+            text, ""]))
     if args.out:
         args.out.write_text(json.dumps({"rows": list(paths), "rate_hz": args.rate, "noise_rad": args.noise,
                                         "load_average": load, "load_average_after": os.getloadavg(),

@@ -80,3 +80,15 @@ def test_the_vertex_of_a_kinked_parabola_is_found():
     x = 0.25 - np.where(s < 0, 2.0, 3.0) * s**2
     uc, value = kinked_vertex(u, x, 4)
     assert uc == pytest.approx(0.1, abs=1e-6) and value == pytest.approx(0.25, abs=1e-9)
+
+
+@pytest.mark.parametrize("end", ["\r\r\n", "\r"])
+def test_a_byte_order_mark_and_other_line_ends_read_as_the_strict_reader_reads_them(tmp_path, end):
+    t = np.arange(40) * 0.01
+    text = end.join(["# release_s: 0.05", "time_s,theta_deg"] + [f"{a:.2f},{10 * np.cos(9 * a):.4f}" for a in t]) + end
+    path = tmp_path / "r.csv"
+    path.write_bytes(b"\xef\xbb\xbf" + text.encode())
+    series = read_timeseries(path)
+    tt, xx, meta = _strict(path)
+    assert np.array_equal(series.time, tt) and np.array_equal(series.theta, np.radians(1.0) * xx)
+    assert series.release_s == 0.05

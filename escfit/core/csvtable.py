@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import csv
 import hashlib
-import io
 import math
 import re
 from dataclasses import dataclass, field
@@ -22,7 +21,7 @@ from pathlib import Path
 
 from .errors import DataError
 from .tabletext import numbered_lines, split_fields
-from .textfile import decode_text
+from .textfile import BOM, decode_text
 
 __all__ = ["refuses_unreadable", "Table", "NumericTable", "read_table", "read_numbers"]
 
@@ -140,7 +139,8 @@ class NumericTable:
 
 
 # what a data row of plain numbers is made of: digits, signs, points, exponents, commas, spaces
-_PLAIN_NUMBERS = re.compile(r"[0-9eE+\-.,\s]*")
+_PLAIN_NUMBERS = re.compile(rb"[0-9eE+\-.,\s]*")
+_DIGIT = re.compile(rb"[0-9]")
 
 
 def read_numbers(path: str | Path) -> NumericTable | None:
@@ -149,8 +149,10 @@ def read_numbers(path: str | Path) -> NumericTable | None:
 
     :func:`read_table` keeps every cell as a string with its line (some 30 times the file's
     size in memory, a few seconds per million rows); a long record of plain numbers needs
-    neither.  ``None`` means: read it with :func:`read_table`, whose messages name the line and
-    the cell of any problem.  The numbers are parsed as :func:`float` parses them.
+    neither: its lines are checked as bytes and parsed by :func:`numpy.loadtxt` from the file
+    (the file's size once in memory, for its checksum, then the array).  ``None`` means: read it
+    with :func:`read_table`, whose messages name the line and the cell of any problem.  The
+    numbers are parsed as :func:`float` parses them.
     """
     import numpy as np
 
@@ -159,15 +161,25 @@ def read_numbers(path: str | Path) -> NumericTable | None:
     if not p.is_file():
         return None
     raw = p.read_bytes()
-    text = decode_text(raw, where, what="a CSV table")
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+        return None
+    pos = len(BOM) if raw.startswith(BOM) else 0
     meta: dict[str, str] = {}
-    pos = 0
     header_line = None
-    while pos < len(text):  # the comments and metadata before the header
-        end = text.find("\n", pos)
-        end = len(text) if end < 0 else end
-        line = text[pos:end]
+    head_lines = 0
+    while pos < len(raw):  # the comments and metadata before the header, and the header
+        end = raw.find(b"\n", pos)
+        if end < 0:
+            return None  # no data row
+        chunk = raw[pos:end]
         pos = end + 1
+        head_lines += 1
+        if b"\r" in (chunk[:-1] if chunk.endswith(b"\r") else chunk):  # other line ends: left to read_table
+            return None
+        try:
+            line = chunk.decode("utf-8")
+        except UnicodeDecodeError:
+            return None
         s = line.strip()
         if not s:
             continue
@@ -178,23 +190,24 @@ def read_numbers(path: str | Path) -> NumericTable | None:
             continue
         header_line = line
         break
-    if header_line is None or "\r" in header_line.rstrip("\r") or '"' in header_line:
+    if header_line is None or '"' in header_line:
         return None
-    body = text[pos:]
-    del text
-    if "\r" in body:  # CRLF (and CR CR LF) lines; a lone CR is left to read_table
-        body = body.replace("\r\r\n", "\n").replace("\r\n", "\n")
-        if "\r" in body:
-            return None
-    if not body.strip() or _PLAIN_NUMBERS.fullmatch(body) is None:
+    body = memoryview(raw)[pos:]
+    if _PLAIN_NUMBERS.fullmatch(body) is None or _DIGIT.search(body) is None:
         return None
+    del body
+    sha256 = hashlib.sha256(raw).hexdigest()
+    del raw
     header = [h.strip() for h in header_line.split(",")]
     if len(set(header)) != len(header):
         return None
     try:
-        values = np.loadtxt(io.StringIO(body), delimiter=",", ndmin=2, dtype=float, comments=None)
+        with open(p, encoding="utf-8-sig", newline=None) as f:  # CRLF and CR CR LF end lines as in read_table
+            for _ in range(head_lines):
+                f.readline()
+            values = np.loadtxt(f, delimiter=",", ndmin=2, dtype=float, comments=None)
     except ValueError:
         return None
     if values.shape[1] != len(header) or not values.shape[0]:
         return None
-    return NumericTable(where, header, values, meta, hashlib.sha256(raw).hexdigest())
+    return NumericTable(where, header, values, meta, sha256)
