@@ -223,6 +223,8 @@ def _local_half(times: np.ndarray, i: int, end: int, fallback: float) -> float:
     d = sorted(np.diff(times[i:min(end, i + 7)]).tolist())  # at most six: no numpy call per interval
     if not d:
         return fallback
+    if any(v != v for v in d):  # an unrefined turning point (nan): as numpy's median says
+        return math.nan
     mid = len(d) // 2
     return float(d[mid]) if len(d) % 2 else 0.5 * (d[mid - 1] + d[mid])
 
