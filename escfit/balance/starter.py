@@ -102,7 +102,7 @@ class Survey:
 
 # -- reading -------------------------------------------------------------------------------------
 def read_with_help(path: str | Path, recording: dict | None = None, *, fmt: str | None = None,
-                   notch_deg: float | None = None) -> tuple[object, dict, dict]:
+                   notch_deg: float | None = None, reduced: dict | None = None) -> tuple[object, dict, dict]:
     """Read ``path`` as a fit does; where the reader cannot decide, try what its message names.
 
     Parameters
@@ -113,6 +113,10 @@ def read_with_help(path: str | Path, recording: dict | None = None, *, fmt: str 
         ``[recording]`` options given by the user (scene-table keys), kept as given.
     fmt, notch_deg
         As :func:`escfit.balance.family.read_data`.
+    reduced
+        A dict that receives ``{"series": data, "turns": TurningPoints}`` when the record's
+        turning points were found on the way (a sampled angle): the caller need not find them
+        again.
 
     Returns
     -------
@@ -140,7 +144,7 @@ def read_with_help(path: str | Path, recording: dict | None = None, *, fmt: str 
             why[key] = reason
             continue
         if isinstance(data, TimeSeries):
-            data = _amplitude_rows(path, data, table, why, fmt)
+            data = _amplitude_rows(path, data, table, why, fmt, reduced)
             if data.meta.get("angle_unit_assumed") and "angle_unit" not in table:
                 table["angle_unit"] = data.meta["angle_unit_assumed"]
                 why["angle_unit"] = (f"the file names no unit for the angle: {data.meta['angle_unit_assumed']} "
@@ -268,14 +272,16 @@ def _looks_like_amplitudes(values: np.ndarray) -> bool:
     return bool(np.mean(np.diff(np.abs(v)) < 0) >= 0.7)
 
 
-def _amplitude_rows(path, series: TimeSeries, table: dict, why: dict, fmt) -> TimeSeries:
+def _amplitude_rows(path, series: TimeSeries, table: dict, why: dict, fmt, reduced: dict | None = None) -> TimeSeries:
     """Switch to ``readings = "amplitudes"`` when the samples are amplitudes, one per half swing."""
     from .recordings.turning_points import reduce_series
 
     if "readings" in table:
         return series
     try:
-        reduce_series(series, strict=False, user_window=series.window)
+        tp = reduce_series(series, strict=False, user_window=series.window)
+        if reduced is not None:
+            reduced.update(series=series, turns=tp)
         return series
     except DataError:
         if not _looks_like_amplitudes(series.theta):
@@ -297,13 +303,14 @@ def survey(path: str | Path, *, restoring: str = "spring", recording: dict | Non
         An unreadable record (the reader's message), a record with no swing in it, or a kind
         of recording a starter scene is not written for (pulse trains).
     """
-    data, table, why = read_with_help(path, recording, fmt=fmt, notch_deg=notch_deg)
+    reduced: dict = {}
+    data, table, why = read_with_help(path, recording, fmt=fmt, notch_deg=notch_deg, reduced=reduced)
     s = Survey(kind="", path=str(path), recording=table, why=why, data=data)
     if isinstance(data, TimeSeries):
         if table.get("readings") == "amplitudes":
             _survey_amplitude_rows(s, data)
         else:
-            _survey_samples(s, data, restoring)
+            _survey_samples(s, data, restoring, reduced.get("turns") if reduced.get("series") is data else None)
     elif isinstance(data, UnitCurve):
         _survey_unit_curve(s, data)
     elif isinstance(data, TimegrapherRecording):
@@ -315,7 +322,8 @@ def survey(path: str | Path, *, restoring: str = "spring", recording: dict | Non
     return s
 
 
-def _survey_samples(s: Survey, series: TimeSeries, restoring: str) -> None:
+def _survey_samples(s: Survey, series: TimeSeries, restoring: str, turns=None) -> None:
+    """The survey of a sampled record; ``turns``: its turning points when already found."""
     from .problems.period import implied_omega0, measured_period
     from .recordings.turning_points import reduce_series
 
@@ -327,7 +335,7 @@ def _survey_samples(s: Survey, series: TimeSeries, restoring: str) -> None:
         s.counts_extra = {"rate zero": rate.offset, "rate zero se": rate.offset_stderr}
         notes = rate.notes
     else:
-        tp = reduce_series(series, strict=False, user_window=series.window)
+        tp = turns if turns is not None else reduce_series(series, strict=False, user_window=series.window)
         notes = [f"warning: {w}" for w in tp.warnings] + list(tp.notes)
     s.quantity = series.quantity
     s.checks = [n for n in str(series.meta.get("analysis", "")).split("; ") if n]  # column and unit judged

@@ -15,14 +15,15 @@ from __future__ import annotations
 import csv
 import hashlib
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from .errors import DataError
 from .tabletext import numbered_lines, split_fields
-from .textfile import decode_text
+from .textfile import BOM, decode_text
 
-__all__ = ["refuses_unreadable", "Table", "read_table"]
+__all__ = ["refuses_unreadable", "Table", "NumericTable", "read_table", "read_numbers"]
 
 
 def refuses_unreadable(reader):
@@ -118,3 +119,95 @@ def read_table(path: str | Path) -> Table:
     if not data:
         raise DataError("header only, no data rows", where)
     return Table(where, header, data, lines, meta, hashlib.sha256(raw).hexdigest())
+
+
+@dataclass
+class NumericTable:
+    """A table whose every data row is plain numbers: its header, its metadata and one float array.
+
+    ``values`` has one row per data row and one column per header name.
+    """
+
+    path: str
+    header: list[str]
+    values: "np.ndarray"
+    meta: dict[str, str] = field(default_factory=dict)
+    sha256: str = ""
+
+    def column(self, name: str) -> "np.ndarray":
+        return self.values[:, self.header.index(name)]
+
+
+# what a data row of plain numbers is made of: digits, signs, points, exponents, commas, spaces
+_PLAIN_NUMBERS = re.compile(rb"[0-9eE+\-.,\s]*")
+_DIGIT = re.compile(rb"[0-9]")
+
+
+def read_numbers(path: str | Path) -> NumericTable | None:
+    """The table of :func:`read_table` as numbers, read in one pass by numpy; ``None`` unless
+    every line after the header is comma-separated plain numbers (no comment, quote or text).
+
+    :func:`read_table` keeps every cell as a string with its line (some 30 times the file's
+    size in memory, a few seconds per million rows); a long record of plain numbers needs
+    neither: its lines are checked as bytes and parsed by :func:`numpy.loadtxt` from the file
+    (the file's size once in memory, for its checksum, then the array).  ``None`` means: read it
+    with :func:`read_table`, whose messages name the line and the cell of any problem.  The
+    numbers are parsed as :func:`float` parses them.
+    """
+    import numpy as np
+
+    p = Path(path)
+    where = str(path)
+    if not p.is_file():
+        return None
+    raw = p.read_bytes()
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+        return None
+    pos = len(BOM) if raw.startswith(BOM) else 0
+    meta: dict[str, str] = {}
+    header_line = None
+    head_lines = 0
+    while pos < len(raw):  # the comments and metadata before the header, and the header
+        end = raw.find(b"\n", pos)
+        if end < 0:
+            return None  # no data row
+        chunk = raw[pos:end]
+        pos = end + 1
+        head_lines += 1
+        if b"\r" in (chunk[:-1] if chunk.endswith(b"\r") else chunk):  # other line ends: left to read_table
+            return None
+        try:
+            line = chunk.decode("utf-8")
+        except UnicodeDecodeError:
+            return None
+        s = line.strip()
+        if not s:
+            continue
+        if s.startswith("#"):
+            key, sep, value = s[1:].partition(":")
+            if sep and key.strip() and " " not in key.strip():
+                meta[key.strip().lower()] = value.strip()
+            continue
+        header_line = line
+        break
+    if header_line is None or '"' in header_line:
+        return None
+    body = memoryview(raw)[pos:]
+    if _PLAIN_NUMBERS.fullmatch(body) is None or _DIGIT.search(body) is None:
+        return None
+    del body
+    sha256 = hashlib.sha256(raw).hexdigest()
+    del raw
+    header = [h.strip() for h in header_line.split(",")]
+    if len(set(header)) != len(header):
+        return None
+    try:
+        with open(p, encoding="utf-8-sig", newline=None) as f:  # CRLF and CR CR LF end lines as in read_table
+            for _ in range(head_lines):
+                f.readline()
+            values = np.loadtxt(f, delimiter=",", ndmin=2, dtype=float, comments=None)
+    except ValueError:
+        return None
+    if values.shape[1] != len(header) or not values.shape[0]:
+        return None
+    return NumericTable(where, header, values, meta, sha256)

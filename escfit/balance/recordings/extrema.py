@@ -15,9 +15,16 @@ __all__ = ["periodogram", "spectral_period", "extrema_period", "power_near", "sm
            "local_amplitude", "second_mode"]
 
 
+# the longest zero-padded transform of a periodogram (32 MB of input, as much of spectrum): a
+# record of more than 2^22 / 8 samples (half a million) is padded less, not at all beyond 2^22
+# samples; its frequency grid, 1 / (samples * dt), is then finer than any working period needs
+MAX_FFT = 1 << 22
+
+
 def periodogram(t: np.ndarray, x: np.ndarray, oversample: int) -> tuple[np.ndarray, np.ndarray]:
     """Frequencies (Hz) and power of ``x`` resampled on a uniform grid, its mean and linear trend
-    removed, under a Tukey window (10 % tapers), zero-padded ``oversample`` times."""
+    removed, under a Tukey window (10 % tapers), zero-padded ``oversample`` times (less beyond
+    :data:`MAX_FFT` points)."""
     from scipy.fft import next_fast_len, rfft, rfftfreq
     from scipy.signal.windows import tukey
 
@@ -26,8 +33,15 @@ def periodogram(t: np.ndarray, x: np.ndarray, oversample: int) -> tuple[np.ndarr
     xu = np.interp(t[0] + dt * np.arange(n), t, x)
     s = np.arange(n) - 0.5 * (n - 1)
     xu = xu - xu.mean() - s * (s @ xu) / (s @ s)
-    nfft = next_fast_len(oversample * n)
-    return rfftfreq(nfft, dt), np.abs(rfft(xu * tukey(n, 0.1), nfft)) ** 2
+    del s
+    nfft = next_fast_len(oversample * n if oversample * n <= MAX_FFT else max(n, MAX_FFT))
+    xu *= tukey(n, 0.1)
+    spectrum = rfft(xu, nfft)
+    del xu
+    power = np.abs(spectrum)
+    del spectrum
+    power **= 2
+    return rfftfreq(nfft, dt), power
 
 
 def spectral_period(t: np.ndarray, x: np.ndarray, *, min_cycles: float = 2.0) -> tuple[float, float]:
@@ -35,7 +49,8 @@ def spectral_period(t: np.ndarray, x: np.ndarray, *, min_cycles: float = 2.0) ->
 
     The series is resampled on a uniform grid, detrended (a drifting centre), tapered at
     its ends only (a Hann window would hide a decay that lasts a small part of the record) and
-    zero-padded eightfold; the peak is refined by a parabola through the log powers.
+    zero-padded eightfold (less beyond half a million samples: :data:`MAX_FFT`); the peak is
+    refined by a parabola through the log powers.
     Noise, quantisation and a resting tail spread their power over all frequencies, so the
     oscillation's peak stands out; only periods that fit ``min_cycles`` times in the record
     are considered.
@@ -51,10 +66,12 @@ def spectral_period(t: np.ndarray, x: np.ndarray, *, min_cycles: float = 2.0) ->
     n = t.size
     dt = (t[-1] - t[0]) / (n - 1)
     freq, power = periodogram(t, x, 8)
-    band = np.flatnonzero((freq >= min_cycles / (n * dt)) & (freq <= 0.45 / dt))
-    if band.size < 5:
+    # the band of frequencies searched: a run of the increasing grid (a view, not a copy)
+    first = int(np.searchsorted(freq, min_cycles / (n * dt), side="left"))
+    stop = int(np.searchsorted(freq, 0.45 / dt, side="right"))
+    if stop - first < 5:
         return math.nan, 0.0
-    p = power[band]
+    p = power[first:stop]
     interior = np.flatnonzero((p[1:-1] >= p[:-2]) & (p[1:-1] >= p[2:])) + 1
     if not interior.size:
         return math.nan, 0.0
@@ -62,7 +79,7 @@ def spectral_period(t: np.ndarray, x: np.ndarray, *, min_cycles: float = 2.0) ->
     y0, y1, y2 = np.log(p[k - 1:k + 2] + 1e-300)
     denom = y0 - 2 * y1 + y2
     shift = 0.5 * (y0 - y2) / denom if denom < 0 else 0.0
-    f = freq[band[k]] + shift * (freq[1] - freq[0])
+    f = freq[first + k] + shift * (freq[1] - freq[0])
     median = float(np.median(p))
     if median <= 0.0:
         return 1.0 / f, math.inf if p[k] > 0 else 0.0
@@ -174,31 +191,18 @@ def alternating_extrema(xs: np.ndarray, threshold: float, start: int = 0, stop: 
         Sample indices of the first and last sample of each extremum's plateau (equal for a
         single sample); its centre is the candidate turning point.
     """
+    from .compiled import extremum_scan
+
     stop = xs.size if stop is None else stop
     eps = 1e-12 * (float(np.max(np.abs(xs[start:stop]))) or 1.0)
-    hi = lo = float(xs[start])
-    hi_a = hi_b = lo_a = lo_b = start
-    out: list[tuple[int, int, bool]] = []
-    for i in range(start + 1, stop):
-        v = float(xs[i])
-        if seek >= 0:
-            if v > hi + eps:
-                hi, hi_a, hi_b = v, i, i
-            elif v >= hi - eps:
-                hi_b = i
-            elif v < hi - threshold:
-                out.append((hi_a, hi_b, True))
-                seek, lo, lo_a, lo_b = -1, v, i, i
-                continue
-        if seek <= 0:
-            if v < lo - eps:
-                lo, lo_a, lo_b = v, i, i
-            elif v <= lo + eps:
-                lo_b = i
-            elif v > lo + threshold:
-                out.append((lo_a, lo_b, False))
-                seek, hi, hi_a, hi_b = 1, v, i, i
-    return out
+    if stop - start < 2:
+        return []
+    xs = np.ascontiguousarray(xs, dtype=float)
+    first, last, is_max = extremum_scan(xs, float(threshold), int(start), int(stop), int(seek), eps)
+    return list(zip(first.tolist(), last.tolist(), is_max.tolist()))
+
+
+_VERTEX_GRID = np.linspace(-0.75, 0.75, 21)  # trial vertex times of kinked_vertex, scaled
 
 
 def kinked_vertex(u: np.ndarray, x: np.ndarray, degree: int = 4, *, flat: str = "",
@@ -232,6 +236,8 @@ def kinked_vertex(u: np.ndarray, x: np.ndarray, degree: int = 4, *, flat: str = 
     """
     from scipy.optimize import minimize_scalar
 
+    from .compiled import kinked_design, kinked_grid, kinked_lstsq
+
     n_left, n_right = int(np.sum(u < 0)), int(np.sum(u > 0))
     if min(n_left, n_right) < 2 or n_left + n_right < 6:
         return None
@@ -239,28 +245,26 @@ def kinked_vertex(u: np.ndarray, x: np.ndarray, degree: int = 4, *, flat: str = 
     deg_right = 0 if flat == "right" else min(degree, max(2, n_right - 2))
     shared = shared and not flat and deg_left == deg_right
 
+    u = np.ascontiguousarray(u, dtype=float)
+    x = np.ascontiguousarray(x, dtype=float)
+
     def solve(uc: float) -> tuple[float, float]:
-        s = u - uc
-        left = s < 0
-        cols = [np.ones_like(s)]
-        for p in range(2, max(deg_left, deg_right) + 1):
-            sp = s**p
-            if shared and p > 2:
-                cols.append(sp)
-                continue
-            if p <= deg_left:
-                cols.append(np.where(left, sp, 0.0))
-            if p <= deg_right:
-                cols.append(np.where(left, 0.0, sp))
-        a = np.stack(cols, axis=1)
+        rss, value, solved = kinked_lstsq(u, x, float(uc), deg_left, deg_right, shared)
+        if solved:
+            return rss, value
+        # rank deficient: numpy's minimum-norm solution
+        a = kinked_design(u, float(uc), deg_left, deg_right, shared)
         coef, *_ = np.linalg.lstsq(a, x, rcond=None)
         r = a @ coef - x
         return float(r @ r), float(coef[0])
 
     # the residual is not unimodal in u_c when the sides differ much (a stop, a release, an
     # encoder's staircase): a grid first, then a bounded search around its best point
-    grid = np.linspace(-0.75, 0.75, 21)
-    best = int(np.argmin([solve(g)[0] for g in grid]))
+    grid = _VERTEX_GRID
+    costs = kinked_grid(u, x, grid, deg_left, deg_right, shared)
+    for g in np.flatnonzero(np.isnan(costs)):
+        costs[g] = solve(grid[g])[0]
+    best = int(np.argmin(costs))
     lo, hi = grid[max(best - 1, 0)], grid[min(best + 1, grid.size - 1)]
     res = minimize_scalar(lambda uc: solve(uc)[0], bounds=(lo, hi), method="bounded", options={"xatol": 1e-7})
     return float(res.x), solve(float(res.x))[1]

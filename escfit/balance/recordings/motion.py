@@ -103,18 +103,25 @@ def faded_end(rec, times: np.ndarray, values: np.ndarray) -> int:
         return times.size
     d = np.diff(times)
     # the intervals before each one set its scale: the noise's own extrema come close together
-    local = np.array([np.median(d[max(0, i - 6):i]) if i >= 3 else np.median(d[:7]) for i in range(d.size)])
+    local = np.empty(d.size)
+    local[:3] = np.median(d[:7])
+    for i in range(3, min(6, d.size)):
+        local[i] = np.median(d[:i])
+    if d.size > 6:
+        local[6:] = np.median(np.lib.stride_tricks.sliding_window_view(d[:-1], 6), axis=1)
     ratio = d / local
     bad = np.flatnonzero((ratio < INTERVAL_RANGE[0]) | (ratio > INTERVAL_RANGE[1]))
     if not bad.size:
         return times.size
     amp = _amplitudes(values)
     big = float(np.max(amp))
+    before = np.maximum.accumulate(amp)  # largest up to and with each
+    after = np.append(np.maximum.accumulate(amp[::-1])[::-1][1:], 0.0)  # largest after each
     for i in bad:
         # faded: small against what came before and nothing large after (a hand's jitter while the
         # oscillator is held before its release is small too, but the swing follows it)
-        if amp[i] <= max(0.1 * big, 3.0 * rec.band) and amp[i] < 0.5 * np.max(amp[:i + 1]) \
-                and np.max(amp[i + 1:], initial=0.0) < 0.5 * np.max(amp[:i + 1]):
+        if amp[i] <= max(0.1 * big, 3.0 * rec.band) and amp[i] < 0.5 * before[i] \
+                and max(after[i], 0.0) < 0.5 * before[i]:
             rec.notes.append(f"turning points from t = {times[i + 1]:.4g} s on left out: the swing had faded to "
                              f"{rec.show(amp[i], 2)} and their spacing is irregular (noise, not motion)")
             return int(i) + 1
@@ -216,8 +223,13 @@ def _spans_gap(rec, t0: float, t1: float) -> bool:
 
 def _local_half(times: np.ndarray, i: int, end: int, fallback: float) -> float:
     """Median interval of the turning points from ``i`` on (up to six), or ``fallback``."""
-    d = np.diff(times[i:min(end, i + 7)])
-    return float(np.median(d)) if d.size else fallback
+    d = sorted(np.diff(times[i:min(end, i + 7)]).tolist())  # at most six: no numpy call per interval
+    if not d:
+        return fallback
+    if any(v != v for v in d):  # an unrefined turning point (nan): as numpy's median says
+        return math.nan
+    mid = len(d) // 2
+    return float(d[mid]) if len(d) % 2 else 0.5 * (d[mid - 1] + d[mid])
 
 
 def _losses(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -225,8 +237,10 @@ def _losses(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     amp = _amplitudes(values)
     n = (amp.size - 1) // SUSTAIN_BLOCK
     starts = np.arange(n) * SUSTAIN_BLOCK
-    level = np.array([np.mean(amp[s:s + SUSTAIN_BLOCK + 1]) for s in starts])
-    loss = np.array([(amp[s] - amp[s + SUSTAIN_BLOCK]) / SUSTAIN_BLOCK for s in starts])
+    if not n:
+        return np.zeros(0), np.zeros(0)
+    level = np.mean(np.lib.stride_tricks.sliding_window_view(amp, SUSTAIN_BLOCK + 1)[starts], axis=1)
+    loss = (amp[starts] - amp[starts + SUSTAIN_BLOCK]) / SUSTAIN_BLOCK
     return level, loss
 
 
@@ -286,7 +300,34 @@ def envelope(rec) -> tuple[np.ndarray, np.ndarray]:
     starts = np.arange(t[0], t[-1] - width + 1e-9 * width, 0.25 * rec.period)
     lo = np.searchsorted(t, starts)
     hi = np.searchsorted(t, starts + width)
-    return starts, np.array([0.5 * float(np.ptp(xs[a:b])) if b > a else 0.0 for a, b in zip(lo, hi)])
+    return starts, 0.5 * _window_range(xs, lo, hi)
+
+
+def _window_range(x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """``max - min`` of ``x[lo[k]:hi[k]]`` for each window (0 for an empty one), in linear time.
+
+    The windows' ends cut ``x`` into segments; each window is a run of whole segments, so its
+    range comes from the segments' maxima and minima (one ``reduceat`` each) over the few
+    segments it spans, instead of one pass over its samples per window.
+    """
+    out = np.zeros(lo.size)
+    full = hi > lo
+    if not full.any():
+        return out
+    lo, hi = lo[full], hi[full]
+    cuts = np.unique(np.concatenate([lo, hi]))
+    cuts = cuts[cuts < x.size]
+    top, bottom = np.maximum.reduceat(x, cuts), np.minimum.reduceat(x, cuts)
+    first = np.searchsorted(cuts, lo)
+    spans = np.searchsorted(cuts, hi) - first  # segments in each window (hi = x.size: up to the end)
+    spans = np.where(hi >= x.size, cuts.size - first, spans)
+    high, low = top[first], bottom[first]
+    for j in range(1, int(spans.max())):
+        more = spans > j
+        high[more] = np.maximum(high[more], top[first[more] + j])
+        low[more] = np.minimum(low[more], bottom[first[more] + j])
+    out[full] = high - low
+    return out
 
 
 def rises(rec) -> list[float]:

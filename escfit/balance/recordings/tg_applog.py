@@ -108,12 +108,27 @@ def _find_header(lines: list[str], limit: int | None = None) -> tuple[int, str, 
     return None
 
 
+def _head_lines(path: str | Path, count: int) -> list[str]:
+    """The first ``count`` lines of a text file (as ``splitlines`` of the whole text gives them),
+    read in growing pieces from 64 kB: a long record is not read whole to look at its start."""
+    data = b""
+    size = 1 << 16
+    with open(path, "rb") as f:
+        while True:
+            chunk = f.read(size)
+            size *= 2  # a file of few, long lines: linear time all the same
+            data += chunk
+            lines = data.decode("utf-8", errors="replace").replace("\r\n", "\n").replace("\r", "\n").splitlines()
+            if not chunk or len(lines) > count:
+                return lines[:count]
+
+
 def sniff_tg_applog(path: str | Path) -> bool:
     """Whether a file looks like an app log: such a header within its first 200 lines (escfit's
     own per-beat CSV header does not count)."""
     if file_kind(path) != "text":
         return False
-    found = _find_header(Path(path).read_text(encoding="utf-8", errors="replace").splitlines(), 200)
+    found = _find_header(_head_lines(path, 200), 200)
     return found is not None and not {f.strip().lower() for f in found[2]} <= set(CSV_COLUMNS)
 
 

@@ -26,7 +26,7 @@ import numpy as np
 
 from ...core.errors import DataError
 from ...core.units import ureg
-from ...core.csvtable import read_table
+from ...core.csvtable import read_numbers, read_table
 from .rawsteps import notes_of, repaired_times, warnings_of
 from .series import TimeSeries
 from .sniff import canonical_header, did_you_mean, refuse_unless_csv
@@ -47,7 +47,8 @@ def read_timeseries(path: str | Path) -> TimeSeries:
         units, text or non-finite numbers, times the time-base stage cannot repair.
     """
     refuse_unless_csv(path, "a time series")
-    t = canonical_header(read_table(path))
+    numbers = read_numbers(path)  # a long record of plain numbers: one numpy pass
+    t = canonical_header(numbers if numbers is not None else read_table(path))
     where = t.path
     angle = [c for c in t.header if c.startswith("theta_")]
     if "time_s" not in t.header or len(angle) != 1:
@@ -65,6 +66,12 @@ def read_timeseries(path: str | Path) -> TimeSeries:
     if not q.dimensionless:
         raise DataError(f"column {angle[0]!r}: {unit!r} is not an angle unit", where)
     factor = float(q.to("rad").magnitude)
+    if numbers is not None:
+        time, theta = t.column("time_s"), t.column(angle[0])
+        if time.size >= 20 and np.all(np.isfinite(theta)) and np.all(np.diff(time) > 0) \
+                and np.isfinite(time[0]) and np.isfinite(time[-1]):
+            return TimeSeries(time.copy(), theta * factor, _release(t, where), where, t.sha256, dict(t.meta))
+        t = canonical_header(read_table(path))  # its messages name the line and the cell
     time = np.array(t.floats("time_s"))
     theta = np.array(t.floats(angle[0])) * factor
     meta = dict(t.meta)
@@ -73,6 +80,14 @@ def read_timeseries(path: str | Path) -> TimeSeries:
     for key, sentences in (("notes", notes), ("warnings", warnings)):
         if sentences:
             meta[key] = "; ".join(n.replace(";", ",") for n in sentences)
+    release = _release(t, where)
+    if time.size < 20:
+        raise DataError(f"only {time.size} samples; a decay needs many samples per period", where)
+    return TimeSeries(time, theta, release, where, t.sha256, meta)
+
+
+def _release(t, where: str) -> float:
+    """The ``# release_s:`` metadata (s), ``nan`` when absent."""
     release = math.nan
     if "release_s" in t.meta:
         try:
@@ -82,9 +97,7 @@ def read_timeseries(path: str | Path) -> TimeSeries:
                             f"{where} [release_s]") from None
         if not math.isfinite(release):
             raise DataError(f"release_s must be a finite time, got {t.meta['release_s']!r}", f"{where} [release_s]")
-    if time.size < 20:
-        raise DataError(f"only {time.size} samples; a decay needs many samples per period", where)
-    return TimeSeries(time, theta, release, where, t.sha256, meta)
+    return release
 
 
 def write_timeseries(path: str | Path, series: TimeSeries, *, unit: str = "rad", decimals: int = 6,

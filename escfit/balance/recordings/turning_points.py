@@ -490,7 +490,12 @@ def _final_turn(rec: SampledRecord, i_rest: int, rest: float, t_ref: float, thet
 def _local_ratios(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Each interval over the median of its neighbours (three each side), and that median."""
     half = 3
-    local = np.array([np.median(d[max(0, i - half):i + half + 1]) for i in range(d.size)])
+    local = np.empty(d.size)
+    edge = list(range(min(half, d.size))) + list(range(max(half, d.size - half), d.size))
+    for i in edge:
+        local[i] = np.median(d[max(0, i - half):i + half + 1])
+    if d.size > 2 * half:
+        local[half:d.size - half] = np.median(np.lib.stride_tricks.sliding_window_view(d, 2 * half + 1), axis=1)
     return d / local, local
 
 
