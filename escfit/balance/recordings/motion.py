@@ -406,17 +406,28 @@ def _last_push(rec, times: np.ndarray, values: np.ndarray, first_ok: int, end: i
 def _jump_instant(rec, t0: float, t1: float, size: float) -> float:
     """Time (s) of the first sample after a jump of ``size`` between ``t0`` and ``t1``.
 
-    The jump is the sample-to-sample change that departs most, in the jump's sign, from the
-    median of the changes around it (the motion's own changes vary slowly from sample to sample).
+    Each sample between them is tried as the first one moved: the samples from a quarter period
+    before ``t0`` to a quarter after ``t1``, less ``size`` from that sample on, are fitted with
+    an arc of the record's period whose amplitude may change linearly (``c + (a + a' t) cos(w t)
+    + (b + b' t) sin(w t)``); the jump is where that fit is best.  (The change between two
+    samples cannot tell a jump from the motion when a period spans few samples.)
     """
-    lo, hi = np.searchsorted(rec.t, [t0, t1])
-    lo, hi = max(lo - 3, 0), min(hi + 3, rec.t.size - 1)
-    d = np.diff(rec.x[lo:hi + 1])
-    if d.size < 3:
-        return float(rec.t[min(hi, rec.t.size - 1)])
-    near = np.array([np.median(np.r_[d[max(0, i - 3):i], d[i + 1:i + 4]]) for i in range(d.size)])
-    i = int(np.argmax(np.sign(size) * (d - near)))
-    return float(rec.t[lo + i + 1])
+    t, x = rec.t, rec.x
+    lo, hi = np.searchsorted(t, [t0 - 0.25 * rec.period, t1 + 0.25 * rec.period])
+    tt = t[lo:hi] - 0.5 * (t0 + t1)
+    if tt.size < 8:
+        return float(t1)
+    w = 2.0 * math.pi / rec.period
+    design = np.stack([np.ones_like(tt), np.cos(w * tt), np.sin(w * tt), tt * np.cos(w * tt), tt * np.sin(w * tt)],
+                      axis=1)
+    best, at = math.inf, float(t1)
+    for j in range(int(np.searchsorted(t, t0)), int(np.searchsorted(t, t1, side="right"))):
+        y = x[lo:hi] - size * (t[lo:hi] >= t[j])
+        coef, *_ = np.linalg.lstsq(design, y, rcond=None)
+        cost = float(np.sum((y - design @ coef) ** 2))
+        if cost < best:
+            best, at = cost, float(t[j])
+    return at
 
 
 def _warn_if_large_cut(rec, times: np.ndarray, first: int, r: int, end: int, why: str) -> None:
