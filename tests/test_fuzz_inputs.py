@@ -43,7 +43,7 @@ def bounded(seconds: int = CASE_SECONDS):
 
     old_handler = signal.signal(signal.SIGALRM, ring)
     soft, hard = resource.getrlimit(resource.RLIMIT_AS)
-    used = _address_space()
+    used = address_space()
     limit = used + MEMORY_HEADROOM if used else resource.RLIM_INFINITY
     if hard != resource.RLIM_INFINITY:
         limit = min(limit, hard)
@@ -57,7 +57,7 @@ def bounded(seconds: int = CASE_SECONDS):
         resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
 
 
-def _address_space() -> int:
+def address_space() -> int:
     try:
         for line in Path("/proc/self/status").read_text().splitlines():
             if line.startswith("VmSize:"):
