@@ -10,7 +10,6 @@ written, within the table's memory ceiling.
 from __future__ import annotations
 
 import struct
-import zipfile
 import zlib
 
 import numpy as np

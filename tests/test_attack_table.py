@@ -13,18 +13,16 @@ from __future__ import annotations
 
 import gzip
 import os
-import resource
 import shutil
 import socket
 import stat
-from contextlib import contextmanager
 
 import pytest
 
 from .attack_files import HOSTILE_FILES
 from .conftest import DATASETS
 from .test_cli_safety import run
-from .test_fuzz_inputs import address_space
+from .test_fuzz_inputs import memory_ceiling
 
 RIG = DATASETS / "friction" / "monday1965_session_1095_steel.csv"
 RIG_SCENE = DATASETS / "friction" / "monday1965_rig.toml"
@@ -236,20 +234,6 @@ ATTACKS += HOSTILE_FILES
 MEMORY_CEILING = 1536 << 20
 
 
-@contextmanager
-def memory_ceiling(extra: int = MEMORY_CEILING):
-    soft, hard = resource.getrlimit(resource.RLIMIT_AS)
-    used = address_space()
-    limit = used + extra if used else resource.RLIM_INFINITY
-    if hard != resource.RLIM_INFINITY:
-        limit = min(limit, hard)
-    resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
-    try:
-        yield
-    finally:
-        resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
-
-
 @pytest.fixture
 def work(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
@@ -267,7 +251,7 @@ def test_an_attack_is_refused_in_one_line_and_changes_nothing(work, name, setup,
     if setup is not None:
         setup(work)
     before = snapshot(work)
-    with memory_ceiling():
+    with memory_ceiling(MEMORY_CEILING):
         r = run(*args)
     lines = r.stderr.strip().splitlines()
     assert r.exit_code == 2, (r.exit_code, r.stderr[-2000:], r.stdout[-500:])
