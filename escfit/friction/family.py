@@ -60,7 +60,10 @@ class RigFamily:
             line = line.strip()
             if not line or line.startswith("#"):
                 continue
-            cells = [c.strip() for c in next(csv.reader([line]))]
+            try:
+                cells = [c.strip() for c in next(csv.reader([line]))]
+            except csv.Error as exc:  # a field beyond the csv module's limit
+                raise DataError(f"cannot read as a table ({exc})", f"{where}:{lineno}") from None
             names = {c.partition("_")[0] for c in cells if "_" in c}
             if {"load", "dw"} <= names:
                 return FORMAT
