@@ -106,10 +106,12 @@ def test_one_motion_in_two_sensors_is_one_decay_but_two_pendulums_are_not():
     t, theta = _decay()
     laser = 2.9e6 + 4e5 * theta + 300 * RNG.standard_normal(t.size)  # counts of a position sensor
     coil = -80 * np.gradient(theta, t) + 0.5 * RNG.standard_normal(t.size)  # volts of a coil: the velocity
-    choice = choose_channel(t, {"FuncGen": coil, "Laser": laser})
-    assert choice.chosen in ("FuncGen", "Laser") and "one motion in several columns" in choice.note()
+    choice = choose_channel(t, {"FuncGen": coil, "Laser": laser})  # no label says which is calibrated
+    assert choice.chosen is None and "one motion in several columns" in choice.refusal()
+    assert "no label says which is the calibrated angle" in choice.refusal()
     named = choose_channel(t, {"ch1": coil, "position (mm)": laser / 1e3}, units={"position (mm)": "mm"})
     assert named.chosen == "position (mm)"  # the label that names the fitted quantity wins
+    assert "one motion in several columns: 'ch1' decays" in named.note()
     other = 0.3 * np.exp(-C * t / 2) * np.cos(1.08 * WD * t)  # a second pendulum, 8 % faster
     two = choose_channel(t, {"Angle, Ch 1+2": theta, "Angle, Ch 3+4": other})
     assert two.chosen is None and "runner-up" in two.reason

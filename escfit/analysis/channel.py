@@ -17,9 +17,10 @@ Margin rule: the best column is chosen only if it scores at least :data:`MIN_SCO
 other at most :data:`MARGIN` times its score.  One motion in several columns: when every rival above
 that margin oscillates at the best's frequency (within :data:`SAME_FREQUENCY`) and its amplitude
 falls by the same share (within :data:`SAME_FALL`), the columns record one decay (a laser and a
-coil on one mass, x and y of one tracked bob): fitting any of them gives the same frequency and
-damping, so the one whose label names an angle (then a displacement), else the best scored, is
-chosen and the note names the others.  Otherwise :class:`ChannelChoice` has no ``chosen``
+coil on one mass, x and y of one tracked bob): they give the same frequency and decay rate, but
+their amplitudes, and so the friction, are only as right as each one's calibration, so the one
+column whose label names an angle (else a displacement) is chosen, the note naming the others;
+when no label or several decide, the refusal says they hold one motion.  Otherwise :class:`ChannelChoice` has no ``chosen``
 and :meth:`ChannelChoice.refusal` names the candidates with their scores and the key to set.
 """
 
@@ -150,14 +151,15 @@ def _one_motion(best: str, rivals: list[str], shapes: dict[str, SwingShape]) -> 
     return rivals
 
 
-def _plainest(best: str, same: list[str], units: dict[str, str | None]) -> str:
-    """Of columns holding one motion, the one whose label says the quantity fitted (an angle,
-    then a displacement), else the best scored."""
+def _plainest(best: str, same: list[str], units: dict[str, str | None]) -> str | None:
+    """Of columns holding one motion, the only one whose label says the quantity fitted (an
+    angle, else a displacement); None when no label, or several, say so (the amplitudes, and so
+    the friction, depend on which column's calibration is right)."""
     for wanted in ("angle", "displacement"):
         named = [c for c in [best, *same] if label_quantity(c, units.get(c)) == wanted]
         if named:
-            return named[0]
-    return best
+            return named[0] if len(named) == 1 else None
+    return None
 
 
 def choose_channel(time: np.ndarray | dict[str, np.ndarray], columns: dict[str, np.ndarray], *,
@@ -198,9 +200,15 @@ def choose_channel(time: np.ndarray | dict[str, np.ndarray], columns: dict[str, 
         same = _one_motion(best, [c for c in order[1:] if scores[c] > MARGIN * scores[best]], shapes)
         if same is not None:
             chosen = _plainest(best, same, units)
+            if chosen is None:
+                reason = (f"one motion in several columns ({', '.join(_shown(c) for c in [best, *same])} decay at "
+                          f"the same frequency, {shapes[best].frequency:.4g} Hz, and rate), and no label says which "
+                          "is the calibrated angle")
+                return ChannelChoice(None, scores, why, reason, key, shapes, units=dict(units))
             others = ", ".join(_shown(c) for c in [best, *same] if c != chosen)
             reason = (f"one motion in several columns: {others} decay{'s' if len(same) == 1 else ''} at the same "
-                      f"frequency ({shapes[best].frequency:.4g} Hz) and rate as {_shown(chosen)}")
+                      f"frequency ({shapes[best].frequency:.4g} Hz) and rate as {_shown(chosen)}, whose label "
+                      "names the quantity fitted")
             return ChannelChoice(chosen, scores, why, reason, key, shapes, units=dict(units))
     if best is None or scores[best] < MIN_SCORE:
         reason = f"no column has the shape of a free decay (a score of {MIN_SCORE:g} at least)"

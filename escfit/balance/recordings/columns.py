@@ -278,13 +278,7 @@ def _mark_companions(cols: Columns, roles: list[str | None], numeric: list[int])
              or any(bases[i][1:].lstrip(" _") == b for b in bases if b)]
     if not maybe:
         return roles
-    values = {}
-    for i in maybe:
-        try:
-            values[i] = _floats(cols, i)
-        except DataError:
-            continue
-    found = companions(cols.names, values)
+    found = companions(cols.names, _parsed(cols, maybe))
     if not found:
         return roles
     said = ", ".join(f"{cols.label(i)!r}" + (f" (of {cols.label(j)!r})" if j is not None else "")
@@ -298,18 +292,23 @@ def _rising_clock(cols: Columns, candidates: list[int]) -> list[int]:
     """``[the column]`` that alone rises at every row, taken as the clock with a note; else ``[]``."""
     from ...analysis.roles import rising_clock
 
-    values = {}
-    for i in candidates:
-        try:
-            values[i] = _floats(cols, i)
-        except DataError:
-            continue
-    found = rising_clock(values)
+    found = rising_clock(_parsed(cols, candidates))
     if found is None:
         return []
     cols.notes.append(f"column {cols.label(found)!r} taken as the time: no name says which column is, and it alone "
                       "rises at every row ([recording] time_column chooses another)")
     return [found]
+
+
+def _parsed(cols: Columns, indices: list[int]) -> dict[int, np.ndarray]:
+    """The columns of ``indices`` that parse as numbers, by index."""
+    out = {}
+    for i in indices:
+        try:
+            out[i] = _floats(cols, i)
+        except DataError:
+            continue
+    return out
 
 
 def _provisional_time(cols: Columns, roles: list[str | None], candidates: list[int]) -> np.ndarray:
@@ -318,14 +317,8 @@ def _provisional_time(cols: Columns, roles: list[str | None], candidates: list[i
     if not times:
         from ...analysis.roles import rising_clock
 
-        others = {}
-        for i in range(cols.ncols):
-            if roles[i] != "uncertainty" and cols.kind(i) == "number":  # a rising column is no candidate's signal
-                try:
-                    others[i] = _floats(cols, i)
-                except DataError:
-                    continue
-        found = rising_clock(others)
+        found = rising_clock(_parsed(cols, [i for i in range(cols.ncols) if roles[i] != "uncertainty"
+                                            and cols.kind(i) == "number"]))  # a rising column is no one's signal
         times = [found] if found is not None else []
     if len(times) == 1:
         try:
@@ -347,14 +340,7 @@ def _shape_choice(cols: Columns, candidates: list[int], roles: list[str | None],
     """:func:`~escfit.analysis.channel.choose_channel` over candidate columns (those that parse as numbers)."""
     from ...analysis.channel import choose_channel
 
-    values = {}
-    for i in candidates:
-        try:
-            v = _floats(cols, i)
-        except DataError:
-            continue
-        if np.isfinite(v).sum() >= 20:
-            values[cols.label(i)] = v
+    values = {cols.label(i): v for i, v in _parsed(cols, candidates).items() if np.isfinite(v).sum() >= 20}
     if not values:
         return None
     time = _provisional_time(cols, roles, candidates)
