@@ -90,11 +90,12 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
         With ``notes`` saying what was done to the record.
     """
     scene = replace(scene, params=ParamSet(dict(scene.params.params)))  # the release is set on a copy
+    given = replace(scene, params=ParamSet(dict(scene.params.params)))  # as the user wrote it: for the agreement check
     notes = notes_of(series.meta)
     quantity = getattr(series, "quantity", "angle")
     _check_quantity(scene, quantity, series.source)
     if quantity != "angle":
-        return _sampled_problem(scene, series, notes, solver, solver_options)
+        return _record_kept(_sampled_problem(scene, series, notes, solver, solver_options), given)
     model = dict(scene.extra.get("observation", {})).get("model", "amplitude")
     if readings == "amplitudes":
         return _amplitude_rows_problem(scene, series, notes, solver, solver_options)
@@ -114,7 +115,7 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
         problem = WaveformProblem(scene, series, tp, solver, solver_options)
         problem.notes = notes + [_count_note(tp)] + problem.notes
         problem.measured_period = mp
-        return problem
+        return _record_kept(problem, given, tp)
     held = hold_omega0(scene, mp)
     curve = turning_point_curve(series, tp)
     notes.append(_count_note(tp))
@@ -124,6 +125,16 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
     problem.notes = notes
     problem.measured_period = mp
     problem.held = ("oscillator.omega0",) if held else ()
+    return _record_kept(problem, given, tp)
+
+
+def _record_kept(problem, scene: BalanceScene, tp=None):
+    """Keep what the agreement check (:mod:`escfit.analysis.agreement`) holds the fit against: the
+    record's turning points (``tp``, when not already kept) and the scene as given, from which a
+    turning-point fit of the same record is built."""
+    if tp is not None:
+        problem.turning_points = tp
+    problem.given_scene = scene
     return problem
 
 
@@ -204,6 +215,7 @@ def _sampled_problem(scene: BalanceScene, series, notes: list, solver, solver_op
     problem = WaveformProblem(scene, series, tp, solver, solver_options, centre=centre, noise=noise)
     problem.notes = notes + [_count_note(tp, series.quantity)] + problem.notes
     problem.measured_period = mp
+    problem.turning_points = tp
     return problem
 
 
