@@ -45,6 +45,7 @@ START_SIGMAS = 5.0  # ... as are two of the first START_TURNS turning points bey
 START_TURNS = 3
 START_RATIO = 2.0
 PARAMETER_SIGMAS = 3.0  # waveform and turning-point estimates further apart than this (combined) disagree
+GROSS_SHARE = 0.3  # a model's amplitudes this far from the record's (a share of them) describe another motion
 MIN_TURNS = 8  # fewer turning points measure no scatter and no drift
 COMPARED = ("oscillator.omega0", "viscous.C", "coulomb.R", "drag.D")  # what both fits estimate
 
@@ -77,6 +78,15 @@ class TurnDifferences:
     difference: np.ndarray
     scatter: float
     trend: np.ndarray
+    size: np.ndarray | None = None  # amplitudes: the record's own at each turning point
+
+    @property
+    def gross(self) -> bool:
+        """Amplitudes: whether the smooth misfit exceeds :data:`GROSS_SHARE` of the record's
+        amplitude somewhere, beyond :data:`DRIFT_SIGMAS` scatters (the model describes another motion)."""
+        if self.size is None or self.drift_sigmas <= DRIFT_SIGMAS:
+            return False
+        return bool(np.any(np.abs(self.trend) > GROSS_SHARE * np.abs(self.size)))
 
     @property
     def sigmas(self) -> np.ndarray:
@@ -99,22 +109,32 @@ class TurnDifferences:
         return abs(self.drift) / self.scatter
 
     @property
+    def start_excess(self) -> np.ndarray:
+        """The first :data:`START_TURNS` differences less the smooth trend of the others
+        extrapolated to them (the difference's unit)."""
+        rest = slice(START_TURNS, None)
+        at = self.swing[:START_TURNS]
+        return self.difference[:START_TURNS] - smooth_trend(self.swing[rest], self.difference[rest], at=at)
+
+    @property
     def start_sigmas(self) -> np.ndarray:
-        """The first :data:`START_TURNS` differences in units of :attr:`scatter`."""
-        return self.sigmas[:START_TURNS]
+        """:attr:`start_excess` in units of :attr:`scatter`."""
+        return np.abs(self.start_excess) / self.scatter
 
     @property
     def start_stands_out(self) -> bool:
         """Whether the record's start departs from the model as the rest of it does not: two of
-        the first :data:`START_TURNS` differences beyond :data:`START_SIGMAS` scatters and beyond
-        :data:`START_RATIO` times the 95th percentile of the others (a misfit of the whole
-        record, such as a damping law that the model lacks, is not a wrong start)."""
-        rest = np.abs(self.difference[START_TURNS:])
-        if rest.size < START_TURNS:
+        the first :data:`START_TURNS` turning points off the trend of the others by more than
+        :data:`START_SIGMAS` scatters and more than :data:`START_RATIO` times the 95th percentile
+        of the others' departures from it (a misfit of the whole record, such as a damping law
+        that the model lacks, is not a wrong start)."""
+        rest = slice(START_TURNS, None)
+        if self.swing.size < START_TURNS + MIN_TURNS:
             return False
-        level = START_RATIO * float(np.quantile(rest, 0.95))
-        first = np.abs(self.difference[:START_TURNS])
-        return int(np.sum((self.start_sigmas > START_SIGMAS) & (first > level))) >= 2
+        others = self.difference[rest] - smooth_trend(self.swing[rest], self.difference[rest])
+        level = START_RATIO * float(np.quantile(np.abs(others), 0.95))
+        excess = np.abs(self.start_excess)
+        return int(np.sum((excess > START_SIGMAS * self.scatter) & (excess > level))) >= 2
 
 
 @dataclass(frozen=True)
@@ -209,14 +229,19 @@ def turn_scatter(difference: np.ndarray, floor: float) -> float:
     return max(s, floor)
 
 
-def smooth_trend(swing: np.ndarray, difference: np.ndarray) -> np.ndarray:
+def smooth_trend(swing: np.ndarray, difference: np.ndarray, at: np.ndarray | None = None) -> np.ndarray:
     """The smooth part of ``difference`` along the record: a quadratic in the turning-point
-    number fitted with an alternating term (a side bias), the alternating term left out."""
-    u = (swing - swing[0]) / max(float(swing[-1] - swing[0]), 1.0)
-    side = np.where(swing % 2 == 0, 1.0, -1.0)
-    design = np.column_stack([np.ones_like(u), u, u * u, side])
-    coef, *_ = np.linalg.lstsq(design, difference, rcond=None)
-    return design[:, :3] @ coef[:3]
+    number fitted with an alternating term (a side bias), the alternating term left out;
+    evaluated at the turning points ``at`` (default ``swing``)."""
+    at = swing if at is None else np.asarray(at)
+    scale = max(float(swing[-1] - swing[0]), 1.0)
+
+    def design(k):
+        u = (k - swing[0]) / scale
+        return np.column_stack([np.ones_like(u, dtype=float), u, u * u, np.where(k % 2 == 0, 1.0, -1.0)])
+
+    coef, *_ = np.linalg.lstsq(design(swing), difference, rcond=None)
+    return design(at)[:, :3] @ coef[:3]
 
 
 def _model_turns(problem, values: Mapping[str, float], swings: np.ndarray):
@@ -278,7 +303,9 @@ def _compare_turns(problem, values: Mapping[str, float]) -> tuple[TurnDifference
             out.append(None)  # the rate's zeros carry no measured angle
             continue
         s = turn_scatter(d, floor)
-        out.append(TurnDifferences(what, swing, t_rec, d, s, smooth_trend(swing, d)) if math.isfinite(s) else None)
+        size = amp_rec if what == "amplitude" else None
+        out.append(TurnDifferences(what, swing, t_rec, d, s, smooth_trend(swing, d), size) if math.isfinite(s)
+                   else None)
     return out[0], out[1], comments
 
 
@@ -302,7 +329,7 @@ def turning_point_refit(problem, lsq, *, seed: int = 0):
     scene = replace(scene, extra={**scene.extra, "observation": {**obs, "model": "amplitude"}})
     try:
         turns = problem_from_series(scene, problem.data, solver=problem.solver,
-                                    solver_options=dict(problem.solver_options or {}))
+                                    solver_options=dict(problem.solver_options or {}), turns=problem.turning_points)
         start = {n: float(lsq.values[n]) for n in turns.names if n in lsq.values and not n.startswith("observation.")}
         fit = least_squares(turns, n_starts=1, seed=seed, start=start)
         fit, _, unresolved = reconcile(turns, fit, seed=seed)
@@ -374,7 +401,10 @@ def check_agreement(problem, lsq, *, seed: int = 0) -> Agreement | None:
         elif d.drift_sigmas > DRIFT_SIGMAS:
             # the phase of a waveform fit is what it fits; an envelope or the times of a turning-point
             # fit that drift say the model misses something, without making its estimates another record's
-            (findings if waveform and d.what == "phase" else cautions).append(clause + _remedy(problem, d))
+            if (waveform and d.what == "phase") or d.gross:
+                findings.append(clause)
+            else:
+                cautions.append(clause + _remedy(problem, d))
     parameters: list[ParameterDifference] = []
     if waveform and getattr(problem, "given_scene", None) is not None and \
             getattr(problem, "quantity", "angle") == "angle":
@@ -429,7 +459,7 @@ def _remedy(problem, d: TurnDifferences) -> str:
 def _start_clause(d: TurnDifferences, unit: str) -> str:
     z = d.start_sigmas
     k = int(np.argmax(z))
-    diff = d.difference[k]
+    diff = d.start_excess[k]
     what = f"{abs(diff):.2g} rad of phase" if d.what == "phase" else _shown(abs(diff), unit)
     return (f"the record's first turning points do not follow a free decay from the release: turning point "
             f"{int(d.swing[k])} at t = {d.time[k]:.4g} s lies {what} ({z[k]:.0f} standard errors) from the model's")

@@ -69,7 +69,7 @@ def _free_centre(scene: BalanceScene, curve: UnitCurve, tp) -> BalanceScene:
 
 
 def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_options: dict | None = None,
-                        readings: str = "samples"):
+                        readings: str = "samples", turns=None):
     """The fit problem of a sampled record (see the module docstring).
 
     Parameters
@@ -83,6 +83,10 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
     readings
         ``"samples"``: theta sampled in time; ``"amplitudes"``: each row is already the
         amplitude of one half swing.
+    turns
+        The record's turning points when already found
+        (:class:`~escfit.balance.recordings.turning_points.TurningPoints` of an angle): they are
+        then not looked for again.
 
     Returns
     -------
@@ -103,7 +107,7 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
 
     # a waveform fit uses the turning points only for its start (reference, period, centre): an
     # irregular interval late in the record is a note there, not a refusal
-    tp = reduce_series(series, strict=model != "waveform")
+    tp = reduce_series(series, strict=model != "waveform") if turns is None else turns
     notes += list(getattr(tp, "notes", []))
     _refuse_sustained(scene, tp, series.source)
     mp = measured_period(tp, series.source)
