@@ -17,8 +17,9 @@ itself measured, independently of the likelihood:
    the phase quadratically), plus an alternating term; it is a finding when its largest value
    along the record exceeds :data:`DRIFT_SIGMAS` of that scatter.
 2. **Start.**  The first :data:`START_TURNS` turning points (the release included when the record
-   holds it whole): a finding when at least two of them lie beyond :data:`START_SIGMAS` of the
-   scatter, as when a hand-guided start is fitted as a free decay.
+   holds it whole): a finding when the record's amplitude grows among them (a free decay never
+   does) and at least two of them leave the trend of the rest of the record by more than
+   :data:`START_SIGMAS` of the scatter, as when a hand-guided start is fitted as a free decay.
 3. **Two fits of one record.**  For a waveform fit, the turning-point fit of the same scene and
    record (``[observation] model = "amplitude"``, fitted by least squares from the waveform's
    values) and the estimates they share (omega0, the damping, the friction) compared: a
@@ -46,6 +47,7 @@ START_TURNS = 3
 START_RATIO = 2.0
 PARAMETER_SIGMAS = 3.0  # waveform and turning-point estimates further apart than this (combined) disagree
 GROSS_SHARE = 0.3  # a model's amplitudes this far from the record's (a share of them) describe another motion
+MIN_DRIFT_TURNS = 20  # below this the scatter is too uncertain for a drift to decide the status (a warning then)
 MIN_TURNS = 8  # fewer turning points measure no scatter and no drift
 COMPARED = ("oscillator.omega0", "viscous.C", "coulomb.R", "drag.D")  # what both fits estimate
 
@@ -87,6 +89,16 @@ class TurnDifferences:
         if self.size is None or self.drift_sigmas <= DRIFT_SIGMAS:
             return False
         return bool(np.any(np.abs(self.trend) > GROSS_SHARE * np.abs(self.size)))
+
+    @property
+    def start_growth(self) -> float:
+        """Amplitudes: the largest growth of the record's amplitude from one turning point to the
+        next on the same side among the first :data:`START_TURNS` + 2, in scatters (a free decay
+        never grows)."""
+        if self.size is None or self.size.size < 3:
+            return 0.0
+        amp = np.abs(self.size[:START_TURNS + 2])
+        return float(np.max(amp[2:] - amp[:-2])) / (math.sqrt(2.0) * self.scatter)  # one side: no centre error
 
     @property
     def sigmas(self) -> np.ndarray:
@@ -392,16 +404,18 @@ def check_agreement(problem, lsq, *, seed: int = 0) -> Agreement | None:
         phase, amplitude, comments = None, None, [f"the model's turning points could not be computed ({exc})"]
     findings, cautions = [], []
     unit = getattr(problem, "reading_units", "rad")
+    driven = amplitude is not None and amplitude.start_growth > START_SIGMAS
     for d in (phase, amplitude):
         if d is None:
             continue
         clause = _drift_clause(d, unit)
-        if d.start_stands_out:
+        if driven and d.start_stands_out:
             findings.append(_start_clause(d, unit))
         elif d.drift_sigmas > DRIFT_SIGMAS:
             # the phase of a waveform fit is what it fits; an envelope or the times of a turning-point
             # fit that drift say the model misses something, without making its estimates another record's
-            if (waveform and d.what == "phase") or d.gross:
+            decisive = d.swing.size >= MIN_DRIFT_TURNS
+            if decisive and ((waveform and d.what == "phase") or d.gross):
                 findings.append(clause)
             else:
                 cautions.append(clause + _remedy(problem, d))
@@ -461,12 +475,14 @@ def _start_clause(d: TurnDifferences, unit: str) -> str:
     k = int(np.argmax(z))
     diff = d.start_excess[k]
     what = f"{abs(diff):.2g} rad of phase" if d.what == "phase" else _shown(abs(diff), unit)
-    return (f"the record's first turning points do not follow a free decay from the release: turning point "
+    return (f"the record's first turning points do not follow a free decay from the release (its amplitude grows: "
+            f"something drives it): turning point "
             f"{int(d.swing[k])} at t = {d.time[k]:.4g} s lies {what} ({z[k]:.0f} standard errors) from the model's")
 
 
 def _advice(problem, phase, amplitude, waveform: bool) -> str:
-    start = any(d is not None and d.start_stands_out for d in (phase, amplitude))
+    start = amplitude is not None and amplitude.start_growth > START_SIGMAS and any(
+        d is not None and d.start_stands_out for d in (phase, amplitude))
     if start:
         return ("start the fit where the free decay starts: [recording] start (or release_s) after the last push, "
                 "or leave them out so that escfit finds it")
