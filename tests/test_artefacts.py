@@ -22,6 +22,8 @@ from escfit.cli.main import cli
 from .artefacts import CLASSES, make
 from .artefacts.score import ACCEPTS, classify, estimates_right, read_result
 
+pytestmark = pytest.mark.slow  # some 20 fits of init + fit: run in CI's slow step (.ci/run)
+
 SEED = 3  # a 1.17 s period sampled at 28 Hz: about 650 rows in 20 periods, a short fit
 PERIODS = 20
 

@@ -178,18 +178,32 @@ def _growth(v: np.ndarray, k: int) -> float:
     return abs(v[k + 1] - centre) - abs(v[k] - centre)
 
 
-def _pushed_half_swings(v: np.ndarray, j: int, noise: float) -> tuple[int, int]:
-    """First and last half swing of the push found at ``j``: the one near ``j`` over which the
-    amplitude grew the most, and the ones after it that still grew by over three times the
-    noise of a growth (``noise``): a hand that pushes over a whole swing."""
-    lo, hi = max(j - 2, 0), min(j + 2, v.size - 4)
+def _pushed_half_swings(v: np.ndarray, run: np.ndarray, noise: float) -> int:
+    """The last half swing of the push found at the positions ``run``.
+
+    Among those positions (from the first one's window before it on, to two after the last),
+    the half swings over which the amplitude grew
+    by over three times the noise of a growth (``noise``) and by over a quarter of the largest
+    growth there; the last of them, and after it those that still grew that much (a hand that
+    pushes over a whole swing).  Where none grew in amplitude, the swing grew only in size: a
+    hold let go (the half swing before the one whose size jumped the most).
+    """
+    lo, hi = max(int(run[0]) - SIDE - 1, 0), min(int(run[-1]) + 2, v.size - 4)
     if hi < lo:
-        return j, j
-    first = max(range(lo, hi + 1), key=lambda k: _growth(v, k))
-    last = first
+        return int(run[0])
+    growth = np.array([_growth(v, k) for k in range(lo, hi + 1)])
+    enough = max(3.0 * noise, 0.25 * float(growth.max()))
+    grew = np.flatnonzero(growth >= enough)
+    if not grew.size:
+        # the swing grew in size but not in amplitude: a hold (tiny swings about a held angle)
+        # let go at a turning point, the start of the half swing whose size jumped the most
+        p = np.abs(np.diff(v))
+        jump = p[lo + 1:hi + 2] - p[lo:hi + 1]
+        return lo + int(np.argmax(jump))
+    last = lo + int(grew[-1])
     while last + 1 <= v.size - 4 and _growth(v, last + 1) > 3.0 * noise:
         last += 1
-    return first, last
+    return last
 
 
 def _spans_jump(v: np.ndarray, p: np.ndarray, k: int, jump: float) -> bool:
@@ -206,12 +220,12 @@ def _spans_jump(v: np.ndarray, p: np.ndarray, k: int, jump: float) -> bool:
     return abs(odd - expected) < abs(jump) / 3.0
 
 
-def _clusters(flags: np.ndarray) -> list[np.ndarray]:
-    """Runs of consecutive True indices."""
+def _clusters(flags: np.ndarray, merge: int = 1) -> list[np.ndarray]:
+    """Runs of True indices, those less than ``merge`` apart joined."""
     idx = np.flatnonzero(flags)
     if not idx.size:
         return []
-    breaks = np.flatnonzero(np.diff(idx) > 1) + 1
+    breaks = np.flatnonzero(np.diff(idx) > merge) + 1
     return np.split(idx, breaks)
 
 
@@ -249,11 +263,11 @@ def find_events(times: np.ndarray, values: np.ndarray, *, resolution: float,
     level = np.array([np.median(p[max(0, j - 1 - SIDE):max(1, j - 1)]) for j in range(p.size)])
     absolute = level * np.expm1(np.nan_to_num(gain))  # the gain in the record's unit
     pushes = np.isfinite(gain) & (gain > Z_PUSH * scale) & (absolute > floor)
-    for run in _clusters(pushes):
+    for run in _clusters(pushes, merge=SIDE + 3):  # windows that overlap see one event
         j = int(run[np.argmax(gain[run])])
         # turning points of noise s_p / sqrt(2) and centres of noise sqrt(6)/4 of it: a growth's
         # noise is about that of one peak-to-peak swing
-        _, k = _pushed_half_swings(v, j, s_p)
+        k = _pushed_half_swings(v, run, s_p)
         score = float(gain[j] / scale[j]) if scale[j] > 0 else math.inf
         events.append(SwingEvent(
             "push", k, float(t[k + 1]), float(absolute[j]), score,

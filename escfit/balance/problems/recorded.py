@@ -150,12 +150,15 @@ def _record_kept(problem, scene: BalanceScene, tp=None):
 
 
 def _without_steps(series, tp):
-    """The series with the offset steps the analysis found taken out (the record itself if none)."""
-    if not getattr(tp, "steps", ()):
-        return series
-    from ..recordings.turning_points import remove_steps
+    """The series without the glitches and with the offset steps the analysis found taken out
+    (the record itself if none)."""
+    from ..recordings.turning_points import drop_samples, remove_steps
 
-    return replace(series, theta=remove_steps(series.time, series.theta, tp.steps))
+    if getattr(tp, "dropped", ()):
+        series = drop_samples(series, tp.dropped)
+    if getattr(tp, "steps", ()):
+        series = replace(series, theta=remove_steps(series.time, series.theta, tp.steps))
+    return series
 
 
 def _amplitude_rows_problem(scene: BalanceScene, series, notes: list[str], solver: str, solver_options):

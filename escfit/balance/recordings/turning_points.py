@@ -70,7 +70,7 @@ from .extrema import (alternating_extrema, extrema_period, local_amplitude, powe
 from .motion import INTERVAL_RANGE, Turn, faded_end, growth_tolerance, levels_off, reference, steady_tail
 from .given_start import user_reference
 from .sampled import MIN_SAMPLES_PER_PERIOD, SampledRecord
-from .series import TimeSeries, quantity_words
+from .series import TimeSeries, quantity_words, show_value
 from .window import window_of
 
 __all__ = ["TurningPoints", "reduce_series", "turning_points", "period_of", "MIN_SAMPLES_PER_PERIOD", "MIN_TURNS"]
@@ -133,6 +133,10 @@ class TurningPoints:
     origin : float
         The file's first sample on the series' clock, s: the zero of the times in ``notes``
         (and of ``[recording] start``, ``stop``, ``release``).
+    dropped : tuple of (float, float, str)
+        Runs of samples left out as a tracking glitch (:mod:`escfit.analysis.glitches`): first
+        and last time (s, the series' clock) and the note; :func:`drop_samples` leaves them out
+        of the series too.
     """
 
     swing: np.ndarray
@@ -155,6 +159,7 @@ class TurningPoints:
     warnings: list = field(default_factory=list)
     steps: tuple = ()
     origin: float = 0.0
+    dropped: tuple = ()
 
     def after_first(self, t: float) -> float:
         """``t`` (s, the series' clock) as a time after the file's first sample, as notes show times."""
@@ -207,13 +212,53 @@ def reduce_series(series: TimeSeries, *, window: float | None = None, degree: in
         rate needed), a growing amplitude, wrapped angles, too few turning points, or
         (``strict``) irregularly spaced turning points.
     """
-    first = _reduce(series, window, degree, strict, min_noise, user_window, find_steps=True)
+    try:
+        first = _reduce(series, window, degree, strict, min_noise, user_window, find_steps=True)
+    except DataError:  # a glitch's spurious turning points break the strict count: look for one first
+        if not strict:
+            raise
+        dropped = _glitches(series, _reduce(series, window, degree, False, min_noise, user_window, find_steps=False))
+        if not dropped:
+            raise
+        first = _reduce(series, window, degree, False, min_noise, user_window, find_steps=False)
+    dropped = _glitches(series, first)
+    if dropped:  # a tracker's jump of a few frames: the same analysis without those samples
+        series = drop_samples(series, dropped)
+        first = _reduce(series, window, degree, strict, min_noise, user_window, find_steps=True)
+        first = replace(first, notes=[note for *_, note in dropped] + first.notes, dropped=dropped)
     if not first.steps:
         return first
     # the centre jumped (a moved origin): the same analysis of the samples with the jumps taken back
     fixed = replace(series, theta=remove_steps(series.time, series.theta, first.steps))
     found = _reduce(fixed, window, degree, strict, min_noise, user_window, find_steps=False)
-    return replace(found, notes=[note for *_, note in first.steps] + found.notes, steps=first.steps)
+    return replace(found, notes=[note for *_, note in first.steps] + found.notes, steps=first.steps,
+                   dropped=first.dropped)
+
+
+def _glitches(series: TimeSeries, tp: TurningPoints) -> tuple:
+    """``(first time, last time, note)`` of each run of samples off the swing (a tracking glitch)."""
+    from ...analysis.glitches import find_glitches
+
+    t, x = np.asarray(series.time, float), np.asarray(series.theta, float)
+    if t.size < 20 or not math.isfinite(tp.period):
+        return ()
+    xs = smooth(x, tp.period / float(np.median(np.diff(t))))
+    out = []
+    for g in find_glitches(t, x, tp.period, xs):
+        n = g.last - g.first + 1
+        out.append((float(t[g.first]), float(t[g.last]),
+                    f"{n} sample(s) at t = {t[g.first] - tp.origin:.4g} s lie {show_value(abs(g.size), series.quantity, 2)} "
+                    "off the swing the samples around them follow (a tracking glitch): left out"))
+    return tuple(out)
+
+
+def drop_samples(series: TimeSeries, dropped) -> TimeSeries:
+    """The series without the samples of each ``(first time, last time, ...)`` run."""
+    t = np.asarray(series.time, float)
+    keep = np.ones(t.size, bool)
+    for first, last, *_ in dropped:
+        keep &= ~((t >= first) & (t <= last))
+    return replace(series, time=t[keep], theta=np.asarray(series.theta, float)[keep])
 
 
 def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool, min_noise: float, user_window, *,
