@@ -30,7 +30,7 @@ _LAZY = {
     "fit": ("escfit.inference", "fit"),
 }
 # Subpackages reachable as attributes (``escfit.inference.fit(...)`` after ``import escfit``)
-_SUBPACKAGES = frozenset({"balance", "core", "fitting", "friction", "geneva", "inference", "likelihood",
+_SUBPACKAGES = frozenset({"analysis", "balance", "core", "fitting", "friction", "geneva", "inference", "likelihood",
                           "observation", "recordings", "report", "results", "study", "verge", "cli"})
 
 

@@ -81,7 +81,7 @@ def test_named_columns_the_reader_chooses_the_decay_over_a_drive_and_over_noise(
         series = read_data(data)
         np.testing.assert_allclose(series.theta, theta, atol=1e-7)
         assert "column 'theta (deg)' chosen" in series.meta["notes"] and words in series.meta["notes"]
-        with pytest.raises(DataError, match="no column looks like the angle.*by shape: 'b' (0\.9\d|1\.00)"):  # unnamed too
+        with pytest.raises(DataError, match=r"no column looks like the angle.*by shape: 'b' (0\.9\d|1\.00)"):  # unnamed too
             read_data(_write(tmp_path / "ab.csv", ["t", "a", "b"], [t, other, theta]))
 
 

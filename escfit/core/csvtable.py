@@ -81,6 +81,17 @@ class Table:
         return out
 
 
+def _comment_or_blank(line: str, meta: dict[str, str]) -> bool:
+    """Whether ``line`` is blank or a ``#`` comment; a ``# key: value`` comment goes into ``meta``."""
+    s = line.strip()
+    if s.startswith("#"):
+        key, sep, value = s[1:].partition(":")
+        if sep and key.strip() and " " not in key.strip():
+            meta[key.strip().lower()] = value.strip()
+        return True
+    return not s
+
+
 def read_table(path: str | Path) -> Table:
     """Read a CSV file with comment and metadata lines."""
     p = Path(path)
@@ -92,13 +103,7 @@ def read_table(path: str | Path) -> Table:
     meta: dict[str, str] = {}
     body: list[tuple[int, str]] = []
     for n, line in numbered_lines(text):
-        s = line.strip()
-        if not s:
-            continue
-        if s.startswith("#"):
-            key, sep, value = s[1:].partition(":")
-            if sep and key.strip() and " " not in key.strip():
-                meta[key.strip().lower()] = value.strip()
+        if _comment_or_blank(line, meta):
             continue
         body.append((n, line))
     if not body:
@@ -180,13 +185,7 @@ def read_numbers(path: str | Path) -> NumericTable | None:
             line = chunk.decode("utf-8")
         except UnicodeDecodeError:
             return None
-        s = line.strip()
-        if not s:
-            continue
-        if s.startswith("#"):
-            key, sep, value = s[1:].partition(":")
-            if sep and key.strip() and " " not in key.strip():
-                meta[key.strip().lower()] = value.strip()
+        if _comment_or_blank(line, meta):
             continue
         header_line = line
         break

@@ -27,7 +27,8 @@ import numpy as np
 
 from ...core.errors import DataError
 from .extrema import vertex_at
-from .motion import HOLD_PERIODS, START_TURN_PERIODS, Turn, _flat_start, _turn_at_start
+from .holds import HOLD_PERIODS, START_TURN_PERIODS, flat_start, turn_at_start
+from .motion import Turn
 
 __all__ = ["user_reference", "NEAR_PERIODS"]
 
@@ -72,8 +73,8 @@ def _first_turn(rec, turns: list[Turn]) -> list[Turn]:
     places it: a turning point at the first sample, or the release of a held start; else dropped."""
     if not turns or turns[0].time is not None:
         return turns
-    at = _turn_at_start(rec)
-    flat = _flat_start(rec) if at is None or at[2] != turns[0].is_max else None
+    at = turn_at_start(rec)
+    flat = flat_start(rec) if at is None or at[2] != turns[0].is_max else None
     if flat is not None:
         return [Turn(turns[0].first, turns[0].last, turns[0].is_max, flat[0], flat[1])] + turns[1:]
     if at is not None:

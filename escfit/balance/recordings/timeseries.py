@@ -70,20 +70,34 @@ def read_timeseries(path: str | Path) -> TimeSeries:
         time, theta = t.column("time_s"), t.column(angle[0])
         if time.size >= 20 and np.all(np.isfinite(theta)) and np.all(np.diff(time) > 0) \
                 and np.isfinite(time[0]) and np.isfinite(time[-1]):
-            return TimeSeries(time.copy(), theta * factor, _release(t, where), where, t.sha256, dict(t.meta))
+            got = _timed(time.copy(), theta * factor, dict(t.meta), lambda i: f"{where} row {i + 1}", where)
+            if got is not None:
+                return TimeSeries(*got[:2], _release(t, where), where, t.sha256, got[2])
         t = canonical_header(read_table(path))  # its messages name the line and the cell
     time = np.array(t.floats("time_s"))
     theta = np.array(t.floats(angle[0])) * factor
-    meta = dict(t.meta)
-    notes, warnings = notes_of(meta), warnings_of(meta)
-    time, theta = repaired_times(time, theta, lambda i: f"{where}:{t.lines[i]} [time_s]", notes, warnings, where)
-    for key, sentences in (("notes", notes), ("warnings", warnings)):
-        if sentences:
-            meta[key] = "; ".join(n.replace(";", ",") for n in sentences)
+    time, theta, meta = _timed(time, theta, dict(t.meta), lambda i: f"{where}:{t.lines[i]} [time_s]", where,
+                               refuse=True)
     release = _release(t, where)
     if time.size < 20:
         raise DataError(f"only {time.size} samples; a decay needs many samples per period", where)
     return TimeSeries(time, theta, release, where, t.sha256, meta)
+
+
+def _timed(time: np.ndarray, theta: np.ndarray, meta: dict, where_of_row, where: str, *, refuse: bool = False):
+    """``(time, theta, meta)`` through the time-base stage, its notes and warnings in ``meta``;
+    ``None`` where the stage refuses and ``refuse`` is off (the strict reader then says why)."""
+    notes, warnings = notes_of(meta), warnings_of(meta)
+    try:
+        time, theta = repaired_times(time, theta, where_of_row, notes, warnings, where)
+    except DataError:
+        if refuse:
+            raise
+        return None
+    for key, sentences in (("notes", notes), ("warnings", warnings)):
+        if sentences:
+            meta[key] = "; ".join(n.replace(";", ",") for n in sentences)
+    return time, theta, meta
 
 
 def _release(t, where: str) -> float:

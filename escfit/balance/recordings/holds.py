@@ -1,0 +1,134 @@
+"""How the free motion of a record begins: a hold and its release, a turning point at the first sample.
+
+A held oscillator is flat within the rest band for at least :data:`HOLD_PERIODS` periods and then
+moves; the release is where that motion starts (:func:`release_instant`: the swing that follows
+fitted as a free start from rest).  A record that starts at a turning point has its vertex within
+:data:`START_TURN_PERIODS` periods of the first sample (:func:`turn_at_start`).  The functions
+take the analysis record of :mod:`escfit.balance.recordings.sampled`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .extrema import vertex_at
+
+__all__ = ["held_release", "release_instant", "flat_start", "turn_at_start", "HOLD_PERIODS", "START_TURN_PERIODS",
+           "RELEASE_DEGREE"]
+
+HOLD_PERIODS = 0.1  # a flat stretch at least this long is a held oscillator
+START_TURN_PERIODS = 0.03  # a turn this close before the first sample counts as a start at a turn
+# a cubic after a release: a quartic's freedom trades the release instant against the first
+# curvature when the noise is some 1 % of the swing (errors of 0.6 s on a 9 s period)
+RELEASE_DEGREE = 3
+
+
+def held_release(rec, turn, amplitude: float = math.inf) -> tuple[float, float] | None:
+    """The release from a hold at ``turn`` (a :class:`~escfit.balance.recordings.motion.Turn`): the
+    instant motion starts and the held angle.
+
+    ``None`` unless the angle stays within the rest band of the turn's level for at least
+    :data:`HOLD_PERIODS` periods up to the departure, and for twice as long as a free turning
+    point of that ``amplitude`` (rad, about the centre) would (a small swing is flat near its
+    turning points for a good part of a period).
+    """
+    t, x, xs = rec.t, rec.x, rec.xs
+    k = max(1, int(round(0.05 * rec.period / rec.dt)))
+    lo, hi = max(0, turn.first - k), min(t.size, turn.last + k + 1)
+    level = float(np.median(x[lo:hi]))
+    out = np.abs(xs - level) > rec.band
+    right = np.flatnonzero(out[turn.last:])
+    if not right.size:
+        return None
+    j1 = turn.last + int(right[0])
+    left = np.flatnonzero(out[:turn.first + 1])
+    j0 = int(left[-1]) + 1 if left.size else 0
+    free = rec.period / math.pi * math.sqrt(2.0 * rec.band / amplitude) if amplitude > rec.band else rec.period
+    if t[j1] - t[j0] < max(HOLD_PERIODS * rec.period, 2.0 * free):
+        return None
+    got = release_instant(rec, j1)
+    if got is None:
+        got = rec.refine(j1, j1, flat="left", degree=RELEASE_DEGREE)
+    return got if got is not None else (float(t[j1]), float(np.median(x[j0:j1])))
+
+
+def release_instant(rec, j1: int) -> tuple[float, float] | None:
+    """When a held oscillator was let go, and where it was held, from the swing that follows.
+
+    ``j1`` is the first sample that left the hold.  Released at rest, a free oscillator
+    starts as ``level + a (1 - cos(w (t - t_r)))`` with ``w = 2 pi / period``: the samples from
+    a quarter period before ``j1`` to a fifth of a period after it are fitted with that, flat
+    before ``t_r`` (``level`` and ``a`` by linear least squares for each ``t_r``, ``t_r`` searched
+    in the quarter period before ``j1``).  Damping and friction change the swing little over a
+    fifth of a period; a local polynomial needs many samples there (at 20 samples per period it
+    put a release a tenth of a period early).  ``None`` when too few samples follow.
+    """
+    t, x, period = rec.t, rec.x, rec.period
+    w = 2.0 * math.pi / period
+    lo, hi = np.searchsorted(t, [t[j1] - 0.25 * period, t[j1] + 0.2 * period])
+    if hi - j1 < 3 or hi - lo < 6:
+        return None
+    tt, xx = t[lo:hi], x[lo:hi]
+
+    def fit(tr: float) -> tuple[float, float]:
+        g = 1.0 - np.cos(w * np.clip(tt - tr, 0.0, None))
+        design = np.stack([np.ones_like(g), g], axis=1)
+        coef, *_ = np.linalg.lstsq(design, xx, rcond=None)
+        r = xx - design @ coef
+        return float(r @ r), float(coef[0])
+
+    grid = np.linspace(max(tt[0], t[j1] - 0.25 * period), t[j1], 101)
+    costs = [fit(tr)[0] for tr in grid]
+    k = int(np.argmin(costs))
+    from scipy.optimize import minimize_scalar
+
+    step = grid[1] - grid[0]
+    found = minimize_scalar(lambda tr: fit(tr)[0], bounds=(grid[max(k - 1, 0)], grid[min(k + 1, grid.size - 1)] + 1e-12 * step),
+                            method="bounded", options={"xatol": 1e-6 * period})
+    tr = float(found.x) if found.fun <= costs[k] else float(grid[k])
+    return tr, fit(tr)[1]
+
+
+def flat_start(rec) -> tuple[float, float] | None:
+    """A record that starts flat (held, however briefly) and then moves: the release and the held angle."""
+    t, x = rec.t, rec.x
+    k = max(3, int(np.sum(t < t[0] + 0.02 * rec.period)))
+    level = float(np.median(x[:k]))
+    out = np.flatnonzero(np.abs(rec.xs - level) > rec.band)
+    if not out.size or out[0] < 3:
+        return None
+    got = release_instant(rec, int(out[0]))
+    return got if got is not None else rec.refine(int(out[0]), int(out[0]), flat="left", degree=RELEASE_DEGREE)
+
+
+def turn_at_start(rec) -> tuple[float, float, bool] | None:
+    """Time, angle and kind (maximum?) of a turning point within a few hundredths of a period
+    of the first sample; or None.
+
+    A cubic through the first fifth of a period decides (its slope vanishes there); the
+    vertex itself comes from a one-sided polynomial without linear term whose vertex time is
+    searched within 0.02 periods of that (:func:`~escfit.balance.recordings.extrema.vertex_at`).
+    """
+    t, x, period = rec.t, rec.x, rec.period
+    sel = t <= t[0] + 0.2 * period
+    s = (t[sel] - t[0]) / period
+    if s.size < 6:
+        return None
+    poly = np.polynomial.Polynomial.fit(s, x[sel], 3).convert()
+    slope = poly.deriv()
+    roots = slope.roots()
+    roots = roots[np.isreal(roots)].real
+    roots = roots[(roots >= -START_TURN_PERIODS) & (roots <= 0.05)]
+    if not roots.size:
+        return None
+    r = float(roots[np.argmin(np.abs(roots))])
+    is_max = bool(slope.deriv()(r) < 0)
+    t_turn = float(t[0] + r * period)
+    near = t <= t_turn + rec.half_width()
+    if np.count_nonzero(near) < 6:
+        return t_turn, float(poly(r)), is_max
+    bounds = (max(-START_TURN_PERIODS * period, r * period - 0.02 * period), r * period + 0.02 * period)
+    sc, value = vertex_at(t[near] - t[0], x[near], rec.degree, search=bounds)
+    return float(t[0] + sc), value, is_max
