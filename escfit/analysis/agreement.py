@@ -14,8 +14,10 @@ itself measured, independently of the likelihood:
    (robust, from differences of turning points two apart, so that a smooth drift and an
    alternating side bias do not count as scatter).  A **drift** is the smooth part: a
    polynomial of degree 2 in the turning-point number (a frequency that drifts linearly moves
-   the phase quadratically), plus an alternating term; it is a finding when its largest value
-   along the record exceeds :data:`DRIFT_SIGMAS` of that scatter.
+   the phase quadratically), plus an alternating term; it is a warning when its largest value
+   along the record exceeds :data:`DRIFT_SIGMAS` of that scatter, and a finding when it is also
+   gross: the phase more than :data:`PHASE_GROSS` off (a quarter period: the model turns where
+   the record is mid-swing) or the envelope more than :data:`GROSS_SHARE` of the amplitude.
 2. **Start.**  The first :data:`START_TURNS` turning points (the release included when the record
    holds it whole): a finding when the record's amplitude grows among them (a free decay never
    does) and at least two of them leave the trend of the rest of the record by more than
@@ -23,7 +25,9 @@ itself measured, independently of the likelihood:
 3. **Two fits of one record.**  For a waveform fit, the turning-point fit of the same scene and
    record (``[observation] model = "amplitude"``, fitted by least squares from the waveform's
    values) and the estimates they share (omega0, the damping, the friction) compared: a
-   difference beyond :data:`PARAMETER_SIGMAS` combined standard errors is a finding.
+   difference beyond :data:`PARAMETER_SIGMAS` combined standard errors is a finding when it is
+   also material (:data:`MATERIAL`: 0.5 % of omega0, 10 % of a damping parameter, enough to
+   change what a user concludes), else a warning that the intervals are too narrow.
 
 Findings make the fit's status "not determined" (the command line exits with status 3) with a
 first warning saying what disagrees, by how much, and what to change; agreement is a note.
@@ -50,6 +54,13 @@ GROSS_SHARE = 0.3  # a model's amplitudes this far from the record's (a share of
 MIN_DRIFT_TURNS = 20  # below this the scatter is too uncertain for a drift to decide the status (a warning then)
 MIN_TURNS = 8  # fewer turning points measure no scatter and no drift
 COMPARED = ("oscillator.omega0", "viscous.C", "coulomb.R", "drag.D")  # what both fits estimate
+MATERIAL = {"oscillator.omega0": 0.005, "damping": 0.10}  # differences that change what a user concludes
+PHASE_GROSS = math.pi / 2  # rad: a model a quarter period out of phase describes another motion
+
+
+def _materiality() -> str:
+    return (f"{100 * MATERIAL['oscillator.omega0']:g} % of omega0, {100 * MATERIAL['damping']:g} % of a damping "
+            "parameter")
 
 
 @dataclass(frozen=True)
@@ -158,6 +169,17 @@ class ParameterDifference:
     waveform_stderr: float
     turning_points: float
     turning_points_stderr: float
+
+    @property
+    def relative(self) -> float:
+        """The difference as a share of the larger of the two estimates' sizes."""
+        size = max(abs(self.waveform), abs(self.turning_points))
+        return abs(self.waveform - self.turning_points) / size if size > 0 else 0.0
+
+    @property
+    def material(self) -> bool:
+        """Whether the difference is one a user would act on: above :data:`MATERIAL` for this estimate."""
+        return self.relative > MATERIAL.get(self.name, MATERIAL["damping"])
 
     @property
     def sigmas(self) -> float:
@@ -415,7 +437,7 @@ def check_agreement(problem, lsq, *, seed: int = 0) -> Agreement | None:
             # the phase of a waveform fit is what it fits; an envelope or the times of a turning-point
             # fit that drift say the model misses something, without making its estimates another record's
             decisive = d.swing.size >= MIN_DRIFT_TURNS
-            if decisive and ((waveform and d.what == "phase") or d.gross):
+            if decisive and ((waveform and d.what == "phase" and abs(d.drift) > PHASE_GROSS) or d.gross):
                 findings.append(clause)
             else:
                 cautions.append(clause + _remedy(problem, d))
@@ -428,10 +450,14 @@ def check_agreement(problem, lsq, *, seed: int = 0) -> Agreement | None:
         else:
             parameters = _compare_parameters(lsq, *turns)
             bad = [p for p in parameters if p.sigmas > PARAMETER_SIGMAS]
-            if bad:
-                findings.append("the waveform and turning-point fits disagree on " + ", ".join(
-                    f"{_short(p.name)} by {p.sigmas:.2g} standard errors ({p.waveform:.4g} against "
-                    f"{p.turning_points:.4g})" for p in bad))
+            said = ", ".join(f"{_short(p.name)} by {p.sigmas:.2g} standard errors ({p.waveform:.4g} against "
+                             f"{p.turning_points:.4g}, {100 * p.relative:.2g} %)" for p in bad)
+            if any(p.material for p in bad):
+                findings.append("the waveform and turning-point fits disagree on " + said)
+            elif bad:
+                cautions.append("the waveform and turning-point fits differ on " + said + ", beyond their "
+                                "standard errors but by less than matters (" + _materiality() + "): the intervals "
+                                "are too narrow for this record")
     tp = problem.turning_points
     span = float(phase.time[-1] - phase.time[0]) if phase is not None else math.nan
     periods = span / float(tp.period) if math.isfinite(span) else float(tp.swing.size) / 2.0
