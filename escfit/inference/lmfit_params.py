@@ -208,6 +208,13 @@ def to_lmfit(scene, data, *, values=None, **options) -> tuple["lmfit.Parameters"
     return lp.params, lp.minimizer()
 
 
+def _json(value):
+    """An attribute of a results file: JSON text (dicts and lists are stored so) or the value."""
+    import json
+
+    return json.loads(value) if isinstance(value, str) and value[:1] in "[{" else value
+
+
 def parameters_from_results(source) -> "lmfit.Parameters":
     """A saved fit as ``lmfit.Parameters``: best fit, standard errors and correlations.
 
@@ -231,7 +238,7 @@ def parameters_from_results(source) -> "lmfit.Parameters":
     lsq = res.group("least_squares")
     if lsq is None:
         raise ResultsError("no least_squares group: not a fit's results", str(source))
-    attrs = res.attrs
+    attrs = {k: _json(v) for k, v in res.attrs.items() if k in ("units", "meanings", "parameters", "held")}
     units, meanings = dict(attrs.get("units", {})), dict(attrs.get("meanings", {}))
     params = lmfit.Parameters()
     names = [str(n) for n in lsq["parameter"].values]
