@@ -5,7 +5,9 @@ The public API is small:
 - :func:`load_scene` reads a TOML scene (``model = "balance" | "geneva" | "verge" | "friction_rig"``);
 - :func:`simulate` runs it and returns an :class:`xarray.Dataset`;
 - :func:`fit` fits a scene's free parameters to a recording (:func:`escfit.inference.fit`);
-- :func:`load_fit` reads a results file back.
+- :func:`load_fit` reads a results file back;
+- :func:`to_lmfit` hands a scene and a recording to lmfit (``Parameters`` and a ``Minimizer``),
+  :func:`lmfit_parameters` a results file (best fit and standard errors).
 
 Everything but the version and the error classes is imported on first use, so that
 ``import escfit`` (and the command line's ``--help``) stays quick.
@@ -20,7 +22,7 @@ from .core.errors import DataError, EscfitError, FitError, ResultsError, SceneEr
 from .core.version import __version__
 
 __all__ = [
-    "__version__", "load_scene", "simulate", "fit", "load_fit",
+    "__version__", "load_scene", "simulate", "fit", "load_fit", "to_lmfit", "lmfit_parameters",
     "EscfitError", "SceneError", "UnitError", "DataError", "SolverError", "FitError", "ResultsError",
 ]
 
@@ -28,6 +30,9 @@ __all__ = [
 _LAZY = {
     "load_scene": ("escfit.core.scene", "load_scene"),
     "fit": ("escfit.inference", "fit"),
+    "load_fit": ("escfit.results", "load_fit"),
+    "to_lmfit": ("escfit.inference.lmfit_params", "to_lmfit"),
+    "lmfit_parameters": ("escfit.inference.lmfit_params", "parameters_from_results"),
 }
 # Subpackages reachable as attributes (``escfit.inference.fit(...)`` after ``import escfit``)
 _SUBPACKAGES = frozenset({"analysis", "balance", "core", "fitting", "friction", "geneva", "inference", "likelihood",
