@@ -38,12 +38,11 @@ For a turning-point fit a drift of the *times* is a warning only: that fit does 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
-from typing import Mapping
+from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Agreement", "TurnDifferences", "ParameterDifference", "check_agreement", "turn_scatter",
+__all__ = ["Agreement", "TurnDifferences", "ParameterDifference", "ModelFacts", "judge", "turn_scatter",
            "smooth_trend", "DRIFT_SIGMAS", "START_SIGMAS", "PARAMETER_SIGMAS"]
 
 DRIFT_SIGMAS = 5.0  # a smooth drift larger than this many point scatters is a finding
@@ -284,191 +283,67 @@ def smooth_trend(swing: np.ndarray, difference: np.ndarray, at: np.ndarray | Non
     return design(at)[:, :3] @ coef[:3]
 
 
-def _model_turns(problem, values: Mapping[str, float], swings: np.ndarray):
-    """The model's turning points at ``swings``: times on the record's clock (s) and signed
-    readings about the model's centre (the readings' unit; amplitudes for a turning-point fit)."""
-    from ..balance.solvers import solve_system
-
-    sys = problem.scene.system(values)
-    n = int(swings.max())
-    tr = solve_system(sys, n, problem.solver, **dict(problem.solver_options or {}))
-    times = np.r_[0.0, np.asarray(tr.time, float)]
-    theta = np.r_[float(sys.theta0), np.asarray(tr.theta_turn, float)]
-    ok = swings < times.size  # the model may come to rest first
-    swings = swings[ok]
-    gain = float(values.get("observation.gain", 1.0))
-    return ok, times[swings], gain * theta[swings]
-
-
-def _compare_turns(problem, values: Mapping[str, float]) -> tuple[TurnDifferences | None, TurnDifferences | None,
-                                                                  list[str]]:
-    tp = problem.turning_points
-    period = float(tp.period)
-    waveform = hasattr(problem, "sample_time")
-    swing = np.r_[0, np.asarray(tp.swing, np.int64)]
-    t_rec = np.r_[float(tp.release_time), np.asarray(tp.time, float)]
-    y_rec = np.r_[float(tp.release_theta), np.asarray(tp.theta, float)]
-    comments = []
-    keep = np.ones(swing.size, bool)
-    first = float(problem.data.time[0])
-    if t_rec[0] <= first + 0.05 * period:  # a reference at the record's edge: extrapolated, not measured whole
-        keep[0] = False
-    if math.isfinite(float(getattr(tp, "stop_time", math.nan))) and tp.stop_time == t_rec[-1]:
-        keep[-1] = False  # a stop is no turning point of the free motion
-    swing, t_rec, y_rec = swing[keep], t_rec[keep], y_rec[keep]
-    if swing.size < MIN_TURNS:
-        return None, None, [f"only {swing.size} turning points to hold the model against"]
-    ok, t_mod, y_mod = _model_turns(problem, values, swing)
-    if not ok.all():
-        comments.append(f"the model comes to rest after {int(ok.sum())} of the record's {ok.size} turning points")
-    swing, t_rec, y_rec = swing[ok], t_rec[ok], y_rec[ok]
-    if swing.size < MIN_TURNS:
-        return None, None, comments
-    if waveform:
-        t_mod = t_mod + float(values["observation.t_release"])
-        centre = -float(values["observation.offset"]) - float(values["observation.offset_rate"]) * (
-            t_mod - problem.observation.t_ref)
-        side = np.sign(y_mod)
-        amp_rec, amp_mod = side * (y_rec - centre), np.abs(y_mod)
-    else:  # a turning-point fit: its readings are amplitudes about the estimated centre, times since release
-        t_mod = t_mod + float(tp.release_time)
-        curve = problem.curves[0]
-        rows = np.searchsorted(curve.swing, swing)
-        amp_rec, amp_mod = curve.y[rows], problem.expected(values)[rows]
-    phase = 2.0 * math.pi * (t_rec - t_mod) / period
-    d_amp = amp_rec - amp_mod
-    out = []
-    for what, d, floor in (("phase", phase, 1e-6), ("amplitude", d_amp, 1e-6 * float(np.max(np.abs(amp_rec))))):
-        if what == "amplitude" and getattr(problem, "quantity", "angle") == "angular_velocity":
-            out.append(None)  # the rate's zeros carry no measured angle
-            continue
-        s = turn_scatter(d, floor)
-        size = amp_rec if what == "amplitude" else None
-        out.append(TurnDifferences(what, swing, t_rec, d, s, smooth_trend(swing, d), size) if math.isfinite(s)
-                   else None)
-    return out[0], out[1], comments
-
-
-# -- the waveform fit against the turning-point fit of the same record -----------------------------
-
-def turning_point_refit(problem, lsq, *, seed: int = 0):
-    """The turning-point (``model = "amplitude"``) fit of a waveform problem's scene and record.
-
-    Least squares from the waveform fit's values, checked against the measured period and with
-    the held omega0's uncertainty, as ``escfit fit`` does.  Returns the least-squares result and
-    the turning-point problem or, when the record's turning points cannot be fitted so, the
-    reason (str).
-    """
-    from ..balance.problems.recorded import problem_from_series
-    from ..core.errors import EscfitError
-    from ..inference.lsq import least_squares
-    from ..inference.reconcile import reconcile, with_held_uncertainty
-
-    scene = problem.given_scene
-    obs = {k: v for k, v in dict(scene.extra.get("observation", {})).items() if k in ("offset", "offset_rate")}
-    scene = replace(scene, extra={**scene.extra, "observation": {**obs, "model": "amplitude"}})
-    try:
-        turns = problem_from_series(scene, problem.data, solver=problem.solver,
-                                    solver_options=dict(problem.solver_options or {}), turns=problem.turning_points)
-        start = {n: float(lsq.values[n]) for n in turns.names if n in lsq.values and not n.startswith("observation.")}
-        fit = least_squares(turns, n_starts=1, seed=seed, start=start)
-        fit, _, unresolved = reconcile(turns, fit, seed=seed)
-        fit, _ = with_held_uncertainty(turns, fit)
-    except (EscfitError, ValueError, ArithmeticError) as exc:
-        return f"no turning-point fit to compare with ({str(exc).splitlines()[0][:160]})"
-    if unresolved:
-        return "the turning-point fit of this record contradicts its measured period: not compared"
-    return fit, turns
-
-
-def _compare_parameters(wave, turns, held_by) -> list[ParameterDifference]:
-    out = []
-    for name in COMPARED:
-        if name not in wave.names:
-            continue
-        i = wave.names.index(name)
-        if name in turns.names:
-            j = turns.names.index(name)
-            b, b_se = float(turns.value[j]), float(turns.stderr[j])
-        elif name == "oscillator.omega0" and name in turns.values:  # held at the measured period's value
-            mp = getattr(held_by, "measured_period", None)
-            b = float(turns.values[name])
-            b_se = b * mp.stderr / mp.period if mp is not None and math.isfinite(mp.stderr) else 0.0
-        else:
-            continue
-        a, a_se = float(wave.value[i]), float(wave.stderr[i])
-        if math.isfinite(a_se) and math.isfinite(b_se):
-            out.append(ParameterDifference(name, a, a_se, b, b_se))
-    return out
-
-
 # -- the decision -------------------------------------------------------------------------------
 
-def check_agreement(problem, lsq, *, seed: int = 0) -> Agreement | None:
-    """Hold a fit of a sampled record against the record (see the module docstring).
+@dataclass(frozen=True)
+class ModelFacts:
+    """What the decision needs of the fitted model: whether it fitted every sample, the readings'
+    unit, its effects (``"drag"``, ``"coulomb"`` ...) and its restoring law."""
+
+    waveform: bool
+    unit: str = "rad"
+    effects: frozenset = frozenset()
+    restoring: str = "spring"
+
+
+def judge(phase: TurnDifferences | None, amplitude: TurnDifferences | None, parameters: list[ParameterDifference],
+          model: ModelFacts, *, periods: float, comments: list[str]) -> Agreement:
+    """The findings, warnings and advice of the comparisons (see the module docstring).
 
     Parameters
     ----------
-    problem
-        A fit problem of a sampled record (:func:`escfit.balance.problems.recorded.problem_from_series`
-        keeps its ``turning_points`` and ``given_scene``); ``None`` is returned for any other.
-    lsq
-        Its least-squares result (:class:`~escfit.inference.lsq.LeastSquaresResult`).
-    seed
-        For the turning-point refit of a waveform fit.
+    phase, amplitude : TurnDifferences or None
+        The record's turning points against the model's.
+    parameters : list of ParameterDifference
+        A waveform fit's estimates against the turning-point fit's (empty for other fits).
+    model : ModelFacts
+        What was fitted.
+    periods : float
+        Periods the compared turning points span.
+    comments : list of str
+        What could not be compared.
 
     Returns
     -------
-    Agreement or None
+    Agreement
     """
-    from ..core.errors import EscfitError
-
-    if getattr(problem, "turning_points", None) is None:
-        return None
-    waveform = hasattr(problem, "sample_time")
-    try:
-        phase, amplitude, comments = _compare_turns(problem, lsq.values)
-    except (EscfitError, ValueError, ArithmeticError) as exc:
-        phase, amplitude, comments = None, None, [f"the model's turning points could not be computed ({exc})"]
     findings, cautions = [], []
-    unit = getattr(problem, "reading_units", "rad")
     driven = amplitude is not None and amplitude.start_growth > START_SIGMAS
     for d in (phase, amplitude):
         if d is None:
             continue
-        clause = _drift_clause(d, unit)
+        clause = _drift_clause(d, model.unit)
         if driven and d.start_stands_out:
-            findings.append(_start_clause(d, unit))
+            findings.append(_start_clause(d, model.unit))
         elif d.drift_sigmas > DRIFT_SIGMAS:
             # the phase of a waveform fit is what it fits; an envelope or the times of a turning-point
             # fit that drift say the model misses something, without making its estimates another record's
             decisive = d.swing.size >= MIN_DRIFT_TURNS
-            if decisive and ((waveform and d.what == "phase" and abs(d.drift) > PHASE_GROSS) or d.gross):
+            if decisive and ((model.waveform and d.what == "phase" and abs(d.drift) > PHASE_GROSS) or d.gross):
                 findings.append(clause)
             else:
-                cautions.append(clause + _remedy(problem, d))
-    parameters: list[ParameterDifference] = []
-    if waveform and getattr(problem, "given_scene", None) is not None and \
-            getattr(problem, "quantity", "angle") == "angle":
-        turns = turning_point_refit(problem, lsq, seed=seed)
-        if isinstance(turns, str):
-            comments.append(turns)
-        else:
-            parameters = _compare_parameters(lsq, *turns)
-            bad = [p for p in parameters if p.sigmas > PARAMETER_SIGMAS]
-            said = ", ".join(f"{_short(p.name)} by {p.sigmas:.2g} standard errors ({p.waveform:.4g} against "
-                             f"{p.turning_points:.4g}, {100 * p.relative:.2g} %)" for p in bad)
-            if any(p.material for p in bad):
-                findings.append("the waveform and turning-point fits disagree on " + said)
-            elif bad:
-                cautions.append("the waveform and turning-point fits differ on " + said + ", beyond their "
-                                "standard errors but by less than matters (" + _materiality() + "): the intervals "
-                                "are too narrow for this record")
-    tp = problem.turning_points
-    span = float(phase.time[-1] - phase.time[0]) if phase is not None else math.nan
-    periods = span / float(tp.period) if math.isfinite(span) else float(tp.swing.size) / 2.0
-    advice = _advice(problem, phase, amplitude, waveform) if findings else ""
-    return Agreement("waveform" if waveform else "amplitude", periods, phase, amplitude, tuple(parameters),
+                cautions.append(clause + _remedy(model, d))
+    bad = [p for p in parameters if p.sigmas > PARAMETER_SIGMAS]
+    said = ", ".join(f"{_short(p.name)} by {p.sigmas:.2g} standard errors ({p.waveform:.4g} against "
+                     f"{p.turning_points:.4g}, {100 * p.relative:.2g} %)" for p in bad)
+    if any(p.material for p in bad):
+        findings.append("the waveform and turning-point fits disagree on " + said)
+    elif bad:
+        cautions.append("the waveform and turning-point fits differ on " + said + ", beyond their standard errors "
+                        "but by less than matters (" + _materiality() + "): the intervals are too narrow for this "
+                        "record")
+    advice = _advice(model, phase, amplitude) if findings else ""
+    return Agreement("waveform" if model.waveform else "amplitude", periods, phase, amplitude, tuple(parameters),
                      tuple(findings), tuple(cautions), advice, tuple(comments))
 
 
@@ -491,11 +366,10 @@ def _drift_clause(d: TurnDifferences, unit: str) -> str:
             f"({d.drift_sigmas:.0f} standard errors of a turning point)")
 
 
-def _remedy(problem, d: TurnDifferences) -> str:
+def _remedy(model: ModelFacts, d: TurnDifferences) -> str:
     """What a drift of the envelope or of the times of a turning-point fit suggests."""
-    names = {n.split(".")[0] for n in problem.scene.params.params}
     if d.what == "amplitude":
-        missing = [f"[effects.{k}]" for k in ("drag", "coulomb") if k not in names]
+        missing = [f"[effects.{k}]" for k in ("drag", "coulomb") if k not in model.effects]
         law = f" (add {' or '.join(missing)})" if missing else ""
         return f": the model's damping law does not follow the record's decay{law}; the estimates are a compromise"
     return (": the record's period changes along it (an amplitude-dependent restoring torque, a temperature drift); "
@@ -512,18 +386,17 @@ def _start_clause(d: TurnDifferences, unit: str) -> str:
             f"{int(d.swing[k])} at t = {d.time[k]:.4g} s lies {what} ({z[k]:.0f} standard errors) from the model's")
 
 
-def _advice(problem, phase, amplitude, waveform: bool) -> str:
+def _advice(model: ModelFacts, phase, amplitude) -> str:
     start = amplitude is not None and amplitude.start_growth > START_SIGMAS and any(
         d is not None and d.start_stands_out for d in (phase, amplitude))
     if start:
         return ("start the fit where the free decay starts: [recording] start (or release_s) after the last push, "
                 "or leave them out so that escfit finds it")
-    names = {n.split(".")[0] for n in problem.scene.params.params}
     steps = []
-    if waveform:
+    if model.waveform:
         steps.append('fit the turning points ([observation] model = "amplitude"), which a drifting phase does '
                      "not bias")
-    if problem.scene.restoring != "pendulum" and "stiffening" not in names:
+    if model.restoring != "pendulum" and "stiffening" not in model.effects:
         steps.append("add an amplitude-dependent restoring torque ([effects.stiffening] k3) if the period changes "
                      "with the amplitude")
     steps.append('or fit a shorter window ([recording] stop = "...")')

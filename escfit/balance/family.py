@@ -277,6 +277,13 @@ class BalanceFamily(FamilyBase):
 
         return detect_format(path)
 
+    def agreement(self, problem, lsq, refit, *, seed: int = 0):
+        """A fit of a sampled record held against the record
+        (:func:`escfit.balance.problems.agreement.check_agreement`); ``None`` for other recordings."""
+        from .problems.agreement import check_agreement
+
+        return check_agreement(problem, lsq, refit, seed=seed)
+
     def problem(self, scene, data, **options):
         self.refuse_unknown_options(options, getattr(scene, "where", None))
         return make_problem(scene, data, **options)

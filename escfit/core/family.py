@@ -121,6 +121,12 @@ class Family(Protocol):
         """The units of a recording file as ``(unit name, recording)``, or ``None`` when the file
         is one unit (see :meth:`splits_units`)."""
 
+    def agreement(self, problem, lsq, refit, *, seed: int = 0) -> Any:
+        """The fit held against the record it was fitted to (an
+        :class:`escfit.analysis.agreement.Agreement`), or ``None`` when the family has no such
+        check for this problem; ``refit(problem, start, seed) -> (result, unresolved)`` is least
+        squares of another problem of the same record."""
+
 
 class FamilyBase:
     """Defaults of the optional parts of :class:`Family`, for families to inherit.
@@ -180,6 +186,9 @@ class FamilyBase:
         return False
 
     def units_of(self, path, *, notch_deg: float | None = None) -> list[tuple[str, Any]] | None:
+        return None
+
+    def agreement(self, problem, lsq, refit, *, seed: int = 0) -> Any:
         return None
 
     def refuse_unknown_options(self, options: Mapping[str, Any], where: str | None = None) -> None:

@@ -201,8 +201,8 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
                      "its uncertainty is in the least-squares intervals but not in the posterior's")
     timings = {"least_squares_s": time.perf_counter() - clock}
     clock = time.perf_counter()
-    check = getattr(problem, "agreement", None)  # the fit held against the record itself, where it has one
-    agreement = check(lsq, seed=seed) if check is not None else None
+    model = getattr(getattr(problem, "scene", None), "model", None)  # the fit held against the record itself
+    agreement = family(model).agreement(problem, lsq, _refit, seed=seed) if isinstance(model, str) else None
     if agreement is not None:
         timings["agreement_s"] = time.perf_counter() - clock
     mc = None
@@ -477,3 +477,13 @@ def _predictive(problem: Problem, mc: McmcResult, obs_coords: dict, reading_unit
     return (xr.Dataset({"expected": (("chain", "draw", "obs"), exp, {"units": reading_units})}, coords=coords),
             xr.Dataset({"reading": (("chain", "draw", "obs"), ll)}, coords=coords,
                        attrs={"note": "pointwise log-likelihood on the thinned draws of posterior_predictive"}))
+
+
+def _refit(problem, start, seed: int):
+    """Least squares of another problem of the same record (the agreement check's turning-point
+    fit): from ``start``, checked against the measured period, with the held omega0's
+    uncertainty; ``(result, unresolved)``."""
+    lsq = least_squares(problem, n_starts=1, seed=seed, start=start)
+    lsq, _, unresolved = reconcile(problem, lsq, seed=seed)
+    lsq, _ = with_held_uncertainty(problem, lsq)
+    return lsq, unresolved

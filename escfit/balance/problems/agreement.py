@@ -1,0 +1,180 @@
+"""The fit of a sampled balance or pendulum record held against the record itself.
+
+The balance family's side of :mod:`escfit.analysis.agreement`: the fitted model run from its
+release to the record's last turning point (:func:`escfit.balance.solvers.solve_system`), its
+turning points compared with the record's (phase and amplitude), and, for a waveform fit, the
+turning-point fit of the same scene and record compared with it; the decision is the analysis
+layer's (:func:`escfit.analysis.agreement.judge`).  The refit's least squares is handed in by the
+inference layer (``refit``), which sits above the families.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from typing import Callable, Mapping
+
+import numpy as np
+
+from ...analysis.agreement import (COMPARED, MIN_TURNS, Agreement, ModelFacts, ParameterDifference,
+                                   TurnDifferences, judge, smooth_trend, turn_scatter)
+
+__all__ = ["check_agreement", "turning_point_refit"]
+
+
+def _model_turns(problem, values: Mapping[str, float], swings: np.ndarray):
+    """The model's turning points at ``swings``: times on the record's clock (s) and signed
+    readings about the model's centre (the readings' unit; amplitudes for a turning-point fit)."""
+    from ..solvers import solve_system
+
+    sys = problem.scene.system(values)
+    n = int(swings.max())
+    tr = solve_system(sys, n, problem.solver, **dict(problem.solver_options or {}))
+    times = np.r_[0.0, np.asarray(tr.time, float)]
+    theta = np.r_[float(sys.theta0), np.asarray(tr.theta_turn, float)]
+    ok = swings < times.size  # the model may come to rest first
+    swings = swings[ok]
+    gain = float(values.get("observation.gain", 1.0))
+    return ok, times[swings], gain * theta[swings]
+
+
+def _compare_turns(problem, values: Mapping[str, float]) -> tuple[TurnDifferences | None, TurnDifferences | None,
+                                                                  list[str]]:
+    tp = problem.turning_points
+    period = float(tp.period)
+    waveform = hasattr(problem, "sample_time")
+    swing = np.r_[0, np.asarray(tp.swing, np.int64)]
+    t_rec = np.r_[float(tp.release_time), np.asarray(tp.time, float)]
+    y_rec = np.r_[float(tp.release_theta), np.asarray(tp.theta, float)]
+    comments = []
+    keep = np.ones(swing.size, bool)
+    first = float(problem.data.time[0])
+    if t_rec[0] <= first + 0.05 * period:  # a reference at the record's edge: extrapolated, not measured whole
+        keep[0] = False
+    if math.isfinite(float(getattr(tp, "stop_time", math.nan))) and tp.stop_time == t_rec[-1]:
+        keep[-1] = False  # a stop is no turning point of the free motion
+    swing, t_rec, y_rec = swing[keep], t_rec[keep], y_rec[keep]
+    if swing.size < MIN_TURNS:
+        return None, None, [f"only {swing.size} turning points to hold the model against"]
+    ok, t_mod, y_mod = _model_turns(problem, values, swing)
+    if not ok.all():
+        comments.append(f"the model comes to rest after {int(ok.sum())} of the record's {ok.size} turning points")
+    swing, t_rec, y_rec = swing[ok], t_rec[ok], y_rec[ok]
+    if swing.size < MIN_TURNS:
+        return None, None, comments
+    if waveform:
+        t_mod = t_mod + float(values["observation.t_release"])
+        centre = -float(values["observation.offset"]) - float(values["observation.offset_rate"]) * (
+            t_mod - problem.observation.t_ref)
+        side = np.sign(y_mod)
+        amp_rec, amp_mod = side * (y_rec - centre), np.abs(y_mod)
+    else:  # a turning-point fit: its readings are amplitudes about the estimated centre, times since release
+        t_mod = t_mod + float(tp.release_time)
+        curve = problem.curves[0]
+        rows = np.searchsorted(curve.swing, swing)
+        amp_rec, amp_mod = curve.y[rows], problem.expected(values)[rows]
+    phase = 2.0 * math.pi * (t_rec - t_mod) / period
+    d_amp = amp_rec - amp_mod
+    out = []
+    for what, d, floor in (("phase", phase, 1e-6), ("amplitude", d_amp, 1e-6 * float(np.max(np.abs(amp_rec))))):
+        if what == "amplitude" and getattr(problem, "quantity", "angle") == "angular_velocity":
+            out.append(None)  # the rate's zeros carry no measured angle
+            continue
+        s = turn_scatter(d, floor)
+        size = amp_rec if what == "amplitude" else None
+        out.append(TurnDifferences(what, swing, t_rec, d, s, smooth_trend(swing, d), size) if math.isfinite(s)
+                   else None)
+    return out[0], out[1], comments
+
+
+# -- the waveform fit against the turning-point fit of the same record -----------------------------
+
+def turning_point_refit(problem, lsq, refit, *, seed: int = 0):
+    """The turning-point (``model = "amplitude"``) fit of a waveform problem's scene and record.
+
+    ``refit(problem, start, seed)`` is the inference layer's least squares (checked against the
+    measured period, with the held omega0's uncertainty, as ``escfit fit`` does), returning the
+    result and whether the period was left unresolved.  Returns the least-squares result and the
+    turning-point problem or, when the record's turning points cannot be fitted so, the reason (str).
+    """
+    from ...core.errors import EscfitError
+    from .recorded import problem_from_series
+
+    scene = problem.given_scene
+    obs = {k: v for k, v in dict(scene.extra.get("observation", {})).items() if k in ("offset", "offset_rate")}
+    scene = replace(scene, extra={**scene.extra, "observation": {**obs, "model": "amplitude"}})
+    try:
+        turns = problem_from_series(scene, problem.data, solver=problem.solver,
+                                    solver_options=dict(problem.solver_options or {}), turns=problem.turning_points)
+        start = {n: float(lsq.values[n]) for n in turns.names if n in lsq.values and not n.startswith("observation.")}
+        fit, unresolved = refit(turns, start, seed)
+    except (EscfitError, ValueError, ArithmeticError) as exc:
+        return f"no turning-point fit to compare with ({str(exc).splitlines()[0][:160]})"
+    if unresolved:
+        return "the turning-point fit of this record contradicts its measured period: not compared"
+    return fit, turns
+
+
+def _compare_parameters(wave, turns, held_by) -> list[ParameterDifference]:
+    out = []
+    for name in COMPARED:
+        if name not in wave.names:
+            continue
+        i = wave.names.index(name)
+        if name in turns.names:
+            j = turns.names.index(name)
+            b, b_se = float(turns.value[j]), float(turns.stderr[j])
+        elif name == "oscillator.omega0" and name in turns.values:  # held at the measured period's value
+            mp = getattr(held_by, "measured_period", None)
+            b = float(turns.values[name])
+            b_se = b * mp.stderr / mp.period if mp is not None and math.isfinite(mp.stderr) else 0.0
+        else:
+            continue
+        a, a_se = float(wave.value[i]), float(wave.stderr[i])
+        if math.isfinite(a_se) and math.isfinite(b_se):
+            out.append(ParameterDifference(name, a, a_se, b, b_se))
+    return out
+
+
+def check_agreement(problem, lsq, refit: Callable, *, seed: int = 0) -> Agreement | None:
+    """Hold a fit of a sampled record against the record (see :mod:`escfit.analysis.agreement`).
+
+    Parameters
+    ----------
+    problem
+        A fit problem of a sampled record (:func:`escfit.balance.problems.recorded.problem_from_series`
+        keeps its ``turning_points`` and ``given_scene``); ``None`` is returned for any other.
+    lsq
+        Its least-squares result (:class:`~escfit.inference.lsq.LeastSquaresResult`).
+    refit
+        ``refit(problem, start, seed) -> (result, unresolved)``: least squares of another problem.
+    seed
+        For the turning-point refit of a waveform fit.
+
+    Returns
+    -------
+    Agreement or None
+    """
+    from ...core.errors import EscfitError
+
+    if getattr(problem, "turning_points", None) is None:
+        return None
+    waveform = hasattr(problem, "sample_time")
+    try:
+        phase, amplitude, comments = _compare_turns(problem, lsq.values)
+    except (EscfitError, ValueError, ArithmeticError) as exc:
+        phase, amplitude, comments = None, None, [f"the model's turning points could not be computed ({exc})"]
+    parameters: list[ParameterDifference] = []
+    if waveform and getattr(problem, "given_scene", None) is not None and \
+            getattr(problem, "quantity", "angle") == "angle":
+        turns = turning_point_refit(problem, lsq, refit, seed=seed)
+        if isinstance(turns, str):
+            comments.append(turns)
+        else:
+            parameters = _compare_parameters(lsq, *turns)
+    tp = problem.turning_points
+    span = float(phase.time[-1] - phase.time[0]) if phase is not None else math.nan
+    periods = span / float(tp.period) if math.isfinite(span) else float(tp.swing.size) / 2.0
+    model = ModelFacts(waveform, getattr(problem, "reading_units", "rad"),
+                       frozenset(n.split(".")[0] for n in problem.scene.params.params), problem.scene.restoring)
+    return judge(phase, amplitude, parameters, model, periods=periods, comments=comments)
