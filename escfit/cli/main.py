@@ -590,9 +590,16 @@ def _describe(ds, sc) -> str:
 
 
 def main() -> None:
-    """Console-script entry point."""
+    """Console-script entry point; the process ends without the interpreter's teardown (see
+    :mod:`escfit.cli.exit`)."""
+    from .exit import exit_status, finish
+
     quiet_third_party_warnings()
-    cli(prog_name="escfit")
+    try:
+        cli(prog_name="escfit")
+    except SystemExit as exc:
+        finish(exit_status(exc.code))
+    finish(0)
 
 
 if __name__ == "__main__":
