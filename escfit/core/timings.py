@@ -54,6 +54,7 @@ def since_process_start() -> tuple[float, float]:
 @contextmanager
 def phase(name: str) -> Iterator[None]:
     """Time the enclosed block as phase ``name`` (wall and CPU seconds, added to earlier ones)."""
+    own = _TOTALS.setdefault(name, [0.0, 0.0])  # listed in the order the phases start
     entry = [name, time.perf_counter(), time.process_time(), 0.0, 0.0]
     _OPEN.append(entry)
     try:
@@ -62,7 +63,6 @@ def phase(name: str) -> Iterator[None]:
         wall = time.perf_counter() - entry[1]
         cpu = time.process_time() - entry[2]
         _OPEN.remove(entry)
-        own = _TOTALS.setdefault(name, [0.0, 0.0])
         own[0] += wall - entry[3]
         own[1] += cpu - entry[4]
         if _OPEN:  # charged to this phase, not again to the one around it
