@@ -18,7 +18,7 @@ import sys
 import threading
 from typing import NoReturn
 
-__all__ = ["exit_status", "finish"]
+__all__ = ["exit_status", "finish", "run_and_exit"]
 
 
 def exit_status(code) -> int:
@@ -48,3 +48,12 @@ def finish(status: int) -> NoReturn:
             pass
     atexit._run_exitfuncs()
     os._exit(status)
+
+
+def run_and_exit(command, **kwargs) -> NoReturn:
+    """Run a click ``command`` as a program (standalone) and :func:`finish` with its exit status."""
+    try:
+        command(**kwargs)
+    except SystemExit as exc:
+        finish(exit_status(exc.code))
+    finish(0)

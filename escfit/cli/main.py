@@ -405,8 +405,7 @@ def _read_recipe(path: Path) -> dict:
 @click.option("--force", is_flag=True, help="Replace an existing results file.")
 @click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None, help="Also write a report.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-@click.option("--timings", "show_timings", is_flag=True,
-              help="Print the wall and CPU seconds of each phase (start-up, imports, scene, record, fit, ...) on stderr.")
+@click.option("--timings", "show_timings", is_flag=True, help="Print each phase's wall and CPU seconds on stderr.")
 def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoint_every, burn, unit_id, material, fmt, time_column, sample_rate,
         angle_column, angle_unit, counts_per_turn, scale, start_time, stop_time, release_time, solver, moves, notch_deg,
         resume, force, report_path, quiet, show_timings):
@@ -416,7 +415,7 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoi
     """
     from ..core import timings
 
-    startup = timings.since_process_start()
+    startup = timings.since_process_start()  # interpreter, click and the command line's own imports
     with timings.phase("imports"):
         from ..core.errors import SceneError
         from ..inference import fit as run_fit
@@ -590,16 +589,11 @@ def _describe(ds, sc) -> str:
 
 
 def main() -> None:
-    """Console-script entry point; the process ends without the interpreter's teardown (see
-    :mod:`escfit.cli.exit`)."""
-    from .exit import exit_status, finish
+    """Console-script entry point (the process ends as :func:`escfit.cli.exit.run_and_exit` says)."""
+    from .exit import run_and_exit
 
     quiet_third_party_warnings()
-    try:
-        cli(prog_name="escfit")
-    except SystemExit as exc:
-        finish(exit_status(exc.code))
-    finish(0)
+    run_and_exit(cli, prog_name="escfit")
 
 
 if __name__ == "__main__":
