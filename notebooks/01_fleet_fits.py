@@ -37,8 +37,8 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
+import escfit
 import escfit.study as study
-from escfit.balance.recordings import read_unit_curve
 from escfit.study import plots
 
 HERE = Path.cwd()
@@ -57,7 +57,7 @@ settings
 
 # %%
 fleet = study.load_fleet(settings.fleets / "angle")
-curve = read_unit_curve(fleet.recordings)
+curve = escfit.read_recording(fleet.recordings)  # a balance unit curve: every unit, every load
 print(fleet.spec.population)
 fig, axes = plt.subplots(1, 3, figsize=(12, 3.3), sharey=True)
 for ax, load in zip(axes, fleet.spec.rig.loads):

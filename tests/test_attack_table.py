@@ -19,8 +19,10 @@ import stat
 
 import pytest
 
+from .attack_files import HOSTILE_FILES
 from .conftest import DATASETS
 from .test_cli_safety import run
+from .test_fuzz_inputs import memory_ceiling
 
 RIG = DATASETS / "friction" / "monday1965_session_1095_steel.csv"
 RIG_SCENE = DATASETS / "friction" / "monday1965_rig.toml"
@@ -225,6 +227,11 @@ ATTACKS = [
     ("fit-many-out-is-a-file", lambda w: (w / "fleet").write_text("not a folder"),
      ["fit-many", "data.csv", "--scene", "rig.toml", "--out", "fleet", "--workers", "0"], ["fleet"]),
 ]
+ATTACKS += HOSTILE_FILES
+
+# address space a refused command may add to the test process: a reader whose memory followed a
+# declared, compressed or quadratic size would end in MemoryError (exit 1) under it
+MEMORY_CEILING = 1536 << 20
 
 
 @pytest.fixture
@@ -244,7 +251,8 @@ def test_an_attack_is_refused_in_one_line_and_changes_nothing(work, name, setup,
     if setup is not None:
         setup(work)
     before = snapshot(work)
-    r = run(*args)
+    with memory_ceiling(MEMORY_CEILING):
+        r = run(*args)
     lines = r.stderr.strip().splitlines()
     assert r.exit_code == 2, (r.exit_code, r.stderr[-2000:], r.stdout[-500:])
     assert len(lines) == 1, r.stderr

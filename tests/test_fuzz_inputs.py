@@ -42,22 +42,31 @@ def bounded(seconds: int = CASE_SECONDS):
         raise Hang(f"no answer after {seconds} s")
 
     old_handler = signal.signal(signal.SIGALRM, ring)
+    with memory_ceiling(MEMORY_HEADROOM):
+        signal.alarm(seconds)
+        try:
+            yield
+        finally:
+            signal.alarm(0)
+            signal.signal(signal.SIGALRM, old_handler)
+
+
+@contextmanager
+def memory_ceiling(extra: int):
+    """Run the body with at most ``extra`` bytes of address space above the process's own."""
     soft, hard = resource.getrlimit(resource.RLIMIT_AS)
-    used = _address_space()
-    limit = used + MEMORY_HEADROOM if used else resource.RLIM_INFINITY
+    used = address_space()
+    limit = used + extra if used else resource.RLIM_INFINITY
     if hard != resource.RLIM_INFINITY:
         limit = min(limit, hard)
     resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
-    signal.alarm(seconds)
     try:
         yield
     finally:
-        signal.alarm(0)
-        signal.signal(signal.SIGALRM, old_handler)
         resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
 
 
-def _address_space() -> int:
+def address_space() -> int:
     try:
         for line in Path("/proc/self/status").read_text().splitlines():
             if line.startswith("VmSize:"):

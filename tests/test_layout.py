@@ -7,7 +7,7 @@ guarded by ``if TYPE_CHECKING:`` never run, so the layering check ignores them; 
 counts them (:data:`FULL_GRAPH`): a cycle hidden behind TYPE_CHECKING is still two modules that
 each need the other, and a reader of either must hold both in mind.  Importing a module runs its
 packages' ``__init__`` too, but that implicit step is not an edge: only what a file names is.
-Dynamic imports (``importlib.import_module`` of the scene's ``MODELS`` strings) are not seen.
+Dynamic imports (``importlib.import_module`` of the family registry's entry paths) are not seen.
 """
 
 from __future__ import annotations
@@ -22,7 +22,14 @@ PACKAGE = "escfit"
 # Lowest first.  An import may go to the same or a lower layer; the model families share a layer
 # but must not import each other.  The top-level escfit/__init__.py (the public facade) is exempt.
 # results (the schema every layer may read or write) stands on core only
-LAYERS = [("core",), ("analysis",), ("results",), ("likelihood",), ("balance", "friction", "geneva", "verge"), ("inference",),
+# The model families' layer is the packages of the registered built-in families (escfit.core.family).
+def _family_packages() -> tuple[str, ...]:
+    from escfit.core.family import BUILTIN_FAMILIES
+
+    return tuple(sorted({entry.split(":")[0].split(".")[1] for entry in BUILTIN_FAMILIES.values()}))
+
+
+LAYERS = [("core",), ("analysis",), ("results",), ("likelihood",), _family_packages(), ("inference",),
           ("report",), ("study",), ("cli",), ("__main__",)]
 FACADE = PACKAGE
 
@@ -220,3 +227,27 @@ def test_module_length():
     assert not new, f"modules over the style guide's {MAX_LINES} lines: " + ", ".join(f"{m} ({lengths[m]})" for m in new)
     shorter = sorted((KNOWN_LONG & set(MODULES)) - long)
     assert not shorter, f"down to {MAX_LINES} lines or fewer, remove from KNOWN_LONG: {shorter}"
+
+
+def _compares_family_name(tree: ast.AST, names: set[str]) -> list[int]:
+    """Lines of comparisons with a family's name (``model == "balance"``, ``model in ("verge", ...)``)."""
+    lines = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Compare):
+            for side in (node.left, *node.comparators):
+                consts = side.elts if isinstance(side, (ast.Tuple, ast.List, ast.Set)) else [side]
+                if any(isinstance(c, ast.Constant) and c.value in names for c in consts):
+                    lines.append(node.lineno)
+    return lines
+
+
+def test_layers_above_the_families_never_branch_on_a_family_name():
+    """The command line, reports, batch code and inference ask the family (escfit.core.family)."""
+    from escfit.core.family import BUILTIN_FAMILIES
+
+    names = set(BUILTIN_FAMILIES)
+    above = {group for layer in LAYERS[LAYERS.index(_family_packages()) + 1:] for group in layer}
+    found = [f"{m}:{line}" for m, p in MODULES.items() if len(m.split(".")) > 1 and m.split(".")[1] in above
+             for line in _compares_family_name(ast.parse(p.read_text(encoding="utf-8")), names)]
+    assert not found, "comparisons with a family's name (ask the family instead): " + ", ".join(found)
+    assert _compares_family_name(ast.parse('if m == "balance": pass'), names), "the check finds nothing"

@@ -16,7 +16,7 @@ import pytest
 
 from escfit.core.display import format_row
 from escfit.core.names import plain_name
-from escfit.report.quantities import half_swing_loss
+from escfit.balance.derived import half_swing_loss
 
 pytest.importorskip("matplotlib")
 pytest.importorskip("jinja2")

@@ -180,16 +180,16 @@ def _quiet(fn, *args, **kwargs):
 
 def _read(cat: Catalogue, doc: dict, where: str, data: str | None = None, options: dict | None = None):
     """Parse a scene document (and build its fit problem when a recording is given)."""
-    from escfit.core.scene import MODELS, model_module
+    from escfit.core.family import family_names, get_family
 
     model = doc.get("model")
-    if model not in MODELS:
+    if model not in family_names():
         return None
     # files read quickest first: a probe then reuses the cheapest document that reached a table
     cost = 0 if data is None else Path(data).stat().st_size if Path(data).exists() else 0
     cat.family, cat.where, cat.context = model, where, (copy.deepcopy(doc), data, dict(options or {}), cost)
     try:
-        scene = _quiet(model_module(model).parse, copy.deepcopy(doc), where=where, text="")
+        scene = _quiet(get_family(model).parse, copy.deepcopy(doc), where=where, text="")
         for p in getattr(getattr(scene, "params", None), "params", {}).values():
             # the unit a parameter ends in (a reader may set it after read_param, as for 1/N)
             cat.final.setdefault((model, re.sub(r"\[\d+\]", "[i]", p.name)), p.unit)
@@ -403,9 +403,9 @@ def declared(cat: Catalogue) -> dict:
     import escfit.core.params as cp
 
     out["param_table_keys"] = sorted(getattr(cp, "_TABLE_KEYS", ()))
-    from escfit.core.scene import MODELS
+    from escfit.core.family import family_names
 
-    out["models"] = list(MODELS)
+    out["models"] = family_names()
     return out
 
 

@@ -16,12 +16,12 @@ from typing import Any
 import numpy as np
 
 from ..core.errors import DataError, FitError
+from ..core.family import FamilyBase
 from ..core.scene import load_scene
-from .recordings import UnitCurve
 
-__all__ = ["FAMILY", "make_problem", "read_data"]
+__all__ = ["FAMILY", "BalanceFamily", "make_problem", "read_data"]
 
-PROBLEM_OPTIONS = {"solver", "solver_options", "unit", "fmt", "notch_deg", "recording"}
+PROBLEM_OPTIONS = frozenset({"solver", "solver_options", "unit", "fmt", "notch_deg", "recording"})
 
 
 def make_problem(scene, data, *, solver: str | None = None, solver_options: dict | None = None,
@@ -64,6 +64,7 @@ def make_problem(scene, data, *, solver: str | None = None, solver_options: dict
     from .recordings.timeseries import TimeSeries
     from .problems.curves import FitProblem
     from .problems.recorded import problem_from_series
+    from .recordings import UnitCurve
     from .recordings.rawsteps import warnings_of
 
     sc = load_scene(scene) if not hasattr(scene, "model") else scene
@@ -194,8 +195,8 @@ def _read_data(path, spec, fmt: str | None, notch_deg: float | None, default_not
     return read_recording(path, detected, **options)
 
 
-class BalanceFamily:
-    """Registry entry of ``model = "balance"`` (see :class:`~escfit.likelihood.problem.ModelFamily`)."""
+class BalanceFamily(FamilyBase):
+    """Registry entry of ``model = "balance"`` (see :class:`~escfit.core.family.Family`)."""
 
     name = "balance"
     # the stretch move by default: it follows the exactly degenerate ridges of Monday's phase
@@ -205,6 +206,52 @@ class BalanceFamily:
     # quick start (unit 3) for "de-t" (8.7 steps: docs/performance.md section 4e)
     fit_defaults = {"walkers": 32, "steps": "auto", "max_steps": 20000, "n_starts": 8, "predictive_draws": 400,
                     "moves": "stretch"}
+    package = "escfit.balance"
+    problem_options = PROBLEM_OPTIONS
+    recorders = ("unit-curve", "pulses", "timegrapher", "timeseries")
+
+    def describe(self, ds) -> list[str]:
+        """Half swings, first and last amplitude, last half period and rate."""
+        if not ds.sizes.get("swing", 0):
+            return []
+        a = ds["amplitude"].values
+        return [f"  {a.size} half swings; amplitude {a[0]:.6g} -> {a[-1]:.6g} rad; last half period "
+                f"{ds['half_period'].values[-1]:.10g} s, rate {ds['rate'].values[-1]:.4f} s/day"]
+
+    def record(self, scene, recorder: str, path, **options) -> None:
+        """A synthetic recording (:func:`escfit.balance.synthetic.recorders.record`)."""
+        from .synthetic.recorders import record
+
+        record(scene, recorder, path, **options)
+
+    def title(self, attrs) -> str:
+        from .derived import model_title
+
+        return model_title(attrs)
+
+    def derived(self, draws, attrs):
+        """Q, logarithmic decrement, amplitude lost per half swing, torques (:mod:`escfit.balance.derived`)."""
+        from .derived import derived_quantities
+
+        return derived_quantities(draws, attrs)
+
+    def splits_units(self, scene) -> bool:
+        """Scenes without a ``[recording]`` table (whose files are raw tables instead) may read
+        unit-curve files holding several units."""
+        return scene.extra.get("recording") is None
+
+    def units_of(self, path, *, notch_deg: float | None = None):
+        """The units of a unit-curve file (each a :class:`~escfit.balance.recordings.UnitCurve`);
+        None for any other file."""
+        from .recordings import read_unit_curve
+        from .recordings.detect import detect_format
+
+        try:
+            if detect_format(path) != "unit-curve":
+                return None
+        except (DataError, OSError):
+            return None  # not a unit curve: the family's reader on the worker says what is wrong
+        return split_units(read_unit_curve(path, notch_deg=notch_deg), path)
 
     @property
     def formats(self) -> dict[str, Any]:
@@ -221,16 +268,17 @@ class BalanceFamily:
         readers.update({n: partial(read_with_spec, spec=None, fmt=n) for n in FORMAT_NAMES if n not in ESCFIT_FORMATS})
         return {**readers, "raw": read_raw_series}
 
+    def read(self, path, fmt: str | None = None, **options):
+        """:func:`read_data`: options ``recording`` (a ``[recording]`` table) and ``notch_deg``."""
+        return read_data(path, fmt=fmt, **options)
+
     def detect(self, path) -> str:
         from .recordings.detect import detect_format
 
         return detect_format(path)
 
     def problem(self, scene, data, **options):
-        unknown = sorted(set(options) - PROBLEM_OPTIONS)
-        if unknown:
-            raise FitError(f"balance fits take no option(s) {unknown}; they take {sorted(PROBLEM_OPTIONS)}",
-                           getattr(scene, "where", None))
+        self.refuse_unknown_options(options, getattr(scene, "where", None))
         return make_problem(scene, data, **options)
 
     def figures(self, result) -> dict[str, bytes]:
@@ -242,6 +290,20 @@ class BalanceFamily:
         out = figures(result)
         decrement = decrement_figure(result)
         return out if decrement is None else {**out, "decrement per half swing": decrement}
+
+
+def split_units(curve, source) -> list[tuple[str, Any]]:
+    """``(unit name, UnitCurve)`` of each unit of a unit curve, in order of appearance; a curve
+    without a ``unit`` column is one unit named after its file."""
+    names = list(dict.fromkeys(map(str, curve.unit))) if curve.unit.size else [""]
+    out = []
+    for name in names:
+        rows = np.flatnonzero(curve.unit == name) if curve.unit.size else np.arange(curve.swing.size)
+        part = curve.select(rows)
+        if name:
+            part.unit = np.full(rows.size, name)
+        out.append((name or Path(curve.source or str(source)).stem, part))
+    return out
 
 
 FAMILY = BalanceFamily()

@@ -203,31 +203,33 @@ def simulate(scene, solver, swings, step, as_json, out, force, recorder, noise, 
     """Simulate SCENE (a TOML scene file), or record it with a synthetic recorder."""
     from ..core.atomic import refuse_existing
     from ..core.h5write import write_netcdf
-    from ..core.scene import load_scene, model_module
+    from ..core.family import get_family
+    from ..core.scene import load_scene
 
     if out:
         _check_outputs({"--out": out}, {"scene": scene})
         refuse_existing(out, force)
     sc = load_scene(scene)
+    family = get_family(sc.model)
     if recorder is not None:
         _record(sc, recorder, out, force=force, noise=noise, seed=seed, swings=swings, notch_deg=notch_deg,
                 notch_reading=notch_reading)
         return
-    module = model_module(sc.model)
     options = {}
     if swings is not None:
         options["swings"] = swings
     if step is not None:
         options["h"] = step
-    ds = module.simulate(sc, solver, **options) if solver else module.simulate(sc, **options)
+    ds = family.simulate(sc, solver, **options)
     if out:
         write_netcdf(ds, out, force=force)  # built in memory: a full disk is one error line, no partial file
     if as_json:
         from .summary import json_safe
 
-        click.echo(json.dumps(json_safe(module.json_summary(ds))))
+        click.echo(json.dumps(json_safe(family.json_summary(ds))))
     else:
-        click.echo(_describe(ds, sc))
+        click.echo("\n".join([f"{Path(sc.where).name}: model {sc.model}, status {ds.attrs.get('status')}",
+                              *family.describe(ds)]))
 
 
 def _record(sc, recorder: str, out: str | None, *, force: bool, noise, seed: int, swings, notch_deg,
@@ -235,10 +237,13 @@ def _record(sc, recorder: str, out: str | None, *, force: bool, noise, seed: int
     """``simulate --recorder``: one synthetic recording, written atomically."""
     from ..core.atomic import atomic_path
     from ..core.errors import SceneError
-    from ..balance.synthetic.recorders import record
+    from ..core.family import family_names, get_family
 
-    if sc.model != "balance":
-        raise SceneError(f"--recorder records balance scenes; this scene's model is {sc.model!r}", sc.where)
+    family = get_family(sc.model)
+    if recorder not in family.recorders:
+        takers = [n for n in family_names() if recorder in get_family(n).recorders]
+        raise SceneError(f"--recorder {recorder} records {' and '.join(takers)} scenes; this scene's model is "
+                         f"{sc.model!r}", sc.where)
     if not out:
         raise SceneError("--recorder needs --out FILE for the recording", sc.where)
     options = {} if swings is None else {"swings": swings}
@@ -253,7 +258,7 @@ def _record(sc, recorder: str, out: str | None, *, force: bool, noise, seed: int
     if recorder == "timegrapher":
         options["fmt"] = "csv" if str(out).lower().endswith(".csv") else "json"
     with atomic_path(out, force=force) as tmp:
-        record(sc, recorder, tmp, noise=noise, seed=seed, **options)
+        family.record(sc, recorder, tmp, noise=noise, seed=seed, **options)
     click.echo(f"wrote {out} ({recorder}, seed {seed})")
 
 
@@ -417,7 +422,6 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoi
 
     startup = timings.since_process_start()  # interpreter, click and the command line's own imports
     with timings.phase("imports"):
-        from ..core.errors import SceneError
         from ..inference import fit as run_fit
 
     recipe: dict = {}
@@ -459,31 +463,16 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoi
 
     with timings.phase("scene"):
         scene = load_scene(scene_path)
-    options = {}
-    if scene.model == "balance":
-        options = {"fmt": pick(fmt, "format", None), "notch_deg": pick(notch_deg, "notch_deg", None),
-                   "unit": pick(unit_id, "unit", None), "solver": pick(solver, "solver", None),
-                   "recording": {"time_column": _column(time_column), "sample_rate": sample_rate,
-                                 "angle_column": _column(angle_column), "angle_unit": angle_unit,
-                                 "counts_per_turn": counts_per_turn, "scale": scale, "start": start_time,
-                                 "stop": stop_time, "release": release_time}}
-    if scene.model == "friction_rig" and pick(material, "material", None) is not None:
-        options["material"] = pick(material, "material", None)
-    elif pick(material, "material", None) is not None:
-        raise SceneError(f"--material applies to friction_rig scenes; this scene's model is {scene.model!r}",
-                         scene_path)
-    if scene.model == "geneva" and pick(fmt, "format", None) is not None:
-        options["fmt"] = pick(fmt, "format", None)
-    if scene.model != "balance":
-        given = {"--format": pick(fmt, "format", None) if scene.model != "geneva" else None, "--notch-deg": pick(notch_deg, "notch_deg", None),
-                 "--unit": pick(unit_id, "unit", None), "--solver": pick(solver, "solver", None),
-                 "--time-column": time_column, "--sample-rate": sample_rate, "--angle-column": angle_column,
-                 "--angle-unit": angle_unit, "--counts-per-turn": counts_per_turn, "--scale": scale,
-                 "--start": start_time, "--stop": stop_time, "--release": release_time}
-        used = sorted(k for k, v in given.items() if v is not None)
-        if used:
-            raise SceneError(f"{', '.join(used)} appl{'ies' if len(used) == 1 else 'y'} to balance recordings; "
-                             f"this scene's model is {scene.model!r}", scene_path)
+    from ..core.family import check_options, get_family
+
+    options = check_options(get_family(scene.model), {
+        "fmt": pick(fmt, "format", None), "notch_deg": pick(notch_deg, "notch_deg", None),
+        "unit": pick(unit_id, "unit", None), "solver": pick(solver, "solver", None),
+        "material": pick(material, "material", None),
+        "recording": {"time_column": _column(time_column), "sample_rate": sample_rate,
+                      "angle_column": _column(angle_column), "angle_unit": angle_unit,
+                      "counts_per_turn": counts_per_turn, "scale": scale, "start": start_time,
+                      "stop": stop_time, "release": release_time}}, FIT_FLAGS, scene_path)
     result = _run_fit_interruptible(run_fit, scene, data, method=method, out=out, force=force,
                                     seed=pick(seed, "seed", 0),
                                     walkers=pick(walkers, "walkers", None), steps=pick(steps, "steps", None),
@@ -520,6 +509,13 @@ def _write_report(results: str, report_path: str, force: bool) -> None:
         raise ResultsError(f"the report was not written ({exc}); the results are saved in {results}: {again} "
                            "writes it") from None
     click.echo(f"wrote {report_path}")
+
+
+# A family's problem option -> the option of `escfit fit` that gives it (for refusals)
+FIT_FLAGS = {"fmt": "--format", "notch_deg": "--notch-deg", "unit": "--unit", "solver": "--solver",
+             "material": "--material", **{f"recording.{k}": f"--{k.replace('_', '-')}" for k in (
+                 "time_column", "sample_rate", "angle_column", "angle_unit", "counts_per_turn", "scale")},
+             "recording.start": "--start", "recording.stop": "--stop", "recording.release": "--release"}
 
 
 def _column(text: str | None):
@@ -570,22 +566,6 @@ def report(results, out, fmt, force, title):
     _check_outputs({"--out": out}, {"results": results},
                    companions={"--out": REPORT_FIGURE_NAMES} if fmt == "md" else None)
     click.echo(f"wrote {make_report(results, out, fmt=fmt, force=force, title=title)}")
-
-
-def _describe(ds, sc) -> str:
-    lines = [f"{Path(sc.where).name}: model {sc.model}, status {ds.attrs.get('status')}"]
-    if sc.model == "balance" and ds.sizes.get("swing", 0):
-        a = ds["amplitude"].values
-        lines.append(f"  {a.size} half swings; amplitude {a[0]:.6g} -> {a[-1]:.6g} rad; "
-                     f"last half period {ds['half_period'].values[-1]:.10g} s, rate {ds['rate'].values[-1]:.4f} s/day")
-    elif sc.model != "balance":
-        from ..core.scene import model_module
-
-        summary = model_module(sc.model).json_summary(ds)
-        for key, value in summary.items():
-            if key != "status" and not isinstance(value, (list, dict)):
-                lines.append(f"  {key}: {value}")
-    return "\n".join(lines)
 
 
 def main() -> None:

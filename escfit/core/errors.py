@@ -8,6 +8,7 @@ built-in exception so generic ``except ValueError`` handlers keep working.
 from __future__ import annotations
 
 import importlib
+import re
 from types import ModuleType
 
 __all__ = [
@@ -37,7 +38,13 @@ class EscfitError(Exception):
     def __init__(self, message: str, where: str | None = None):
         self.message = message
         self.where = where
-        super().__init__(f"{where}: {message}" if where else message)
+        text = f"{where}: {message}" if where else message
+        # a file or column name holding a line break would break the one-line message (and could
+        # forge a second line): control characters are shown escaped
+        super().__init__(_CONTROL.sub(lambda m: repr(m.group())[1:-1], text))
+
+
+_CONTROL = re.compile(r"[\x00-\x08\x0a-\x1f\x7f\x85\u2028\u2029]")
 
 
 class SceneError(EscfitError, ValueError):

@@ -1,13 +1,12 @@
 """Scene files: TOML documents naming a model and only the effects it should simulate.
 
-The top-level key ``model`` selects the model family; each family parses the rest of the
+The top-level key ``model`` selects the model family (:mod:`escfit.core.family`); each family parses the rest of the
 document into its own frozen scene object.  A scene keeps its source text so results can
 record exactly what produced them.
 """
 
 from __future__ import annotations
 
-import importlib
 import tomllib
 from pathlib import Path
 from typing import Any, Mapping, Protocol
@@ -15,7 +14,7 @@ from typing import Any, Mapping, Protocol
 from .errors import SceneError
 from .params import ParamSet
 
-__all__ = ["Scene", "load_scene", "parse_toml", "MODELS", "check_keys", "MAX_DEPTH", "MAX_SCENE_BYTES"]
+__all__ = ["Scene", "load_scene", "parse_toml", "check_keys", "MAX_DEPTH", "MAX_SCENE_BYTES"]
 
 # Deepest nesting of tables and arrays a scene or recipe may have: real ones use 3 or 4
 # (effects.escapement[1].X.prior); tomllib recurses once per level and fails with a bare
@@ -24,16 +23,6 @@ MAX_DEPTH = 16
 # Largest scene or recipe text, bytes: real ones are a few kB (a 1000-piece hairspring is 20 kB);
 # a million-piece spring (20 MB) would run for hours before any error could be reported
 MAX_SCENE_BYTES = 1_000_000
-
-# model name -> module that provides ``parse(doc, where, text) -> Scene`` and
-# ``simulate(scene, solver=..., **options) -> xarray.Dataset``.
-MODELS: dict[str, str] = {
-    "balance": "escfit.balance",
-    "geneva": "escfit.geneva",
-    "verge": "escfit.verge",
-    "friction_rig": "escfit.friction",
-}
-
 
 class Scene(Protocol):
     """What every model's scene object offers."""
@@ -88,11 +77,6 @@ def _deep_key(value: Any, budget: int, path: str = "") -> str | None:
     return None
 
 
-def model_module(name: str):
-    """Import the module implementing model ``name``."""
-    return importlib.import_module(MODELS[name])
-
-
 def load_scene(source: str | Path, *, text: str | None = None) -> "Scene":
     """Read and validate a scene.
 
@@ -135,9 +119,11 @@ def load_scene(source: str | Path, *, text: str | None = None) -> "Scene":
     elif text.startswith("\ufeff"):
         text = text[1:]
     doc = parse_toml(text, where)
+    from .family import family_names, get_family
+
     model = doc.get("model")
     if model is None:
-        raise SceneError(f"missing key 'model' (one of {sorted(MODELS)})", where)
-    if not isinstance(model, str) or model not in MODELS:
-        raise SceneError(f"unknown model {model!r}; known models: {sorted(MODELS)}", f"{where} [model]")
-    return model_module(model).parse(doc, where=where, text=text)
+        raise SceneError(f"missing key 'model' (one of {family_names()})", where)
+    if not isinstance(model, str) or model not in family_names():
+        raise SceneError(f"unknown model {model!r}; known models: {family_names()}", f"{where} [model]")
+    return get_family(model).parse(doc, where=where, text=text)

@@ -20,17 +20,18 @@ from pathlib import Path
 from typing import Any
 
 from ..core.errors import DataError, FitError
+from ..core.family import FamilyBase
 from ..core.scene import load_scene
 from .readers import Readings, read_readings
 
 __all__ = ["FAMILY", "RigFamily", "FORMAT", "PROBLEM_OPTIONS"]
 
 FORMAT = "rig-readings"
-PROBLEM_OPTIONS = {"material"}
+PROBLEM_OPTIONS = frozenset({"material"})
 
 
-class RigFamily:
-    """Registry entry of ``model = "friction_rig"`` (see :class:`~escfit.likelihood.problem.ModelFamily`).
+class RigFamily(FamilyBase):
+    """Registry entry of ``model = "friction_rig"`` (see :class:`~escfit.core.family.Family`).
 
     ``fit_defaults``: the log posterior is closed-form and vectorised over the ensemble, so
     32 walkers x 3000 steps (about 40 autocorrelation times of the Monday sessions' 5
@@ -38,6 +39,8 @@ class RigFamily:
     """
 
     name = "friction_rig"
+    package = "escfit.friction"
+    problem_options = PROBLEM_OPTIONS
     fit_defaults = {"walkers": 32, "steps": 3000, "n_starts": 8, "predictive_draws": 400}
 
     @property
@@ -60,7 +63,10 @@ class RigFamily:
             line = line.strip()
             if not line or line.startswith("#"):
                 continue
-            cells = [c.strip() for c in next(csv.reader([line]))]
+            try:
+                cells = [c.strip() for c in next(csv.reader([line]))]
+            except csv.Error as exc:  # a field beyond the csv module's limit
+                raise DataError(f"cannot read as a table ({exc})", f"{where}:{lineno}") from None
             names = {c.partition("_")[0] for c in cells if "_" in c}
             if {"load", "dw"} <= names:
                 return FORMAT
@@ -76,10 +82,7 @@ class RigFamily:
         """
         from .problem import RigProblem
 
-        unknown = sorted(set(options) - PROBLEM_OPTIONS)
-        if unknown:
-            raise FitError(f"friction rig fits take no option(s) {unknown}; they take {sorted(PROBLEM_OPTIONS)}",
-                           getattr(scene, "where", None))
+        self.refuse_unknown_options(options, getattr(scene, "where", None))
         material = options.get("material")
         sc = load_scene(scene) if not hasattr(scene, "model") else scene
         if sc.model != self.name:
@@ -97,6 +100,9 @@ class RigFamily:
             raise FitError(f"the file holds {len(data.materials())} materials {data.materials()}; a session is one "
                            "material: choose one with material=...", data.where)
         return RigProblem(sc, data, sha256=sha, material=material)
+
+    def title(self, attrs) -> str:
+        return "Friction rig model"
 
     def figures(self, result) -> dict[str, bytes]:
         """The readings dw against the load per sliding speed, with the model (:mod:`escfit.friction.figures`)."""

@@ -10,16 +10,16 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from ..core.errors import FitError
+from ..core.family import FamilyBase
 from ..core.scene import load_scene
 
 __all__ = ["FAMILY", "GenevaFamily"]
 
-PROBLEM_OPTIONS = {"fmt"}
+PROBLEM_OPTIONS = frozenset({"fmt"})
 
 
-class GenevaFamily:
-    """Registry entry of ``model = "geneva"`` (see :class:`~escfit.likelihood.problem.ModelFamily`).
+class GenevaFamily(FamilyBase):
+    """Registry entry of ``model = "geneva"`` (see :class:`~escfit.core.family.Family`).
 
     ``fit_defaults``: a speed trace's least-squares cost is rugged (a wrong period puts the
     speed oscillation out of phase), so the cost is ranked at 24 start points spread over
@@ -32,6 +32,8 @@ class GenevaFamily:
     """
 
     name = "geneva"
+    package = "escfit.geneva"
+    problem_options = PROBLEM_OPTIONS
     fit_defaults = {"walkers": 16, "steps": 600, "n_starts": 24, "n_refine": 3, "predictive_draws": 160}
 
     @property
@@ -55,17 +57,14 @@ class GenevaFamily:
         from .data import read_data
         from .problem import GenevaProblem
 
-        unknown = sorted(set(options) - PROBLEM_OPTIONS)
-        if unknown:
-            raise FitError(f"Geneva fits take no option(s) {unknown}; they take {sorted(PROBLEM_OPTIONS)}",
-                           getattr(scene, "where", None))
+        self.refuse_unknown_options(options, getattr(scene, "where", None))
         sc = load_scene(scene) if not hasattr(scene, "model") else scene
         if isinstance(data, (str, Path)):
             data = read_data(data, options.get("fmt"))
         return GenevaProblem(sc, data)
 
-    def figures(self, result) -> dict[str, bytes]:
-        return {}
+    def title(self, attrs) -> str:
+        return "Geneva escapement model"
 
 
 FAMILY = GenevaFamily()

@@ -1,31 +1,16 @@
-"""The model families by name: a scene's ``model =`` value -> its :class:`ModelFamily` entry.
+"""A fit problem by the scene's family: ``model =`` name -> :class:`~escfit.core.family.Family` -> problem.
 
-Each family package (listed in :data:`escfit.core.scene.MODELS`) holds a ``family`` module
-defining ``FAMILY``; it is imported only when a fit of that family is asked for.
+The registry itself is :mod:`escfit.core.family`; :func:`family` is its
+:func:`~escfit.core.family.get_family`, named as the inference layer has always named it.
 """
 
 from __future__ import annotations
 
-import importlib
-
-from ..core.errors import SceneError
-from ..core.scene import MODELS, load_scene
-from ..likelihood.problem import ModelFamily, Problem
+from ..core.family import get_family as family
+from ..core.scene import load_scene
+from ..likelihood.problem import Problem
 
 __all__ = ["family", "make_problem"]
-
-
-def family(name: str) -> ModelFamily:
-    """The registry entry of model family ``name``.
-
-    Raises
-    ------
-    SceneError
-        An unknown family name.
-    """
-    if name not in MODELS:
-        raise SceneError(f"unknown model {name!r}; known models: {sorted(MODELS)}")
-    return importlib.import_module(MODELS[name] + ".family").FAMILY
 
 
 def make_problem(scene, data, **options) -> Problem:

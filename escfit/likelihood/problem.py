@@ -1,11 +1,11 @@
-"""What a fit needs from a model family: the :class:`Problem` and :class:`ModelFamily` protocols.
+"""What a fit needs from a model family: the :class:`Problem` protocol.
 
 One inference layer (:mod:`escfit.inference`) serves every mechanism.  It sees a fit only
 through a :class:`Problem`: a free-parameter vector with priors and bounds, a log posterior,
 standardised residuals for least squares, and the readings with their coordinates.  A model
 family (balance wheel and pendulum, friction rig, Geneva escapement, verge escapement)
-supplies the problem from a scene and a recording through its :class:`ModelFamily` entry,
-registered by the scene's ``model =`` name in :data:`escfit.core.scene.MODELS`.
+supplies the problem from a scene and a recording through its entry in the family registry
+(:class:`escfit.core.family.Family`), found by the scene's ``model =`` name.
 
 Sign and unit conventions are the family's; every number crossing this interface is in the
 parameter's canonical unit (``units``) or the readings' unit (``reading_units``).
@@ -15,13 +15,13 @@ from __future__ import annotations
 
 import math
 from collections import Counter
-from typing import Any, Callable, Mapping, Protocol, runtime_checkable
+from typing import Any, Mapping, Protocol, runtime_checkable
 
 import numpy as np
 
 from .priors import Prior
 
-__all__ = ["Problem", "ModelFamily", "ProblemBase", "gaussian_prior_residuals", "FAIL_RESIDUAL"]
+__all__ = ["Problem", "ProblemBase", "gaussian_prior_residuals", "FAIL_RESIDUAL"]
 
 #: standardised residual standing for a reading the model could not predict (a failed run)
 FAIL_RESIDUAL = 1e6
@@ -126,34 +126,6 @@ class Problem(Protocol):
     def hold(self, name: str, value: float) -> None:
         """Set a parameter the problem holds fixed (one it chose to hold, such as an omega0
         taken from the measured period) to ``value``."""
-
-
-class ModelFamily(Protocol):
-    """A mechanism's entry in the registry: everything ``escfit`` commands need to know.
-
-    Attributes
-    ----------
-    name : str
-        The scene's ``model =`` value.
-    formats : Mapping[str, Callable]
-        Recording formats the family reads, name -> reader ``(path) -> data``.
-    fit_defaults : Mapping[str, Any]
-        Defaults of the sampler and optimiser for this family (``walkers``, ``steps``,
-        ``burn``, ``n_starts``, ``predictive_draws``) where the generic ones do not suit.
-    """
-
-    name: str
-    formats: Mapping[str, Callable[..., Any]]
-    fit_defaults: Mapping[str, Any]
-
-    def detect(self, path) -> str:
-        """The format of a recording file, or an escfit error naming the file."""
-
-    def problem(self, scene, data, **options) -> Problem:
-        """The fit problem of a scene and a recording (object or path); unknown options refused."""
-
-    def figures(self, result) -> dict[str, bytes]:
-        """PNG figures of a saved fit for the report (``{}`` when the generic ones suffice)."""
 
 
 def gaussian_prior_residuals(priors, x: np.ndarray) -> np.ndarray:

@@ -116,19 +116,15 @@ def _kind_words(kind) -> str:
 
 
 def _model_words(a: dict) -> str:
-    import tomllib
+    """The model in plain words, as its family says it (a family not registered here: its name)."""
+    from ..core.errors import SceneError
+    from ..core.family import get_family
 
     model = str(a.get("model", "balance"))
-    if model == "balance":
-        try:
-            osc = tomllib.loads(a.get("scene", "") or "").get("oscillator", {})
-        except tomllib.TOMLDecodeError:
-            osc = {}
-        if osc.get("coordinate") == "linear":
-            return "Linear oscillator (mass on a spring) model"
-        return "Gravity pendulum model" if osc.get("restoring") == "pendulum" else "Balance wheel (spring) model"
-    return {"friction_rig": "Friction rig model", "geneva": "Geneva escapement model",
-            "verge": "Verge escapement model"}.get(model, f"{model} model")
+    try:
+        return get_family(model).title(a)
+    except SceneError:
+        return f"{model} model"
 
 
 # Why an evaluation gave no prediction, for the codes that are not sentences already

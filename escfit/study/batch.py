@@ -51,7 +51,8 @@ from ..core.atomic import atomic_path
 from ..core.errors import DataError, FitError, ResultsError
 from ..core.h5write import write_bytes
 from ..core.interrupts import deferred_interrupts
-from ..balance.recordings import UnitCurve, read_unit_curve
+from ..balance.family import split_units
+from ..balance.recordings import UnitCurve
 from ..core.provenance import dependency_versions
 from ..results import SCHEMA_VERSION, FitResult, clean_attrs
 from .cluster import LazyClient, Runner, local_cluster, require_distributed
@@ -150,21 +151,16 @@ def recording_files(folder: str | Path) -> list[Path]:
     return files
 
 
-def _reads_unit_curves(scene) -> bool:
-    """Whether the batch reads balance unit-curve files on the client (and splits them by unit):
-    balance scenes without a ``[recording]`` table (whose files are raw tables instead)."""
-    if scene is None:
-        return True
-    return scene.model == "balance" and scene.extra.get("recording") is None
+def _units_of(scene) -> Callable[[Path], list | None]:
+    """How the client splits a recording file into units: the scene's family's ``units_of`` when it
+    reads files holding several units (balance unit curves; ``scene=None``: the balance family),
+    else a function saying "one unit" (None)."""
+    from ..core.family import get_family
 
-
-def _is_unit_curve(path: Path) -> bool:
-    from ..balance.recordings.detect import detect_format
-
-    try:
-        return detect_format(path) == "unit-curve"
-    except (DataError, OSError):
-        return False  # not a unit curve: the family's reader on the worker says what is wrong
+    family = get_family(scene.model if scene is not None else "balance")
+    if scene is not None and not family.splits_units(scene):
+        return lambda path, **_: None
+    return family.units_of
 
 
 def discover_units(data: Sequence[str | Path | UnitCurve], out_dir: str | Path, *,
@@ -183,7 +179,7 @@ def discover_units(data: Sequence[str | Path | UnitCurve], out_dir: str | Path, 
         A unit name occurs twice, a file is missing, or a unit-curve file cannot be read.
     """
     out = Path(out_dir)
-    curves = _reads_unit_curves(scene)
+    units_of = _units_of(scene)
     tasks: list[UnitTask] = []
     seen: dict[str, str] = {}
 
@@ -201,18 +197,12 @@ def discover_units(data: Sequence[str | Path | UnitCurve], out_dir: str | Path, 
         else:
             items.append(item)
     for item in items:
-        if not isinstance(item, UnitCurve) and not (curves and _is_unit_curve(Path(item))):
+        parts = split_units(item, item) if isinstance(item, UnitCurve) else units_of(Path(item), notch_deg=notch_deg)
+        if parts is None:
             add(Path(item).stem, RecordingFile.read(item), str(item))
             continue
-        curve = item if isinstance(item, UnitCurve) else read_unit_curve(item, notch_deg=notch_deg)
-        source = curve.source or str(item)
-        names = list(dict.fromkeys(map(str, curve.unit))) if curve.unit.size else [""]
-        for name in names:
-            rows = np.flatnonzero(curve.unit == name) if curve.unit.size else np.arange(curve.swing.size)
-            part = curve.select(rows)
-            if name:
-                part.unit = np.full(rows.size, name)
-            add(name or Path(source).stem, part, source)
+        for name, part in parts:
+            add(name, part, getattr(part, "source", None) or str(item))
     if not tasks:
         raise DataError("no units to fit: no data files given")
     return tasks
@@ -301,8 +291,8 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
     ResultsError
         Finished units of ``out_dir`` were fitted with another scene or method; nothing was written.
     """
+    from ..core.family import check_options, get_family as family
     from ..core.scene import load_scene
-    from ..inference.registry import family
 
     if method not in ("leastsq", "emcee"):
         raise FitError(f"method must be 'leastsq' or 'emcee', got {method!r}")
@@ -313,16 +303,9 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
     if workers != 0 and (scheduler is None or isinstance(scheduler, str)):
         require_distributed()  # refused before any data is read
     sc = load_scene(scene)
-    family(sc.model)  # an unknown family is refused here, not once per unit
-    family_options: dict[str, Any] = {}
-    if solver is not None:
-        if sc.model != "balance":  # the other families choose their integrators themselves
-            raise FitError(f"--solver applies to balance scenes; this scene's model is {sc.model!r}", str(scene))
-        family_options["solver"] = solver
-    if notch_deg is not None:
-        if sc.model != "balance":
-            raise FitError(f"notch_deg applies to balance unit curves; this scene's model is {sc.model!r}", str(scene))
-        family_options["notch_deg"] = notch_deg
+    # an unknown family, or an option the scene's family does not take, is refused here, not once per unit
+    family_options: dict[str, Any] = check_options(family(sc.model), {"solver": solver, "notch_deg": notch_deg},
+                                                   {"solver": "--solver", "notch_deg": "--notch-deg"}, str(scene))
     items = [data] if isinstance(data, (str, Path, UnitCurve)) else list(data)
     out = Path(out_dir)
     # the data are read before the folder and its lock are made: a refusal leaves nothing behind

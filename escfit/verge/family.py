@@ -20,20 +20,23 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..core.errors import DataError, FitError
+from ..core.errors import DataError
+from ..core.family import FamilyBase
 from ..core.scene import load_scene
 from .data import FORMAT, TurnsData, detect_turns, read_turns_csv
 from .problem import TurnsProblem
 
 __all__ = ["FAMILY", "VergeFamily"]
 
-PROBLEM_OPTIONS = {"step"}
+PROBLEM_OPTIONS = frozenset({"step"})
 
 
-class VergeFamily:
-    """Registry entry of ``model = "verge"`` (see :class:`~escfit.likelihood.problem.ModelFamily`)."""
+class VergeFamily(FamilyBase):
+    """Registry entry of ``model = "verge"`` (see :class:`~escfit.core.family.Family`)."""
 
     name = "verge"
+    package = "escfit.verge"
+    problem_options = PROBLEM_OPTIONS
     formats = {FORMAT: read_turns_csv}
     fit_defaults = {"walkers": 8, "steps": 300, "n_starts": 3, "predictive_draws": 16, "moves": "de-t"}
 
@@ -47,10 +50,8 @@ class VergeFamily:
         Options: ``step`` (RK4 step, rad of spin; default the scene's ``[fit] step`` or
         :data:`~escfit.verge.problem.FIT_STEP`).
         """
-        unknown = sorted(set(options) - PROBLEM_OPTIONS)
         sc = load_scene(scene) if not hasattr(scene, "model") else scene
-        if unknown:
-            raise FitError(f"verge fits take no option(s) {unknown}; they take {sorted(PROBLEM_OPTIONS)}", sc.where)
+        self.refuse_unknown_options(options, sc.where)
         if isinstance(data, (str, Path)):
             fmt = self.detect(data)
             data = self.formats[fmt](data)
@@ -58,8 +59,8 @@ class VergeFamily:
             raise DataError(f"a verge fit reads turns-to-arm data, got {type(data).__name__}", sc.where)
         return TurnsProblem(sc, data, step=options.get("step"))
 
-    def figures(self, result) -> dict[str, bytes]:
-        return {}
+    def title(self, attrs) -> str:
+        return "Verge escapement model"
 
 
 FAMILY = VergeFamily()

@@ -37,6 +37,8 @@ never mutates them.
 
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass
 from typing import Mapping
 
@@ -49,6 +51,11 @@ __all__ = ["ReadContext", "Slot", "NEEDS", "per_inertia", "read_either", "OMEGA0
 #: omega0 (rad/s) the solvers handle: a period between about 6 nanoseconds and 200 years.
 #: Outside, the solvers' arithmetic (omega0**2, half periods) would overflow or divide by zero.
 OMEGA0_RANGE = (1e-9, 1e9)
+# Largest effect size a scene may give, by the unit of the read value: far past any oscillator
+# (a rate 1000 times the fastest omega0, an acceleration 1000 rad times its square; a drag or
+# stiffening that doubles the force at a micro-radian), yet small enough that the solvers'
+# products stay finite; a typo of exponents (1e200) is refused, not simulated to nonsense.
+SIZE_MAX = {"1/s": 1e12, "1/s**2": 1e21, "m/s**2": 1e21, "1/rad": 1e6, "1/rad**2": 1e12, "1/m": 1e6}
 
 #: What an effect may ask of a solver.
 NEEDS = {
@@ -185,6 +192,6 @@ def read_either(
         raise SceneError(f"give exactly one of '{dkey}' ({unit}) or '{pkey}' (physical, needs inertia)", where)
     if dkey in table:
         return read_param(table[dkey], name=name, kind=dkind, lower=0.0, meaning=meaning,
-                          where=f"{where}.{dkey}", unit=unit)
-    return read_param(table[pkey], name=name, kind=pkind, lower=0.0, meaning=meaning,
+                          where=f"{where}.{dkey}", unit=unit, upper=SIZE_MAX.get(unit, math.inf))
+    return read_param(table[pkey], name=name, kind=pkind, lower=0.0, meaning=meaning, upper=SIZE_MAX.get(unit, math.inf),
                       where=f"{where}.{pkey}", convert=per_inertia(ctx, pkey, f"{where}.{pkey}"), unit=unit)

@@ -20,7 +20,7 @@ import numpy as np
 
 from ...core.params import Param
 from ...core.scene import check_keys
-from .base import ReadContext, Slot, read_either
+from .base import SIZE_MAX, ReadContext, Slot, read_either
 
 __all__ = ["Coulomb"]
 
@@ -88,11 +88,12 @@ class Coulomb:
         if "R" not in table:
             raise SceneError("give 'R' (m/s^2): the friction force per mass", where)
         meaning = "Coulomb (dry) friction force per mass R (m/s^2), opposes the motion"
-        p = read_param(table["R"], name="coulomb.R", kind="acceleration", lower=0.0, meaning=meaning,
+        p = read_param(table["R"], name="coulomb.R", kind="acceleration", lower=0.0, upper=SIZE_MAX["m/s**2"], meaning=meaning,
                        where=f"{where}.R")
         if "R_static" not in table:
             return cls(), [p]
         q = read_param(table["R_static"], name="coulomb.R_static", kind="acceleration", lower=0.0,
+                       upper=SIZE_MAX["m/s**2"],
                        meaning="static friction force per mass (m/s^2, >= R): holds the mass at rest",
                        where=f"{where}.R_static")
         if q.value < p.value:

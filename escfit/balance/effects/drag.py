@@ -23,7 +23,7 @@ from ...core.errors import SceneError
 from ...core.kernels import kernel
 from ...core.params import Param, read_param
 from ...core.scene import check_keys
-from .base import ReadContext, Slot
+from .base import SIZE_MAX, ReadContext, Slot
 
 __all__ = ["Drag", "torque"]
 
@@ -44,11 +44,11 @@ class Drag:
             raise SceneError("air drag needs switching = 'angle' (phase switching assumes the fixed half period of a "
                              "linear oscillator)", where)
         if ctx.coordinate == "linear":  # a mass moving through air: the drag force per mass is -D |x'| x'
-            p = read_param(table["D"], name="drag.D", kind="inverse_length", lower=0.0,
+            p = read_param(table["D"], name="drag.D", kind="inverse_length", lower=0.0, upper=SIZE_MAX["1/m"],
                            meaning="quadratic air drag per mass D (1/m): force -D |x'| x' per mass",
                            where=f"{where}.D")
             return cls(), [p]
-        p = read_param(table["D"], name="drag.D", kind="dimensionless", lower=0.0, unit="1/rad",
+        p = read_param(table["D"], name="drag.D", kind="dimensionless", lower=0.0, upper=SIZE_MAX["1/rad"], unit="1/rad",
                        meaning="quadratic air drag per inertia D (1/rad): torque -D |theta'| theta'",
                        where=f"{where}.D")
         return cls(), [p]

@@ -27,7 +27,7 @@ from ...core.errors import SceneError
 from ...core.kernels import kernel
 from ...core.params import Param, read_param
 from ...core.scene import check_keys
-from .base import ReadContext, Slot
+from .base import SIZE_MAX, ReadContext, Slot
 
 __all__ = ["Stiffening", "torque"]
 
@@ -48,7 +48,8 @@ class Stiffening:
         if ctx.switching == "phase":
             raise SceneError("a stiffening spring needs switching = 'angle' (phase switching assumes the fixed half "
                              "period of a linear spring)", where)
-        p = read_param(table["k3"], name="stiffening.k3", kind="dimensionless", lower=0.0, unit="1/rad**2",
+        p = read_param(table["k3"], name="stiffening.k3", kind="dimensionless", lower=0.0, upper=SIZE_MAX["1/rad**2"],
+                       unit="1/rad**2",
                        meaning="cubic stiffening (1/rad^2): restoring torque omega0**2*(theta + k3*theta**3)",
                        where=f"{where}.k3")
         return cls(), [p]

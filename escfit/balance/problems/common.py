@@ -59,12 +59,16 @@ class BalanceProblem(ProblemBase):
         out["K"] = "Monday's combined K (derived)"
         return out
 
+    #: whether the readings come in branches (a unit curve's per-load curves) that the residual checks
+    #: read one at a time
+    readings_in_branches = False
+
     @property
     def misfit_options(self) -> dict[str, bool]:
         """How the generic residual checks read this problem's residuals."""
         ar1 = getattr(self.observation, "noise", "") == "ar1"
         return {"standardised": getattr(self.data, "kind", "") == "notches" or ar1,
-                "branches": type(self).__name__ == "FitProblem", "innovations": ar1}
+                "branches": self.readings_in_branches, "innovations": ar1}
 
     def obs_coords(self) -> dict[str, Any]:
         swing = np.concatenate([c.swing for c in self.curves])

@@ -97,6 +97,7 @@ class FitProblem(FreeParameters, BalanceProblem):
     data: UnitCurve
     solver: str | None = None
     solver_options: dict = field(default_factory=dict)
+    readings_in_branches = True  # a unit curve's per-load curves (see BalanceProblem.misfit_options)
 
     def __post_init__(self) -> None:
         if self.scene.model != "balance":

@@ -29,6 +29,7 @@ from __future__ import annotations
 import hashlib
 import re
 import xml.etree.ElementTree as ET
+from array import array
 from pathlib import Path
 
 import numpy as np
@@ -37,40 +38,62 @@ from ...core.errors import DataError
 from ...core.tabletext import decode_lenient, numbered_lines, split_fields
 from .columns import Columns, series_from_columns
 from .foreign import cassy_member, zip_names
+from .packed import XML_MAX_BYTES, feed_xml, member_chunks, read_capped
 from .recording_spec import RecordingSpec
 from .series import TimeSeries
 
-__all__ = ["read_cassy_labx", "read_cassy_text", "sniff_cassy_text", "parse_xml"]
+__all__ = ["read_cassy_labx", "read_cassy_text", "sniff_cassy_text"]
 
 _DEF = re.compile(r'^\s*"([^"]*)"\s*(\S*)\s*(?:/\s*(.*?))?\s*$')
 
 
-def parse_xml(raw: bytes, where: str) -> ET.Element:
-    """Parse an instrument's XML file; a document type or entity declaration is refused (no
-    instrument writes one, and entities can expand without bound)."""
-    head = raw[:4096]
-    if b"<!DOCTYPE" in head or b"<!ENTITY" in raw:
-        raise DataError("XML with a document type or entity declaration: not an instrument's data file", where)
+class _CassyBuilder(ET.TreeBuilder):
+    """A tree of the ``.labx`` without its ``<value>`` elements: each ``<values>`` element's numbers
+    are gathered as they are parsed (8 bytes a sample, not an element each)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.arrays: dict[ET.Element, array] = {}
+        self._values: array | None = None
+        self._text: list[str] | None = None
+
+    def start(self, tag, attrs):  # type: ignore[override]
+        if tag == "value" and self._values is not None:
+            self._text = []
+            return None
+        elem = super().start(tag, attrs)
+        if tag == "values":
+            self._values = self.arrays.setdefault(elem, array("d"))
+        return elem
+
+    def data(self, data):  # type: ignore[override]
+        if self._text is not None:
+            self._text.append(data)
+        else:
+            super().data(data)
+
+    def end(self, tag):  # type: ignore[override]
+        if self._text is not None and tag == "value":
+            self._values.append(_number("".join(self._text)))  # type: ignore[union-attr]
+            self._text = None
+            return None
+        if tag == "values":
+            self._values = None
+        return super().end(tag)
+
+
+def _number(cell: str) -> float:
+    cell = cell.strip()
     try:
-        return ET.fromstring(raw)
-    except ET.ParseError as exc:
-        line, col = exc.position
-        raise DataError(f"invalid XML ({str(exc).split(':')[0]}, column {col}); the file is cut short or damaged",
-                        f"{where}:{line}") from None
+        return float(cell.replace(",", ".")) if cell else np.nan
+    except ValueError:
+        return np.nan
 
 
-def _floats(values: ET.Element | None) -> np.ndarray:
-    if values is None:
+def _floats(values: ET.Element | None, arrays: dict[ET.Element, array]) -> np.ndarray:
+    if values is None or values not in arrays:
         return np.zeros(0)
-    cells = [(v.text or "").strip() for v in values.findall("value")]
-    out = np.full(len(cells), np.nan)
-    for i, c in enumerate(cells):
-        if c:
-            try:
-                out[i] = float(c.replace(",", "."))
-            except ValueError:
-                out[i] = np.nan
-    return out
+    return np.frombuffer(arrays[values], dtype=float).copy()
 
 
 def read_cassy_labx(path: str | Path, spec: RecordingSpec | None = None) -> TimeSeries:
@@ -84,11 +107,13 @@ def read_cassy_labx(path: str | Path, spec: RecordingSpec | None = None) -> Time
     """
     spec = spec or RecordingSpec()
     where = str(path)
-    raw = Path(path).read_bytes()
-    xml, packed = raw, ""
+    raw = read_capped(path, XML_MAX_BYTES, "a CASSY Lab file")
+    builder = _CassyBuilder()
+    packed = ""
     if raw.startswith(b"PK\x03\x04"):  # saved compressed: a zip whose data.xml is the file's XML
-        xml, packed = _unzipped(path)
-    root = parse_xml(xml.lstrip(b"\xef\xbb\xbf"), where)
+        root, packed = _unzipped(path, builder)
+    else:
+        root = feed_xml([raw], where, builder)
     if root.tag != "cassylab":
         raise DataError(f"XML root <{root.tag}>, not <cassylab>: not a CASSY Lab file", where)
     run = (spec.run or 1) - 1
@@ -102,7 +127,7 @@ def read_cassy_labx(path: str | Path, spec: RecordingSpec | None = None) -> Time
                             f"{len(runs)} run(s)", where)
         ch = runs[run]
         found.append(((ch.findtext("quantity") or "").strip(), (ch.findtext("symbol") or "").strip(),
-                      (ch.findtext("unit") or "").strip(), _floats(ch.find("values"))))
+                      (ch.findtext("unit") or "").strip(), _floats(ch.find("values"), builder.arrays)))
     times = [i for i, (q, s, u, v) in enumerate(found) if u == "s" and v.size]
     if not times:
         raise DataError(f"no time channel (unit s) among {[q for q, *_ in found]}", where)
@@ -125,21 +150,19 @@ def read_cassy_labx(path: str | Path, spec: RecordingSpec | None = None) -> Time
     return series_from_columns(cols, spec, sha256=hashlib.sha256(raw).hexdigest())
 
 
-_MAX_XML = 2 ** 30  # bytes: a zip member larger than this is not a lab measurement
-
-
-def _unzipped(path) -> tuple[bytes, str]:
-    """The XML of a compressed ``.labx`` and how it was found (for the description)."""
+def _unzipped(path, builder: _CassyBuilder) -> tuple[ET.Element, str]:
+    """The parsed XML of a compressed ``.labx`` and how it was found (for the description): the
+    member is unpacked and parsed chunk by chunk, at most :data:`XML_MAX_BYTES` of it."""
     import zipfile
 
+    where = str(path)
     member = cassy_member(zip_names(path), Path(path).suffix.lower())
     if member is None:
         raise DataError("a zip archive holding no single CASSY Lab data file: extract the .labx from it and read "
-                        "that", str(path))
+                        "that", where)
     with zipfile.ZipFile(path) as zf:
-        if zf.getinfo(member).file_size > _MAX_XML:
-            raise DataError(f"{member} in the zip unpacks to more than 1 GB: not a lab measurement", str(path))
-        return zf.read(member), f" (compressed, {member})"
+        root = feed_xml(member_chunks(zf, member, XML_MAX_BYTES, where, "a CASSY Lab file"), where, builder)
+    return root, f" (compressed, {member})"
 
 
 def sniff_cassy_text(text: str) -> bool:

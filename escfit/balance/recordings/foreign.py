@@ -22,6 +22,7 @@ import zipfile
 from pathlib import Path
 
 from ...core.errors import DataError
+from .packed import read_head
 
 __all__ = ["refuse_foreign", "cassy_member", "zip_names"]
 
@@ -104,7 +105,7 @@ def _zip(p: Path, suffix: str) -> str | None:
     try:
         with zipfile.ZipFile(p) as zf:
             names = zf.namelist()
-            mimetype = zf.read("mimetype")[:80].decode("ascii", "replace") if "mimetype" in names else ""
+            mimetype = read_head(zf, "mimetype", 80, str(p)).decode("ascii", "replace") if "mimetype" in names else ""
     except (zipfile.BadZipFile, OSError):
         return "a damaged .zip file (cut short?): copy or export it again"
     lower = [n.lower() for n in names]

@@ -35,7 +35,7 @@ import numpy as np
 
 from ...core.errors import DataError
 from ...core.tabletext import decode_lenient, numbered_lines, parse_number
-from .cassy import parse_xml
+from .packed import XML_MAX_BYTES, parse_xml, read_capped
 from .columns import Columns, series_from_columns
 from .rawtable import scan_text, table_columns
 from .recording_spec import RecordingSpec, header_role
@@ -56,7 +56,7 @@ def read_cmbl(path: str | Path, spec: RecordingSpec | None = None) -> TimeSeries
     """Read a Vernier Logger Pro ``.cmbl`` file (see the module docstring)."""
     spec = spec or RecordingSpec()
     where = str(path)
-    raw = Path(path).read_bytes()
+    raw = read_capped(path, XML_MAX_BYTES, "a Logger Pro file")
     root = parse_xml(raw.lstrip(b"\xef\xbb\xbf"), where)
     sets = list(root.iter("DataSet"))
     if not sets:

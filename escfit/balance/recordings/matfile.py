@@ -39,75 +39,22 @@ from typing import Any, Callable
 import numpy as np
 
 from ...core.errors import DataError
+from .matvars import load_mat_variables
 from .rawsteps import MIN_SAMPLES, build_series
 from .recording_spec import COUNT_WORDS, RecordingSpec, rad_per_unit
 from .series import TimeSeries
 
-__all__ = ["read_mat_series", "load_mat_variables"]
+__all__ = ["read_mat_series"]
 
 _SELECTOR = re.compile(r"\s*([A-Za-z]\w*(?:\.[A-Za-z]\w*)*)\s*(?:\[\s*(\d+)\s*\])?\s*")
 _DT_NAMES = ("dt", "Ts", "dt_s", "ts")
 _TIME_NAMES = ("t", "time", "Time", "tout", "t_s")
 
 
-class _Struct:
-    """A MATLAB struct read from HDF5, shaped like scipy's ``mat_struct``."""
+class _Variables(dict):
+    """The variables read, and the class of every variable of the file (read or not)."""
 
-    def __init__(self, fields: dict[str, Any]):
-        self._fieldnames = list(fields)
-        self.__dict__.update(fields)
-
-
-def _h5_value(node: Any, f: Any) -> Any:
-    import h5py
-
-    if isinstance(node, h5py.Group):
-        return _Struct({k: _h5_value(node[k], f) for k in node if not k.startswith("#")})
-    cls = node.attrs.get("MATLAB_class", b"double")
-    cls = cls.decode() if isinstance(cls, bytes) else str(cls)
-    data = node[()]
-    if cls == "cell":
-        refs = np.asarray(data).T
-        out = np.empty(refs.shape, dtype=object)
-        for idx, ref in np.ndenumerate(refs):
-            out[idx] = _h5_value(f[ref], f)
-        return out.squeeze() if out.size != 1 else out.ravel()[0]
-    if cls == "char":
-        return "".join(chr(c) for c in np.asarray(data).ravel())
-    arr = np.asarray(data).T.squeeze()
-    return arr[()] if arr.ndim == 0 else arr
-
-
-def load_mat_variables(path: str | Path) -> tuple[dict[str, Any], str]:
-    """The variables of a .mat file and a description of its format.
-
-    Raises
-    ------
-    DataError
-        Unreadable files, or v7.3 files without h5py.
-    """
-    where = str(path)
-    with open(path, "rb") as fh:
-        head = fh.read(520)
-    if head.startswith(b"MATLAB 7.3") or head[512:520] == b"\x89HDF\r\n\x1a\n":
-        try:
-            import h5py
-        except ImportError:
-            raise DataError("a MATLAB v7.3 (HDF5) file needs h5py; save it with -v7 or install h5py", where) \
-                from None
-        try:
-            with h5py.File(path, "r") as f:
-                return {k: _h5_value(f[k], f) for k in f if not k.startswith("#")}, "MATLAB v7.3 .mat (HDF5)"
-        except (OSError, KeyError, ValueError) as exc:
-            raise DataError(f"cannot read as a MATLAB v7.3 file ({exc})", where) from None
-    from scipy.io import loadmat
-
-    try:
-        doc = loadmat(str(path), squeeze_me=True, struct_as_record=False)
-    except Exception as exc:  # scipy raises ValueError, TypeError, MatReadError ... for foreign files
-        raise DataError(f"cannot read as a MATLAB file ({type(exc).__name__}: {exc})", where) from None
-    version = "v5" if head.startswith(b"MATLAB 5.0") else "v4"
-    return {k: v for k, v in doc.items() if not k.startswith("__")}, f"MATLAB {version} .mat"
+    kinds: dict[str, str] = {}
 
 
 def _is_struct(x: Any) -> bool:
@@ -132,7 +79,8 @@ def _summary(x: Any) -> str:
 
 
 def _listing(doc: dict[str, Any]) -> str:
-    return "; ".join(f"{k} ({_summary(v)})" for k, v in doc.items())
+    kinds = getattr(doc, "kinds", {})
+    return "; ".join(f"{k} ({_summary(doc[k]) if k in doc else kinds[k]})" for k in {**dict.fromkeys(kinds), **doc})
 
 
 def _component(arr: Any, k: int | None, where: str) -> np.ndarray:
@@ -233,6 +181,28 @@ def _auto_clock(doc: dict[str, Any], n: int, path: str, notes: list[str]) -> tup
                     f"{_listing(doc)}", path)
 
 
+def _read_needed(path: str | Path, spec: RecordingSpec) -> tuple[_Variables, str]:
+    """The variables the spec's selectors name (and the clock's candidates), or without an angle
+    selector the numeric arrays and structs: never the whole file."""
+    roots: set[str] | None = None
+    if spec.angle_column is not None:
+        named = [*_selectors(spec.angle_column, "angle_column", str(path))]
+        if spec.time_column is not None:
+            named += _selectors(spec.time_column, "time_column", str(path))
+        elif spec.sample_rate is None:
+            named += [*_DT_NAMES, *_TIME_NAMES]
+        roots = {m.group(1).split(".")[0] for s in named if (m := _SELECTOR.fullmatch(s))}
+    values, kinds, fmt = load_mat_variables(path, roots)
+    if roots is not None and not roots & set(kinds) >= roots - {*_DT_NAMES, *_TIME_NAMES}:
+        try:  # a name that is not there: the refusal lists what is, as read
+            values = {**load_mat_variables(path, None)[0], **values}
+        except DataError:
+            pass
+    doc = _Variables(values)
+    doc.kinds = kinds
+    return doc, fmt
+
+
 def read_mat_series(path: str | Path, spec: RecordingSpec | None = None) -> TimeSeries:
     """Read a MATLAB recording (see the module docstring for the selectors).
 
@@ -253,9 +223,9 @@ def read_mat_series(path: str | Path, spec: RecordingSpec | None = None) -> Time
     spec = spec or RecordingSpec()
     where = str(path)
     raw = Path(path).read_bytes()
-    doc, fmt = load_mat_variables(path)
+    doc, fmt = _read_needed(path, spec)
     notes: list[str] = []
-    if not doc:
+    if not doc.kinds:
         raise DataError("the file holds no variables", where)
     angle_sel = _selectors(spec.angle_column, "angle_column", where) if spec.angle_column is not None else \
         (_auto_angle(doc, where, notes),)

@@ -35,6 +35,7 @@ from pathlib import Path
 from ...core.errors import DataError
 from ...core.tabletext import decode_lenient, numbered_lines, parse_number, split_fields
 from .columns import series_from_columns
+from .packed import read_head, read_member
 from .rawtable import scan_text, table_columns
 from .recording_spec import RecordingSpec
 from .series import TimeSeries
@@ -57,23 +58,29 @@ def sniff_phyphox_csv(text: str) -> bool:
     return False
 
 
-def _members(path: Path, where: str) -> dict[str, bytes]:
+META_BYTES = 1 << 20  # meta/device.csv and meta/time.csv: a few lines each
+
+
+def _members(path: Path, where: str) -> tuple[str, dict[str, bytes]]:
+    """The data set to read and the members read for it (the set, ``meta/device.csv``,
+    ``meta/time.csv``): only these are unpacked, the set at most :data:`MAX_MEMBER_BYTES`, each
+    other member at most :data:`META_BYTES`; the other sets' first bytes tell which set is the
+    recording."""
     try:
         zf = zipfile.ZipFile(path)
-    except zipfile.BadZipFile:
+    except (zipfile.BadZipFile, OSError):
         raise DataError("not a readable .zip file", where) from None
-    out = {}
     with zf:
-        for info in zf.infolist():
-            if info.is_dir() or not info.filename.lower().endswith(".csv"):
-                continue
-            if info.file_size > MAX_MEMBER_BYTES:
-                raise DataError(f"{info.filename} unpacks to {info.file_size / 1e6:.0f} MB: not a phyphox export", where)
-            try:
-                out[info.filename] = zf.read(info)
-            except (zipfile.BadZipFile, OSError, RuntimeError, EOFError) as exc:
-                raise DataError(f"cannot unpack {info.filename} ({exc})", where) from None
-    return out
+        names = [i.filename for i in zf.infolist() if not i.is_dir() and i.filename.lower().endswith(".csv")]
+        sets = [n for n in names if not n.startswith("meta/")]
+        heads = {n: read_head(zf, n, 200, where) for n in sets} if len(sets) > 1 and "Raw Data.csv" not in sets \
+            else dict.fromkeys(sets, b"")
+        name = _choose_set(heads, where)
+        out = {name: read_member(zf, name, MAX_MEMBER_BYTES, where, "a phyphox data set")}
+        for meta in ("meta/device.csv", "meta/time.csv"):
+            if meta in names:
+                out[meta] = read_member(zf, meta, META_BYTES, where, "phyphox's meta data")
+    return name, out
 
 
 def _meta_table(raw: bytes, where: str) -> list[list[str]]:
@@ -98,8 +105,9 @@ def _time_notes(rows: list[list[str]], notes: list[str], meta: dict[str, str]) -
                      "time skips each pause, so the record joins separate runs; set [recording] start/stop to keep one")
 
 
-def _choose_set(members: dict[str, bytes], where: str) -> str:
-    sets = {n: b for n, b in members.items() if not n.startswith("meta/")}
+def _choose_set(heads: dict[str, bytes], where: str) -> str:
+    """The data set holding the recording, from the sets' first bytes."""
+    sets = heads
     if not sets:
         raise DataError("no data set (<set name>.csv) in the zip: not a phyphox export", where)
     if "Raw Data.csv" in sets or len(sets) == 1:
@@ -126,8 +134,7 @@ def read_phyphox(path: str | Path, spec: RecordingSpec | None = None) -> TimeSer
     notes: list[str] = []
     meta: dict[str, str] = {}
     if raw[:4] == b"PK\x03\x04":
-        members = _members(p, where)
-        name = _choose_set(members, where)
+        name, members = _members(p, where)
         body_raw = members[name]
         meta["phyphox_set"] = name[:-4]
         if "meta/device.csv" in members:

@@ -183,11 +183,25 @@ def _layout(body: list[tuple[int, str]], where: str) -> _Layout:
         if names is not None and not (underlined and not any(header_role(h)[0] for h in names)):
             lay.header, lay.header_line = names, pre[-1][0]
             pre = pre[:-1]
+    if lay.header is None and pre and lay.ncols > 2 and dialect.delimiter == ",":
+        _refuse_split_decimal_commas(pre[-1], lay.ncols, where)
     lay.titles = [s.strip() for _, s in pre]
     lay.rows = [_split(s, lay.dialect) for _, s in data]
     lay.lines = [n for n, _ in data]
     lay.kinds = kinds  # type: ignore[attr-defined]
     return lay
+
+
+def _refuse_split_decimal_commas(line: tuple[int, str], ncols: int, where: str) -> None:
+    """A header of names one short of the rows' fields, over comma-separated rows: numbers
+    written with a decimal comma and not quoted (``0,02,44.3365``) split in two; reading on
+    would drop the header and take the integer part for the clock."""
+    names = split_fields(line[1], ",")
+    if len(names) < ncols <= 2 * len(names) and all(n.strip() and not _is_number(n, False) for n in names):
+        raise DataError(f"the header names {len(names)} columns ({', '.join(n.strip() for n in names)}) but every row has "
+                        f"{ncols} comma-separated fields: a number written with a decimal comma and not quoted "
+                        "(0,02 read as 0 and 02)? save the file with decimal points, or with ';' between the fields",
+                        f"{where}:{line[0]}")
 
 
 def _describe(lay: _Layout) -> str:

@@ -33,7 +33,7 @@ import numpy as np
 
 from ...core.errors import DataError
 from ...core.tabletext import decode_lenient, numbered_lines
-from .cassy import parse_xml
+from .packed import XML_MAX_BYTES, parse_xml, read_capped
 from .columns import Columns, series_from_columns
 from .rawtable import scan_text, table_columns
 from .recording_spec import RecordingSpec
@@ -111,7 +111,7 @@ def read_trk(path: str | Path, spec: RecordingSpec | None = None) -> TimeSeries:
     module docstring); ``[recording] angle_column`` names the track when there are several."""
     spec = spec or RecordingSpec()
     where = str(path)
-    raw = Path(path).read_bytes()
+    raw = read_capped(path, XML_MAX_BYTES, "a Tracker file")
     root = parse_xml(raw, where)
     if "tracker" not in (root.get("class") or "").lower():
         raise DataError(f"XML object {root.get('class')!r}, not a Tracker panel: not a .trk file", where)
