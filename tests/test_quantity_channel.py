@@ -189,5 +189,7 @@ def test_two_equally_good_decays_are_refused_listing_both_with_scores(tmp_path):
     assert max(choice.scores.values()) >= MIN_SCORE
     result, scene = _init(tmp_path, _write(tmp_path / "twin2.csv", ["t", "p", "q"], [t, theta, other]))
     assert result.exit_code == 2 and scene is None
-    assert "no clear free decay" in result.output and "'p' 1.00" in result.output and "'q' 1.00" in result.output
+    assert "one motion in several columns" in result.output and "no label says which is the calibrated angle" in \
+        result.output  # q is 0.8 p: one decay, two calibrations
+    assert "'p' 1.00" in result.output and "'q' 1.00" in result.output
     assert "angle_column" in result.output

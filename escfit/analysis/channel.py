@@ -14,7 +14,13 @@ its minimum, or a one-sided column at twice a neighbour's frequency), an acceler
 column whose label says another quantity score 0.
 
 Margin rule: the best column is chosen only if it scores at least :data:`MIN_SCORE` and every
-other at most :data:`MARGIN` times its score; otherwise :class:`ChannelChoice` has no ``chosen``
+other at most :data:`MARGIN` times its score.  One motion in several columns: when every rival above
+that margin oscillates at the best's frequency (within :data:`SAME_FREQUENCY`) and its amplitude
+falls by the same share (within :data:`SAME_FALL`), the columns record one decay (a laser and a
+coil on one mass, x and y of one tracked bob): they give the same frequency and decay rate, but
+their amplitudes, and so the friction, are only as right as each one's calibration, so the one
+column whose label names an angle (else a displacement) is chosen, the note naming the others;
+when no label or several decide, the refusal says they hold one motion.  Otherwise :class:`ChannelChoice` has no ``chosen``
 and :meth:`ChannelChoice.refusal` names the candidates with their scores and the key to set.
 """
 
@@ -32,6 +38,8 @@ __all__ = ["ChannelChoice", "choose_channel", "decay_score", "MIN_SCORE", "MARGI
 MIN_SCORE = 0.2
 MARGIN = 0.5
 FULL_FALL = 0.5  # a swing losing half its amplitude over the record counts fully as a decay
+SAME_FREQUENCY = 0.005  # columns whose frequencies agree this closely (relative) ...
+SAME_FALL = 0.1  # ... and whose amplitudes fall by shares this close hold one motion
 
 
 @dataclass(frozen=True)
@@ -75,7 +83,9 @@ class ChannelChoice:
         """The sentence said when a column was chosen."""
         rest = [c for c in sorted(self.scores, key=lambda c: -self.scores[c]) if c != self.chosen]
         others = "; ".join(f"{_shown(c)} {100 * self.scores[c]:.0f} %: {self.why[c]}" for c in rest)
-        return (f"{_shown(self.chosen, 'column ')} chosen: {self.why[self.chosen]}, score {self.scores[self.chosen]:.2f}"
+        said = "" if self.reason == "clear winner" else f"{self.reason}; "
+        return (said + f"{_shown(self.chosen, 'column ')} chosen: {self.why[self.chosen]}, score "
+                f"{self.scores[self.chosen]:.2f}"
                 + (f"; {others}" if others else "") + f" ([recording] {self.key} chooses another)")
 
     def refusal(self) -> str:
@@ -126,6 +136,32 @@ def _double_of_a_neighbour(label: str, shapes: dict[str, SwingShape], values: di
                and s.explained > 0.5 for other, s in shapes.items())
 
 
+def _one_motion(best: str, rivals: list[str], shapes: dict[str, SwingShape]) -> list[str] | None:
+    """The rivals, if every one decays as ``best`` does: the same frequency within
+    :data:`SAME_FREQUENCY` and a fall within :data:`SAME_FALL` (one motion seen by several
+    sensors, or a sensor and the drive's monitor of it); else None."""
+    me = shapes[best]
+    if not rivals or not math.isfinite(me.frequency):
+        return None
+    for c in rivals:
+        s = shapes[c]
+        if not (math.isfinite(s.frequency) and abs(s.frequency / me.frequency - 1.0) <= SAME_FREQUENCY
+                and abs(s.fall - me.fall) <= SAME_FALL):
+            return None
+    return rivals
+
+
+def _plainest(best: str, same: list[str], units: dict[str, str | None]) -> str | None:
+    """Of columns holding one motion, the only one whose label says the quantity fitted (an
+    angle, else a displacement); None when no label, or several, say so (the amplitudes, and so
+    the friction, depend on which column's calibration is right)."""
+    for wanted in ("angle", "displacement"):
+        named = [c for c in [best, *same] if label_quantity(c, units.get(c)) == wanted]
+        if named:
+            return named[0] if len(named) == 1 else None
+    return None
+
+
 def choose_channel(time: np.ndarray | dict[str, np.ndarray], columns: dict[str, np.ndarray], *,
                    units: dict[str, str | None] | None = None, key: str = "angle_column") -> ChannelChoice:
     """Score each candidate column as a free decay and choose a clear winner, if there is one.
@@ -160,6 +196,20 @@ def choose_channel(time: np.ndarray | dict[str, np.ndarray], columns: dict[str, 
     second = scores[order[1]] if len(order) > 1 else 0.0
     if best is not None and scores[best] >= MIN_SCORE and second <= MARGIN * scores[best]:
         return ChannelChoice(best, scores, why, "clear winner", key, shapes, units=dict(units))
+    if best is not None and scores[best] >= MIN_SCORE:
+        same = _one_motion(best, [c for c in order[1:] if scores[c] > MARGIN * scores[best]], shapes)
+        if same is not None:
+            chosen = _plainest(best, same, units)
+            if chosen is None:
+                reason = (f"one motion in several columns ({', '.join(_shown(c) for c in [best, *same])} decay at "
+                          f"the same frequency, {shapes[best].frequency:.4g} Hz, and rate), and no label says which "
+                          "is the calibrated angle")
+                return ChannelChoice(None, scores, why, reason, key, shapes, units=dict(units))
+            others = ", ".join(_shown(c) for c in [best, *same] if c != chosen)
+            reason = (f"one motion in several columns: {others} decay{'s' if len(same) == 1 else ''} at the same "
+                      f"frequency ({shapes[best].frequency:.4g} Hz) and rate as {_shown(chosen)}, whose label "
+                      "names the quantity fitted")
+            return ChannelChoice(chosen, scores, why, reason, key, shapes, units=dict(units))
     if best is None or scores[best] < MIN_SCORE:
         reason = f"no column has the shape of a free decay (a score of {MIN_SCORE:g} at least)"
     else:

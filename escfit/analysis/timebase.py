@@ -21,6 +21,8 @@ Repairs, in this order, each recorded as a :class:`Repair` whose sentence says w
    through the bursts' first rows, accepted when no stamp is further from it than the longest
    burst spans.  A few short runs of a repeated stamp in a record stamped row by row are
    instead re-timed evenly between the neighbouring stamps;
+   Stamps written with too few digits (never falling, a fifth of the rows sharing a stamp in
+   short runs) are re-timed on the same line;
 5. *gaps*: a step longer than :data:`GAP_INTERVALS` intervals is kept (the fits take irregular
    times) and noted, as is a jitter of the steps above :data:`JITTER_NOTE` of the interval.
 
@@ -178,7 +180,7 @@ def time_base(time, values=None, *, where_of_row: Callable[[int], str] | None = 
             raise _refuse(f"the time stamps span more than a float holds ({t.min():.3g} to {t.max():.3g} s)",
                           where(0), t)
         t, idx, v = _order(t, idx, v, where, repairs)
-        bursty = _bursty(t)
+        bursty = _bursty(t) or _rounded(t)
         t, idx = _repeated_rows(t, idx, v, bursty, repairs)
         t, idx = _stalls(t, idx, bursty, where, repairs)
         t = _retime(t, idx, bursty, where, repairs)
@@ -194,6 +196,12 @@ def _order(t, idx, v, where, repairs):
     limit = max(5, t.size // 100)
     if neg.size > limit:
         i = int(neg[0])
+        steps = np.diff(np.asarray(v, dtype=float))
+        if v is not None and (np.all(steps <= 0) or np.all(steps >= 0)) and np.ptp(v) > 0:
+            raise DataError(f"time goes backwards at {neg.size} of {t.size} rows, and the readings only "
+                            f"{'fall' if steps.sum() < 0 else 'rise'} from row to row: the rows are sorted by the "
+                            "reading, a table of amplitudes? read it with [recording] readings = \"amplitudes\" "
+                            "(or --readings amplitudes)", where(idx[i + 1]))
         raise _refuse(f"time goes backwards at {neg.size} of {t.size} rows (the first: {float(t[i])!r} then "
                       f"{float(t[i + 1])!r} s), too often to be a few rows out of order", where(idx[i + 1]), t)
     h = _typical_step(t)
@@ -259,6 +267,18 @@ def _bursty(t) -> bool:
     starts = np.flatnonzero(np.r_[True, np.diff(t) != 0])
     runs = np.diff(np.r_[starts, t.size])
     return starts.size >= 3 and float(np.median(runs)) >= 1.5
+
+
+def _rounded(t) -> bool:
+    """Whether the stamps are a clock written with too few digits: never falling, a fifth of the
+    rows or more sharing a stamp with the row before, in runs of at most :data:`STALL_ROWS` rows
+    (a clock written to three significant digits repeats each stamp three times past 10 s at
+    30 rows a second).  They are re-timed as bursts are."""
+    if t.size < 20:
+        return False
+    d = np.diff(t)
+    _, runs = _runs(t)
+    return bool(np.all(d >= 0) and np.mean(d == 0) >= 0.2 and runs.max() < STALL_ROWS)
 
 
 def _repeated_rows(t, idx, v, bursty: bool, repairs):
@@ -383,9 +403,13 @@ def _burst_line(t, idx, starts, runs, where, repairs):
         raise _refuse(f"time stamps repeat in bursts (~{np.median(runs):.0f} rows) but do not follow a straight line "
                       f"of stamp on row number (stamp {float(t[worst])!r} is {off[worst]:.3g} s from it)",
                       where(idx[worst]), t)
+    said = (f"time stamps repeat in bursts of ~{np.median(runs):.0f} rows"
+            + (f" ({runs.min()} to {runs.max()})" if runs.min() < runs.max() else "")
+            if np.median(runs) >= 1.5 else
+            f"time stamps written too coarsely to tell every row apart ({int((runs > 1).sum())} stamps shared by "
+            f"{runs.min() if runs.min() > 1 else 2} to {runs.max()} rows)")
     repairs.append(Repair("bursts", int(t.size),
-                          f"time stamps repeat in bursts of ~{np.median(runs):.0f} rows"
-                          + (f" ({runs.min()} to {runs.max()})" if runs.min() < runs.max() else "") + f": all {t.size} rows re-timed by a straight line of stamp on row number "
+                          said + f": all {t.size} rows re-timed by a straight line of stamp on row number "
                           f"through the bursts' first rows, {1.0 / slope:.6g} Hz (every stamp within "
                           f"{off[worst]:.3g} s of it)"))
     return fitted

@@ -215,6 +215,7 @@ def _choose(cols: Columns, spec: RecordingSpec, rate: float | None) -> tuple[int
         roles = [signal_role(h, cols.units[i] if cols.units and i < len(cols.units) else None)
                  for i, h in enumerate(cols.names)]
         roles = [None if i in texts else r for i, r in enumerate(roles)]
+        roles = _mark_companions(cols, roles, numeric)
         if a is None:
             hits = [i for i, r in enumerate(roles) if r == quantity and i != t]
             if n == 1 and roles[0] != "time":
@@ -243,6 +244,7 @@ def _choose(cols: Columns, spec: RecordingSpec, rate: float | None) -> tuple[int
         if t is None and not uniform:
             hits = [i for i, r in enumerate(roles) if r == "time" and i != a and i not in texts]
             hits = hits or [i for i in clocks if i != a]
+            hits = hits or _rising_clock(cols, [i for i in numeric if i != a and roles[i] != "uncertainty"])
             if len(hits) > 1:
                 hits = _finest_clock(cols, hits)
             if not hits and numeric == [a]:
@@ -265,16 +267,70 @@ def _choose(cols: Columns, spec: RecordingSpec, rate: float | None) -> tuple[int
     return t, a
 
 
+def _mark_companions(cols: Columns, roles: list[str | None], numeric: list[int]) -> list[str | None]:
+    """Roles with the columns that are uncertainties of others (:func:`~escfit.analysis.roles.companions`)
+    marked ``"uncertainty"``, with a note; only columns whose names could be one are read."""
+    from ...analysis.roles import base_name, companions
+
+    words = ("unc", "err", "sigma", "std", "delta", "fehler", "'", "′", "σ", "δ")
+    bases = [base_name(h) for h in cols.names]
+    maybe = [i for i in numeric if any(w in bases[i] for w in words)
+             or any(bases[i][1:].lstrip(" _") == b for b in bases if b)]
+    if not maybe:
+        return roles
+    found = companions(cols.names, _parsed(cols, maybe))
+    if not found:
+        return roles
+    said = ", ".join(f"{cols.label(i)!r}" + (f" (of {cols.label(j)!r})" if j is not None else "")
+                     for i, j in found.items())
+    cols.notes.append(f"uncertainty columns, never negative and named as such, are neither the time nor the signal: "
+                      f"{said}")
+    return ["uncertainty" if i in found else r for i, r in enumerate(roles)]
+
+
+def _rising_clock(cols: Columns, candidates: list[int]) -> list[int]:
+    """``[the column]`` that alone rises at every row, taken as the clock with a note; else ``[]``."""
+    from ...analysis.roles import rising_clock
+
+    found = rising_clock(_parsed(cols, candidates))
+    if found is None:
+        return []
+    cols.notes.append(f"column {cols.label(found)!r} taken as the time: no name says which column is, and it alone "
+                      "rises at every row ([recording] time_column chooses another)")
+    return [found]
+
+
+def _parsed(cols: Columns, indices: list[int]) -> dict[int, np.ndarray]:
+    """The columns of ``indices`` that parse as numbers, by index."""
+    out = {}
+    for i in indices:
+        try:
+            out[i] = _floats(cols, i)
+        except DataError:
+            continue
+    return out
+
+
 def _provisional_time(cols: Columns, roles: list[str | None], candidates: list[int]) -> np.ndarray:
     """Times for scoring candidate columns' shapes: the one time column's readings in s, else the row number."""
     times = [i for i, r in enumerate(roles) if r == "time" and i not in candidates and cols.kind(i) == "number"]
+    if not times:
+        from ...analysis.roles import rising_clock
+
+        found = rising_clock(_parsed(cols, [i for i in range(cols.ncols) if roles[i] != "uncertainty"
+                                            and cols.kind(i) == "number"]))  # a rising column is no one's signal
+        times = [found] if found is not None else []
     if len(times) == 1:
         try:
             values = _floats(cols, times[0])
             unit = cols.unit(times[0]) if cols.names is not None else None
             values = values * (seconds_per_unit(unit, cols.where) if unit else 1.0)
-            if np.all(np.diff(values[np.isfinite(values)]) > 0):
+            steps = np.diff(values[np.isfinite(values)])
+            if np.all(steps > 0):
                 return values
+            if np.all(steps >= 0) and np.any(steps > 0) and np.isfinite(values).all():  # stamps rounded: a line
+                rows = np.arange(values.size, dtype=float)
+                return np.polyval(np.polyfit(rows, values, 1), rows)
         except DataError:
             pass
     return np.arange(len(cols.lines) if cols.lines else max(len(v) for v in cols.values.values()), dtype=float)
@@ -284,14 +340,7 @@ def _shape_choice(cols: Columns, candidates: list[int], roles: list[str | None],
     """:func:`~escfit.analysis.channel.choose_channel` over candidate columns (those that parse as numbers)."""
     from ...analysis.channel import choose_channel
 
-    values = {}
-    for i in candidates:
-        try:
-            v = _floats(cols, i)
-        except DataError:
-            continue
-        if np.isfinite(v).sum() >= 20:
-            values[cols.label(i)] = v
+    values = {cols.label(i): v for i, v in _parsed(cols, candidates).items() if np.isfinite(v).sum() >= 20}
     if not values:
         return None
     time = _provisional_time(cols, roles, candidates)

@@ -100,6 +100,11 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
         raise DataError(f"only {np.size(time)} samples; a decay needs at least {MIN_SAMPLES}", source)
     time, theta = np.asarray(time, dtype=float), np.asarray(theta, dtype=float)
     rows = np.arange(time.size)
+    if spec.readings == "amplitudes" and np.any(np.diff(time) < 0.0):  # a table's rows need not be in time order
+        rows = np.argsort(time, kind="stable")
+        time, theta = time[rows], theta[rows]
+        notes.append(f"the {time.size} amplitudes are not in time order in the file (sorted by another column?): "
+                     "read in the order of their times")
     # the keys are read on the clock as the file gives it (its first row the origin), before any re-timing
     window, clock_notes = resolve_window(spec, time, source)
     notes += clock_notes
@@ -170,11 +175,13 @@ def unwrap_angles(theta: np.ndarray, notes: list[str]) -> np.ndarray:
 
     A step of more than 1.5*pi rad between neighbouring samples is a wrap, not motion (the
     motion itself moves far less between samples of any usable record); the wraps are undone
-    with a note counting them.
+    with a note counting them.  Only angles that stay within one turn (a span of at most 2 pi, 5 %
+    allowed for noise) can have been written modulo one turn: jumps in a signal spanning more are
+    left for the checks that follow (counts or another unit read as an angle).
     """
     steps = np.diff(theta)
     jumps = int(np.count_nonzero(np.abs(steps) > 1.5 * math.pi))
-    if not jumps:
+    if not jumps or np.ptp(theta) > 2.1 * math.pi:
         return theta
     notes.append(f"angles written modulo one turn: {jumps} wraps at +-180 deg undone")
     return np.unwrap(theta, discont=1.5 * math.pi)

@@ -112,6 +112,9 @@ def _header_names(line: str, lay: _Layout) -> list[str] | None:
         names = [line.strip()]
     elif lay.dialect.delimiter is not None:
         names = _split(line, lay.dialect)
+        filled = [n for n in names if n.strip()]
+        if len(filled) == 1 and len(filled[0].split()) == lay.ncols:  # a header spaced above tab-separated data
+            names = filled[0].split()
     else:  # whitespace: keep "Time ( s )" and "t [s]" together, else try runs of 2+ spaces or tabs
         names = []
         for tok in line.split():
@@ -122,10 +125,18 @@ def _header_names(line: str, lay: _Layout) -> list[str] | None:
                 names.append(tok)
         if len(names) != lay.ncols:
             names = [f for f in re.split(r"\s{2,}|\t", line.strip()) if f]
-    names = [n.strip().strip('"').strip("'").strip() for n in names]
+    names = [_unquoted(n) for n in names]
     if len(names) != lay.ncols or any(_is_number(n, lay.dialect.decimal_comma) and n for n in names):
         return None
     return names
+
+
+def _unquoted(name: str) -> str:
+    """A header cell without its surrounding quotes (a trailing prime, ``X'``, is part of the name)."""
+    name = name.strip()
+    while len(name) >= 2 and name[0] == name[-1] and name[0] in "\"'":
+        name = name[1:-1].strip()
+    return name.strip('"').strip() if name.count('"') == 1 else name
 
 
 def _unit_row(line: str, lay: _Layout) -> list[str | None] | None:

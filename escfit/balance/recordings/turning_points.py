@@ -422,8 +422,12 @@ def prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, whe
     jump = np.abs(np.diff(x)) if quantity == "angle" else np.zeros(0)
     if np.any(jump > 1.5 * math.pi):  # no motion sampled 16 times a period moves that far
         i = int(np.argmax(jump))
+        within_turn = np.ptp(x) <= 2.1 * math.pi
+        why = ("a wrapped angle? unwrap it (numpy.unwrap) before the analysis" if within_turn else
+               "further than any swing moves between two samples, so the column is not an angle in the unit it "
+               "was read in: set [recording] angle_unit (and scale), or displacement_column with its unit")
         raise DataError(f"the angle jumps by {math.degrees(jump[i]):.0f} deg between t = {t[i]:.4g} s and "
-                        f"{t[i + 1]:.4g} s: a wrapped angle? unwrap it (numpy.unwrap) before the analysis", where)
+                        f"{t[i + 1]:.4g} s: {why}", where)
     notes: list[str] = []
     dt = float(np.median(dts))
     gaps = np.flatnonzero(dts > 3 * dt)
