@@ -79,3 +79,19 @@ def test_timings_table_adds_up_to_the_process(tmp_path):
     assert abs(sum(v[0] for v in rows.values()) - total[0]) < 0.001 * (len(rows) + 1) + 0.02
     assert abs(sum(v[1] for v in rows.values()) - total[1]) < 0.001 * (len(rows) + 1) + 0.02
     assert rows["least squares"][1] > 0 and rows["record"][1] > 0
+
+
+def test_the_command_exits_with_its_status_and_keeps_a_profilers_output(tmp_path):
+    # the process ends without the interpreter's teardown, but with the command's status, its
+    # output flushed, and a profiler's statistics written (they are written at the end)
+    args = ["-m", "escfit", "fit", str(tmp_path / "missing.csv"), "--scene", str(tmp_path / "missing.toml")]
+    r = subprocess.run([sys.executable, *args], capture_output=True, text=True, env=_env(), cwd=tmp_path, timeout=300)
+    assert r.returncode == 2 and "data file not found" in r.stderr
+    prof = tmp_path / "run.prof"  # (cProfile itself ends with status 0 whatever the program's)
+    r = subprocess.run([sys.executable, "-m", "cProfile", "-o", str(prof), *args], capture_output=True, text=True,
+                       env=_env(), cwd=tmp_path, timeout=300)
+    assert "data file not found" in r.stderr
+    assert prof.is_file() and prof.stat().st_size > 0
+    r = subprocess.run([sys.executable, "-m", "escfit", "--version"], capture_output=True, text=True, env=_env(),
+                       timeout=300)
+    assert r.returncode == 0 and r.stdout.startswith("escfit")

@@ -35,7 +35,13 @@ def exit_status(code) -> int:
 
 
 def finish(status: int) -> NoReturn:
-    """End the process with ``status`` after the orderly parts of an exit (see the module's notes)."""
+    """End the process with ``status`` after the orderly parts of an exit (see the module's notes).
+
+    Under a profiler or a tracer (``python -m cProfile``, a debugger, coverage) the exit is the
+    interpreter's own, so that they can write what they collected when the program ends.
+    """
+    if sys.getprofile() is not None or sys.gettrace() is not None:
+        sys.exit(status)
     main = threading.main_thread()
     for thread in threading.enumerate():
         if thread is not main and not thread.daemon:
