@@ -112,7 +112,8 @@ else:
     code = 0
 end = since_start()
 startup = first[0] if first else end
-out = {"start-up + imports": list(startup), **totals, "process": list(end), "exit": code if isinstance(code, int) else 1}
+out = {"start-up + imports": list(startup), **totals, "process": list(end),
+       "exit": code if isinstance(code, int) else 1}
 os.write(1, ("\nPHASES " + json.dumps(out) + "\n").encode())
 '''
 
@@ -210,7 +211,8 @@ def report(job: str, record: dict) -> list[str]:
     for label in ("previous", "current"):
         cold = record.get(f"{label} cold")
         if cold:
-            lines.append(f"| cold ({label}, empty numba cache), wall / CPU | | {cold['wall']:.2f} / {cold['cpu']:.2f} |")
+            lines.append(f"| cold ({label}, empty numba cache), wall / CPU | | "
+                         f"{cold['wall']:.2f} / {cold['cpu']:.2f} |")
     return lines + [""]
 
 
