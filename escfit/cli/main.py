@@ -420,6 +420,7 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoi
     """
     from ..core import timings
 
+    timings.reset()  # this command's phases only (several commands may run in one process)
     startup = timings.since_process_start()  # interpreter, click and the command line's own imports
     with timings.phase("imports"):
         from ..inference import fit as run_fit
