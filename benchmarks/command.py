@@ -102,19 +102,17 @@ class Hook(importlib.abc.MetaPathFinder):
         spec.loader.exec_module = exec_module
         return spec
 
+def report():  # at exit: escfit's command line may end the process without returning here
+    end = since_start()
+    startup = first[0] if first else end
+    out = {"start-up + imports": list(startup), **totals, "process": list(end)}
+    os.write(1, ("\nPHASES " + json.dumps(out) + "\n").encode())
+
+import atexit
+atexit.register(report)
 sys.meta_path.insert(0, Hook())
 sys.argv = ["escfit", *sys.argv[1:]]
-try:
-    runpy.run_module("escfit", run_name="__main__", alter_sys=True)
-except SystemExit as exc:
-    code = exc.code
-else:
-    code = 0
-end = since_start()
-startup = first[0] if first else end
-out = {"start-up + imports": list(startup), **totals, "process": list(end),
-       "exit": code if isinstance(code, int) else 1}
-os.write(1, ("\nPHASES " + json.dumps(out) + "\n").encode())
+runpy.run_module("escfit", run_name="__main__", alter_sys=True)
 '''
 
 
@@ -157,8 +155,8 @@ def run_once(folder: Path, args: list[str], work: Path, pycache: Path, numba_cac
     if not lines:
         raise SystemExit(f"escfit {' '.join(args)} under {folder} failed:\n{stderr.decode()[-3000:]}")
     raw = json.loads(lines[-1][len("PHASES "):])
-    if raw["exit"] not in (0, 3):
-        raise SystemExit(f"escfit {' '.join(args)} under {folder} exited {raw['exit']}:\n{stderr.decode()[-3000:]}")
+    if proc.returncode not in (0, 3):  # 3: a fit that ran but determined nothing
+        raise SystemExit(f"escfit {' '.join(args)} under {folder} exited {proc.returncode}:\n{stderr.decode()[-3000:]}")
     return {"phases": _phases(raw), "wall": wall, "cpu": cpu}
 
 
