@@ -192,6 +192,12 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
         fixes.append(f"the posterior holds {', '.join(problem.held)} where the recording's own measurement puts it; "
                      "its uncertainty is in the least-squares intervals but not in the posterior's")
     timings = {"least_squares_s": time.perf_counter() - clock}
+    clock = time.perf_counter()
+    check = getattr(problem, "agreement", None)  # the fit held against the record itself, where it has one
+    with phase("agreement"):
+        agreement = check(lsq, seed=seed) if check is not None else None
+    if agreement is not None:
+        timings["agreement_s"] = time.perf_counter() - clock
     mc = None
     if method == "emcee":
         with phase("sampling"):
@@ -204,7 +210,7 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
         from ..results import FitResult, clean_attrs
 
         tree = build_tree(problem, lsq, mc, method=method, seed=seed, started=started,
-                          predictive_draws=predictive_draws, fixes=fixes, unresolved=unresolved)
+                          predictive_draws=predictive_draws, fixes=fixes, unresolved=unresolved, agreement=agreement)
     timings["diagnostics_s"] = time.perf_counter() - clock
     tree.attrs.update(clean_attrs({"timings": {k: round(float(v), 4) for k, v in timings.items()}}))
     if title:
@@ -270,11 +276,13 @@ def _remove_stale_temporaries(out: str | Path, checkpoint: str | Path | None) ->
 
 def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None, *, method: str, seed: int,
                started: str, predictive_draws: int = 400, fixes: list[str] | None = None,
-               unresolved: list | None = None) -> xr.DataTree:
+               unresolved: list | None = None, agreement=None) -> xr.DataTree:
     """The results tree of a fit (groups and attributes of :mod:`escfit.results`).
 
     ``fixes`` and ``unresolved`` come from :func:`~escfit.inference.reconcile.reconcile`: what was
-    refitted to agree with the recording's direct measurements, and what still disagrees.
+    refitted to agree with the recording's direct measurements, and what still disagrees;
+    ``agreement`` is the problem's check of the fit against the record
+    (:class:`escfit.analysis.agreement.Agreement`), or ``None``.
     """
     import xarray as xr
 
@@ -345,7 +353,11 @@ def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None,
             convergence.append("the run is shorter than 50 autocorrelation times: intervals are approximate")
         warnings = convergence + correlation_warnings(names, pc) + sloppy_directions(names, flat)
         warnings += [w for w in problem.checks_of_posterior(mc.chain) if w not in family_warnings]
-    status, undetermined, statement = verdict(problem, lsq, list(unresolved or []), posterior=mc is not None)
+    status, undetermined, statement = verdict(problem, lsq, list(unresolved or []), posterior=mc is not None,
+                                              agreement=agreement)
+    if agreement is not None:
+        warnings = list(agreement.cautions) + warnings
+        fixes = list(fixes or []) + ([agreement.note()] if agreement.agrees and agreement.note() else [])
     warnings = _unique(([statement] if statement else []) + warnings + misfit_warnings
                        + list(getattr(problem, "data_warnings", [])))
     attrs = {

@@ -131,7 +131,7 @@ def with_held_uncertainty(problem, lsq: LeastSquaresResult) -> tuple[LeastSquare
 
 
 def verdict(problem, lsq: LeastSquaresResult, unresolved: list[Implied], *,
-            posterior: bool = False) -> tuple[str, list[str], str]:
+            posterior: bool = False, agreement=None) -> tuple[str, list[str], str]:
     """What the fit determines.
 
     Parameters
@@ -139,6 +139,9 @@ def verdict(problem, lsq: LeastSquaresResult, unresolved: list[Implied], *,
     posterior
         A posterior run follows: intervals come from the draws, so a singular least-squares
         curvature alone does not leave a parameter undetermined.
+    agreement
+        The fit held against the record (:class:`escfit.analysis.agreement.Agreement`) or
+        ``None``: a fit that disagrees with the record determines nothing.
 
     Returns
     -------
@@ -161,6 +164,8 @@ def verdict(problem, lsq: LeastSquaresResult, unresolved: list[Implied], *,
             f"the {c.implied:.5g} it implies even when refitted from there: the scene does not describe this record "
             "(check its effects, restoring law, units and ranges), or fit every sample "
             "([observation] model = \"waveform\")")
+    if agreement is not None and not agreement.agrees:
+        return NOT_DETERMINED, structural, agreement.statement()
     if posterior:
         return DETERMINED, [], ""
     missing = [n for n, e in zip(lsq.names, lsq.stderr) if n in structural and not np.isfinite(e)]

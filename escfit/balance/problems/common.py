@@ -109,6 +109,15 @@ class BalanceProblem(ProblemBase):
                             "the intervals describe the best fit of an incomplete model")
         return {}, warnings
 
+    def agreement(self, lsq, *, seed: int = 0):
+        """A fit of a sampled record held against the record (:func:`escfit.analysis.agreement.check_agreement`);
+        ``None`` for other recordings."""
+        if getattr(self, "turning_points", None) is None:
+            return None
+        from ...analysis.agreement import check_agreement
+
+        return check_agreement(self, lsq, seed=seed)
+
     def consistency(self, values: Mapping[str, float]) -> list:
         """omega0 against the record's measured period, for sampled records (see
         :mod:`escfit.balance.problems.period`)."""

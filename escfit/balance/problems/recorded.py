@@ -73,7 +73,7 @@ def _free_centre(scene: BalanceScene, curve: UnitCurve, tp) -> BalanceScene:
 
 
 def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_options: dict | None = None,
-                        readings: str = "samples"):
+                        readings: str = "samples", turns=None):
     """The fit problem of a sampled record (see the module docstring).
 
     Parameters
@@ -87,6 +87,10 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
     readings
         ``"samples"``: theta sampled in time; ``"amplitudes"``: each row is already the
         amplitude of one half swing.
+    turns
+        The record's turning points when already found
+        (:class:`~escfit.balance.recordings.turning_points.TurningPoints` of an angle): they are
+        then not looked for again.
 
     Returns
     -------
@@ -94,11 +98,12 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
         With ``notes`` saying what was done to the record.
     """
     scene = replace(scene, params=ParamSet(dict(scene.params.params)))  # the release is set on a copy
+    given = replace(scene, params=ParamSet(dict(scene.params.params)))  # as the user wrote it: for the agreement check
     notes = notes_of(series.meta)
     quantity = getattr(series, "quantity", "angle")
     _check_quantity(scene, quantity, series.source)
     if quantity != "angle":
-        return _sampled_problem(scene, series, notes, solver, solver_options)
+        return _record_kept(_sampled_problem(scene, series, notes, solver, solver_options), given)
     model = dict(scene.extra.get("observation", {})).get("model", "amplitude")
     if readings == "amplitudes":
         return _amplitude_rows_problem(scene, series, notes, solver, solver_options)
@@ -106,7 +111,7 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
 
     # a waveform fit uses the turning points only for its start (reference, period, centre): an
     # irregular interval late in the record is a note there, not a refusal
-    tp = reduce_series(series, strict=model != "waveform", user_window=series.window)
+    tp = reduce_series(series, strict=model != "waveform", user_window=series.window) if turns is None else turns
     notes += list(getattr(tp, "notes", []))
     series = _without_steps(series, tp)
     _refuse_sustained(scene, tp, series.source)
@@ -120,7 +125,7 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
         problem.notes = notes + [_count_note(tp)] + problem.notes
         problem.measured_period = mp
         problem.data_warnings = list(getattr(problem, "data_warnings", [])) + list(tp.warnings)
-        return problem
+        return _record_kept(problem, given, tp)
     held = hold_omega0(scene, mp)
     curve = turning_point_curve(series, tp)
     notes.append(_count_note(tp))
@@ -131,6 +136,16 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
     problem.measured_period = mp
     problem.held = ("oscillator.omega0",) if held else ()
     problem.data_warnings = list(getattr(problem, "data_warnings", [])) + list(tp.warnings)
+    return _record_kept(problem, given, tp)
+
+
+def _record_kept(problem, scene: BalanceScene, tp=None):
+    """Keep what the agreement check (:mod:`escfit.analysis.agreement`) holds the fit against: the
+    record's turning points (``tp``, when not already kept) and the scene as given, from which a
+    turning-point fit of the same record is built."""
+    if tp is not None:
+        problem.turning_points = tp
+    problem.given_scene = scene
     return problem
 
 
@@ -225,6 +240,7 @@ def _sampled_problem(scene: BalanceScene, series, notes: list, solver, solver_op
     problem.notes = notes + [_count_note(tp, series.quantity)] + problem.notes
     problem.measured_period = mp
     problem.data_warnings = list(getattr(problem, "data_warnings", [])) + list(getattr(tp, "warnings", []))
+    problem.turning_points = tp
     return problem
 
 
