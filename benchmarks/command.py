@@ -14,7 +14,9 @@ median printed.  Jobs: the string pendulum's least squares (``fits/real/string_p
 Phases are timed the same way in both versions, from outside escfit's code: a small harness
 wraps, as each module finishes importing, the functions that start each phase (the scene's
 loading, the fit, least squares, sampling, the results tree, the write, the printed summary,
-the report) and reads the process's wall and CPU clocks around them; start-up and imports are
+the report) and reads the process's wall and CPU clocks around them ("record" is what the fit
+spends outside those: reading and analysing the record, and checks such as the agreement of the
+fit with the record's turning points); start-up and imports are
 the time from the process's start (``/proc``) to the first of them.  The whole process's wall
 time and CPU seconds (user + system, from the operating system's accounting of the finished
 child) are measured outside.  ``--cold`` adds one run of each version with an empty numba cache
