@@ -10,7 +10,9 @@ command line's ``--help``) stays quick:
 - :func:`simulate` runs a scene of any family and returns an :class:`xarray.Dataset`;
   :func:`solve` runs a balance or pendulum scene and returns its per-swing trajectory;
 - :func:`fit` fits a scene's free parameters to a recording (:func:`escfit.inference.fit`);
-- :func:`load_results` reads a saved fit, or a ``fit-many`` fleet summary, back.
+- :func:`load_results` reads a saved fit, or a ``fit-many`` fleet summary, back;
+- :func:`to_lmfit` hands a scene and a recording to lmfit (``Parameters`` and a ``Minimizer``),
+  :func:`lmfit_parameters` a results file (best fit and standard errors).
 
 The subpackages (``escfit.balance``, ``escfit.inference``, ``escfit.study`` ...) are reachable as
 attributes too; docs/architecture.md shows how they are layered.
@@ -26,6 +28,7 @@ from .core.version import __version__
 
 __all__ = [
     "__version__", "Scene", "load_scene", "read_recording", "simulate", "solve", "fit", "load_results", "load_fit",
+    "to_lmfit", "lmfit_parameters",
     "EscfitError", "SceneError", "UnitError", "DataError", "SolverError", "FitError", "ResultsError",
 ]
 
@@ -36,6 +39,8 @@ _LAZY = {
     "fit": ("escfit.inference", "fit"),
     "solve": ("escfit.balance", "solve"),
     "load_fit": ("escfit.results", "load_fit"),
+    "to_lmfit": ("escfit.inference.lmfit_params", "to_lmfit"),
+    "lmfit_parameters": ("escfit.inference.lmfit_params", "parameters_from_results"),
 }
 # Subpackages reachable as attributes (``escfit.inference.fit(...)`` after ``import escfit``)
 _SUBPACKAGES = frozenset({"analysis", "balance", "core", "friction", "geneva", "inference", "likelihood", "report",

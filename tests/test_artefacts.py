@@ -30,7 +30,6 @@ PERIODS = 20
 # what today's analysis does with the classes it gets wrong (the lead removes a mark when its fix lands)
 FAILS_TODAY: dict[str, str] = {
     "wobble": "a 3 % slow amplitude wobble moves C by +150 % and R to 0 with standard errors that do not cover it",
-    "radians_as_degrees": "radians in a column labelled degrees are fitted as degrees (R 57 times too small)",
 }
 SLOW = {"long_jitter"}
 

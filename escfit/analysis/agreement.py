@@ -17,7 +17,8 @@ itself measured, independently of the likelihood:
    the phase quadratically), plus an alternating term; it is a warning when its largest value
    along the record exceeds :data:`DRIFT_SIGMAS` of that scatter, and a finding when it is also
    gross: the phase more than :data:`PHASE_GROSS` off (a quarter period: the model turns where
-   the record is mid-swing) or the envelope more than :data:`GROSS_SHARE` of the amplitude.
+   the record is mid-swing) or the envelope off by more than :data:`GROSS_SHARE` of the amplitude
+   lost by then (at least a fifth of the first amplitude).
 2. **Start.**  The first :data:`START_TURNS` turning points (the release included when the record
    holds it whole): a finding when the record's amplitude grows among them (a free decay never
    does) and at least two of them leave the trend of the rest of the record by more than
@@ -95,11 +96,16 @@ class TurnDifferences:
 
     @property
     def gross(self) -> bool:
-        """Amplitudes: whether the smooth misfit exceeds :data:`GROSS_SHARE` of the record's
-        amplitude somewhere, beyond :data:`DRIFT_SIGMAS` scatters (the model describes another motion)."""
+        """Amplitudes: whether the smooth misfit exceeds :data:`GROSS_SHARE` of the amplitude the
+        record has lost by then (at least a fifth of its first amplitude) somewhere, beyond
+        :data:`DRIFT_SIGMAS` scatters: the model describes another motion, not the same decay
+        with a slightly different law (whose misfit grows with what was lost and stays a share of it)."""
         if self.size is None or self.drift_sigmas <= DRIFT_SIGMAS:
             return False
-        return bool(np.any(np.abs(self.trend) > GROSS_SHARE * np.abs(self.size)))
+        size = np.abs(self.size)
+        first = float(np.max(size[:3]))
+        lost = np.maximum(first - size, 0.2 * first)
+        return bool(np.any(np.abs(self.trend) > GROSS_SHARE * lost))
 
     @property
     def start_growth(self) -> float:

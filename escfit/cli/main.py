@@ -30,7 +30,7 @@ import click
 
 from ..core.version import __version__
 from ..core.errors import EscfitError
-from .options import STEPS_MAX, WALKERS_MAX, FiniteFloat, StepsType
+from .options import STEPS_MAX, WALKERS_MAX, FiniteFloat, MethodType, StepsType
 from ..core.interrupts import interrupting_signals
 
 __all__ = ["main", "cli"]
@@ -315,7 +315,7 @@ def _recipe_steps(recipe: dict, key: str, where: str):
 
 # The kind of value each recipe key takes (steps and max_steps: see _recipe_steps)
 RECIPE_TEXT = ("data", "scene", "out", "report", "title", "solver", "format", "material")
-RECIPE_CHOICES = {"method": ("leastsq", "emcee"), "moves": ("stretch", "de", "de-t")}
+RECIPE_CHOICES = {"moves": ("stretch", "de", "de-t")}
 RECIPE_WHOLE = {"seed": (0, SEED_MAX), "walkers": (2, WALKERS_MAX), "burn": (0, STEPS_MAX)}
 
 
@@ -329,6 +329,13 @@ def _check_recipe_values(doc: dict, where: str) -> None:
     for key in RECIPE_TEXT:
         if key in doc and (not isinstance(doc[key], str) or not doc[key].strip()):
             refuse(key, "a non-empty text")
+    if "method" in doc:
+        from ..inference.lmfit_path import check_method
+
+        try:
+            check_method(doc["method"]) if isinstance(doc["method"], str) else refuse("method", "a text")
+        except EscfitError as exc:
+            raise SceneError(str(exc), f"{where}.method") from None
     for key, choices in RECIPE_CHOICES.items():
         if key in doc and doc[key] not in choices:
             refuse(key, " or ".join(repr(c) for c in choices))
@@ -369,7 +376,10 @@ def _read_recipe(path: Path) -> dict:
 @cli.command()
 @click.argument("data", type=click.Path(dir_okay=False))
 @click.option("--scene", "scene_path", type=click.Path(dir_okay=False), default=None, help="Scene TOML with free parameters.")
-@click.option("--method", type=click.Choice(["leastsq", "emcee"]), default=None, help="Default leastsq (recipe may set it).")
+@click.option("--method", type=MethodType(), default=None,
+              help="leastsq (default; a recipe may set it): scipy's trust region; emcee: then the posterior; "
+                   "lmfit:NAME: least squares with lmfit's minimiser NAME (leastsq, least_squares, nelder, "
+                   "differential_evolution, basinhopping, ampgo, brute, ...; needs lmfit).")
 @click.option("--out", type=click.Path(dir_okay=False), default=None, help="Results file (HDF5).")
 @click.option("--seed", type=click.IntRange(0, SEED_MAX), default=None, help="Seed of the fit's random numbers.")
 @click.option("--walkers", type=click.IntRange(2, WALKERS_MAX), default=None)

@@ -14,7 +14,7 @@ import click
 
 from ..core.limits import STEPS_MAX, WALKERS_MAX
 
-__all__ = ["FiniteFloat", "StepsType", "WALKERS_MAX", "STEPS_MAX"]
+__all__ = ["FiniteFloat", "StepsType", "MethodType", "WALKERS_MAX", "STEPS_MAX"]
 
 
 class FiniteFloat(click.ParamType):
@@ -78,3 +78,20 @@ class StepsType(click.ParamType):
         if n is None or not 10 <= n <= STEPS_MAX:
             self.fail(f"{value!r} is neither 'auto' nor a whole number of steps in [10, {STEPS_MAX}]", param, ctx)
         return n
+
+
+class MethodType(click.ParamType):
+    """``--method``: ``leastsq``, ``emcee`` or ``lmfit:NAME`` for any lmfit minimiser escfit runs
+    (checked against :data:`escfit.inference.lmfit_path.LMFIT_METHODS` without importing lmfit)."""
+
+    name = "leastsq|emcee|lmfit:NAME"
+
+    def convert(self, value, param, ctx):
+        from ..core.errors import FitError
+        from ..inference.lmfit_path import check_method
+
+        try:
+            check_method(str(value))
+        except FitError as exc:
+            self.fail(str(exc), param, ctx)
+        return str(value)

@@ -25,10 +25,12 @@ from ..core.timings import phase
 from ..likelihood.problem import Problem
 from .information import information_attrs
 from .identifiability import bound_warnings, correlation_warnings, ridge_warnings, sloppy_directions
+from .lmfit_path import check_method
 from .lsq import LeastSquaresResult, least_squares
 from .misfit import misfit_report
 from .reconcile import reconcile, verdict, with_held_uncertainty
 from .registry import family
+from .trf import minimize
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -83,7 +85,10 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
     data
         A recording object of the family, or the path of a recording file.
     method
-        ``"leastsq"`` (scipy trust-region, multistart) or ``"emcee"`` (least squares, then MCMC).
+        ``"leastsq"`` (scipy trust-region, multistart), ``"emcee"`` (least squares, then MCMC) or
+        ``"lmfit:NAME"``: least squares with lmfit's minimiser ``NAME`` in place of scipy's trust
+        region (``leastsq``, ``least_squares``, ``nelder``, ``differential_evolution`` ...; see
+        :mod:`escfit.inference.lmfit_path`), the results in the same layout, the method recorded.
     out
         Results file (HDF5); written atomically and never replacing a file without ``force``.
         Refused before any work when it or its checkpoint is the data or scene file, or when
@@ -120,8 +125,7 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
     from ..core.inputs import check_input_file
     from ..core.outlock import output_lock
 
-    if method not in ("leastsq", "emcee"):
-        raise FitError(f"method must be 'leastsq' or 'emcee', got {method!r}")
+    check_method(method)
     if resume and method != "emcee":
         raise FitError("--resume continues an interrupted emcee run; a least-squares fit has nothing to resume "
                        "(use --method emcee, or leave out --resume)")
@@ -183,9 +187,17 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
                   target=None if steps == "auto" else steps, provenance=problem.provenance(), fit_options=fit_options)
     started = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
     clock = time.perf_counter()
+    optimizer, lmfit_name = minimize, check_method(method)
+    if lmfit_name is not None:
+        from .lmfit_path import GLOBAL, lmfit_optimizer
+
+        optimizer = lmfit_optimizer(problem, lmfit_name, seed=seed)
+        if lmfit_name in GLOBAL:  # a global search covers the box itself: one run, not one per start
+            n_starts, n_refine = 1, 1
     with phase("least squares"):
-        lsq = least_squares(problem, n_starts=n_starts, n_refine=n_refine, seed=seed, priors_count=method == "emcee")
-        lsq, fixes, unresolved = reconcile(problem, lsq, seed=seed, priors_count=method == "emcee")
+        lsq = least_squares(problem, n_starts=n_starts, n_refine=n_refine, seed=seed, priors_count=method == "emcee",
+                            optimizer=optimizer)
+        lsq, fixes, unresolved = reconcile(problem, lsq, seed=seed, priors_count=method == "emcee", optimizer=optimizer)
         lsq, more = with_held_uncertainty(problem, lsq)
     fixes += more
     if method == "emcee" and getattr(problem, "held", ()):

@@ -43,7 +43,7 @@ from .fdjac import batch_jacobian
 from .starts import multistart_points
 from .trf import minimize, single_blas_thread
 
-__all__ = ["LeastSquaresResult", "least_squares", "bounded_interval", "bound_flags", "INTERVAL_Z"]
+__all__ = ["LeastSquaresResult", "least_squares", "bounded_interval", "bound_flags", "stacked_residuals", "INTERVAL_Z"]
 
 _GAUSSIAN = ("normal", "halfnormal", "lognormal")
 
@@ -130,7 +130,7 @@ class LeastSquaresResult:
 
 def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None = None, seed: int = 0,
                   fixed: dict[str, float] | None = None, start: dict[str, float] | None = None,
-                  priors_count: bool = False) -> LeastSquaresResult:
+                  priors_count: bool = False, optimizer=minimize) -> LeastSquaresResult:
     """Minimise the standardised residuals over the structural free parameters.
 
     Parameters
@@ -157,6 +157,10 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
         fewer readings than parameters.
     start
         Starting values by name, replacing the scene's.
+    optimizer
+        The run from one start: :func:`~escfit.inference.trf.minimize` (scipy's trust region) or
+        any callable of its signature returning an :class:`~escfit.inference.trf.Optimum`
+        (:func:`~escfit.inference.lmfit_path.lmfit_optimizer`: an lmfit minimiser).
 
     Raises
     ------
@@ -176,7 +180,8 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
     pinned_by_priors = sum(problem.priors[problem.names.index(n)].kind in _GAUSSIAN for n in names)
     refuse_underdetermined(problem, names, pinned_by_priors if priors_count else 0)
     if "observation.rho" in problem.names and "observation.rho" not in fixed:
-        return _two_stage_ar1(problem, n_starts=n_starts, n_refine=n_refine, seed=seed, fixed=fixed, start=start)
+        return _two_stage_ar1(problem, n_starts=n_starts, n_refine=n_refine, seed=seed, fixed=fixed, start=start,
+                              optimizer=optimizer)
     idx = [problem.names.index(n) for n in names]
     priors = [problem.priors[i] for i in idx]
     lo, hi = (np.asarray(b, float)[idx] for b in problem.bounds)
@@ -198,7 +203,7 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
     def residual(x: np.ndarray) -> np.ndarray:
         vals = problem.values({**fixed, **dict(zip(names, (float(v) for v in x)))})
         r = np.asarray(problem.residuals(vals), float)[:n] / scale[0]
-        out = _stacked(r, priors, x)
+        out = stacked_residuals(r, priors, x)
         last.update(x=np.array(x, float), scale=scale[0], out=out)
         return out
 
@@ -213,7 +218,8 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
         best = None
         for x in starts:
             try:
-                res = minimize(residual, x, lo, hi, scale_covar=not iterate_scale and profile_noise, **options)
+                res = optimizer(residual, x, lo, hi, scale_covar=not iterate_scale and profile_noise, names=names,
+                                **options)
             except (ValueError, FloatingPointError) as exc:  # scipy refusing a start
                 problem.failures[f"least squares start failed: {exc}"[:120]] += 1
                 continue
@@ -233,7 +239,7 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
                 scale[0] = new
                 if done:
                     break
-                best = minimize(residual, best.x, lo, hi, scale_covar=False, **options)
+                best = optimizer(residual, best.x, lo, hi, scale_covar=False, names=names, **options)
                 free_dof = _data_dof(best, priors, n, len(names) - pinned)
     value = best.x.copy()
     covar_scale = float(best.redchi) if (profile_noise and not iterate_scale) else 1.0
@@ -268,7 +274,7 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
                               lower=lo.copy(), upper=hi.copy(), warnings=cov_warnings)
 
 
-def _stacked(r: np.ndarray, priors, x: np.ndarray) -> np.ndarray:
+def stacked_residuals(r: np.ndarray, priors, x: np.ndarray) -> np.ndarray:
     """The readings' residuals and the Gaussian priors' ones, failures made large and finite."""
     out = np.concatenate([r, gaussian_prior_residuals(priors, x)])
     return np.where(np.isfinite(out), out, FAIL_RESIDUAL)
@@ -288,7 +294,7 @@ def _batch_jacobian(problem, names, fixed, priors, n, scale, last, lo, hi, rel_s
         vecs = np.repeat(full[None, :], points.shape[0], axis=0)
         vecs[:, cols] = points
         r = np.asarray(problem.residuals_many(vecs), float)[:, :n] / scale[0]
-        return np.array([_stacked(ri, priors, p) for ri, p in zip(r, points)])
+        return np.array([stacked_residuals(ri, priors, p) for ri, p in zip(r, points)])
 
     def jac(x: np.ndarray) -> np.ndarray:
         seen = "x" in last and last["scale"] == scale[0] and np.array_equal(last["x"], x)
@@ -548,17 +554,17 @@ def _data_dof(best, priors, n: int, unpinned: int) -> float:
     return float(max(n - (p - tr_prior), 1.0))
 
 
-def _two_stage_ar1(problem, *, n_starts, n_refine, seed, fixed, start) -> LeastSquaresResult:
+def _two_stage_ar1(problem, *, n_starts, n_refine, seed, fixed, start, optimizer) -> LeastSquaresResult:
     """Correlated noise: fit with white noise, estimate rho from the residuals, refit."""
     first = least_squares(problem, n_starts=n_starts, n_refine=n_refine, seed=seed,
-                          fixed={**(fixed or {}), "observation.rho": 0.0}, start=start)
+                          fixed={**(fixed or {}), "observation.rho": 0.0}, start=start, optimizer=optimizer)
     r = problem.observed - problem.expected(first.values)
     r = r - r.mean()
     i = problem.names.index("observation.rho")
     lo, hi = (float(np.asarray(b)[i]) for b in problem.bounds)
     rho = float(np.clip((r[1:] @ r[:-1]) / (r @ r), max(lo, -0.99), min(hi, 0.99)))
     return least_squares(problem, n_starts=1, seed=seed, fixed={**(fixed or {}), "observation.rho": rho},
-                         start={n: first.values[n] for n in first.names})
+                         start={n: first.values[n] for n in first.names}, optimizer=optimizer)
 
 
 def _ranked(starts: list[np.ndarray], residual, lo: np.ndarray, hi: np.ndarray,

@@ -26,6 +26,7 @@ import numpy as np
 
 from ..likelihood.consistency import Implied
 from .lsq import LeastSquaresResult, least_squares
+from .trf import minimize
 
 __all__ = ["reconcile", "with_held_uncertainty", "verdict", "NOT_DETERMINED", "PARTLY", "DETERMINED"]
 
@@ -38,9 +39,11 @@ def _start(lsq: LeastSquaresResult) -> dict[str, float]:
     return {n: float(lsq.values[n]) for n in lsq.names}
 
 
-def reconcile(problem, lsq: LeastSquaresResult, *, seed: int = 0,
-              priors_count: bool = False) -> tuple[LeastSquaresResult, list[str], list[Implied]]:
+def reconcile(problem, lsq: LeastSquaresResult, *, seed: int = 0, priors_count: bool = False,
+              optimizer=minimize) -> tuple[LeastSquaresResult, list[str], list[Implied]]:
     """Check ``lsq`` against the recording's direct measurements; refit where that settles it.
+
+    Refits run ``optimizer`` from one start (see :func:`~escfit.inference.lsq.least_squares`).
 
     Returns
     -------
@@ -65,7 +68,8 @@ def reconcile(problem, lsq: LeastSquaresResult, *, seed: int = 0,
         c = bad[0]
         if c.name in held:
             problem.hold(c.name, c.implied)
-            lsq = least_squares(problem, n_starts=1, seed=seed, start=_start(lsq), priors_count=priors_count)
+            lsq = least_squares(problem, n_starts=1, seed=seed, start=_start(lsq), priors_count=priors_count,
+                                optimizer=optimizer)
             if not notes or not notes[-1].startswith(f"{c.name} moved"):
                 notes.append(f"{c.name} moved from {c.fitted:.6g} to {c.implied:.6g} so that the model's period "
                              f"matches the record's ({c.facts} at the first value)")
@@ -77,7 +81,8 @@ def reconcile(problem, lsq: LeastSquaresResult, *, seed: int = 0,
         i = lsq.names.index(c.name)
         start = _start(lsq)
         start[c.name] = float(np.clip(c.implied, lsq.lower[i], lsq.upper[i]))
-        refit = least_squares(problem, n_starts=1, seed=seed, start=start, priors_count=priors_count)
+        refit = least_squares(problem, n_starts=1, seed=seed, start=start, priors_count=priors_count,
+                              optimizer=optimizer)
         again = [x for x in consistency(refit.values) if x.name == c.name]
         if again and not again[0].agrees:
             return lsq, notes, [c]

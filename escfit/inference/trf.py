@@ -23,7 +23,7 @@ from typing import Callable
 
 import numpy as np
 
-__all__ = ["Optimum", "minimize", "single_blas_thread", "DEFAULT_TOL"]
+__all__ = ["Optimum", "minimize", "optimum", "single_blas_thread", "DEFAULT_TOL"]
 
 #: ftol, xtol and gtol of every run (lmfit's defaults for this method)
 DEFAULT_TOL = 1e-8
@@ -76,7 +76,7 @@ def single_blas_thread():
 
 
 def minimize(fun: Callable[[np.ndarray], np.ndarray], x0: np.ndarray, lower: np.ndarray, upper: np.ndarray, *,
-             scale_covar: bool = False, **options) -> Optimum:
+             scale_covar: bool = False, names: list[str] | None = None, **options) -> Optimum:
     """Minimise ``sum(fun(x)**2)`` inside ``lower <= x <= upper`` from ``x0``.
 
     Parameters
@@ -89,6 +89,8 @@ def minimize(fun: Callable[[np.ndarray], np.ndarray], x0: np.ndarray, lower: np.
         Bounds (``-inf``/``inf`` when open).
     scale_covar
         Multiply the covariance by the reduced chi-square (the noise scale is profiled).
+    names
+        The parameters' names (unused here; optimisers that report by name take them).
     **options
         Passed on to ``scipy.optimize.least_squares`` (``diff_step``, tolerances, ``max_nfev``).
     """
@@ -101,8 +103,16 @@ def minimize(fun: Callable[[np.ndarray], np.ndarray], x0: np.ndarray, lower: np.
                max_nfev=4000 * (k + 1))
     kws.update(options)
     ret = scipy_least_squares(fun, x0, bounds=(lower, upper), **kws)
-    r = np.asarray(ret.fun, float)
-    jac = np.asarray(ret.jac, float)
+    return optimum(ret.x, ret.fun, ret.jac, scale_covar=scale_covar, success=bool(ret.success),
+                   message=str(ret.message), nfev=int(ret.nfev))
+
+
+def optimum(x, residual, jac, *, scale_covar: bool, success: bool, message: str, nfev: int) -> Optimum:
+    """The :class:`Optimum` at ``x`` from its residual vector and Jacobian: chi-square, reduced
+    chi-square and covariance ``(J^T J)^-1`` (times the reduced chi-square when ``scale_covar``;
+    None when singular or not finite)."""
+    x, r, jac = np.asarray(x, float), np.asarray(residual, float), np.asarray(jac, float)
+    k = x.size
     chisqr = float(r @ r)
     redchi = chisqr / max(1, r.size - k)
     try:
@@ -113,5 +123,4 @@ def minimize(fun: Callable[[np.ndarray], np.ndarray], x0: np.ndarray, lower: np.
         covar = covar * redchi
     if covar is not None and not np.all(np.isfinite(covar)):
         covar = None
-    return Optimum(np.asarray(ret.x, float), r, jac, covar, chisqr, redchi if math.isfinite(redchi) else math.nan,
-                   bool(ret.success), str(ret.message), int(ret.nfev))
+    return Optimum(x, r, jac, covar, chisqr, redchi if math.isfinite(redchi) else math.nan, success, message, nfev)

@@ -116,6 +116,8 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
     series = _without_steps(series, tp)
     _refuse_sustained(scene, tp, series.source)
     mp = measured_period(tp, series.source)
+    unit_notes, unit_warnings = _unit_from_period(scene, series, tp)
+    notes += unit_notes
     check_scene_omega0(scene, mp)
     if model == "waveform":
         from .waveform import WaveformProblem
@@ -124,7 +126,7 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
         problem = WaveformProblem(scene, series, tp, solver, solver_options)
         problem.notes = notes + [_count_note(tp)] + problem.notes
         problem.measured_period = mp
-        problem.data_warnings = list(getattr(problem, "data_warnings", [])) + list(tp.warnings)
+        problem.data_warnings = list(getattr(problem, "data_warnings", [])) + list(tp.warnings) + unit_warnings
         return _record_kept(problem, given, tp)
     held = hold_omega0(scene, mp)
     curve = turning_point_curve(series, tp)
@@ -135,7 +137,7 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
     problem.notes = notes
     problem.measured_period = mp
     problem.held = ("oscillator.omega0",) if held else ()
-    problem.data_warnings = list(getattr(problem, "data_warnings", [])) + list(tp.warnings)
+    problem.data_warnings = list(getattr(problem, "data_warnings", [])) + list(tp.warnings) + unit_warnings
     return _record_kept(problem, given, tp)
 
 
@@ -254,3 +256,35 @@ def _refuse_sustained(scene: BalanceScene, tp, source: str) -> None:
     raise DataError(f"from t = {tp.after_first(when):.4g} s the swing keeps its amplitude where a free decay would go on losing: "
                     "something drives it (a motor, an escapement), and the scene has no drive, so it cannot be fitted "
                     "as a free decay; cut the record before that with [recording] stop, or model the drive", source)
+
+
+_DEGREE_WORDS = ("deg", "degree", "degrees", "°")
+_RADIAN_WORDS = ("rad", "radian", "radians")
+
+
+def _unit_from_period(scene: BalanceScene, series, tp) -> tuple[list[str], list[str]]:
+    """A free pendulum's angles held against its period's amplitude dependence
+    (:mod:`escfit.analysis.pendulum_unit`): ``(notes, warnings)``.  Radians read as degrees are
+    refused naming ``angle_unit``; a period that keeps still where a pendulum's would change is a
+    warning; a unit the periods confirm is a note."""
+    unit = str(series.meta.get("angle_unit", "")).strip().lower()
+    stiff = any(n.startswith("stiffening.") for n in scene.params.params)
+    if scene.restoring != "pendulum" or stiff or unit not in _DEGREE_WORDS + _RADIAN_WORDS:
+        return [], []
+    from ...analysis.pendulum_unit import unit_from_period
+    from ...core.errors import DataError
+
+    after = series.time >= tp.release_time
+    centre = tp.offset + tp.offset_rate * (series.time[after] - tp.release_time)
+    evidence = unit_from_period(series.time[after], series.theta[after] - centre)
+    if evidence is None:
+        return [], []
+    if evidence.verdict == "radians read as degrees" and unit in _DEGREE_WORDS:
+        raise DataError(f"{evidence.sentence()}: set [recording] angle_unit = \"rad\" (or --angle-unit rad)",
+                        series.source)
+    if evidence.verdict == "as read":
+        return [evidence.sentence()], []
+    if evidence.verdict == "unlike a pendulum":
+        return [], [evidence.sentence() + ": the angles' scale ([recording] angle_unit, scale) or the restoring "
+                    "law (a pendulum, --pendulum, or a spring) is not what the scene says"]
+    return [], []

@@ -1,0 +1,110 @@
+"""Every fit recipe's problem as lmfit Parameters, and lmfit's notebook run end to end.
+
+The Parameters must carry what the problem declares (independently: its ``names``, ``bounds``,
+``noise_names``, ``units`` and the scene's fixed parameters); the residual's sum of squares at
+escfit's least-squares optimum must be escfit's cost there (readings' chi-square plus the
+Gaussian priors' terms, computed here from the priors directly).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from escfit.inference.lmfit_params import lmfit_key, lmfit_problem
+from escfit.inference.lsq import least_squares
+
+from .test_lmfit_path import ROOT, recipe_problem
+
+lmfit = pytest.importorskip("lmfit")
+
+RECIPES = sorted(str(p.relative_to(ROOT / "fits")) for p in (ROOT / "fits").rglob("*.toml"))
+
+
+@pytest.mark.parametrize("recipe", RECIPES)
+def test_every_recipe_is_an_lmfit_problem(recipe):
+    _, problem = recipe_problem(recipe)
+    lp = lmfit_problem(problem)
+    lo, hi = problem.bounds
+    noise = set(problem.noise_names)
+    for i, name in enumerate(problem.names):
+        p = lp.params[lmfit_key(name)]
+        assert p.user_data["name"] == name and p.user_data["unit"] == problem.units.get(name, "")
+        assert p.vary == (name not in noise) and p.min == lo[i] and p.max == hi[i]
+    for q in problem.params:
+        if q.name not in problem.names:
+            p = lp.params[lmfit_key(q.name)]
+            assert not p.vary and (p.expr is not None) == (q.tie is not None and q.tie[0] in lp.keys)
+
+
+def test_a_tie_is_an_lmfit_expression():
+    from escfit.core.params import Param, ParamSet
+    from types import SimpleNamespace
+
+    from escfit.likelihood.priors import uniform
+
+    params = ParamSet()
+    params.add(Param("escapement[1].M", 2.0, "1/s**2", "impulse", vary=True, min=0, max=10))
+    params.add(Param("escapement[1].S", math.nan, "1/s**2", "unlock", tie=("escapement[1].M", 0.25)))
+    fake = SimpleNamespace(family="balance", names=["escapement[1].M"], initial=np.array([2.0]), params=params,
+                           bounds=(np.array([0.0]), np.array([10.0])), noise_names=(), priors=[uniform(0, 10)],
+                           units={"escapement[1].M": "1/s**2", "escapement[1].S": "1/s**2"}, meanings={},
+                           values=lambda m: {**dict(m), "escapement[1].S": 0.25 * dict(m)["escapement[1].M"]})
+    lp = lmfit_problem(fake, {"escapement[1].M": 4.0})
+    assert lp.params["escapement_1__S"].expr == "0.25 * escapement_1__M"
+    assert lp.params["escapement_1__S"].value == pytest.approx(1.0)
+
+
+def test_the_residual_is_escfits_cost():
+    """The friction rig: noise known (not profiled), normal priors on the geometry and slopes."""
+    _, problem = recipe_problem("friction_monday_steel.toml")
+    lsq = least_squares(problem, n_starts=3, seed=1)
+    assert not lsq.profiled
+    lp = lmfit_problem(problem, lsq.values)
+    r = lp.residual(lp.params)
+    n = problem.n_data
+    priors = 0.0
+    for name in lp.fitted:
+        pr = problem.priors[problem.names.index(name)]
+        if pr.kind == "normal":
+            priors += ((lsq.values[name] - pr.args[0]) / pr.args[1]) ** 2
+    assert priors > 0 and r.size > n
+    assert float(r[:n] @ r[:n]) == pytest.approx(lsq.chisqr, rel=1e-9)
+    assert float(r[n:] @ r[n:]) == pytest.approx(priors, rel=1e-9)
+
+
+def test_conf_interval_brackets_the_delta_method_interval():
+    """geneva_trace: 201 readings, mu nearly linear in the readings: the profile (lmfit's F test)
+    and escfit's delta-method 95 % interval agree to a tenth of their width."""
+    fam, problem = recipe_problem("geneva_trace.toml")
+    lsq = least_squares(problem, n_starts=fam.fit_defaults["n_starts"], n_refine=fam.fit_defaults["n_refine"], seed=1)
+    assert lsq.at_bound.tolist() == [0, 0]
+    lp = lmfit_problem(problem, lsq.values)
+    mini = lp.minimizer()
+    best = mini.minimize(method="least_squares")
+    ci = lmfit.conf_interval(mini, best, p_names=["geneva__mu"], sigmas=[0.95])
+    i = lsq.names.index("geneva.mu")
+    lo, hi = lsq.intervals["lo95"][i], lsq.intervals["hi95"][i]
+    width = hi - lo
+    assert abs(ci["geneva__mu"][0][1] - lo) < 0.1 * width and abs(ci["geneva__mu"][2][1] - hi) < 0.1 * width
+
+
+def test_the_lmfit_notebook_runs(tmp_path, monkeypatch):
+    for module in ("jupytext", "nbclient", "ipykernel", "matplotlib"):
+        pytest.importorskip(module)
+    import jupytext
+    from nbclient import NotebookClient
+
+    monkeypatch.setenv("ESCFIT_LMFIT_FIGURES", str(tmp_path))
+    monkeypatch.setenv("ESCFIT_LMFIT_STEPS", "600")
+    monkeypatch.setenv("PYTHONPATH", str(ROOT))
+    nb = jupytext.read(ROOT / "notebooks" / "04_lmfit.py")
+    NotebookClient(nb, timeout=900, kernel_name="python3",
+                   resources={"metadata": {"path": str(ROOT / "notebooks")}}).execute()
+    errors = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])
+              if o.get("output_type") == "error"]
+    assert not errors
+    assert (tmp_path / "lmfit_profile.png").stat().st_size > 10_000
