@@ -1,4 +1,4 @@
-"""Fit results: one HDF5 file per fit, written by xarray (h5netcdf) in ArviZ's layout.
+"""Fit results: one HDF5 file per fit, in xarray's netCDF-4 encoding and ArviZ's layout.
 
 Groups
 ------

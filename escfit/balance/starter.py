@@ -506,8 +506,7 @@ def decay_estimates(amplitudes: np.ndarray, omega0: float, times: np.ndarray | N
 
 def _excess_lag1(x: np.ndarray, period_samples: float) -> float:
     """Lag-1 correlation of the samples about their smoothing, minus what white noise would give."""
-    from scipy.signal import savgol_coeffs
-
+    from ..core.filters import savgol_coeffs
     from .recordings.extrema import smooth
 
     if x.size < 50 or not math.isfinite(period_samples):

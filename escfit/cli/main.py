@@ -420,14 +420,20 @@ def _read_recipe(path: Path) -> dict:
 @click.option("--force", is_flag=True, help="Replace an existing results file.")
 @click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None, help="Also write a report.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
+@click.option("--timings", "show_timings", is_flag=True, help="Print each phase's wall and CPU seconds on stderr.")
 def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoint_every, burn, unit_id, material, fmt, time_column, sample_rate,
         angle_column, angle_unit, counts_per_turn, scale, start_time, stop_time, release_time, solver, moves, notch_deg,
-        resume, force, report_path, quiet):
+        resume, force, report_path, quiet, show_timings):
     """Fit DATA (a recording) with --scene SCENE, or run a fit RECIPE.toml.
 
     Without a scene, `escfit init DATA` writes a starter scene (on a terminal this command offers to).
     """
-    from ..inference import fit as run_fit
+    from ..core import timings
+
+    timings.reset()  # this command's phases only (several commands may run in one process)
+    startup = timings.since_process_start()  # interpreter, click and the command line's own imports
+    with timings.phase("imports"):
+        from ..inference import fit as run_fit
 
     recipe: dict = {}
     recipe_path = None
@@ -466,7 +472,8 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoi
         refuse_existing(report_path, force)
     from ..core.scene import load_scene
 
-    scene = load_scene(scene_path)
+    with timings.phase("scene"):
+        scene = load_scene(scene_path)
     from ..core.family import check_options, get_family
 
     options = check_options(get_family(scene.model), {
@@ -485,9 +492,13 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoi
                                     resume=resume, progress=not quiet and sys.stderr.isatty(),
                                     moves=pick(moves, "moves", None), title=recipe.get("title"), **options)
     click.echo(f"wrote {out}")
-    _print_summary(result)
+    with timings.phase("summary"):
+        _print_summary(result)
     if report_path:
-        _write_report(out, report_path, force)
+        with timings.phase("report"):
+            _write_report(out, report_path, force)
+    if show_timings:
+        click.echo(timings.table(startup), err=True)
     if getattr(result, "verdict", "") == "not determined":
         raise click.exceptions.Exit(EXIT_NOT_DETERMINED)
 
@@ -569,9 +580,11 @@ def report(results, out, fmt, force, title):
 
 
 def main() -> None:
-    """Console-script entry point."""
+    """Console-script entry point (the process ends as :func:`escfit.cli.exit.run_and_exit` says)."""
+    from .exit import run_and_exit
+
     quiet_third_party_warnings()
-    cli(prog_name="escfit")
+    run_and_exit(cli, prog_name="escfit")
 
 
 if __name__ == "__main__":

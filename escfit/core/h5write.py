@@ -25,7 +25,7 @@ import xarray as xr
 from .atomic import atomic_path
 from .errors import ResultsError
 
-__all__ = ["checksum_encoding", "netcdf_image", "write_netcdf", "write_bytes"]
+__all__ = ["checksum_encoding", "netcdf_image", "xarray_image", "write_netcdf", "write_bytes"]
 
 
 def checksum_encoding(ds: xr.Dataset) -> dict[str, dict]:
@@ -38,7 +38,18 @@ def checksum_encoding(ds: xr.Dataset) -> dict[str, dict]:
 
 
 def netcdf_image(obj: xr.Dataset | xr.DataTree, *, checksums: bool = True) -> bytes:
-    """The bytes of ``obj`` written as a netCDF-4/HDF5 file by xarray's h5netcdf engine."""
+    """The bytes of ``obj`` written as a netCDF-4/HDF5 file: by h5netcdf directly when every
+    variable is of a kind :mod:`escfit.core.h5direct` writes (numbers, flags, text), else by
+    xarray's h5netcdf engine (:func:`xarray_image`); both read back as the same objects."""
+    from .h5direct import image, supported
+
+    if supported(obj):
+        return image(obj, checksums=checksums)
+    return xarray_image(obj, checksums=checksums)
+
+
+def xarray_image(obj: xr.Dataset | xr.DataTree, *, checksums: bool = True) -> bytes:
+    """The bytes of ``obj`` written as a netCDF-4/HDF5 file by xarray's ``to_netcdf`` (h5netcdf engine)."""
     if isinstance(obj, xr.DataTree):
         encoding = {node.path: checksum_encoding(node.to_dataset(inherit=False)) for node in obj.subtree} \
             if checksums else None

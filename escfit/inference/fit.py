@@ -21,6 +21,7 @@ from ..core.errors import FitError
 from ..core.limits import check_sampler_size
 from ..core.provenance import dependency_versions
 from ..core.scene import load_scene
+from ..core.timings import phase
 from ..likelihood.problem import Problem
 from .information import information_attrs
 from .identifiability import bound_warnings, correlation_warnings, ridge_warnings, sloppy_directions
@@ -143,11 +144,13 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
     with output_lock(out) if out is not None else contextlib.nullcontext():  # one run per results file
         if method == "emcee" and checkpoint is not None:
             _check_checkpoint(checkpoint, resume=resume, force=force)
-        sc = load_scene(scene) if not hasattr(scene, "model") else scene
+        with phase("scene"):
+            sc = load_scene(scene) if not hasattr(scene, "model") else scene
         fam = family(sc.model)
         defaults = {**GENERIC_DEFAULTS, **dict(getattr(fam, "fit_defaults", {}))}
         pick = lambda value, key: defaults[key] if value is None else value  # noqa: E731
-        problem = fam.problem(sc, data, **options)
+        with phase("record"):  # reading and analysing the recording, building the problem
+            problem = fam.problem(sc, data, **options)
         if out is not None:
             _remove_stale_temporaries(out, checkpoint)
         if method == "emcee" and checkpoint is not None and force and not resume:
@@ -191,10 +194,11 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
         optimizer = lmfit_optimizer(problem, lmfit_name, seed=seed)
         if lmfit_name in GLOBAL:  # a global search covers the box itself: one run, not one per start
             n_starts, n_refine = 1, 1
-    lsq = least_squares(problem, n_starts=n_starts, n_refine=n_refine, seed=seed, priors_count=method == "emcee",
-                        optimizer=optimizer)
-    lsq, fixes, unresolved = reconcile(problem, lsq, seed=seed, priors_count=method == "emcee", optimizer=optimizer)
-    lsq, more = with_held_uncertainty(problem, lsq)
+    with phase("least squares"):
+        lsq = least_squares(problem, n_starts=n_starts, n_refine=n_refine, seed=seed, priors_count=method == "emcee",
+                            optimizer=optimizer)
+        lsq, fixes, unresolved = reconcile(problem, lsq, seed=seed, priors_count=method == "emcee", optimizer=optimizer)
+        lsq, more = with_held_uncertainty(problem, lsq)
     fixes += more
     if method == "emcee" and getattr(problem, "held", ()):
         fixes.append(f"the posterior holds {', '.join(problem.held)} where the recording's own measurement puts it; "
@@ -202,20 +206,23 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
     timings = {"least_squares_s": time.perf_counter() - clock}
     clock = time.perf_counter()
     model = getattr(getattr(problem, "scene", None), "model", None)  # the fit held against the record itself
-    agreement = family(model).agreement(problem, lsq, _refit, seed=seed) if isinstance(model, str) else None
+    with phase("agreement"):
+        agreement = family(model).agreement(problem, lsq, _refit, seed=seed) if isinstance(model, str) else None
     if agreement is not None:
         timings["agreement_s"] = time.perf_counter() - clock
     mc = None
     if method == "emcee":
-        mc = run_emcee(problem, lsq, walkers=walkers, steps=steps, burn=burn, seed=seed, checkpoint=checkpoint,
-                       resume=resume, progress=progress, moves=moves, max_steps=max_steps,
-                       checkpoint_every=checkpoint_every, provenance=problem.provenance(), fit_options=fit_options)
+        with phase("sampling"):
+            mc = run_emcee(problem, lsq, walkers=walkers, steps=steps, burn=burn, seed=seed, checkpoint=checkpoint,
+                           resume=resume, progress=progress, moves=moves, max_steps=max_steps,
+                           checkpoint_every=checkpoint_every, provenance=problem.provenance(), fit_options=fit_options)
         timings.update(mc.timings)
-    from ..results import FitResult, clean_attrs  # xarray: only once there is a result to hold
-
     clock = time.perf_counter()
-    tree = build_tree(problem, lsq, mc, method=method, seed=seed, started=started, predictive_draws=predictive_draws,
-                      fixes=fixes, unresolved=unresolved, agreement=agreement)
+    with phase("results"):  # diagnostics and the results tree; xarray only once there is a result
+        from ..results import FitResult, clean_attrs
+
+        tree = build_tree(problem, lsq, mc, method=method, seed=seed, started=started,
+                          predictive_draws=predictive_draws, fixes=fixes, unresolved=unresolved, agreement=agreement)
     timings["diagnostics_s"] = time.perf_counter() - clock
     tree.attrs.update(clean_attrs({"timings": {k: round(float(v), 4) for k, v in timings.items()}}))
     if title:
@@ -223,7 +230,8 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
     result = FitResult(tree)
     if out is not None:
         clock = time.perf_counter()
-        write_fit(result, out, force=force)
+        with phase("write"):
+            write_fit(result, out, force=force)
         if checkpoint is not None and Path(checkpoint).exists():
             Path(checkpoint).unlink()
         timings["write_s"] = time.perf_counter() - clock

@@ -40,6 +40,7 @@ import numpy as np
 from ..core.errors import EscfitError, FitError
 from ..likelihood.problem import FAIL_RESIDUAL, Problem, gaussian_prior_residuals
 from .fdjac import batch_jacobian
+from .starts import multistart_points
 from .trf import minimize, single_blas_thread
 
 __all__ = ["LeastSquaresResult", "least_squares", "bounded_interval", "bound_flags", "stacked_residuals", "INTERVAL_Z"]
@@ -192,7 +193,7 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
     # kinds (timegrapher amplitudes and beat times) share the one covariance rescale instead
     profile_noise = "observation.sigma" in problem.names and "observation.sigma" in noise
     iterate_scale = profile_noise and pinned > 0 and not getattr(problem, "mixed_readings", False)
-    starts = _starts(priors, x0, lo, hi, n_starts, seed)
+    starts = multistart_points(priors, x0, lo, hi, n_starts, seed)
     n = problem.n_data
     options = dict(getattr(problem, "lsq_options", {}) or {})
     scale = [1.0]  # reading residuals are divided by this (the profiled noise over the scene's)
@@ -573,26 +574,3 @@ def _ranked(starts: list[np.ndarray], residual, lo: np.ndarray, hi: np.ndarray,
         return starts
     cost = [float(np.sum(residual(np.clip(x, lo, hi)) ** 2)) for x in starts]
     return [starts[i] for i in np.argsort(cost, kind="stable")[:max(1, n_refine)]]
-
-
-def _starts(priors, x0: np.ndarray, lo: np.ndarray, hi: np.ndarray, n_starts: int, seed: int) -> list[np.ndarray]:
-    """The start point and a Latin hypercube over the priors (or the bounds)."""
-    from scipy.stats import qmc  # scipy.stats takes a second to import: only when a multistart needs it
-
-    starts = [x0]
-    if n_starts <= 1:
-        return starts
-    u = qmc.LatinHypercube(d=x0.size, seed=seed).random(n_starts - 1)
-    span_lo = np.where(np.isfinite(lo), lo, x0 - 0.5 * np.abs(x0) - 1e-12)
-    span_hi = np.where(np.isfinite(hi), hi, x0 + 0.5 * np.abs(x0) + 1e-12)
-    pts = qmc.scale(u, span_lo, span_hi)
-    for j, pr in enumerate(priors):
-        ppf = getattr(pr, "ppf", None)
-        if ppf is not None and pr.kind != "uniform" and getattr(pr, "proper", True):
-            try:
-                x = np.asarray(ppf(u[:, j]), float)
-            except (ValueError, ArithmeticError):  # SceneError is a ValueError
-                continue
-            if np.all(np.isfinite(x)):
-                pts[:, j] = x
-    return starts + list(pts)

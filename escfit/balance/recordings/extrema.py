@@ -26,7 +26,8 @@ def periodogram(t: np.ndarray, x: np.ndarray, oversample: int) -> tuple[np.ndarr
     removed, under a Tukey window (10 % tapers), zero-padded ``oversample`` times (less beyond
     :data:`MAX_FFT` points)."""
     from scipy.fft import next_fast_len, rfft, rfftfreq
-    from scipy.signal.windows import tukey
+
+    from ...core.filters import tukey
 
     n = t.size
     dt = (t[-1] - t[0]) / (n - 1)
@@ -126,12 +127,12 @@ def smoothing_window(period_samples: float) -> int:
 
 def smooth(x: np.ndarray, period_samples: float) -> np.ndarray:
     """Savitzky-Golay smoothing (quadratic, window a tenth of a period, at least 5 samples)."""
-    from scipy.signal import savgol_filter
+    from ...core.filters import savgol_filter
 
     n = smoothing_window(period_samples)
     if n > x.size:
         return x.astype(float)
-    return savgol_filter(x, n, 2, mode="interp")
+    return savgol_filter(x, n, 2)
 
 
 def smoothing_share(period_samples: float) -> float:
@@ -141,7 +142,7 @@ def smoothing_share(period_samples: float) -> float:
     the smoothing follows part of each sample's own noise (a fifth to a half of its variance
     when the window holds 5 to 11 samples).
     """
-    from scipy.signal import savgol_coeffs
+    from ...core.filters import savgol_coeffs
 
     n = smoothing_window(period_samples)
     return float(savgol_coeffs(n, 2)[n // 2])

@@ -1,0 +1,100 @@
+"""What ``escfit fit --method leastsq`` imports, and its ``--timings`` table.
+
+Each check runs the command in a fresh interpreter: the libraries a process has imported are
+only known for a clean module table.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+RECIPE = ROOT / "fits" / "real" / "string_pendulum_lab1.toml"
+
+# Run escfit's command line in this process, noting the libraries loaded at the least squares'
+# first call (the fit phase) and at the end.
+DRIVER = r"""
+import json, sys
+import escfit.inference.fit
+module = sys.modules["escfit.inference.fit"]
+inner, seen = module.least_squares, {}
+WATCH = ("scipy.signal", "scipy.stats", "pandas", "xarray", "h5py", "emcee", "arviz", "matplotlib", "lmfit",
+         "distributed")
+
+def hooked(*a, **k):
+    seen.setdefault("before_fit", [m for m in WATCH if m in sys.modules])
+    return inner(*a, **k)
+
+module.least_squares = hooked
+from escfit.cli.main import cli
+try:
+    cli.main(sys.argv[1:], prog_name="escfit")
+except SystemExit as exc:
+    seen["exit"] = exc.code
+seen["at_end"] = [m for m in WATCH if m in sys.modules]
+print("SEEN " + json.dumps(seen))
+"""
+
+
+def _env() -> dict:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
+    env["ESCFIT_QUIET_COMPILE"] = "1"
+    return env
+
+
+def test_least_squares_fit_imports_no_signal_stats_or_pandas_before_the_fit(tmp_path):
+    out = tmp_path / "fit.h5"
+    r = subprocess.run([sys.executable, "-c", DRIVER, "fit", str(RECIPE), "--method", "leastsq", "--out", str(out),
+                        "--quiet"], capture_output=True, text=True, env=_env(), cwd=tmp_path, timeout=900)
+    line = [ln for ln in r.stdout.splitlines() if ln.startswith("SEEN ")]
+    assert line, r.stderr[-3000:]
+    seen = json.loads(line[0][5:])
+    assert seen.get("exit") in (0, None), r.stderr[-3000:]
+    # nothing heavy is needed to read the recipe, the scene and the record and to start the fit
+    assert seen["before_fit"] == [], seen
+    # the whole command never needs the signal-processing or statistics packages, a sampler, plots,
+    # or dask's cluster scheduler (which xarray's own writer would ask for)
+    never = {"scipy.signal", "scipy.stats", "emcee", "arviz", "matplotlib", "distributed"}
+    assert not never & set(seen["at_end"]), seen
+    assert out.is_file()
+
+
+def test_timings_table_adds_up_to_the_process(tmp_path):
+    out = tmp_path / "fit.h5"
+    r = subprocess.run([sys.executable, "-m", "escfit", "fit", str(RECIPE), "--method", "leastsq", "--out", str(out),
+                        "--quiet", "--timings"], capture_output=True, text=True, env=_env(), cwd=tmp_path, timeout=900)
+    assert r.returncode == 0, r.stderr[-3000:]
+    rows = {}
+    for line in r.stderr.splitlines():
+        parts = line.rsplit(None, 2)
+        if len(parts) == 3 and parts[1].replace(".", "").isdigit():
+            rows[parts[0].strip()] = (float(parts[1]), float(parts[2]))
+    expected = {"start-up", "imports", "scene", "record", "least squares", "results", "write", "summary", "other",
+                "total (process)"}
+    assert expected <= set(rows), r.stderr
+    total = rows.pop("total (process)")
+    # the phases and the rest make up the whole process, wall and CPU (rounding to 1 ms per row)
+    assert abs(sum(v[0] for v in rows.values()) - total[0]) < 0.001 * (len(rows) + 1) + 0.02
+    assert abs(sum(v[1] for v in rows.values()) - total[1]) < 0.001 * (len(rows) + 1) + 0.02
+    assert rows["least squares"][1] > 0 and rows["record"][1] > 0
+
+
+def test_the_command_exits_with_its_status_and_keeps_a_profilers_output(tmp_path):
+    # the process ends without the interpreter's teardown, but with the command's status, its
+    # output flushed, and a profiler's statistics written (they are written at the end)
+    args = ["-m", "escfit", "fit", str(tmp_path / "missing.csv"), "--scene", str(tmp_path / "missing.toml")]
+    r = subprocess.run([sys.executable, *args], capture_output=True, text=True, env=_env(), cwd=tmp_path, timeout=300)
+    assert r.returncode == 2 and "data file not found" in r.stderr
+    prof = tmp_path / "run.prof"  # (cProfile itself ends with status 0 whatever the program's)
+    r = subprocess.run([sys.executable, "-m", "cProfile", "-o", str(prof), *args], capture_output=True, text=True,
+                       env=_env(), cwd=tmp_path, timeout=300)
+    assert "data file not found" in r.stderr
+    assert prof.is_file() and prof.stat().st_size > 0
+    r = subprocess.run([sys.executable, "-m", "escfit", "--version"], capture_output=True, text=True, env=_env(),
+                       timeout=300)
+    assert r.returncode == 0 and r.stdout.startswith("escfit")
