@@ -116,3 +116,23 @@ def test_the_same_record_released_where_the_hand_lets_go_agrees():
     res = fitted(replace(record, release_s=2.0), "amplitude")
     assert res.verdict == "determined", res.warnings
     assert not any("free decay from the release" in w for w in res.warnings)
+
+
+def test_a_trade_between_two_losses_leaves_them_undetermined_and_a_common_shift_does_not():
+    from escfit.analysis.agreement import ModelFacts, ParameterDifference, judge
+
+    facts = ModelFacts(waveform=True, effects=frozenset({"viscous", "coulomb"}), restoring="pendulum")
+    omega = ParameterDifference("oscillator.omega0", 4.0, 1e-4, 4.0001, 1e-4)  # agrees
+    trade = [omega, ParameterDifference("viscous.C", 0.011, 0.001, 0.020, 0.001),  # 45 %, 6 sigma, up ...
+             ParameterDifference("coulomb.R", 0.010, 0.001, 0.004, 0.001)]  # ... and down: one loss for the other
+    got = judge(None, None, trade, facts, periods=100.0, comments=[])
+    assert got.agrees and got.undetermined == ("viscous.C", "coulomb.R")
+    assert got.cautions[0].startswith("C and R are not determined by this record")
+    both = [omega, ParameterDifference("viscous.C", 0.011, 0.001, 0.020, 0.001),
+            ParameterDifference("coulomb.R", 0.002, 0.001, 0.008, 0.001)]  # both larger in one fit: the loss differs
+    got = judge(None, None, both, facts, periods=100.0, comments=[])
+    assert not got.agrees and got.statement().startswith("the parameters are NOT determined: the waveform and "
+                                                         "turning-point fits disagree on C")
+    small = [ParameterDifference("viscous.C", 0.0200, 5e-5, 0.0204, 5e-5)]  # 5.7 sigma but 2 %: a warning only
+    got = judge(None, None, small, facts, periods=100.0, comments=[])
+    assert got.agrees and not got.undetermined and "by less than matters" in got.cautions[0]

@@ -28,7 +28,10 @@ itself measured, independently of the likelihood:
    values) and the estimates they share (omega0, the damping, the friction) compared: a
    difference beyond :data:`PARAMETER_SIGMAS` combined standard errors is a finding when it is
    also material (:data:`MATERIAL`: 0.5 % of omega0, 10 % of a damping parameter, enough to
-   change what a user concludes), else a warning that the intervals are too narrow.
+   change what a user concludes), else a warning that the intervals are too narrow.  When the
+   material differences are only of damping parameters and go both ways (one loss larger, the
+   other smaller: a trade along the ridge of losses), those parameters are not determined by the
+   record while the rest stands: the fit is "partly determined".
 
 Findings make the fit's status "not determined" (the command line exits with status 3) with a
 first warning saying what disagrees, by how much, and what to change; agreement is a note.
@@ -215,6 +218,9 @@ class Agreement:
         What the user can change, when there are findings.
     comments : tuple of str
         What could not be compared, and why.
+    undetermined : tuple of str
+        Damping parameters the two fits trade against each other (one larger, the other smaller):
+        not determined by the record, while the rest of the fit stands.
     """
 
     fit: str
@@ -226,6 +232,7 @@ class Agreement:
     cautions: tuple = ()
     advice: str = ""
     comments: tuple = field(default_factory=tuple)
+    undetermined: tuple = ()
 
     @property
     def agrees(self) -> bool:
@@ -336,7 +343,16 @@ def judge(phase: TurnDifferences | None, amplitude: TurnDifferences | None, para
     bad = [p for p in parameters if p.sigmas > PARAMETER_SIGMAS]
     said = ", ".join(f"{_short(p.name)} by {p.sigmas:.2g} standard errors ({p.waveform:.4g} against "
                      f"{p.turning_points:.4g}, {100 * p.relative:.2g} %)" for p in bad)
-    if any(p.material for p in bad):
+    material = [p for p in bad if p.material]
+    split = _split_only(material) and not findings
+    undetermined: tuple = ()
+    if split:  # one loss traded for another: the split is not determined, the rest stands
+        undetermined = tuple(p.name for p in material)
+        cautions.insert(0, f"{' and '.join(_short(n) for n in undetermined)} are not determined by this record: the "
+                           f"waveform and turning-point fits trade one loss for the other ({said}); their sum, the "
+                           "swing's loss, and the other parameters agree; a longer record, one at larger "
+                           "amplitude, or fixing one of them separates them")
+    elif material:
         findings.append("the waveform and turning-point fits disagree on " + said)
     elif bad:
         cautions.append("the waveform and turning-point fits differ on " + said + ", beyond their standard errors "
@@ -344,7 +360,16 @@ def judge(phase: TurnDifferences | None, amplitude: TurnDifferences | None, para
                         "record")
     advice = _advice(model, phase, amplitude) if findings else ""
     return Agreement("waveform" if model.waveform else "amplitude", periods, phase, amplitude, tuple(parameters),
-                     tuple(findings), tuple(cautions), advice, tuple(comments))
+                     tuple(findings), tuple(cautions), advice, tuple(comments), undetermined)
+
+
+def _split_only(material: list[ParameterDifference]) -> bool:
+    """Whether the material differences are only between damping parameters, some larger and some
+    smaller in the waveform fit than in the turning-point fit (a trade along the ridge of losses)."""
+    if len(material) < 2 or any(p.name == "oscillator.omega0" for p in material):
+        return False
+    signs = {math.copysign(1.0, p.waveform - p.turning_points) for p in material}
+    return signs == {1.0, -1.0}
 
 
 def _short(name: str) -> str:
