@@ -400,7 +400,9 @@ def _burst_line(t, idx, starts, runs, where, repairs):
     off = np.abs(t - fitted)
     worst = int(np.argmax(off))
     if not (slope > 0 and math.isfinite(slope)) or off[worst] > (runs.max() + 1) * slope:
-        raise _refuse(f"time stamps repeat in bursts (~{np.median(runs):.0f} rows) but do not follow a straight line "
+        what = (f"repeat in bursts (~{np.median(runs):.0f} rows)" if np.median(runs) >= 1.5 else
+                f"repeat ({int((runs > 1).sum())} stamps shared by neighbouring rows)")
+        raise _refuse(f"time stamps {what} but do not follow a straight line "
                       f"of stamp on row number (stamp {float(t[worst])!r} is {off[worst]:.3g} s from it)",
                       where(idx[worst]), t)
     said = (f"time stamps repeat in bursts of ~{np.median(runs):.0f} rows"
