@@ -19,7 +19,8 @@ def print_summary(result) -> None:
     from ..report.plain import plain_summary
 
     a = result.attrs
-    plain = plain_summary(result)
+    # not determined: the NOT DETERMINED line below says so in its place
+    plain = plain_summary(result) if getattr(result, "verdict", "") != "not determined" else []
     for sentence in plain:
         click.echo(sentence)
     if plain:
