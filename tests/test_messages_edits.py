@@ -201,3 +201,15 @@ def test_a_pendulum_past_180_degrees_is_refused_in_the_fit_too(tmp_path):
     with pytest.raises(DataError, match=r"past the 180 deg a pendulum can swing.*angle_unit = \"deg\""):
         swing_unit_warnings(series, tp, "pendulum")
     assert swing_unit_warnings(series, tp, "spring") == []  # 4.1 rad is a balance's swing
+
+
+@pytest.mark.parametrize("name, key", [
+    ("viscous.C", "[effects.viscous] C"), ("oscillator.theta0", "[oscillator] theta0"),
+    ("observation.t_release", "[observation] t_release"), ("coulomb.R[load=330.66]", "[effects.coulomb] R"),
+    ("escapement[2].X", "[[effects.escapement]] number 2, X"), ("fit.kappa", "[fit.loads] kappa"),
+    ("geneva.mu", "[geneva] mu"), ("friction.mu", "[friction] mu"), ("rig.k", "[rig] k"),
+])
+def test_parameters_are_named_where_the_scene_writes_them(name, key):
+    from escfit.core.names import scene_key
+
+    assert scene_key(name) == key

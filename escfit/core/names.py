@@ -132,7 +132,7 @@ def centre_sign(name: str) -> float:
 
 
 # Tables a parameter's prefix names directly; every other prefix is an effect, [effects.<prefix>]
-_OWN_TABLES = ("oscillator", "observation", "geneva", "verge", "friction", "rig")
+_OWN_TABLES = ("oscillator", "observation", "geneva", "friction", "rig")
 
 
 def scene_key(name: str) -> str:
@@ -149,4 +149,8 @@ def scene_key(name: str) -> str:
     table, _, key = base.partition(".")
     if not key:
         return base
+    if table == "fit":  # the load rule's parameters (fit.kappa, fit.mu)
+        return f"[fit.loads] {key}"
+    if table == "verge":  # the verge reads its keys from [verge] and its sub-tables
+        return f"[verge] (or its sub-table holding it) {key}"
     return f"[{table}] {key}" if table in _OWN_TABLES else f"[effects.{table}] {key}"
