@@ -27,5 +27,5 @@ def test_committed_scene_key_tables_match_the_code(tmp_path):
 
 def test_scene_keys_page_points_at_the_tables_as_markdown():
     page = (ROOT / "docs" / "reference" / "scene-keys.md").read_text(encoding="utf-8")
-    assert "(_scene_keys.md)" in page and "{include} _scene_keys.md" in page
+    assert "`docs/reference/_scene_keys.md`" in page and "{include} _scene_keys.md" in page
     assert COMMITTED.is_file() and COMMITTED.stat().st_size > 10_000
