@@ -70,7 +70,7 @@ def test_init_then_fit_recovers_a_synthetic_pendulum_decay(tmp_path):
     result, here = _init([data, "--pendulum"], tmp_path)
     assert result.exit_code == 0, result.output
     assert "wrote decay.toml" in result.output
-    assert f"next: escfit fit {data} --scene decay.toml --report decay.html" in result.output
+    assert f"next: escfit fit {data} --scene decay.toml --out decay_fit.h5 --report decay.html" in result.output
     doc = tomllib.loads((here / "decay.toml").read_text())
     assert doc["oscillator"]["restoring"] == "pendulum"
     assert doc["observation"]["model"] == "waveform"

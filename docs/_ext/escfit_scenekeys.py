@@ -3,7 +3,9 @@
 At ``builder-inited`` it runs ``scenekeys_collect.py`` in a separate process (which watches
 the readers read every shipped scene and probes the keys no shipped file uses), renders the
 catalogue as Markdown into ``reference/_scene_keys.md`` and lets ``reference/scene-keys.md``
-include it.  The catalogue is cached beside the build, keyed by the contents of escfit's
+include it.  That file is kept in the repository, so that the reference reads as Markdown on
+its own; ``tests/test_docs_scene_keys.py`` checks that it matches the code (regenerate it with
+``python docs/_ext/escfit_scenekeys.py``).  The catalogue is cached beside the build, keyed by the contents of escfit's
 sources, the shipped scenes and this folder, so an unchanged tree is not read again.
 
 Descriptions come from the code (a parameter's declared meaning, an effect's docstring, the
@@ -23,9 +25,14 @@ import sys
 import tomllib
 from pathlib import Path
 
-from sphinx.util import logging
+try:  # the test that the committed reference matches the code imports this module without Sphinx
+    from sphinx.util import logging
 
-logger = logging.getLogger(__name__)
+    logger = logging.getLogger(__name__)
+except ImportError:
+    import logging
+
+    logger = logging.getLogger(__name__)
 
 HERE = Path(__file__).resolve().parent
 TOP = "(top)"
@@ -274,13 +281,21 @@ def _fit_help() -> dict[str, str]:
     return out
 
 
-def generate(app) -> None:
-    docs = Path(app.srcdir)
-    root = docs.parent
-    cat = collect(root, Path(app.doctreedir) / "scenekeys-cache.json")
+def render(root: Path, cache: Path) -> tuple[str, "Renderer"]:
+    """The scene-key tables of the checkout at ``root`` as Markdown, and the renderer (for its
+    warnings); ``cache`` keeps the collected catalogue between runs."""
+    docs = root / "docs"
+    cat = collect(root, cache)
     glossary = tomllib.loads((docs / "reference" / "scene-keys-glossary.toml").read_text(encoding="utf-8"))
     r = Renderer(cat, glossary, _fit_help())
-    text = r.render()
+    return r.render(), r
+
+
+def generate(app) -> None:
+    """Write ``reference/_scene_keys.md`` (kept in the repository, so that the page reads as
+    Markdown too) when the code's tables differ from it."""
+    docs = Path(app.srcdir)
+    text, r = render(docs.parent, Path(app.doctreedir) / "scenekeys-cache.json")
     for item in r.stale_glossary():
         logger.warning(f"scene keys: the glossary describes {item}, which no reader allows "
                        "(docs/reference/scene-keys-glossary.toml)")
@@ -294,3 +309,13 @@ def generate(app) -> None:
 def setup(app):
     app.connect("builder-inited", generate)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}
+
+
+if __name__ == "__main__":  # python docs/_ext/escfit_scenekeys.py: rewrite the committed tables
+    import tempfile
+
+    top = HERE.parents[1]
+    with tempfile.TemporaryDirectory() as tmp:
+        tables, _ = render(top, Path(tmp) / "cache.json")
+    (top / "docs" / "reference" / "_scene_keys.md").write_text(tables, encoding="utf-8")
+    print("wrote docs/reference/_scene_keys.md")

@@ -25,6 +25,10 @@ swings explained to ``CLEAN_EXPLAINED`` by a sinusoid is suspect (radians of a 3
 read as degrees); only a note, since a real sub-arcminute swing is possible.
 ``MAX_TURNS`` (2): a half range above 2 turns (4 pi rad) in radians is refused: no swinging
 oscillator escfit fits turns that far, and a wrapped angle (``atan2``) spans at most one turn.
+``SMALL_SWING_DEG`` (1): a measured decay whose largest amplitude about its centre is below one
+"degree" over ``CLEAN_SWINGS`` swings or more earns a warning naming ``angle_unit = "rad"``
+(:func:`swing_unit_check`): radians read as degrees shrink a 40-degree swing to 0.7 "degrees",
+which a pendulum's fit takes for a small swing, with the wrong omega0.
 ``ENERGY_FALL`` (0.3) and ``ENERGY_FLOOR`` (0.05): the peaks fall by 30 % of the range or more
 while every swing's trough stays within 5 % of the range above the minimum.
 """
@@ -37,13 +41,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["SwingShape", "QuantityCheck", "swing_shape", "check_quantity", "label_quantity",
-           "COLUMN_KEYS", "SMALL_DEG", "MAX_TURNS", "ENERGY_FALL", "ENERGY_FLOOR"]
+__all__ = ["SwingShape", "QuantityCheck", "swing_shape", "check_quantity", "label_quantity", "swing_unit_check",
+           "COLUMN_KEYS", "SMALL_DEG", "SMALL_SWING_DEG", "MAX_TURNS", "ENERGY_FALL", "ENERGY_FLOOR"]
 
 SMALL_DEG = 0.05
 CLEAN_SWINGS = 4
 CLEAN_EXPLAINED = 0.9
 MAX_TURNS = 2.0
+SMALL_SWING_DEG = 1.0
 ENERGY_FALL = 0.3
 ENERGY_FLOOR = 0.05
 COLUMN_KEYS = {"angle": "angle_column", "angular_velocity": "velocity_column", "displacement": "displacement_column"}
@@ -326,3 +331,48 @@ def check_quantity(time: np.ndarray, values: np.ndarray, *, claimed: str = "angl
                         "radians")
         return QuantityCheck(claimed, unit, tuple(evidence), "suspect", 'angle_unit = "rad"', shape)
     return QuantityCheck(claimed, unit, (), "ok", "", shape)
+
+
+def swing_unit_check(amplitude: float, unit: str, *, restoring: str = "spring", swings: float = 0.0,
+                     scale: float = 1.0) -> QuantityCheck:
+    """Hold a measured decay's largest amplitude against the angle unit it was read in.
+
+    Used by ``escfit init`` and by a fit alike, so that a unit slip is caught at the same point
+    both ways: degrees read as radians (a pendulum past 180 degrees, or any swing beyond
+    :data:`MAX_TURNS` turns) are refused; radians read as degrees (a largest swing under
+    :data:`SMALL_SWING_DEG` over :data:`CLEAN_SWINGS` swings or more) are suspect.
+
+    Parameters
+    ----------
+    amplitude : float
+        Largest amplitude about the centre, rad, as read (after the unit and ``scale``).
+    unit : str
+        The angle unit the column was read in (``deg``, ``rad``; other units are not judged).
+    restoring : str
+        ``"pendulum"`` (cannot swing past 180 deg) or ``"spring"``.
+    swings : float
+        Periods measured in the record.
+    scale : float
+        The ``scale`` option; a scaled column (a sensor's volts) is not judged.
+
+    Returns
+    -------
+    QuantityCheck
+        ``verdict`` ``"refuse"``, ``"suspect"`` or ``"ok"``; ``key`` the ``[recording]`` setting to make.
+    """
+    if scale != 1.0 or not math.isfinite(amplitude) or amplitude <= 0:
+        return QuantityCheck("angle", unit)
+    if _in_unit(unit, 1.0) == 1.0:  # radians
+        pendulum = restoring == "pendulum" and amplitude >= math.pi
+        if pendulum or amplitude > MAX_TURNS * 2 * math.pi:
+            past = ", past the 180 deg a pendulum can swing" if pendulum else ": no swinging oscillator turns that far"
+            return QuantityCheck("angle", unit, (
+                f"read in {unit} the swing's amplitude is {amplitude:.4g} rad = {amplitude / (2 * math.pi):.3g} "
+                f"turns{past}; read in degrees it is {amplitude:.4g} deg",), "refuse", 'angle_unit = "deg"')
+    elif _in_unit(unit, 1.0) is not None:  # degrees
+        in_deg = math.degrees(amplitude)
+        if in_deg < SMALL_SWING_DEG and swings >= CLEAN_SWINGS:
+            return QuantityCheck("angle", unit, (
+                f"read in {unit} the largest swing is {in_deg:.3g} deg over {swings:.0f} swings; read in radians it "
+                f"is {math.degrees(in_deg):.3g} deg, a usual pendulum's swing",), "suspect", 'angle_unit = "rad"')
+    return QuantityCheck("angle", unit)

@@ -235,6 +235,13 @@ class BalanceFamily(FamilyBase):
 
         return derived_quantities(draws, attrs)
 
+    def plain(self, draws, attrs, observed=None):
+        """The loss per period and where it goes, Q, the halving time; an escapement's share taken by
+        friction (:mod:`escfit.balance.plain`)."""
+        from .plain import plain_sentences
+
+        return plain_sentences(draws, attrs, observed)
+
     def splits_units(self, scene) -> bool:
         """Scenes without a ``[recording]`` table (whose files are raw tables instead) may read
         unit-curve files holding several units."""

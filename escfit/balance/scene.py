@@ -10,6 +10,7 @@ from typing import Any, Mapping
 from ..core.errors import SceneError
 from ..core.params import Param, ParamSet, read_param
 from ..core.scene import check_keys
+from ..core.suggest import did_you_mean, one_of
 from ..core.units import BARE_ANGLE_LIMIT, to_canonical
 from .effects import EFFECTS
 from .effects.base import OMEGA0_RANGE, ReadContext, squared
@@ -160,7 +161,8 @@ def parse(doc: Mapping[str, Any], *, where: str, text: str) -> BalanceScene:
     ctx = ReadContext(where=where, inertia=inertia, switching=switching, coordinate=coordinate)
     unknown = sorted(set(effects_doc) - set(EFFECTS))
     if unknown:
-        raise SceneError(f"unknown effect(s) {unknown}; known effects: {sorted(EFFECTS)}", f"{where} [effects]")
+        hints = "".join(did_you_mean(k, EFFECTS) for k in unknown)
+        raise SceneError(f"unknown effect(s) {unknown}{hints}; known effects: {sorted(EFFECTS)}", f"{where} [effects]")
     if "viscous_drift" in effects_doc and "viscous" not in effects_doc:
         raise SceneError("viscous_drift changes C and needs [effects.viscous]", f"{where} [effects.viscous_drift]")
     effects = []
@@ -179,16 +181,29 @@ def parse(doc: Mapping[str, Any], *, where: str, text: str) -> BalanceScene:
         raise SceneError(f"theta0 = {params['oscillator.theta0'].value:g} rad lies beyond the banking angle "
                          f"{bank.angle:g} rad", f"{ow}.theta0")
     title = doc.get("title", "")
+    _check_observation_model(doc.get("observation"), where)
     extra = {k: doc[k] for k in ("observation", "fit", "recording") if k in doc}
     return BalanceScene(switching, tuple(effects), params, swings, inertia, text, where, str(title), extra,
                         restoring=restoring, coordinate=coordinate)
+
+
+# What ``[observation] model`` may say: turning-point amplitudes or notch counts of a unit curve,
+# every sample of a recording, a timegrapher's readings, the times of a pickup's pulses
+OBSERVATION_MODELS = ("amplitude", "notches", "waveform", "timegrapher", "passage_times")
+
+
+def _check_observation_model(table: Any, where: str) -> None:
+    """Refuse an ``[observation] model`` no observation model has, listing every valid one."""
+    if isinstance(table, Mapping) and "model" in table and table["model"] not in OBSERVATION_MODELS:
+        raise SceneError(one_of("observation model", table["model"], OBSERVATION_MODELS),
+                         f"{where} [observation].model")
 
 
 def _read_restoring(osc: Mapping, doc: Mapping, switching: str, where: str) -> str:
     """``[oscillator] restoring``: ``"spring"`` (default) or ``"pendulum"``, with its refusals."""
     restoring = osc.get("restoring", "spring")
     if restoring not in ("spring", "pendulum"):
-        raise SceneError(f"restoring must be 'spring' or 'pendulum', got {restoring!r}", f"{where}.restoring")
+        raise SceneError(one_of("restoring", restoring, ("spring", "pendulum")), f"{where}.restoring")
     if restoring == "pendulum":
         effects = doc.get("effects", {})
         if isinstance(effects, Mapping) and "hairspring" in effects:

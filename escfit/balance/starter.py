@@ -325,6 +325,7 @@ def survey(path: str | Path, *, restoring: str = "spring", recording: dict | Non
 def _survey_samples(s: Survey, series: TimeSeries, restoring: str, turns=None) -> None:
     """The survey of a sampled record; ``turns``: its turning points when already found."""
     from .problems.period import implied_omega0, measured_period
+    from .problems.release import swing_unit_warnings
     from .recordings.turning_points import reduce_series
 
     if series.quantity == "angular_velocity":  # the angle's turning points are the rate's zeros
@@ -339,6 +340,7 @@ def _survey_samples(s: Survey, series: TimeSeries, restoring: str, turns=None) -
         notes = [f"warning: {w}" for w in tp.warnings] + list(tp.notes)
     s.quantity = series.quantity
     s.checks = [n for n in str(series.meta.get("analysis", "")).split("; ") if n]  # column and unit judged
+    s.checks += [f"warning: {w}" for w in swing_unit_warnings(series, tp, restoring)]  # as the fit will judge it
     s.kind, s.tp = "waveform", tp
     s.period = float(tp.period)
     times = np.concatenate([[tp.release_time], np.asarray(tp.time, float)])

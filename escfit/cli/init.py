@@ -79,6 +79,7 @@ def write_starter(data: str, out: str | Path, *, kind: str | None = None, force:
     from ..core.atomic import atomic_path, check_output_folder, refuse_clobbering_inputs, refuse_existing
     from ..core.errors import DataError
     from ..core.scene import load_scene
+    from shlex import quote
 
     out = Path(out)
     if not Path(data).is_file():
@@ -98,16 +99,33 @@ def write_starter(data: str, out: str | Path, *, kind: str | None = None, force:
         lines.append("a linear oscillator (a mass on a spring): the record is a displacement in m")
     elif said == "assumed":
         lines.append("assumed a spring (linear restoring torque: a balance spring, a torsion wire); for a gravity "
-                     f"pendulum run: escfit init {data} --pendulum --force" + (f" --out {out}" if out != default_scene_path(data) else ""))
+                     f"pendulum run: escfit init {quote(str(data))} --pendulum --force"
+                     + (f" --out {quote(str(out))}" if out != default_scene_path(data) else ""))
     else:
         lines.append(f"restoring torque: {'gravity pendulum' if restoring == 'pendulum' else 'spring (linear)'} ({said})")
     lines.append(f"wrote {out}")
     return out, lines
 
 
+def unused_outputs(stem: str, folder: Path = Path(".")) -> tuple[Path, Path]:
+    """``(<stem>_fit.h5, <stem>.html)`` in ``folder``, numbered ``_2``, ``_3`` ... until neither exists
+    (nor the results' sampler checkpoint), so that a suggested fit refuses nothing."""
+    for n in range(1, 10_000):
+        tail = "" if n == 1 else f"_{n}"
+        results, report = folder / f"{stem}{tail}_fit.h5", folder / f"{stem}{tail}.html"
+        if not any(p.exists() for p in (results, report, Path(f"{results}.emcee"))):
+            return results, report
+    raise RuntimeError(f"no free name for the results of {stem} in {folder}")  # 10,000 earlier fits
+
+
 def next_command(data: str, scene: Path) -> str:
-    report = f"{Path(data).stem}.html"
-    return f"escfit fit {data} --scene {scene} --report {report}"
+    """The fit to run next, as a line a shell takes as it is: every path quoted (shlex), results
+    and report named after the scene and not clashing with files in the current folder."""
+    from shlex import quote
+
+    results, report = unused_outputs(Path(scene).stem or "scene")
+    return (f"escfit fit {quote(str(data))} --scene {quote(str(scene))} --out {quote(str(results))} "
+            f"--report {quote(str(report))}")
 
 
 @click.command("init")
@@ -177,18 +195,21 @@ def offer_starter(data: str, recording: dict | None = None, fmt: str | None = No
     """
     from ..core.errors import SceneError
 
+    from shlex import quote
+
     out = default_scene_path(data)
-    command = f"escfit init {data}" + ("" if out == Path(f"{Path(data).stem}.toml") else f" --out {out}")
+    command = f"escfit init {quote(data)}" + ("" if out == Path(f"{Path(data).stem}.toml") else f" --out {quote(str(out))}")
     if not interactive():
         raise SceneError(f"no scene given: write a starter scene with `{command}` (or give --scene SCENE.toml, or a "
                          "fit recipe)", data)
     if out.exists():
-        raise SceneError(f"no scene given; {out} exists: fit with `escfit fit {data} --scene {out}`", data)
+        raise SceneError(f"no scene given; {out} exists: fit with `escfit fit {quote(data)} --scene {quote(str(out))}`",
+                         data)
     if not click.confirm(f"No scene given. Write a starter scene for {Path(data).name} to {out} and fit with it?",
                          default=True):
         raise SceneError(f"no scene given: write one with `{command}`, or give --scene SCENE.toml", data)
     written, lines = write_starter(data, out, recording=recording, fmt=fmt)
     for line in lines:
         click.echo(line)
-    click.echo(f"fitting with {written} (next time: escfit fit {data} --scene {written})")
+    click.echo(f"fitting with {written} (next time: escfit fit {quote(data)} --scene {quote(str(written))})")
     return str(written)

@@ -509,7 +509,10 @@ def _write_report(results: str, report_path: str, force: bool) -> None:
     from ..core.errors import ResultsError
     from ..report import make_report
 
-    again = f"`escfit report {results} --out {report_path}{' --format md' if report_path.endswith('.md') else ''}`"
+    from shlex import quote
+
+    again = (f"`escfit report {quote(str(results))} --out {quote(str(report_path))}"
+             f"{' --format md' if report_path.endswith('.md') else ''}`")
     try:
         make_report(results, report_path, fmt="md" if str(report_path).endswith(".md") else "html", force=force)
     except KeyboardInterrupt:

@@ -16,8 +16,15 @@ __all__ = ["summary", "print_summary", "json_safe"]
 
 def print_summary(result) -> None:
     from ..report import parameter_table
+    from ..report.plain import plain_summary
 
     a = result.attrs
+    # not determined: the NOT DETERMINED line below says so in its place
+    plain = plain_summary(result) if getattr(result, "verdict", "") != "not determined" else []
+    for sentence in plain:
+        click.echo(sentence)
+    if plain:
+        click.echo("")
     if "steps" in a and "walkers" in a:
         how = "fixed length"
         if a.get("steps_mode") == "auto":
@@ -68,7 +75,10 @@ def summary(results, as_json, as_csv):
     res = load_fit(results)
     if as_json:
         a = res.attrs
-        click.echo(json.dumps(json_safe({"parameters": res.summary(), "warnings": res.warnings, "notes": res.notes,
+        from ..report.plain import plain_summary
+
+        click.echo(json.dumps(json_safe({"plain": plain_summary(res), "parameters": res.summary(),
+                                         "warnings": res.warnings, "notes": res.notes,
                                "misfit": res.misfit,
                                "model": a.get("model", "balance"), "method": a.get("method"),
                                "data_file": a.get("data_file"),

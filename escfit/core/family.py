@@ -113,6 +113,11 @@ class Family(Protocol):
     def figures(self, result) -> dict[str, bytes]:
         """PNG figures of a saved fit for the report (``{}`` when the generic ones suffice)."""
 
+    def plain(self, draws: Mapping[str, Any], attrs: Mapping[str, Any], observed=None) -> list[str]:
+        """The fit's answer in a few plain sentences (numbers with their 95 % intervals in words,
+        :mod:`escfit.core.plainwords`), from the parameter draws, the results' root attributes
+        and their ``observed_data`` group (or None)."""
+
     def splits_units(self, scene) -> bool:
         """Whether ``fit-many`` reads this scene's recording files on the client and splits them
         into units (:meth:`units_of`) instead of fitting each file as one unit."""
@@ -181,6 +186,11 @@ class FamilyBase:
 
     def figures(self, result) -> dict[str, bytes]:
         return {}
+
+    def plain(self, draws: Mapping[str, Any], attrs: Mapping[str, Any], observed=None) -> list[str]:
+        from .plainwords import coefficient_sentences
+
+        return coefficient_sentences(draws)  # friction coefficients, the parameters every family shares
 
     def splits_units(self, scene) -> bool:
         return False

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import re
 
-__all__ = ["NAMES", "plain_name", "centre_sign", "symbol_of"]
+__all__ = ["NAMES", "plain_name", "centre_sign", "symbol_of", "scene_key"]
 
 # (pattern, plain name with symbol); first match wins
 NAMES: tuple[tuple[str, str], ...] = (
@@ -129,3 +129,28 @@ def symbol_of(plain: str) -> str:
 def centre_sign(name: str) -> float:
     """-1 for the stored zero offset and its drift (shown as the centre and its drift), else +1."""
     return -1.0 if name in ("observation.offset", "observation.offset_rate") else 1.0
+
+
+# Tables a parameter's prefix names directly; every other prefix is an effect, [effects.<prefix>]
+_OWN_TABLES = ("oscillator", "observation", "geneva", "friction", "rig")
+
+
+def scene_key(name: str) -> str:
+    """Where a parameter is written in a scene: ``viscous.C`` -> ``[effects.viscous] C``.
+
+    ``escapement[2].X`` -> ``[[effects.escapement]] number 2, X``; ``oscillator.theta0`` ->
+    ``[oscillator] theta0``; a fixture load's suffix (``[load=330.66]``) is dropped.  Used by
+    messages that ask for an edit of the scene.
+    """
+    base = re.sub(r"\[load=[^\]]*\]", "", name)
+    found = re.fullmatch(r"escapement\[(\d+)\]\.(\w+)", base)
+    if found:
+        return f"[[effects.escapement]] number {found.group(1)}, {found.group(2)}"
+    table, _, key = base.partition(".")
+    if not key:
+        return base
+    if table == "fit":  # the load rule's parameters (fit.kappa, fit.mu)
+        return f"[fit.loads] {key}"
+    if table == "verge":  # the verge reads its keys from [verge] and its sub-tables
+        return f"[verge] (or its sub-table holding it) {key}"
+    return f"[{table}] {key}" if table in _OWN_TABLES else f"[effects.{table}] {key}"

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any, Mapping, Protocol
 
 from .errors import SceneError
+from .suggest import did_you_mean
 from .params import ParamSet
 
 __all__ = ["Scene", "load_scene", "parse_toml", "check_keys", "MAX_DEPTH", "MAX_SCENE_BYTES"]
@@ -39,7 +40,8 @@ def check_keys(table: Mapping[str, Any], allowed: set[str], where: str, required
         raise SceneError(f"expected a table, got {table!r}", where)
     unknown = sorted(set(table) - allowed)
     if unknown:
-        raise SceneError(f"unknown key(s) {unknown}; allowed: {sorted(allowed)}", where)
+        hints = "".join(did_you_mean(k, allowed) for k in unknown)
+        raise SceneError(f"unknown key(s) {unknown}{hints}; allowed: {sorted(allowed)}", where)
     missing = sorted(required - set(table))
     if missing:
         raise SceneError(f"missing required key(s) {missing}", where)
@@ -125,5 +127,6 @@ def load_scene(source: str | Path, *, text: str | None = None) -> "Scene":
     if model is None:
         raise SceneError(f"missing key 'model' (one of {family_names()})", where)
     if not isinstance(model, str) or model not in family_names():
-        raise SceneError(f"unknown model {model!r}; known models: {family_names()}", f"{where} [model]")
+        raise SceneError(f"unknown model {model!r}{did_you_mean(model, family_names())}; known models: "
+                         f"{family_names()}", f"{where} [model]")
     return get_family(model).parse(doc, where=where, text=text)

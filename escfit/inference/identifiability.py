@@ -12,6 +12,7 @@ import math
 import numpy as np
 
 from ..likelihood.problem import Problem
+from ..core.names import scene_key
 from .lsq import LeastSquaresResult, least_squares
 
 __all__ = ["correlation_warnings", "sloppy_directions", "ridge_warnings", "bound_warnings", "profile"]
@@ -97,9 +98,28 @@ def bound_warnings(problem: Problem | None, lsq: LeastSquaresResult) -> list[str
         if flag < 0 and edge == 0.0:
             why = ": the data find no evidence for it (an upper limit is what they give)"
         else:
-            why = ": the data want it beyond the scene's range; widen the range or check the units"
+            why = f": the data want it beyond the scene's range; {widen_edit(name, lsq, i, flag)}, or check the units"
         out.append(f"{name} ends on its {which} bound {edge:g}{why}{one_sided}")
     return out
+
+
+def widen_edit(name: str, lsq: LeastSquaresResult, i: int, flag: int) -> str:
+    """The scene line that widens parameter ``i``'s range past the bound it ended on.
+
+    The range is doubled on that side (by its own width; a bound at zero on the upper side is
+    not crossed into negative values), written as a free parameter table at the parameter's key,
+    which the scene may not contain yet (the release angle and instant are set from the record
+    when it does not).  Values are in the results' units (rad, s, 1/s ...), as the scene reads
+    bare numbers.
+    """
+    lo, hi, value = float(lsq.lower[i]), float(lsq.upper[i]), float(lsq.value[i])
+    width = hi - lo if math.isfinite(hi - lo) and hi > lo else max(abs(value), 1.0)
+    if flag < 0:
+        lo = lo - width if lo < 0 or lo - width >= 0 else 0.0
+    else:
+        hi = hi + width
+    return (f"widen the range: set {scene_key(name)} = {{ value = {value:.6g}, vary = true, min = {lo:.6g}, "
+            f"max = {hi:.6g} }} in the scene")
 
 
 def profile(problem: Problem, name: str, grid, *, n_starts: int = 3, seed: int = 0) -> dict:

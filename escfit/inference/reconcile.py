@@ -135,6 +135,25 @@ def with_held_uncertainty(problem, lsq: LeastSquaresResult) -> tuple[LeastSquare
     return out, notes
 
 
+def _start_edit(name: str, implied: float, lsq: LeastSquaresResult) -> str:
+    """The scene line that starts ``name`` at the value the record implies, inside its range."""
+    from ..core.names import scene_key
+
+    i = lsq.names.index(name)
+    lo, hi = min(float(lsq.lower[i]), implied), max(float(lsq.upper[i]), implied)
+    return f"{scene_key(name)} = {{ value = {implied:.5g}, vary = true, min = {lo:.5g}, max = {hi:.5g} }}"
+
+
+def _waveform_hint(problem) -> str:
+    """``', or fit every sample ([observation] model = "waveform")'`` unless the scene already does."""
+    scene = getattr(problem, "scene", None)
+    observation = dict(getattr(scene, "extra", {}).get("observation", {}) or {})
+    if observation.get("model") == "waveform" or \
+            any(getattr(c, "label", "") == "waveform" for c in getattr(problem, "curves", ())):
+        return ""
+    return ", or fit every sample ([observation] model = \"waveform\")"
+
+
 def verdict(problem, lsq: LeastSquaresResult, unresolved: list[Implied], *,
             posterior: bool = False, agreement=None) -> tuple[str, list[str], str]:
     """What the fit determines.
@@ -157,18 +176,20 @@ def verdict(problem, lsq: LeastSquaresResult, unresolved: list[Implied], *,
     message : str
         One sentence naming what is not determined and what to fix ('' when all is).
     """
+    from ..core.names import scene_key
+
     structural = [n for n in lsq.names if not n.startswith("observation.")] or list(lsq.names)
     if unresolved:
         c = unresolved[0]
         if c.name not in lsq.names:
             return NOT_DETERMINED, structural, (
                 f"the parameters are NOT determined: {c.facts}, but the scene fixes {c.name} = {c.fitted:.5g} where "
-                f"the record implies {c.implied:.5g}: set it there, or let it vary")
+                f"the record implies {c.implied:.5g}: set it there ({scene_key(c.name)} = {c.implied:.5g}), or let it vary")
         return NOT_DETERMINED, structural, (
             f"the parameters are NOT determined: {c.facts}, and the fit's {c.name} = {c.fitted:.5g} disagrees with "
             f"the {c.implied:.5g} it implies even when refitted from there: the scene does not describe this record "
-            "(check its effects, restoring law, units and ranges), or fit every sample "
-            "([observation] model = \"waveform\")")
+            f"(check its effects, restoring law, units and ranges): start from the implied value, "
+            f"{_start_edit(c.name, c.implied, lsq)}{_waveform_hint(problem)}")
     if agreement is not None and not agreement.agrees:
         return NOT_DETERMINED, structural, agreement.statement()
     split = tuple(getattr(agreement, "undetermined", ()) or ())
@@ -181,8 +202,9 @@ def verdict(problem, lsq: LeastSquaresResult, unresolved: list[Implied], *,
     missing = [n for n, e in zip(lsq.names, lsq.stderr) if n in structural and not np.isfinite(e)]
     if not missing:
         return DETERMINED, [], ""
-    fix = ("fix some of them in the scene, give them informative priors (--method emcee), or record what "
-           "separates them")
+    first = missing[0]
+    fix = (f"fix some of them in the scene (e.g. {scene_key(first)} = {float(lsq.values[first]):.5g}, its value "
+           "here), give them informative priors (--method emcee), or record what separates them")
     if set(missing) >= set(structural):
         return NOT_DETERMINED, missing, (f"the parameters are NOT determined: the readings fix none of "
                                          f"{', '.join(missing)} (singular curvature, no interval); {fix}")

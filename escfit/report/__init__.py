@@ -4,7 +4,7 @@ Reports read the results file only; matplotlib and Jinja2 are imported when a re
 (ArviZ is not: the corner plot is drawn with matplotlib, :mod:`escfit.report.corner`).  The HTML page is rendered from ``templates/report.html.j2`` with autoescaping,
 so text from the scene or the recording (titles, notes) is shown, never interpreted.
 
-Sections: title, fit statistics, parameter table (plain names and symbols, held parameters
+Sections: title, the answer in plain sentences (:mod:`escfit.report.plain`), fit statistics, parameter table (plain names and symbols, held parameters
 listed, display units: angles in deg, torques per inertia in rad/s^2, see
 :mod:`escfit.core.display` and :mod:`escfit.core.names`), derived quantities (Q, decrement,
 losses per swing, torques in N m, :mod:`escfit.report.quantities`), warnings, notes on the
@@ -24,6 +24,7 @@ from ..core.atomic import atomic_path, check_output_folder, refuse_clobbering_in
 from ..core.display import display_text, load_unit
 from ..core.errors import MissingDependency
 from ..results import FitResult, load_fit
+from .plain import plain_summary
 from .quantities import derived_rows
 from .params import held_table
 from .tables import failures_text, fit_statistics, parameter_table, provenance_rows, sampler_rows
@@ -153,6 +154,7 @@ def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: 
         "notes": res.notes,
         "provenance": provenance_rows(res, path),
         "scene": a.get("scene", ""),
+        "plain": plain_summary(res),
     }
     head, rows = parameter_table(res, plain=True)
     page["units_note"] = _units_note([r[1] for r in rows], res)
@@ -183,7 +185,10 @@ def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: 
 
 
 def _markdown(page, head, rows, sampler_text, sampler_head, sampler_table, figures, diagnostics, images) -> str:
-    lines = [f"# {_md_text(page['title'])}", "", _md_text(page["fit_stats"])]
+    lines = [f"# {_md_text(page['title'])}", ""]
+    if page["plain"]:
+        lines += ["## In plain words", "", *[f"{_md_text(p)}\n" for p in page["plain"]]]
+    lines += [_md_text(page["fit_stats"])]
     if page["failures"]:
         lines += ["", _md_text(page["failures"])]
     lines += ["", "## Parameters", "",

@@ -11,6 +11,7 @@ from typing import Any, Mapping
 
 from ...core.errors import SceneError
 from ...core.scene import check_keys
+from ...core.suggest import did_you_mean
 from .amplitude import AmplitudeObservation
 from .notches import NotchObservation
 
@@ -37,7 +38,8 @@ def observation_from_table(table: Mapping[str, Any] | None, where: str, data_kin
     w = f"{where} [observation]"
     model = table.pop("model", data_kind)
     if model not in _KINDS:
-        raise SceneError(f"observation model must be one of {sorted(_KINDS)}, got {model!r}", f"{w}.model")
+        raise SceneError(f"observation model {model!r}{did_you_mean(model, _KINDS)} does not apply to these data: "
+                         f"{data_kind} readings are fitted with one of {sorted(_KINDS)}", f"{w}.model")
     if model != data_kind:
         raise SceneError(f"observation model {model!r} does not match the data, which hold {data_kind} readings", w)
     cls = _KINDS[model]

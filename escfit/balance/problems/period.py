@@ -123,8 +123,9 @@ def check_scene_omega0(scene, mp: MeasuredPeriod) -> list[str]:
                         "it vary", mp.source)
     if p.vary and (p.max < lo or p.min > hi):
         raise DataError(f"the record's period is {mp.describe()} (omega0 = {value:.4g} rad/s for this {what}), outside "
-                        f"the scene's range of omega0 [{p.min:.4g}, {p.max:.4g}] rad/s: widen the range, or check the "
-                        "time unit", mp.source)
+                        f"the scene's range of omega0 [{p.min:.4g}, {p.max:.4g}] rad/s: widen the range, [oscillator] omega0 = "
+                        f"{{ value = {value:.4g}, vary = true, min = {0.5 * value:.4g}, max = {1.5 * value:.4g} }}, or "
+                        "check the time unit", mp.source)
     return []
 
 

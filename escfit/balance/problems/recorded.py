@@ -39,7 +39,7 @@ from .amplitude_rows import amplitude_readings_curve
 from .curves import FitProblem
 from .nuisance import centre_priors
 from .period import check_scene_omega0, hold_omega0, measured_period, start_omega0
-from .release import release_from_record
+from .release import release_from_record, swing_unit_warnings
 
 __all__ = ["problem_from_series", "turning_point_curve", "amplitude_readings_curve"]
 
@@ -113,11 +113,13 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
     # irregular interval late in the record is a note there, not a refusal
     tp = reduce_series(series, strict=model != "waveform", user_window=series.window) if turns is None else turns
     notes += list(getattr(tp, "notes", []))
+    swing_warnings = swing_unit_warnings(series, tp, scene.restoring)  # the swing's size against the unit
     series = _without_steps(series, tp)
     _refuse_sustained(scene, tp, series.source)
     mp = measured_period(tp, series.source)
     unit_notes, unit_warnings = _unit_from_period(scene, series, tp)
     notes += unit_notes
+    unit_warnings = swing_warnings + unit_warnings
     check_scene_omega0(scene, mp)
     if model == "waveform":
         from .waveform import WaveformProblem

@@ -15,7 +15,7 @@ from dataclasses import replace
 from ...core.errors import DataError
 from ...core.params import ParamSet
 
-__all__ = ["release_from_record"]
+__all__ = ["swing_unit_warnings", "release_from_record"]
 
 REL_TOL = 0.05  # a fixed scene theta0 may differ from the record's reference angle by this fraction
 FREE_SPAN = 0.2  # a free release angle may move this fraction of the reference angle either way
@@ -85,3 +85,37 @@ def release_from_record(params: ParamSet, measured: float, source: str, restorin
         params.params[p.name] = replace(p, value=-p.value)
         return [f"release {word} {p.value:+.4g} {unit} taken on the record's side ({-p.value:+.4g} {unit})"]
     return []
+
+
+def swing_unit_warnings(series, tp, restoring: str = "spring") -> list[str]:
+    """The record's largest swing held against its angle unit (see
+    :func:`escfit.analysis.quantity.swing_unit_check`), as ``escfit init`` and a fit both do.
+
+    Returns
+    -------
+    list of str
+        A warning naming ``[recording] angle_unit = "rad"`` when radians look read as degrees.
+
+    Raises
+    ------
+    DataError
+        Degrees read as radians: a pendulum past 180 deg or a swing of more than two turns,
+        naming ``[recording] angle_unit = "deg"`` (``--angle-unit deg``).
+    """
+    import numpy as np
+
+    from ...analysis.quantity import swing_unit_check
+
+    if getattr(series, "quantity", "angle") != "angle" or not len(tp.theta):
+        return []
+    meta = getattr(series, "meta", {}) or {}
+    unit = str(meta.get("angle_unit", "")).split(" (")[0]
+    times = np.concatenate([[tp.release_time], np.asarray(tp.time, float)])
+    theta = np.concatenate([[tp.release_theta], np.asarray(tp.theta, float)])
+    amplitude = float(np.nanmax(np.abs(theta - tp.centre(times))))
+    check = swing_unit_check(amplitude, unit, restoring=restoring, swings=0.5 * len(tp.theta),
+                             scale=float(meta.get("scale", 1) or 1))
+    option = f" (--angle-unit {check.key.split(chr(34))[1]})" if check.key else ""
+    if check.verdict == "refuse":
+        raise DataError(check.sentence() + option, series.source)
+    return [f"{check.sentence()}{option} if the column holds radians"] if check.verdict == "suspect" else []

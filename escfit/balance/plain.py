@@ -1,0 +1,150 @@
+"""A balance wheel's or pendulum's fit in plain sentences (:meth:`BalanceFamily.plain`).
+
+Free decay (a pendulum, a Pohl wheel, a balance without escapement), at the release amplitude
+``A`` (per unit inertia; small damping, each loss over one half swing):
+
+=====================================  ===================================
+viscous damping C                      ``A (1 - exp(-pi C / (2 omega_d)))``, ``omega_d = sqrt(omega0**2 - C**2/4)``
+Coulomb (pivot) friction R             ``2 R / omega0**2``
+quadratic air drag D                   ``4 D A**2 / 3``
+=====================================  ===================================
+
+The swing loses ``2 (sum of the three) / A`` of its amplitude each period; each term's share
+of the sum says where the loss goes, and ``Q = pi / (that fraction)`` (``omega0 / C`` for
+viscous damping alone).  The amplitude halves in ``ln 2 / -ln(1 - fraction)`` periods.  A
+minute holds ``60 omega0 / pi`` half swings; the amplitude lost in it is given when it is less
+than the amplitude (a balance's figure).
+
+Escapement-driven balance: the impulse windows give ``X * w`` per half swing (rad^2/s^2 per
+unit inertia, ``w`` the part of the window inside ``[-A, A]``), friction takes ``2 R A`` and
+viscous damping ``(pi / 2) C omega0 A**2`` in the same half swing; the sentences give those as
+shares of the impulse at the amplitude a timegrapher read (else the release), the friction
+torque ``R I`` in N m when the scene gives the inertia ``I``.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import tomllib
+from typing import Any, Mapping
+
+import numpy as np
+
+from ..core.display import RAD_TO_DEG
+from ..core.plainwords import interval_words, join_words, quantiles, share_words, sig
+from .derived import inertia_of
+
+__all__ = ["plain_sentences", "viscous_loss"]
+
+HALF_SWINGS_PER_MINUTE = 60.0 / math.pi  # times omega0
+
+
+def viscous_loss(amp, w0, c):
+    """Amplitude viscous damping takes from one half swing of amplitude ``amp`` (module docstring)."""
+    wd = np.sqrt(np.maximum(w0 ** 2 - c ** 2 / 4, 1e-300))
+    return amp * (1 - np.exp(-math.pi * c / (2 * wd)))
+
+
+def _scene(attrs: Mapping[str, Any]) -> dict:
+    try:
+        return tomllib.loads(attrs.get("scene", "") or "")
+    except tomllib.TOMLDecodeError:
+        return {}
+
+
+def plain_sentences(draws: Mapping[str, Any], attrs: Mapping[str, Any], observed=None) -> list[str]:
+    """The sentences of a balance or pendulum fit (see the module docstring).
+
+    Parameters
+    ----------
+    draws
+        Every parameter at every draw (canonical units), held ones constant.
+    attrs
+        The results' root attributes (the scene text).
+    observed
+        The results' ``observed_data`` group, or None (timegrapher amplitudes are read from it).
+    """
+    if "oscillator.omega0" not in draws:
+        return []
+    scene = _scene(attrs)
+    linear = scene.get("oscillator", {}).get("coordinate") == "linear"
+    k, unit = (1.0, "m") if linear else (RAD_TO_DEG, "deg")
+    w0 = np.asarray(draws["oscillator.omega0"], float)
+    zero = np.zeros_like(w0)
+    c = np.asarray(draws.get("viscous.C", zero), float)
+    d = np.asarray(draws.get("drag.D", zero), float)
+    rs = {n: np.asarray(v, float) for n, v in draws.items() if n == "coulomb.R" or n.startswith("coulomb.R[")}
+    if any(n.startswith("escapement[") for n in draws):
+        return _escapement(attrs, draws, scene, observed, w0, c, rs, k, unit)
+    if "oscillator.theta0" not in draws:
+        return []
+    amp = np.abs(np.asarray(draws["oscillator.theta0"], float))
+    out = []
+    for name, r in (rs or {"": zero}).items():
+        v, f, a = viscous_loss(amp, w0, c), 2 * r / w0 ** 2, 4 * d * amp ** 2 / 3
+        total = v + f + a
+        per_period = 200 * total / amp  # % of the amplitude each period
+        out.append(f"The swing{_load_words(name)} loses {interval_words(per_period, '%')} of its amplitude each "
+                   f"period, starting from {sig(float(np.median(amp)) * k, 3)} {unit}.")
+        shares = [(share, words) for share, words in (
+            (v / total, "viscous damping (C)"), (f / total, "friction in the pivot (R)"),
+            (a / total, "air drag (D)")) if np.nanmedian(share) > 0]
+        if shares:
+            parts = [f"{share_words(s)} is {words}" for s, words in sorted(shares, key=lambda p: -np.nanmedian(p[0]))]
+            out.append(f"Of that loss, {join_words(parts)}; Q = {sig(quantiles(math.pi / (per_period / 100))[0])} "
+                       f"at this amplitude.")
+        halving = math.log(2) / -np.log1p(-np.minimum(per_period / 100, 1 - 1e-12)) * 2 * math.pi / w0
+        out.append(f"At that rate the amplitude halves in {interval_words(halving, 's')}.")
+        minute = total * w0 * HALF_SWINGS_PER_MINUTE * k
+        if np.median(minute) < np.median(amp) * k:  # a balance's figure; a pendulum at rest sooner has none
+            out.append(f"That is {interval_words(minute, unit)} of amplitude lost in the first minute.")
+    return out
+
+
+def _escapement(attrs, draws, scene, observed, w0, c, rs, k, unit) -> list[str]:
+    """Sentences for a balance driven by an escapement: where the impulse goes, the friction torque."""
+    windows = scene.get("effects", {}).get("escapement", [])
+    inertia = inertia_of(attrs)
+    amp = _amplitude(draws, observed)
+    out = []
+    for name, r in rs.items():
+        torque = f", a friction torque of {interval_words(r * inertia, 'N m')}" if inertia is not None else ""
+        out.append(f"Friction in the pivot{_load_words(name)} would take {interval_words(2 * r / w0 ** 2 * k, unit)} "
+                   f"of amplitude each half swing without the escapement{torque}.")
+    if amp is None:
+        return out
+    given = np.zeros_like(w0)
+    for i, window in enumerate(windows, start=1):
+        x = draws.get(f"escapement[{i}].X")
+        if x is None or window.get("kind") != "impulse":
+            continue
+        lo, hi = max(float(window.get("from", 0.0)), -amp), min(float(window.get("to", 0.0)), amp)
+        given = given + np.asarray(x, float) * max(hi - lo, 0.0)
+    if not np.any(given > 0):
+        return out
+    for name, r in (rs or {"": np.zeros_like(w0)}).items():
+        parts = [f"friction in the pivot (R) takes {interval_words(100 * 2 * r * amp / given, '%')}"]
+        if np.any(c > 0):
+            parts.append(f"viscous damping (C) {interval_words(100 * math.pi / 2 * c * w0 * amp ** 2 / given, '%')}")
+        taken = np.median(2 * r * amp / given + math.pi / 2 * c * w0 * amp ** 2 / given)
+        verdict = (" Friction outweighs the impulse there, so the amplitude falls." if taken > 1 else
+                   " The rest of the impulse goes into the unlocking and a growing swing." if taken < 0.9 else "")
+        out.append(f"At {sig(amp * k, 3)} {unit} of amplitude{_load_words(name)}, {join_words(parts)} of the energy "
+                   f"the escapement's impulse gives each half swing.{verdict}")
+    return out
+
+
+def _amplitude(draws, observed) -> float | None:
+    """The amplitude the balance runs at: the median timegrapher reading, else the release angle (rad)."""
+    if observed is not None and "curve" in observed.coords:
+        readings = observed["reading"].values[observed["curve"].values == "amplitude"]
+        if readings.size and str(observed["reading"].attrs.get("units", "")).startswith("deg"):
+            return math.radians(float(np.median(readings)))
+    a0 = draws.get("oscillator.theta0")
+    return float(np.median(np.abs(a0))) if a0 is not None else None
+
+
+def _load_words(name: str) -> str:
+    found = re.search(r"\[load=([^\]]+)\]", name)
+    return f" at load {found.group(1)}" if found else ""

@@ -1,0 +1,167 @@
+"""The plain sentences at the top of a report, read back from the HTML, against the fit's numbers.
+
+Each test fits a shipped recipe, reads the sentences from the report's "In plain words"
+section and recomputes their numbers here from the results file: the posterior's draws, or
+draws of the least-squares normal approximation made with this test's own generator, and the
+textbook losses of one half swing (viscous ``A (1 - exp(-pi C / 2 omega_d))``, Coulomb
+``2 R / omega0**2``, quadratic drag ``4 D A**2 / 3``; an escapement's impulse ``X w`` against
+friction's ``2 R A``).  The printed figures are rounded, and least-squares draws differ from
+the report's, so a number agrees when it lies within half its last printed digit, 2 % and three
+times the Monte Carlo error of a quantile of 4000 draws.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import math
+import re
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from escfit.cli.main import cli
+from escfit.results import load_fit
+
+ROOT = Path(__file__).resolve().parents[1]
+NUMBER = r"(-?[\d.]+(?:e[-+]?\d+)?)"
+
+
+def _fit(tmp_path: Path, recipe: str, *options: str):
+    out, report = tmp_path / "fit.h5", tmp_path / "fit.html"
+    runner = CliRunner()
+    with runner.isolated_filesystem(temp_dir=tmp_path):
+        r = runner.invoke(cli, ["fit", str(ROOT / recipe), "--out", str(out), "--report", str(report), "--quiet",
+                                *options])
+    assert r.exit_code == 0, r.output
+    return load_fit(out), _plain_text(report), r.output
+
+
+def _plain_text(report: Path) -> str:
+    page = report.read_text(encoding="utf-8")
+    block = re.search(r"<h2>In plain words</h2>\s*<div class=\"plain\">(.*?)</div>", page, re.S)
+    assert block, "no plain summary at the top of the report"
+    assert page.index("In plain words") < page.index("<h2>Parameters</h2>")  # before the tables
+    return html.unescape(re.sub(r"<[^>]+>", " ", block.group(1)))
+
+
+def _draws(res, n: int = 20000) -> dict[str, np.ndarray]:
+    """Every parameter's draws, made here: the posterior's, or the normal approximation of least
+    squares (values, standard errors, correlations) clipped to the bounds; held ones constant."""
+    post, lsq = res.group("posterior"), res.group("least_squares")
+    if post is not None:
+        out = {name: np.asarray(post[name].values, float).ravel() for name in res.parameter_names if name in post}
+    else:
+        names = [str(x) for x in lsq["parameter"].values]
+        se = np.nan_to_num(lsq["stderr"].values.astype(float))
+        cov = np.nan_to_num(lsq["correlation"].values.astype(float)) * np.outer(se, se)
+        z = np.random.default_rng(987).multivariate_normal(lsq["value"].values.astype(float), cov, size=n,
+                                                           method="eigh", check_valid="ignore")
+        z = np.clip(z, lsq["min"].values, lsq["max"].values)
+        out = {name: z[:, i] for i, name in enumerate(names)}
+    size = len(next(iter(out.values())))
+    for name, value in json.loads(res.attrs.get("held", "{}")).items():
+        out.setdefault(name, np.full(size, float(value)))
+    return out
+
+
+def _agree(printed: str, values, q: float) -> None:
+    values = np.asarray(values, float)
+    expected = float(np.quantile(values, q))
+    decimals = len(printed.split(".")[1]) if "." in printed else 0
+    # rounding, plus the Monte Carlo error of a quantile of the report's 4000 draws (about 0.05 sd
+    # at 2.5 %): three times that
+    spread = float(np.quantile(values, 0.975) - np.quantile(values, 0.025)) / 3.92
+    tolerance = 0.5 * 10.0 ** -decimals + 0.02 * abs(expected) + 0.15 * spread
+    assert abs(float(printed) - expected) <= tolerance, (printed, expected, q)
+
+
+def _agree_interval(match, values) -> None:
+    for printed, q in zip(match.groups()[:3], (0.5, 0.025, 0.975)):
+        _agree(printed, values, q)
+
+
+def _free_decay_losses(d: dict) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    w0, amp = d["oscillator.omega0"], np.abs(d["oscillator.theta0"])
+    zero = np.zeros_like(w0)
+    c, r, drag = d.get("viscous.C", zero), d.get("coulomb.R", zero), d.get("drag.D", zero)
+    wd = np.sqrt(w0 ** 2 - c ** 2 / 4)
+    losses = {"C": amp * (1 - np.exp(-math.pi * c / (2 * wd))), "R": 2 * r / w0 ** 2, "D": 4 / 3 * drag * amp ** 2}
+    return amp, losses
+
+
+def _check_free_decay(res, text: str) -> dict[str, np.ndarray]:
+    d = _draws(res)
+    amp, losses = _free_decay_losses(d)
+    total = sum(losses.values())
+    per_period = 200 * total / amp
+    found = re.search(rf"loses {NUMBER} % \(between {NUMBER} and {NUMBER} %, 95 %\) of its amplitude each period, "
+                      rf"starting from {NUMBER} deg", text)
+    assert found, text
+    _agree_interval(found, per_period)
+    _agree(found.group(4), np.degrees(amp), 0.5)
+    q = re.search(rf"Q = {NUMBER} at this amplitude", text)
+    _agree(q.group(1), math.pi / (per_period / 100), 0.5)
+    shares = {}
+    for symbol in ("C", "R", "D"):
+        share = re.search(rf"\({NUMBER} %, between {NUMBER} and {NUMBER} %\) is [a-z ]+ \({symbol}\)", text)
+        if share:
+            shares[symbol] = 100 * losses[symbol] / total
+            _agree_interval(share, shares[symbol])
+    halves = re.search(rf"halves in {NUMBER} s \(between {NUMBER} and {NUMBER} s, 95 %\)", text)
+    periods = math.log(2) / -np.log(1 - per_period / 100)
+    _agree_interval(halves, periods * 2 * math.pi / d["oscillator.omega0"])
+    return shares
+
+
+def test_quick_start_pendulum_says_its_loss_in_words(tmp_path):
+    res, text, output = _fit(tmp_path, "fits/real/encoder_pendulum_jensen.toml")
+    shares = _check_free_decay(res, text)
+    assert set(shares) == {"C", "R"}
+    assert output.splitlines()[1].startswith("The swing loses")  # escfit fit prints them first too
+    # escfit summary prints the same sentences
+    summary = CliRunner().invoke(cli, ["summary", str(tmp_path / "fit.h5")]).output
+    assert " ".join(summary.split("\n\n")[0].split()) == " ".join(text.split())
+
+
+def test_pohl_wheel_by_least_squares(tmp_path):
+    res, text, _ = _fit(tmp_path, "fits/real/pohl_amplitudes.toml", "--method", "leastsq")
+    assert set(_check_free_decay(res, text)) == {"C", "R"}
+
+
+@pytest.mark.slow  # the drag needs the integrating solver: a minute of CPU
+def test_string_pendulum_with_drag_shares_the_loss_three_ways(tmp_path):
+    res, text, _ = _fit(tmp_path, "fits/real/string_pendulum_lab1_drag.toml")
+    shares = _check_free_decay(res, text)
+    assert "D" in shares and "C" in shares
+
+
+@pytest.mark.slow  # a timegrapher least-squares fit: half a minute of CPU
+def test_watch_timegrapher_fit_gives_the_impulse_share(tmp_path):
+    runner = CliRunner()
+    out, report = tmp_path / "tg.h5", tmp_path / "tg.html"
+    recordings = ROOT / "datasets" / "recordings"
+    r = runner.invoke(cli, ["fit", str(recordings / "monday_timegrapher.json"), "--scene",
+                            str(recordings / "timegrapher_scene.toml"), "--out", str(out), "--report", str(report),
+                            "--quiet"])
+    assert r.exit_code == 0, r.output
+    res, text = load_fit(out), _plain_text(report)
+    d = _draws(res)
+    obs = res.group("observed_data")
+    amp = math.radians(float(np.median(obs["reading"].values[obs["curve"].values == "amplitude"])))
+    windows = tomllib.loads(res.attrs["scene"])["effects"]["escapement"]
+    (impulse,) = [i for i, w in enumerate(windows, start=1) if w["kind"] == "impulse"]
+    width = min(windows[impulse - 1]["to"], amp) - max(windows[impulse - 1]["from"], -amp)
+    given = d[f"escapement[{impulse}].X"] * width
+    found = re.search(rf"At {NUMBER} deg of amplitude, friction in the pivot \(R\) takes {NUMBER} % "
+                      rf"\(between {NUMBER} and {NUMBER} %, 95 %\)", text)
+    assert found, text
+    _agree(found.group(1), [math.degrees(amp)], 0.5)
+    for printed, q in zip(found.groups()[1:], (0.5, 0.025, 0.975)):
+        _agree(printed, 100 * 2 * d["coulomb.R"] * amp / given, q)
+    per_half = re.search(rf"Friction in the pivot would take {NUMBER} deg \(between {NUMBER} and {NUMBER} deg",
+                         text)
+    _agree_interval(per_half, np.degrees(2 * d["coulomb.R"] / d["oscillator.omega0"] ** 2))
