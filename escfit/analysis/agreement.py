@@ -17,8 +17,8 @@ itself measured, independently of the likelihood:
    the phase quadratically), plus an alternating term; it is a warning when its largest value
    along the record exceeds :data:`DRIFT_SIGMAS` of that scatter, and a finding when it is also
    gross: the phase more than :data:`PHASE_GROSS` off (a quarter period: the model turns where
-   the record is mid-swing) or the envelope off by more than :data:`GROSS_SHARE` of the amplitude
-   lost by then (at least a fifth of the first amplitude).
+   the record is mid-swing) or the envelope off by more than :data:`GROSS_SHARE` both of the
+   record's amplitude there and of the amplitude lost by then (at least a fifth of the first).
 2. **Start.**  The first :data:`START_TURNS` turning points (the release included when the record
    holds it whole): a finding when the record's amplitude grows among them (a free decay never
    does) and at least two of them leave the trend of the rest of the record by more than
@@ -98,16 +98,17 @@ class TurnDifferences:
 
     @property
     def gross(self) -> bool:
-        """Amplitudes: whether the smooth misfit exceeds :data:`GROSS_SHARE` of the amplitude the
-        record has lost by then (at least a fifth of its first amplitude) somewhere, beyond
-        :data:`DRIFT_SIGMAS` scatters: the model describes another motion, not the same decay
-        with a slightly different law (whose misfit grows with what was lost and stays a share of it)."""
+        """Amplitudes: whether the smooth misfit exceeds :data:`GROSS_SHARE` both of the record's
+        amplitude and of the amplitude it has lost by then (at least a fifth of its first)
+        somewhere, beyond :data:`DRIFT_SIGMAS` scatters: the model describes another motion, not
+        the same decay with a slightly different law (whose misfit stays a share of what was lost
+        early on, and of what is left late)."""
         if self.size is None or self.drift_sigmas <= DRIFT_SIGMAS:
             return False
         size = np.abs(self.size)
         first = float(np.max(size[:3]))
         lost = np.maximum(first - size, 0.2 * first)
-        return bool(np.any(np.abs(self.trend) > GROSS_SHARE * lost))
+        return bool(np.any(np.abs(self.trend) > GROSS_SHARE * np.minimum(lost, size)))
 
     @property
     def start_growth(self) -> float:
