@@ -108,7 +108,7 @@ class TurnDifferences:
         size = np.abs(self.size)
         first = float(np.max(size[:3]))
         lost = np.maximum(first - size, 0.2 * first)
-        return bool(np.any(np.abs(self.trend) > GROSS_SHARE * np.minimum(lost, size)))
+        return bool(np.any(np.abs(self.trend) > GROSS_SHARE * np.maximum(lost, size)))
 
     @property
     def start_growth(self) -> float:
