@@ -72,7 +72,9 @@ def _same_optimum(recipe: str, method: str) -> None:
     assert res.attrs["method"] == method
     gap = np.abs(lsq["value"].values - ref["value"].values) / ref["stderr"].values
     assert np.all(gap < 0.05), dict(zip(lsq["parameter"].values, gap))
-    assert 0 <= lsq.attrs["chisqr"] - ref.attrs["chisqr"] < 1e-3 * max(1.0, ref.attrs["redchi"])
+    # the cost no lower than the optimum's and above it by at most a hundredth of what one standard
+    # error in one parameter costs (a chi-square of 1 in the noise's own scale, redchi)
+    assert 0 <= lsq.attrs["chisqr"] - ref.attrs["chisqr"] < 1e-2 * max(1.0, ref.attrs["redchi"])
 
 
 @pytest.mark.parametrize("recipe", FAST)
