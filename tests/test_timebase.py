@@ -111,6 +111,19 @@ def test_stamps_of_a_logger_sampling_in_bursts_are_kept(tmp_path):
                for n in notes_of(ts.meta)), notes_of(ts.meta)
 
 
+def test_arrival_stamps_with_noisy_readings_are_kept_with_a_warning(tmp_path):
+    """Readings dominated by noise cannot say whether the rows were even: the stamps are kept and
+    the user is warned, with the fix."""
+    t, _ = truth()
+    stamps = arrivals(t)
+    noise = np.random.default_rng(8).standard_normal(N)
+    ts = read_data(write(tmp_path, "noisy.csv", stamps, noise))
+    np.testing.assert_allclose(ts.time - ts.time[0], stamps - stamps[0], rtol=0, atol=1e-9)
+    (warning,) = warnings_of(ts.meta)
+    assert "the readings cannot tell whether the rows were taken evenly" in warning
+    assert "set [recording] sample_rate" in warning
+
+
 @pytest.mark.parametrize("stamps", [
     lambda t: np.r_[t[:700], t[:800]],  # the clock reset
     lambda t: np.r_[t[:300], np.full(1200, t[300])],  # the clock stalled

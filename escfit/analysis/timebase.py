@@ -81,11 +81,14 @@ class Repair:
         Rows dropped or re-timed (0 for a note that changes nothing).
     text : str
         What was found and done, a plain sentence with counts and times (s).
+    doubt : bool
+        Whether the repair leaves the time base in doubt (a warning however few rows it touches).
     """
 
     kind: str
     rows: int
     text: str
+    doubt: bool = False
 
 
 @dataclass(frozen=True)
@@ -135,12 +138,13 @@ class TimeBase:
     @property
     def notes(self) -> list[str]:
         """Sentences of the repairs that are notes (all of them unless :attr:`large`)."""
-        return [r.text for r in self.repairs if not (self.large and r.rows)]
+        return [r.text for r in self.repairs if not (self.large and r.rows) and not r.doubt]
 
     @property
     def warnings(self) -> list[str]:
-        """Sentences of the repairs that are warnings: those changing rows, when :attr:`large`."""
-        return [r.text for r in self.repairs if self.large and r.rows]
+        """Sentences of the repairs that are warnings: those changing rows, when :attr:`large`, and
+        those that leave the time base in doubt."""
+        return [r.text for r in self.repairs if (self.large and r.rows) or r.doubt]
 
 
 def time_base(time, values=None, *, where_of_row: Callable[[int], str] | None = None,
@@ -422,10 +426,15 @@ def _clusters(t, idx, v, where, repairs):
     said = (f"time stamps arrive in clusters (up to {runs.max()} rows; "
             f"{100.0 * np.mean(d < CLUSTER_STEP * mean):.0f} % of the steps under half the mean step)")
     if not (math.isfinite(across) and across / inside < EVEN_STEPS):
-        how = ("the readings cannot tell whether the rows were taken evenly" if not math.isfinite(across) else
-               f"the readings step {across / inside:.3g} times more across a cluster's gap than within it, as "
-               "samples taken in bursts do")
-        repairs.append(Repair("clusters", 0, f"{said}: {how}, so the stamps are kept as the sample times"))
+        if math.isfinite(across):
+            repairs.append(Repair("clusters", 0, f"{said}: the readings step {across / inside:.3g} times more "
+                                                 "across a cluster's gap than within it, as samples taken in bursts "
+                                                 "do, so the stamps are kept as the sample times"))
+        else:
+            repairs.append(Repair("clusters", 0, f"{said}: the readings cannot tell whether the rows were taken "
+                                                 "evenly (stamps of arrival can be a tenth of a second late), so the "
+                                                 f"stamps are kept as the sample times; if the logger samples evenly, "
+                                                 f"{FIX}", doubt=True))
         return t
     line = _burst_line(t, idx, starts + runs - 1, runs, where, [])  # rows arrive after the last is taken
     off = float(np.max(np.abs(t - line)))
