@@ -67,12 +67,11 @@ def solve_exact(system: System, n_swings: int, *, max_segments: int | None = Non
     run = run_options(n_swings, max_segments=nseg, t_end=t_end, dense=dense)
     kernel = run_phase_one if system.switching == "phase" else run_one
     # room for the segments of ~4 regions per half swing; more is made when a run needs it
-    (n_done, status, n_seg, t, theta, omega), log = with_rows(
-        lambda rows: kernel(system.k, run, out, rows), min(nseg, 4 * n_swings + 64), 9, dense)
-    traj = Trajectory(*columns(out, n_done), Status(status), system.omega0, "exact",
-                      {"max_segments": nseg}, n_seg, 0, (t, theta, omega))
+    res, log = with_rows(lambda rows: kernel(system.k, run, out, rows), min(nseg, 4 * n_swings + 64), 9, dense)
+    traj = Trajectory(*columns(out, res.n_done), Status(res.status), system.omega0, "exact",
+                      {"max_segments": nseg}, res.n_seg, 0, (res.t, res.theta, res.omega))
     if dense:
-        traj.dense = RowSolution(log[:n_seg].copy(), ROW_EXACT, system.k, traj)
+        traj.dense = RowSolution(log[:res.rows].copy(), ROW_EXACT, system.k, traj)
     return traj
 
 
