@@ -220,6 +220,7 @@ def advance_dop853(k, run, start, region, work, rows, n_rows):
     """
     t0, x, v, s, swing, steps0 = start
     w2, xc, xb, _ = region
+    x_seg, v_seg = x, v
     kx, kv, memory = work
     stages = (kx, kv)
     tol = (run.rtol, run.atol_x, run.atol_v)
@@ -233,7 +234,6 @@ def advance_dop853(k, run, start, region, work, rows, n_rows):
         h = _initial_step((x, v, a), regime, tol)
     # no turning point within many time constants: creeping to rest (overdamped)
     horizon = creep_horizon(k.c, w2)
-    motion = math.sqrt(acceleration(x, 0.0, w2, xc, k) ** 2 + w2 * v * v) / w2
     budget = run.max_steps - steps0
     t_seg = 0.0
     n_steps = 0
@@ -302,9 +302,14 @@ def advance_dop853(k, run, start, region, work, rows, n_rows):
             break
     memory[0] = h
     memory[1] = 1.0 if rejected else 0.0
+    motion = 0.0  # read by the walk at a turn and in the run's first region only
+    if event == TURN or steps0 == 0:
+        motion = math.sqrt(acceleration(x_seg, 0.0, w2, xc, k) ** 2 + w2 * v_seg * v_seg) / w2
     if fail != 0:
         return Segment(FAILED, t_seg, x, v, 0.0, x, motion, fail, n_steps, n_rows)
-    if event == EDGE or event == TURN:
+    if event == EDGE:
+        return Segment(event, t_seg + tau, xe, ve, 0.0, xe, motion, 0, n_steps, n_rows)
+    if event == TURN:
         a_rest = acceleration(xe, 0.0, w2, xc, k)  # the turn's offset from the rest position is -a/w2
         return Segment(event, t_seg + tau, xe, ve, a_rest / w2, xe + a_rest / w2, motion, 0, n_steps, n_rows)
     return Segment(event, t_seg, x, v, 0.0, x, motion, 0, n_steps, n_rows)

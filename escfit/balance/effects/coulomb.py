@@ -75,6 +75,13 @@ class Coulomb:
                              f"R = {p.value:g} rad/s^2; it must be at least R", f"{where}.R_static")
         return cls(static=True), [p, q]
 
+    @staticmethod
+    def example(w0: float, a0: float) -> dict[str, str]:
+        """A typical instance for the conformance suite: sliding friction 1 % of the spring's
+        acceleration at the release ``a0`` (rad), static friction 3 %: it stops within a few swings."""
+        unit = w0 * w0 * a0
+        return {"coulomb": f"R = {0.01 * unit!r}\nR_static = {0.03 * unit!r}\n"}
+
     @classmethod
     def _read_linear(cls, table: Mapping, ctx: ReadContext, where: str) -> tuple["Coulomb", list[Param]]:
         """A linear oscillator's dry friction: a force per mass, ``R`` (and ``R_static``) in m/s^2."""
