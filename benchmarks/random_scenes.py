@@ -88,27 +88,12 @@ def compare(a: dict, b: dict, a0: float) -> dict:
     return {"kind": "same", "abs": d, "rel": d / a0}
 
 
-def main(argv: list[str] | None = None) -> dict:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--scenes", type=int, default=10_000)
-    ap.add_argument("--rk4-every", type=int, default=10)
-    ap.add_argument("--ivp-every", type=int, default=10)
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--json", default=None, help="write the figures as JSON here")
-    args = ap.parse_args(argv)
-    missing = sorted(set(REGISTERED) - set(ALL_EFFECTS))
-    if missing:
-        raise SystemExit(f"random_scenes: no generator for the registered effects {missing}")
-    rng = np.random.default_rng(args.seed)
-    solved: dict[str, Counter] = {s: Counter() for s in SOLVERS}
-    reasons: dict[str, Counter] = {s: Counter() for s in solved}
-    slowest = {s: 0.0 for s in solved}
-    pairs = {(p, q): [] for i, p in enumerate(SOLVERS) for q in SOLVERS[i + 1:]}
-    status_cases: list[dict] = []
-    effects_seen: Counter = Counter()
-    near_critical = Counter()
-    t_start = time.perf_counter()
+def _run_scenes(args, rng, solved, reasons, slowest, pairs, status_cases, effects_seen, near_critical, t_start):
+    """Draw, solve and compare ``args.scenes`` scenes, counting into the tables given."""
     for i in range(args.scenes):
+        near_critical["done"] = i
+        if i and i % 500 == 0:
+            print(f"  ... {i} scenes in {time.perf_counter() - t_start:.0f} s", flush=True)
         text, names = random_scene(rng, effects=ALL_EFFECTS)
         effects_seen.update(names)
         try:
@@ -133,13 +118,42 @@ def main(argv: list[str] | None = None) -> dict:
                 reasons[name][r["reason"] if "reason" in r else "NaN in the results"] += 1
         for (p, q), rows in pairs.items():
             if p in runs and q in runs:
-                c = compare(runs[p], runs[q], a0)
-                rows.append(c)
-                if c["kind"] == "status":
+                cmp = compare(runs[p], runs[q], a0)
+                rows.append(cmp)
+                if cmp["kind"] == "status":
                     near_critical[f"status disagreements {p}/{q}"] += critical
                     if len(status_cases) < 20:
-                        status_cases.append({"scene": i, "pair": f"{p}/{q}", "near_critical": critical, **c,
+                        status_cases.append({"scene": i, "pair": f"{p}/{q}", "near_critical": critical, **cmp,
                                              "C/2w0": c / (2.0 * sys_.omega0), "text": text})
+    near_critical["done"] = args.scenes
+
+
+def main(argv: list[str] | None = None) -> dict:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scenes", type=int, default=10_000)
+    ap.add_argument("--rk4-every", type=int, default=10)
+    ap.add_argument("--ivp-every", type=int, default=10)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--json", default=None, help="write the figures as JSON here")
+    args = ap.parse_args(argv)
+    missing = sorted(set(REGISTERED) - set(ALL_EFFECTS))
+    if missing:
+        raise SystemExit(f"random_scenes: no generator for the registered effects {missing}")
+    rng = np.random.default_rng(args.seed)
+    solved: dict[str, Counter] = {s: Counter() for s in SOLVERS}
+    reasons: dict[str, Counter] = {s: Counter() for s in solved}
+    slowest = {s: 0.0 for s in solved}
+    pairs = {(p, q): [] for i, p in enumerate(SOLVERS) for q in SOLVERS[i + 1:]}
+    status_cases: list[dict] = []
+    effects_seen: Counter = Counter()
+    near_critical = Counter()
+    t_start = time.perf_counter()
+    try:
+        _run_scenes(args, rng, solved, reasons, slowest, pairs, status_cases, effects_seen, near_critical, t_start)
+    except KeyboardInterrupt:  # Ctrl-C: the figures of the scenes done so far
+        print(f"  interrupted after {near_critical['done']} scenes")
+        args.scenes = near_critical["done"]
+    del near_critical["done"]
     elapsed = time.perf_counter() - t_start
     figures = {"scenes": args.scenes, "seed": args.seed, "seconds": round(elapsed, 1), "effects": dict(effects_seen),
                "near_critical": dict(near_critical), "solvers": {}, "pairs": {}, "status_cases": status_cases}
