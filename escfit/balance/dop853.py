@@ -42,7 +42,7 @@ from ..core.kernels import kernel
 from ..core.status import Status
 from .records import ROWS_FULL, columns, half_swings, run_options, with_rows
 from .segment import creep_horizon
-from .solution import ROW_DOP853, RowSolution
+from .solution import ROW_DOP853, RowSolution, write_row
 from .steps import N_STAGES, dop853_step
 from .system import System
 from .torque import acceleration, jerk
@@ -283,15 +283,7 @@ def advance_dop853(k, run, start, region, work, rows, n_rows):
                 event = -1
                 fail = ROWS_FULL
                 break
-            rows[n_rows, 0] = t0 + t_seg
-            rows[n_rows, 1] = tau if event >= 0 else h_try
-            rows[n_rows, 2] = s
-            rows[n_rows, 3] = x
-            rows[n_rows, 4] = v
-            rows[n_rows, 5] = xc
-            rows[n_rows, 6] = w2
-            rows[n_rows, 7] = a
-            rows[n_rows, 8] = swing
+            write_row(rows, n_rows, (t0 + t_seg, tau if event >= 0 else h_try, s, x, v), (xc, w2), a, swing)
             n_rows += 1
         if event >= 0:
             break

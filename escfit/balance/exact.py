@@ -47,6 +47,7 @@ from ..core.status import Status
 from .records import ROWS_FULL
 from .regions import applies
 from .segment import cross_time, propagate, turn_time
+from .solution import write_row
 from .walker import EDGE, FAILED, REST, TURN, Segment, Walk, compile_walk, drift_factor
 
 __all__ = ["run_angle", "run_phase", "run_angle_many", "run_phase_many", "run_one", "run_phase_one", "advance_exact",
@@ -126,14 +127,7 @@ def advance_exact(k, run, start, region, work, log, n_rows):
     if record:
         if n_rows >= log.shape[0]:
             return Segment(FAILED, 0.0, x, v, 0.0, xc, motion, ROWS_FULL, 0, n_rows)
-        log[n_rows, 0] = t
-        log[n_rows, 2] = s
-        log[n_rows, 3] = x
-        log[n_rows, 4] = v
-        log[n_rows, 5] = xc
-        log[n_rows, 6] = w2
-        log[n_rows, 7] = h
-        log[n_rows, 8] = swing
+        write_row(log, n_rows, (t, 0.0, s, x, v), (xc, w2), h, swing)
     tau_turn = turn_time(y0, v, h, w2)
     x_turn = xc
     y_turn = 0.0

@@ -30,7 +30,7 @@ from ..core.status import Status
 from .records import ROWS_FULL, columns, half_swings, run_options, with_rows
 from .regions import region_at, swing_edges
 from .segment import creep_horizon
-from .solution import ROW_RK4, RowSolution
+from .solution import ROW_RK4, RowSolution, write_row
 from .steps import rk4_step
 from .system import System
 from .torque import acceleration
@@ -94,15 +94,7 @@ def _row(rows, n_rows, state, where, regime):
     t0, x, v = state
     s, swing, h = where
     w2, xc, _ = regime
-    rows[n_rows, 0] = t0
-    rows[n_rows, 1] = 0.0
-    rows[n_rows, 2] = s
-    rows[n_rows, 3] = x
-    rows[n_rows, 4] = v
-    rows[n_rows, 5] = xc
-    rows[n_rows, 6] = w2
-    rows[n_rows, 7] = h
-    rows[n_rows, 8] = swing
+    write_row(rows, n_rows, (t0, 0.0, s, x, v), (xc, w2), h, swing)
     rows[n_rows, 9] = 0.0
     return True
 
