@@ -188,3 +188,15 @@ def test_every_compiled_kernel_of_the_package_goes_through_kernel():
                  if p.name != "kernels.py" and direct.search(p.read_text(encoding="utf-8"))]
     assert not offenders, f"use escfit.core.kernels.kernel instead of numba.njit in {offenders}"
     assert any("@kernel" in p.read_text(encoding="utf-8") for p in (root / "verge").glob("*.py"))
+
+
+@pytest.mark.parametrize("walk, module", [(exact.run_angle, exact), (dop853.run_dop853, dop853),
+                                          (rk4._run_located, rk4)], ids=["exact", "dop853", "rk4"])
+def test_each_solvers_walk_is_keyed_on_the_walker_and_the_solvers_step(walk, module):
+    """The walk is one source compiled once per solver with its step bound in: an edit of the
+    walker or of the solver's module must recompile that copy, and the copies have their own
+    cache files (distinct names)."""
+    balance = Path(exact.__file__).resolve().parent
+    files = set(kernel_sources(walk))
+    assert {balance / "walker.py", Path(module.__file__).resolve()} <= files
+    assert walk.py_func.__qualname__ == f"walk_{module.__name__.rsplit('.', 1)[-1]}"

@@ -20,6 +20,7 @@ from escfit.balance.batch import solve_batch
 from escfit.balance.records import blank, half_swings, run_options
 from escfit.balance.segment import CREEP_OVERSHOOT, cross_time, propagate, turn_time
 from escfit.balance.solvers import solve_system
+from escfit.balance.walker import drift_factor
 
 from .conftest import DATASETS
 
@@ -55,7 +56,7 @@ def reference_phase(theta0, c0, r, w2, w_lo, w_hi, w_x, w_dir, dr_th, dr_rate, n
         if x <= 0.0:
             status = 4
         if drift and n_done % 2 == 0:
-            c *= exact._drift_factor(int_c, dr_th, dr_rate)
+            c *= drift_factor(int_c, dr_th, dr_rate)
             if c >= 2.0 * math.sqrt(w2):
                 status = 4
                 break
@@ -133,7 +134,7 @@ def reference_angle(theta0, v0, c0, r, sp_bp, sp_w2, sp_off, w_lo, w_hi, w_x, w_
         t_swing = 0.0
         n_done += 1
         if drift and n_done % 2 == 0:
-            c *= exact._drift_factor(int_c, dr_th, dr_rate)
+            c *= drift_factor(int_c, dr_th, dr_rate)
         s, x = -s, -x
         v = restitution * v if is_bank else 0.0
         at_start = v == 0.0
@@ -222,9 +223,9 @@ def _kernel_run(kernel, k, n_swings, max_seg=0, log_rows=0):
     run = run_options(n_swings, max_segments=max_seg, dense=log_rows > 0)
     log = np.zeros((log_rows, 9))
     res = kernel(k, run, out, log)
-    n = res[0]
+    n = res.n_done
     fields = {f: out[f][:n] for f in ("amplitude", "theta_turn", "half_period", "time", "banked")}
-    return fields, res[0], res[1], res[2], tuple(res[3:6]), log[:res[2]]
+    return fields, res.n_done, res.status, res.n_seg, (res.t, res.theta, res.omega), log[:res.rows]
 
 
 # -- the phase kernel ---------------------------------------------------------------------------

@@ -72,7 +72,7 @@ def _run_dense(k, run, n):
     while True:
         log = np.empty((rows, N_LOG))
         res = run_angle(k, run, out, log)
-        if res[1] != ROWS_FULL:
+        if res.status != ROWS_FULL:
             return res, log
         rows *= 4
 
@@ -105,16 +105,16 @@ def _sample_one(ks, i, spec, times, shift, value, row):
         run.n_swings = n
         run.max_segments = spec.max_segments if spec.max_segments > 0 else 64 * n + 1000
         res, log = _run_dense(k, run, n)
-        n_done, status, n_seg, t_fin = res[0], res[1], res[2], res[3]
+        n_done, status, n_seg, t_fin = res.n_done, res.status, res.n_seg, res.t
         reached = t_fin >= t_end
         if reached or n_done < n or n >= max_swings:
             break
         # the half swings were longer than pi/omega0: scale by the time covered (as sample_state)
         n = min(max_swings, max(2 * n, int(n * t_end / max(t_fin, 1e-300) * 1.1) + 2))
-    beyond = (res[4], 0.0) if status == _STOPPED else (math.nan, math.nan)
+    beyond = (res.theta, 0.0) if status == _STOPPED else (math.nan, math.nan)
     stages = (np.empty(N_STAGES + 1), np.empty(N_STAGES + 1))
     other = np.empty(n_t)
-    sol = (log[:n_seg], ROW_EXACT, ks[i:i + 1], stages)
+    sol = (log[:res.rows], ROW_EXACT, ks[i:i + 1], stages)
     if spec.which == THETA:
         _states_at(sol, t, beyond, value, other)
     else:

@@ -80,7 +80,7 @@ def _run_dense(k, run, n):
     while True:
         rows = np.empty((n_rows, _N_ROW))
         res = run_dop853(k, run, out, rows)
-        if res[1] != ROWS_FULL:
+        if res.status != ROWS_FULL:
             return res, rows
         n_rows *= 4
 
@@ -114,13 +114,13 @@ def _sample_one(ks, i, spec, times, shift, value, row):
         run.max_segments = spec.max_segments if spec.max_segments > 0 else 64 * n + 1000
         run.max_steps = spec.max_steps if spec.max_steps > 0 else 10_000 * n + 100_000
         res, rows = _run_dense(k, run, n)
-        n_done, status, n_seg, t_fin, n_rows = res[0], res[1], res[2], res[4], res[7]
+        n_done, status, n_seg, t_fin, n_rows = res.n_done, res.status, res.n_seg, res.t, res.rows
         reached = t_fin >= t_end
         if reached or n_done < n or n >= max_swings:
             break
         # the half swings were longer than pi/omega0: scale by the time covered (as sample_state)
         n = min(max_swings, max(2 * n, int(n * t_end / max(t_fin, 1e-300) * 1.1) + 2))
-    beyond = (res[5], 0.0) if status == _STOPPED else (math.nan, math.nan)
+    beyond = (res.theta, 0.0) if status == _STOPPED else (math.nan, math.nan)
     stages = (np.empty(N_STAGES + 1), np.empty(N_STAGES + 1))
     other = np.empty(n_t)
     sol = (rows[:n_rows], ROW_DOP853, ks[i:i + 1], stages)

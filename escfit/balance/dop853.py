@@ -41,21 +41,20 @@ from ..core.errors import SolverError
 from ..core.kernels import kernel
 from ..core.status import Status
 from .records import ROWS_FULL, columns, half_swings, run_options, with_rows
-from .regions import region_tables
-from .segment import creep_horizon, creeps_to_rest
-from .solution import ROW_DOP853, RowSolution
+from .segment import creep_horizon
+from .solution import ROW_DOP853, RowSolution, write_row
 from .steps import N_STAGES, dop853_step
 from .system import System
 from .torque import acceleration, jerk
 from .trajectory import Trajectory
+from .walker import EDGE, END, FAILED, REST, TURN, Segment, compile_walk
 
-__all__ = ["solve_dop853", "run_dop853"]
+__all__ = ["solve_dop853", "run_dop853", "advance_dop853"]
 
 _E3 = np.ascontiguousarray(_coefficients.E3)
 _E5 = np.ascontiguousarray(_coefficients.E5)
 _SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
 _EXPONENT = -1.0 / 8.0  # the error estimate is of order 7 (scipy: -1/(error_estimator_order + 1))
-_STOPPED, _BANKED, _MAX_SEGMENTS = int(Status.STOPPED), int(Status.BANKED), int(Status.MAX_SEGMENTS)
 _OVER_THE_TOP, _UNDERFLOW, _BUDGET = int(Status.OVER_THE_TOP), int(Status.STEP_UNDERFLOW), int(Status.STEP_BUDGET)
 
 
@@ -201,201 +200,118 @@ def _locate(state, regime, event, end, stages):
 
 
 @kernel
-def run_dop853(k, run, out, rows):
-    """Integrate half swings (angle switching) from ``k.theta0, k.v0``.
+def _dop853_scratch(k):
+    """The stage arrays and what carries from one region to the next: the step size (s; -1 before
+    the first step) and whether the last step was rejected."""
+    return np.empty(N_STAGES + 1), np.empty(N_STAGES + 1), np.array([-1.0, 0.0])
 
-    Parameters
-    ----------
-    k : record
-        The coefficient record (:mod:`escfit.balance.records`).
-    run : record
-        :data:`escfit.balance.records.RUN`: ``n_swings``, ``max_segments`` and ``max_steps``
-        budgets, ``t_end`` (s; the run ends at the first accepted step reaching it), ``rtol``,
-        ``atol_x`` (rad), ``atol_v`` (rad/s) and ``dense``.
-    out : ndarray of :data:`escfit.balance.records.HALF_SWING`
-        Per-half-swing results, filled while the count is below its length.
-    rows : ndarray, shape (n, 9)
-        The dense solution's rows (t0, tau, s, x0, v0, xc, w2, a0, swing), filled when
-        ``run.dense``; when it has no room left the run stops with status ``ROWS_FULL``.
 
-    Returns
-    -------
-    n_done, status, n_seg, n_steps, t, theta, omega, n_rows
-        Half swings done, :class:`~escfit.core.status.Status` code, segments and steps
-        (accepted and rejected) used, the time (s), angle (rad) and angular velocity (rad/s)
-        where the run ended, and the dense rows filled.
+@kernel
+def advance_dop853(k, run, start, region, work, rows, n_rows):
+    """One region of a half swing by adaptive DOP853 steps: the walk's step
+    (:mod:`escfit.balance.walker`).
+
+    Steps until one passes the edge ahead or a turning point, which :func:`_locate` then places
+    on the step map.  Ends early (``REST``) when no event comes within
+    :func:`~escfit.balance.segment.creep_horizon`, (``END``) at the first accepted step reaching
+    ``run.t_end``, or fails: step budget, step size below rounding, a pendulum over the top, no
+    room for a dense row.  With ``run.dense`` each accepted step is a row (t0, tau, s, x0, v0,
+    xc, w2, a0, swing).
     """
-    theta0 = k.theta0
-    v0 = k.v0
-    hold = k.r_static - k.r  # static friction beyond the sliding one (rad/s^2)
-    bank = k.bank
-    restitution = k.restitution
-    n_swings = run.n_swings
-    max_seg = run.max_segments
-    max_steps = run.max_steps
-    t_end = run.t_end
+    t0, x, v, s, swing, steps0 = start
+    w2, xc, xb, _ = region
+    x_seg, v_seg = x, v
+    kx, kv, memory = work
+    stages = (kx, kv)
     tol = (run.rtol, run.atol_x, run.atol_v)
     record = run.dense != 0
     pend = k.pendulum != 0
-    s = 1.0 if theta0 < 0.0 else -1.0
-    if v0 != 0.0:
-        s = 1.0 if v0 > 0.0 else -1.0
-    x = s * theta0
-    v = s * v0
-    t = 0.0
-    t_swing = 0.0  # duration of the current half swing, summed apart from t to keep its precision
-    status = 0
-    n_done = 0
-    n_seg = 0
+    regime = (w2, xc, k)
+    h = memory[0]
+    rejected = memory[1] != 0.0
+    a = acceleration(x, v, w2, xc, k)
+    if h < 0.0:
+        h = _initial_step((x, v, a), regime, tol)
+    # no turning point within many time constants: creeping to rest (overdamped)
+    horizon = creep_horizon(k.c, w2)
+    budget = run.max_steps - steps0
+    t_seg = 0.0
     n_steps = 0
-    n_rows = 0
-    any_bank = False
-    reached = False  # t_end reached
-    n_out = out.shape[0]
-    stages = (np.empty(N_STAGES + 1), np.empty(N_STAGES + 1))
-    edge_tab, n_edge_tab, w2_tab, xc_tab = region_tables(k)
-    d = 0 if s > 0.0 else 1
-    h = -1.0
-    rejected = False
-    at_start = True
-    scale = -1.0
-    while n_done < n_swings and not reached:
-        if n_seg >= max_seg:
-            status = _MAX_SEGMENTS
+    event = -1
+    fail = 0
+    tau = 0.0
+    xe, ve = x, v
+    while True:
+        if n_steps >= budget:
+            fail = _BUDGET
             break
-        n_edges = n_edge_tab[d]
-        j = 0
-        while j < n_edges and edge_tab[d, j] <= x:
-            j += 1
-        w2 = w2_tab[d, j]
-        xc = xc_tab[d, j]
-        regime = (w2, xc, k)
-        xb = edge_tab[d, j] if j < n_edges else math.inf
-        n_seg += 1
-        event = -1  # 0: edge, 1: turning point
-        tau = 0.0
-        xe = x
-        ve = v
-        if v <= 0.0:
-            v = 0.0
-            a = acceleration(x, 0.0, w2, xc, k)
-            if a <= 0.0 or (at_start and a <= hold):
-                if at_start:
-                    status = _STOPPED  # at rest and the net torque cannot overcome static friction
-                    break
-                event = 1  # came to rest exactly on an edge: a turning point there
-        else:
-            a = acceleration(x, v, w2, xc, k)
-        if h < 0.0:
-            h = _initial_step((x, v, a), regime, tol)
-        # no turning point within many time constants: creeping to rest (overdamped)
-        horizon = creep_horizon(k.c, w2)
-        x_seg, v_seg = x, v
-        if scale < 0.0:  # the run's scale: the release's offset from its rest position (rad)
-            scale = math.sqrt(acceleration(x, 0.0, w2, xc, k) ** 2 + w2 * v * v) / w2
-        t_seg = 0.0
-        while event < 0:
-            if n_steps >= max_steps:
-                status = _BUDGET
-                break
-            if t_seg > horizon:
-                status = _STOPPED
-                break
-            h_try = h
-            x1, v1, a1 = dop853_step((x, v, a), h_try, regime, stages)
-            n_steps += 1
-            err = _error_norm((x, v), (x1, v1), h_try, stages, tol)
-            if not err < 1.0:  # also NaN
-                h = h_try * max(_MIN_FACTOR, _SAFETY * err**_EXPONENT) if math.isfinite(err) else 0.5 * h_try
-                rejected = True
-                if h <= 1e-15 * (t + h_try):
-                    status = _UNDERFLOW
-                    break
-                continue
-            factor = _MAX_FACTOR if err == 0.0 else min(_MAX_FACTOR, _SAFETY * err**_EXPONENT)
-            if rejected:
-                factor = min(1.0, factor)
-            rejected = False
-            h_next = h_try * factor
-            if v1 <= 0.0:
-                tau, xe, ve, ae = _locate((x, v, a), regime, (1, 0.0), (h_try, x1, v1, a1), stages)
-                event = 1
-                if xe > xb:  # passed the edge before turning within this step
-                    tau, xe, ve, ae = _locate((x, v, a), regime, (0, xb), (tau, xe, ve, ae), stages)
-                    event = 0
-            elif x1 >= xb:
-                tau, xe, ve, ae = _locate((x, v, a), regime, (0, xb), (h_try, x1, v1, a1), stages)
-                event = 0
-            h = h_next
-            if pend and (xe if event >= 0 else x1) >= math.pi:
-                status = _OVER_THE_TOP
-                break
-            if record:
-                if n_rows >= rows.shape[0]:
-                    status = ROWS_FULL
-                    break
-                rows[n_rows, 0] = t
-                rows[n_rows, 1] = tau if event >= 0 else h_try
-                rows[n_rows, 2] = s
-                rows[n_rows, 3] = x
-                rows[n_rows, 4] = v
-                rows[n_rows, 5] = xc
-                rows[n_rows, 6] = w2
-                rows[n_rows, 7] = a
-                rows[n_rows, 8] = n_done
-                n_rows += 1
-            if event >= 0:
-                break
-            x, v, a = x1, v1, a1
-            t += h_try
-            t_seg += h_try
-            t_swing += h_try
-            if t >= t_end:
-                reached = True
-                break
-        if status != 0 or reached:
+        if t_seg > horizon:
+            event = REST
             break
-        if event == 1 and creeps_to_rest(acceleration(xe, 0.0, w2, xc, k) / w2, math.sqrt(
-                acceleration(x_seg, 0.0, w2, xc, k) ** 2 + w2 * v_seg * v_seg) / w2, scale):
-            # the "turn" lies on the rest position to within rounding: a creep to rest, as the
-            # exact solver decides it (segment.CREEP_OVERSHOOT), not a swing
-            x = xe
-            status = _STOPPED
+        h_try = h
+        x1, v1, a1 = dop853_step((x, v, a), h_try, regime, stages)
+        n_steps += 1
+        err = _error_norm((x, v), (x1, v1), h_try, stages, tol)
+        if not err < 1.0:  # also NaN
+            h = h_try * max(_MIN_FACTOR, _SAFETY * err**_EXPONENT) if math.isfinite(err) else 0.5 * h_try
+            rejected = True
+            if h <= 1e-15 * (t0 + t_seg + h_try):
+                fail = _UNDERFLOW
+                break
+            continue
+        factor = _MAX_FACTOR if err == 0.0 else min(_MAX_FACTOR, _SAFETY * err**_EXPONENT)
+        if rejected:
+            factor = min(1.0, factor)
+        rejected = False
+        h_next = h_try * factor
+        if v1 <= 0.0:
+            tau, xe, ve, ae = _locate((x, v, a), regime, (1, 0.0), (h_try, x1, v1, a1), stages)
+            event = TURN
+            if xe > xb:  # passed the edge before turning within this step
+                tau, xe, ve, ae = _locate((x, v, a), regime, (0, xb), (tau, xe, ve, ae), stages)
+                event = EDGE
+        elif x1 >= xb:
+            tau, xe, ve, ae = _locate((x, v, a), regime, (0, xb), (h_try, x1, v1, a1), stages)
+            event = EDGE
+        h = h_next
+        if pend and (xe if event >= 0 else x1) >= math.pi:
+            event = -1
+            fail = _OVER_THE_TOP
             break
-        t += tau
-        t_swing += tau
-        at_start = False
-        is_bank = False
-        if event == 0:
-            x = xb
-            v = max(ve, 0.0)
-            is_bank = j == n_edges - 1 and math.isfinite(bank)
-            if not is_bank:
-                continue
-        else:
-            x = xe
-            v = 0.0
-        # end of a half swing: a turning point or an impact on the banking pins
-        if n_done < n_out:
-            rec = out[n_done]
-            rec.amplitude = abs(x)
-            rec.theta_turn = s * x
-            rec.half_period = t_swing
-            rec.time = t
-            rec.banked = 1 if is_bank else 0
-        any_bank = any_bank or is_bank
-        t_swing = 0.0
-        n_done += 1
-        s = -s
-        x = -x
-        v = restitution * v if is_bank else 0.0
-        at_start = v == 0.0
-        d = 1 - d
-        if t >= t_end:
-            reached = True
-    if status == 0 and any_bank:
-        status = _BANKED
-    return n_done, status, n_seg, n_steps, t, s * x, s * v, n_rows
+        if record:
+            if n_rows >= rows.shape[0]:
+                event = -1
+                fail = ROWS_FULL
+                break
+            write_row(rows, n_rows, (t0 + t_seg, tau if event >= 0 else h_try, s, x, v), (xc, w2), a, swing)
+            n_rows += 1
+        if event >= 0:
+            break
+        x, v, a = x1, v1, a1
+        t_seg += h_try
+        if t0 + t_seg >= run.t_end:
+            event = END
+            break
+    memory[0] = h
+    memory[1] = 1.0 if rejected else 0.0
+    motion = 0.0  # read by the walk at a turn and in the run's first region only
+    if event == TURN or steps0 == 0:
+        motion = math.sqrt(acceleration(x_seg, 0.0, w2, xc, k) ** 2 + w2 * v_seg * v_seg) / w2
+    if fail != 0:
+        return Segment(FAILED, t_seg, x, v, 0.0, x, motion, fail, n_steps, n_rows)
+    if event == EDGE:
+        return Segment(event, t_seg + tau, xe, ve, 0.0, xe, motion, 0, n_steps, n_rows)
+    if event == TURN:
+        a_rest = acceleration(xe, 0.0, w2, xc, k)  # the turn's offset from the rest position is -a/w2
+        return Segment(event, t_seg + tau, xe, ve, a_rest / w2, xe + a_rest / w2, motion, 0, n_steps, n_rows)
+    return Segment(event, t_seg, x, v, 0.0, x, motion, 0, n_steps, n_rows)
+
+
+#: Integrate half swings (angle switching) from ``k.theta0, k.v0`` with DOP853: the walk of
+#: :mod:`escfit.balance.walker` with :func:`advance_dop853`, ``run_dop853(k, run, out, rows) ->
+#: Walk``; ``run`` holds the budgets ``max_segments`` and ``max_steps``, ``t_end``, ``rtol``,
+#: ``atol_x`` (rad), ``atol_v`` (rad/s) and ``dense``.
+run_dop853 = compile_walk(advance_dop853, _dop853_scratch, "dop853")
 
 
 @kernel
@@ -445,11 +361,10 @@ def solve_dop853(system: System, n_swings: int, *, rtol: float = 1e-10, atol: fl
                       atol_x=atol, atol_v=atol_v)
     out = half_swings(n_swings)
     # room for ~64 steps per half swing; more is made when a run needs it
-    (n_done, status, n_seg, steps, t, th, om, n_rows), rows = with_rows(
-        lambda buf: run_one(k, run, out, buf), 64 * min(n_swings, 10_000) + 256, 9, dense)
-    traj = Trajectory(*columns(out, n_done), Status(status), system.omega0, "dop853", options, n_seg,
-                      steps, (t, th, om))
+    res, rows = with_rows(lambda buf: run_one(k, run, out, buf), 64 * min(n_swings, 10_000) + 256, 9, dense)
+    traj = Trajectory(*columns(out, res.n_done), Status(res.status), system.omega0, "dop853", options, res.n_seg,
+                      res.steps, (res.t, res.theta, res.omega))
     if dense:
-        traj.dense = RowSolution(rows[:n_rows].copy(), ROW_DOP853, k, traj)
+        traj.dense = RowSolution(rows[:res.rows].copy(), ROW_DOP853, k, traj)
     return traj
 

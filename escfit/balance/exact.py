@@ -5,7 +5,9 @@ coefficient, the stiffness of the current hairspring piece, the Coulomb torque (
 is fixed within a half swing) and the escapement windows the balance is in.  Each segment
 is solved in closed form (:mod:`escfit.balance.segment`); window edges are located by a
 safeguarded root solve on that closed form and turning points analytically, so the only
-error is floating-point rounding.  With angle switching the closed form at a turning point is
+error is floating-point rounding.  With angle switching the half swings are walked by the one
+loop of :mod:`escfit.balance.walker` (regions, stop rule, banking, creep, drift, status), this
+module supplying only the region step :func:`advance_exact`; the closed form at a turning point is
 evaluated only when that point may end the half swing (:func:`_surely_crosses`), which
 leaves every result bit for bit what it was.  With phase switching every half cycle of a
 direction has the same segments, so it is one affine map of the state, tabulated once per
@@ -25,7 +27,8 @@ sets in parallel (front end: :mod:`escfit.balance.batch`).  The functions of
 either recompiles them.
 
 Every kernel takes the coefficient record of :mod:`escfit.balance.records` whole and returns a
-:class:`~escfit.core.status.Status` code: ``OK``, ``STOPPED`` (friction holds the balance at
+:class:`~escfit.balance.walker.Walk` record whose status is a :class:`~escfit.core.status.Status`
+code: ``OK``, ``STOPPED`` (friction holds the balance at
 rest -- static friction ``r_static`` at the start of a half swing -- or it creeps to rest without
 a further turning point), ``BANKED``, ``MAX_SEGMENTS`` or ``PHASE_BREAKDOWN`` (phase switching: a
 half cycle ended on the side it started, so Monday's phase convention no longer describes the
@@ -42,24 +45,17 @@ from numba import prange
 from ..core.kernels import kernel
 from ..core.status import Status
 from .records import ROWS_FULL
-from .regions import applies, region_tables
-from .segment import creeps_to_rest, cross_time, propagate, turn_time
+from .regions import applies
+from .segment import cross_time, propagate, turn_time
+from .solution import write_row
+from .walker import EDGE, FAILED, REST, TURN, Segment, Walk, compile_walk, drift_factor
 
-__all__ = ["run_angle", "run_phase", "run_angle_many", "run_phase_many", "run_one", "run_phase_one", "N_LOG"]
+__all__ = ["run_angle", "run_phase", "run_angle_many", "run_phase_many", "run_one", "run_phase_one", "advance_exact",
+           "N_LOG"]
 
 N_LOG = 9  # fields of a segment-log row: t0, tau, s, x0, v0, xc, w2, h, swing
 _STOPPED, _BANKED, _MAX_SEGMENTS, _BREAKDOWN = (int(Status.STOPPED), int(Status.BANKED), int(Status.MAX_SEGMENTS),
                                                int(Status.PHASE_BREAKDOWN))
-
-
-@kernel
-def _drift_factor(integral_c, th, rate):
-    """Growth factor of C after a cycle, from the envelope exp(-int C dt / 2)."""
-    env = math.exp(-0.5 * integral_c)
-    for i in range(th.shape[0]):
-        if env > th[i]:
-            return 1.0 + rate[i]
-    return 1.0 + rate[th.shape[0]]
 
 
 @kernel(inline="always")
@@ -102,178 +98,63 @@ def _surely_crosses(y0, v0, h, w2, tau_turn, xc, xb):
 
 
 @kernel
-def run_angle(k, run, out, log):
-    """Integrate half swings with angle switching (the physical escapement).
+def _no_scratch(k):
+    """The closed form keeps nothing from one region to the next."""
+    return 0
 
-    Parameters
-    ----------
-    k : record
-        Coefficients (:data:`escfit.balance.records.COEFFICIENTS`): release ``theta0, v0``
-        (rad, rad/s; released at rest when v0 == 0), viscous ``c`` (1/s), sliding and static
-        friction ``r, r_static`` (rad/s^2), the restoring torque's pieces, the escapement
-        windows, banking ``bank, restitution`` and the damping drift.
-    run : record
-        :data:`escfit.balance.records.RUN`: ``n_swings`` half swings wanted, the segment budget
-        ``max_segments``, ``t_end`` (s; the run ends with the first half swing ending at or
-        after it) and ``dense`` (keep the segment log).
-    out : ndarray of :data:`escfit.balance.records.HALF_SWING`
-        Per-half-swing results, filled up to the returned count.
-    log : ndarray, shape (rows, 9)
-        The segment log (t0, tau, s, x0, v0, xc, w2, h, swing), filled when ``run.dense``; when
-        it has no room left the run stops with status ``ROWS_FULL``
-        (:func:`escfit.balance.records.with_rows` runs it again with more).
+
+@kernel
+def advance_exact(k, run, start, region, work, log, n_rows):
+    """One region of a half swing in closed form: the walk's step (:mod:`escfit.balance.walker`).
+
+    The turning point is evaluated only when it may come before the edge ahead
+    (:func:`_surely_crosses`); an edge crossing is located by :func:`cross_time` on the closed
+    form.  With ``run.dense`` one row (t0, tau, s, x0, v0, xc, w2, h, swing) is logged per
+    region; with no room left the region fails with ``ROWS_FULL``.
 
     Returns
     -------
-    n_done, status, n_seg, t, theta, omega
-        Half swings done, :class:`~escfit.core.status.Status` code, segments used (the log's
-        filled rows when dense) and where the run ended (s, rad, rad/s).
+    Segment
+        ``EDGE``, ``TURN`` (with its overshoot past ``xc``, the rest position) or ``REST``: the
+        motion creeps towards ``xc`` without turning or reaching the edge (``tau = inf``).
     """
-    theta0 = k.theta0
-    v0 = k.v0
-    r = k.r
-    hold = k.r_static - r  # static friction beyond the sliding one (rad/s^2)
-    bank = k.bank
-    restitution = k.restitution
-    dr_th = k.drift_th[:k.n_bands]
-    dr_rate = k.drift_rate[:k.n_bands + 1]
-    n_swings = run.n_swings
-    max_seg = run.max_segments
-    t_end = run.t_end
+    t, x, v, s, swing, _ = start
+    w2, xc, xb, c = region
+    h = 0.5 * c
+    y0 = x - xc
+    motion = math.sqrt(y0 * y0 + v * v / w2)
     record = run.dense != 0
-    s = 1.0 if theta0 < 0.0 else -1.0
-    if v0 != 0.0:
-        s = 1.0 if v0 > 0.0 else -1.0
-    x = s * theta0
-    v = s * v0
-    c = k.c
-    t = 0.0
-    t_swing = 0.0  # duration of the current half swing, summed apart from t to keep its precision
-    int_c = 0.0
-    status = 0
-    n_done = 0
-    n_seg = 0
-    any_bank = False
-    drift = False
-    for i in range(dr_rate.shape[0]):
-        if dr_rate[i] != 0.0:
-            drift = True
-    edge_tab, n_edge_tab, w2_tab, xc_tab = region_tables(k)
-    d = 0 if s > 0.0 else 1
-    edges = edge_tab[d]
-    n_edges = n_edge_tab[d]
-    at_start = True
-    at_edge = False  # the state sits on edge j after a crossing
-    j = 0
-    scale = -1.0
-    while n_done < n_swings:
-        if n_seg >= max_seg:
-            status = _MAX_SEGMENTS
-            break
-        if at_edge:
-            j += 1  # just crossed edge j: the edges are distinct, so the region above is the next
-        else:
-            j = 0
-            while j < n_edges and edges[j] <= x:
-                j += 1
-        w2 = w2_tab[d, j]
-        xc = xc_tab[d, j]
-        y0 = x - xc
-        if scale < 0.0:  # the run's scale: the release's offset from its rest position
-            scale = math.sqrt(y0 * y0 + v * v / w2)
-        h = 0.5 * c
-        xb = edges[j] if j < n_edges else math.inf
-        grazed = False
-        if v <= 0.0 and (y0 >= 0.0 or (at_start and hold > 0.0 and w2 * y0 + hold >= 0.0)):
-            v = 0.0
-            if at_start:
-                status = _STOPPED  # at rest and the net torque cannot overcome static friction
-                break
-            grazed = True  # came to rest exactly on an edge: a turning point there
-        if record:
-            if n_seg >= log.shape[0]:
-                status = ROWS_FULL
-                break
-            log[n_seg, 0] = t
-            log[n_seg, 2] = s
-            log[n_seg, 3] = x
-            log[n_seg, 4] = v
-            log[n_seg, 5] = xc
-            log[n_seg, 6] = w2
-            log[n_seg, 7] = h
-            log[n_seg, 8] = n_done
-        crosses = False
-        if grazed:
-            tau = 0.0
-        else:
-            if v <= 0.0:
-                v = 0.0  # also clears a negative zero, which would flip atan2's branch
-            tau_turn = turn_time(y0, v, h, w2)
-            x_turn = xc
-            # the turning point itself is only needed when it may end the half swing
-            crosses = _surely_crosses(y0, v, h, w2, tau_turn, xc, xb)
-            creep = not math.isfinite(tau_turn)
-            if not crosses:
-                if math.isfinite(tau_turn):
-                    y_turn, _ = propagate(y0, v, tau_turn, h, w2)
-                    x_turn = xc + y_turn
-                    # a turn that overshoots the rest position by a negligible amount is a creep
-                    creep = creeps_to_rest(y_turn, math.sqrt(y0 * y0 + v * v / w2), scale)
-                crosses = x_turn > xb
-            if crosses:
-                tau, v_new = cross_time(y0, v, h, w2, xb - xc, tau_turn)
-                x = xb
-                v = max(v_new, 0.0)
-            elif not creep:
-                tau = tau_turn
-                x = x_turn
-                v = 0.0
-            else:
-                # creeps towards the centre without turning (or overshooting it visibly) or reaching
-                # another edge
-                if record:
-                    log[n_seg, 1] = math.inf
-                n_seg += 1
-                x = xc
-                v = 0.0
-                t = math.inf
-                status = _STOPPED
-                break
-        if record:
-            log[n_seg, 1] = tau
-        n_seg += 1
-        t += tau
-        t_swing += tau
-        int_c += c * tau
-        at_start = False
-        is_bank = crosses and j == n_edges - 1 and math.isfinite(bank)
-        at_edge = crosses and not is_bank
-        if at_edge:
-            continue
-        # end of a half swing: a turning point or an impact on the banking pins
-        rec = out[n_done]
-        rec.amplitude = abs(x)
-        rec.theta_turn = s * x
-        rec.half_period = t_swing
-        rec.time = t
-        rec.banked = 1 if is_bank else 0
-        any_bank = any_bank or is_bank
-        t_swing = 0.0
-        n_done += 1
-        if drift and n_done % 2 == 0:
-            c *= _drift_factor(int_c, dr_th, dr_rate)
-        s = -s
-        x = -x
-        v = restitution * v if is_bank else 0.0
-        at_start = v == 0.0
-        d = 1 - d
-        edges = edge_tab[d]
-        n_edges = n_edge_tab[d]
-        if t >= t_end:
-            break
-    if status == 0 and any_bank:
-        status = _BANKED
-    return n_done, status, n_seg, t, s * x, s * v
+    if record:
+        if n_rows >= log.shape[0]:
+            return Segment(FAILED, 0.0, x, v, 0.0, xc, motion, ROWS_FULL, 0, n_rows)
+        write_row(log, n_rows, (t, 0.0, s, x, v), (xc, w2), h, swing)
+    tau_turn = turn_time(y0, v, h, w2)
+    x_turn = xc
+    y_turn = 0.0
+    # the turning point itself is only needed when it may end the half swing
+    crosses = _surely_crosses(y0, v, h, w2, tau_turn, xc, xb)
+    if not crosses:
+        if math.isfinite(tau_turn):
+            y_turn, _ = propagate(y0, v, tau_turn, h, w2)
+            x_turn = xc + y_turn
+        crosses = x_turn > xb
+    if crosses:
+        tau, v_new = cross_time(y0, v, h, w2, xb - xc, tau_turn)
+        seg = Segment(EDGE, tau, xb, v_new, 0.0, xc, motion, 0, 0, n_rows + 1)
+    elif math.isfinite(tau_turn):
+        seg = Segment(TURN, tau_turn, x_turn, 0.0, y_turn, xc, motion, 0, 0, n_rows + 1)
+    else:
+        # creeps towards the centre without turning or reaching another edge
+        seg = Segment(REST, math.inf, xc, 0.0, 0.0, xc, motion, 0, 0, n_rows + 1)
+    if record:
+        log[n_rows, 1] = seg.tau
+    return seg
+
+
+#: Integrate half swings with angle switching (the physical escapement): the walk of
+#: :mod:`escfit.balance.walker` with the closed form's region step, ``run_angle(k, run, out, log)
+#: -> Walk``.  ``log`` has shape (rows, 9) and receives one row per region when ``run.dense``.
+run_angle = compile_walk(advance_exact, _no_scratch, "exact")
 
 
 @kernel
@@ -464,7 +345,7 @@ def run_phase(k, run, out, log):
             status = _BREAKDOWN  # keep going, as Monday's programs did, but say so
         if drift and n_done % 2 == 0:
             c_old = c
-            c *= _drift_factor(int_c, dr_th, dr_rate)
+            c *= drift_factor(int_c, dr_th, dr_rate)
             if c >= 2.0 * math.sqrt(w2):
                 status = _BREAKDOWN
                 break
@@ -476,7 +357,7 @@ def run_phase(k, run, out, log):
         v = -v
         if t >= t_end:
             break
-    return n_done, status, n_seg, t, s * x, s * v
+    return Walk(n_done, status, n_seg, 0, t, s * x, s * v, n_seg)
 
 
 @kernel
@@ -505,8 +386,8 @@ def run_angle_many(ks, runs, active, out, summary):
             continue
         res = run_angle(ks[i], runs[0], out[i], np.zeros((0, 9)))
         row = summary[i]
-        row.n_done, row.status, row.n_seg = res[0], res[1], res[2]
-        row.t, row.theta, row.omega = res[3], res[4], res[5]
+        row.n_done, row.status, row.n_seg = res.n_done, res.status, res.n_seg
+        row.t, row.theta, row.omega = res.t, res.theta, res.omega
 
 
 @kernel(parallel=True)
@@ -518,5 +399,5 @@ def run_phase_many(ks, runs, active, out, summary):
             continue
         res = run_phase(ks[i], runs[0], out[i], np.zeros((0, 9)))
         row = summary[i]
-        row.n_done, row.status, row.n_seg = res[0], res[1], res[2]
-        row.t, row.theta, row.omega = res[3], res[4], res[5]
+        row.n_done, row.status, row.n_seg = res.n_done, res.status, res.n_seg
+        row.t, row.theta, row.omega = res.t, res.theta, res.omega

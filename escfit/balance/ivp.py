@@ -23,14 +23,15 @@ from scipy.special import ellipk
 from ..core.errors import SolverError
 from ..core.kernels import kernel
 from ..core.status import Status
-from .regions import region_at, swing_edges
-from .segment import creep_horizon, creeps_to_rest
+from .records import columns, half_swings, run_options
+from .segment import creep_horizon
 from .solution import DenseSolution
 from .system import System
 from .torque import acceleration
 from .trajectory import Trajectory
+from .walker import EDGE, FAILED, REST, TURN, Segment, compile_walk
 
-__all__ = ["solve_ivp_events", "IvpSolution"]
+__all__ = ["solve_ivp_events", "advance_ivp", "IvpSolution"]
 
 # A turning point found beyond the next edge by less than GRAZE times the step tolerance is a
 # grazing turn at the edge (the integration's own drift, e.g. an undamped balance released at
@@ -45,14 +46,86 @@ def _acc(ks, w2, xc, x, v):
     return acceleration(x, v, w2, xc, ks[0])
 
 
-@kernel
-def _region(ks, x, s, edges, n_edges):
-    return region_at(x, s, edges, n_edges, ks[0])
+#: scipy methods, by their index in ``run.mode``
+METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
 
 
-@kernel
-def _edges(ks, s, edges):
-    return swing_edges(s, ks[0], edges)
+def _scratch(k) -> tuple:
+    """The record as an array of one (which reaches a compiled function fastest) and the extra
+    horizon of a pendulum, whose half swing lasts ``2 K(sin^2(A/2)) / omega0``, long near pi."""
+    ks = np.array([k], dtype=k.dtype)
+    extra = 0.0
+    if k.pendulum:
+        extra = 4.0 * float(ellipk(math.sin(0.5 * float(k.theta0)) ** 2)) / float(k.omega0)
+    return ks, extra
+
+
+def advance_ivp(k, run, start, region, work, rows, n_rows) -> Segment:
+    """One region of a half swing by one :func:`scipy.integrate.solve_ivp` call: the walk's step
+    (:mod:`escfit.balance.walker`), run as plain Python.
+
+    Terminal events: the edge ahead (rising), the turning point (velocity falling through zero)
+    and, for a pendulum, ``x = pi``; no event within the horizon (every solver's
+    :func:`~escfit.balance.segment.creep_horizon`, plus a pendulum's longest half swing) is a
+    creep to rest.  With ``run.dense`` the call's dense output is appended to ``rows`` as
+    ``(t0, t1, s, swing, OdeSolution)``.
+    """
+    t0, x, v, s, swing, _ = start
+    w2, xc, xb, _ = region
+    ks, extra = work
+    rtol, atol = float(run.rtol), float(run.atol_x)
+    a_rest = _acc(ks, w2, xc, x, 0.0)
+    motion = math.hypot(a_rest, v * math.sqrt(w2)) / w2
+
+    def rhs(_t, y):
+        return (y[1], _acc(ks, w2, xc, y[0], y[1]))
+
+    def edge(_t, y):
+        return y[0] - xb
+
+    def turn(_t, y):
+        return y[1]
+
+    def over_top(_t, y):
+        return y[0] - math.pi
+
+    edge.terminal, edge.direction = True, 1.0
+    turn.terminal, turn.direction = True, -1.0
+    over_top.terminal, over_top.direction = True, 1.0
+    events = [turn] if not math.isfinite(xb) else [edge, turn]
+    if k.pendulum:
+        events.append(over_top)
+    y0 = [x, v]
+    if v == 0.0:  # start from rest: nudge past the trivial root of the turning event
+        y0[1] = 1e-300
+    sol = solve_ivp(rhs, (0.0, extra + creep_horizon(float(k.c), w2)), y0, method=METHODS[int(run.mode)], rtol=rtol,
+                    atol=atol, events=events, dense_output=bool(run.dense) or math.isfinite(xb))
+    steps = int(sol.t.size)
+    hit = [i for i, te in enumerate(sol.t_events) if te.size]
+    if not hit:  # creeps to rest within the horizon without an event
+        return Segment(REST, float(sol.t[-1]), float(sol.y[0, -1]), float(sol.y[1, -1]), 0.0, x, motion, 0, steps,
+                       n_rows)
+    i = min(hit, key=lambda i: sol.t_events[i][0])
+    te = float(sol.t_events[i][0])
+    ye = sol.y_events[i][0]
+    if events[i] is over_top:
+        return Segment(FAILED, te, math.pi, float(ye[1]), 0.0, x, motion, int(Status.OVER_THE_TOP), steps, n_rows)
+    is_edge = events[i] is edge
+    if not is_edge and float(ye[0]) - xb > GRAZE * (atol + rtol * abs(xb)):
+        te, ye = _missed_edge(sol, xb, te)
+        is_edge = True
+    if run.dense:
+        rows.append((t0, t0 + te, s, swing, sol.sol))
+        n_rows += 1
+    if is_edge:
+        return Segment(EDGE, te, xb, float(ye[1]), 0.0, xb, motion, 0, steps, n_rows)
+    x_turn = float(ye[0])
+    a_turn = _acc(ks, w2, xc, x_turn, 0.0)  # the turn's offset from the rest position is -a/w2
+    return Segment(TURN, te, x_turn, 0.0, a_turn / w2, x_turn + a_turn / w2, motion, 0, steps, n_rows)
+
+
+#: The walk of :mod:`escfit.balance.walker` as plain Python, with :func:`advance_ivp`.
+_walk_ivp = compile_walk(advance_ivp, _scratch, "ivp", python=True)
 
 
 def solve_ivp_events(system: System, n_swings: int, *, method: str = "DOP853", rtol: float = 1e-10,
@@ -71,112 +144,17 @@ def solve_ivp_events(system: System, n_swings: int, *, method: str = "DOP853", r
     t_end
         End the run with the first half swing ending at or after this time (s), if it comes first.
     """
-    if method not in ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA"):
+    if method not in METHODS:
         raise SolverError(f"unknown solve_ivp method {method!r}")
-    ks = system.k
-    k = ks[0]
-    theta0, c, bank, rest = float(k["theta0"]), float(k["c"]), float(k["bank"]), float(k["restitution"])
-    hold = float(k["r_static"] - k["r"])
     nseg = int(max_segments or 64 * n_swings + 1000)
-    s = 1.0 if theta0 < 0 else -1.0
-    x, v, t, t_last = s * theta0, 0.0, 0.0, 0.0
-    amp, tturn, hp, tm, bk = [], [], [], [], []
-    edges = np.empty(2 * int(k["n_windows"]) + int(k["n_pieces"]))
-    n_edges = _edges(ks, s, edges)
-    status, nsteps, n_seg, at_start = Status.OK, 0, 0, True
-    pieces = []  # (t0, t1, s, swing, OdeSolution) of every segment, for the dense solution
-    pend = system.restoring == "pendulum"
-    # no event within this long a segment: a creep to rest, on the horizon every solver uses
-    # (segment.creep_horizon) so that they agree on when a balance has stopped
-    horizon = 0.0
-    if pend:  # a pendulum's half swing lasts 2 K(sin^2(A/2)) / omega0, long near A = pi
-        horizon = 4.0 * float(ellipk(math.sin(0.5 * theta0) ** 2)) / system.omega0
-    scale = -1.0
-    while len(amp) < n_swings:
-        if n_seg >= nseg:
-            status = Status.MAX_SEGMENTS
-            break
-        j, w2, xc = _region(ks, x, s, edges, n_edges)
-        if at_start and v <= 0.0 and _acc(ks, w2, xc, x, 0.0) <= max(hold, 0.0):
-            status = Status.STOPPED  # the net acceleration at rest cannot overcome static friction
-            break
-        xb = edges[j] if j < n_edges else math.inf
-        if scale < 0.0:  # the run's scale: the release's offset from its rest position (rad)
-            scale = math.hypot(_acc(ks, w2, xc, x, 0.0), v * math.sqrt(w2)) / w2
-
-        def rhs(_t, y, w2=w2, xc=xc):
-            return (y[1], _acc(ks, w2, xc, y[0], y[1]))
-
-        def edge(_t, y, xb=xb):
-            return y[0] - xb
-
-        def turn(_t, y):
-            return y[1]
-
-        def over_top(_t, y):
-            return y[0] - math.pi
-
-        edge.terminal, edge.direction = True, 1.0
-        turn.terminal, turn.direction = True, -1.0
-        over_top.terminal, over_top.direction = True, 1.0
-        events = [turn] if not math.isfinite(xb) else [edge, turn]
-        if pend:
-            events.append(over_top)
-        y0 = [x, v if v > 0 else 0.0]
-        if y0[1] == 0.0:  # start from rest: nudge past the trivial root of the turning event
-            y0[1] = 1e-300
-        sol = solve_ivp(rhs, (0.0, horizon + creep_horizon(c, w2)), y0, method=method, rtol=rtol, atol=atol, events=events,
-                        dense_output=dense or math.isfinite(xb))
-        nsteps += int(sol.t.size)
-        n_seg += 1
-        hit = [i for i, te in enumerate(sol.t_events) if te.size]
-        if not hit:
-            status = Status.STOPPED  # creeps to rest within the horizon without an event
-            break
-        i = min(hit, key=lambda i: sol.t_events[i][0])
-        if events[i] is over_top:
-            status = Status.OVER_THE_TOP
-            t += float(sol.t_events[i][0])
-            x = math.pi
-            break
-        te = float(sol.t_events[i][0])
-        ye = sol.y_events[i][0]
-        is_edge = events[i] is edge
-        if not is_edge and float(ye[0]) - xb > GRAZE * (atol + rtol * abs(xb)):
-            te, ye = _missed_edge(sol, xb, te)
-            is_edge = True
-        if dense:
-            pieces.append((t, t + te, s, len(amp), sol.sol))
-        t += te
-        at_start = False
-        if is_edge:
-            x, v = xb, max(float(ye[1]), 0.0)
-            is_bank = j == n_edges - 1 and math.isfinite(bank)
-            if not is_bank:
-                continue
-        else:
-            x, v, is_bank = float(ye[0]), 0.0, False
-            a_end, a_start = _acc(ks, w2, xc, x, 0.0), _acc(ks, w2, xc, y0[0], 0.0)
-            if creeps_to_rest(a_end / w2, math.hypot(a_start, y0[1] * math.sqrt(w2)) / w2, scale):
-                status = Status.STOPPED  # a turn on the rest position to within rounding: a creep to rest
-                break
-        amp.append(abs(x))
-        tturn.append(s * x)
-        hp.append(t - t_last)
-        tm.append(t)
-        bk.append(is_bank)
-        t_last = t
-        s, x = -s, -x
-        v = rest * v if is_bank else 0.0
-        at_start = v == 0.0
-        n_edges = _edges(ks, s, edges)
-        if t >= t_end:
-            break
-    if status == Status.OK and any(bk):
-        status = Status.BANKED
-    traj = Trajectory(np.array(amp), np.array(tturn), np.array(hp), np.array(tm), np.array(bk, bool), status,
-                      system.omega0, "ivp", {"method": method, "rtol": rtol, "atol": atol}, n_seg, nsteps,
-                      (t, s * x, s * v))
+    run = run_options(n_swings, max_segments=nseg, t_end=t_end, dense=dense, rtol=rtol, atol_x=atol,
+                      mode=METHODS.index(method)).view(np.recarray)[0]
+    out = half_swings(n_swings).view(np.recarray)
+    pieces: list = []  # (t0, t1, s, swing, OdeSolution) of every region, for the dense solution
+    res = _walk_ivp(system.k.view(np.recarray)[0], run, out, pieces)
+    traj = Trajectory(*columns(out.view(np.ndarray), int(res.n_done)), Status(int(res.status)), system.omega0, "ivp",
+                      {"method": method, "rtol": rtol, "atol": atol}, int(res.n_seg), int(res.steps),
+                      (float(res.t), float(res.theta), float(res.omega)))
     if dense:
         traj.dense = IvpSolution(pieces, traj)
     return traj

@@ -29,12 +29,13 @@ from ..core.kernels import kernel
 from ..core.status import Status
 from .records import ROWS_FULL, columns, half_swings, run_options, with_rows
 from .regions import region_at, swing_edges
-from .segment import creep_horizon, creeps_to_rest
-from .solution import ROW_RK4, RowSolution
+from .segment import creep_horizon
+from .solution import ROW_RK4, RowSolution, write_row
 from .steps import rk4_step
 from .system import System
 from .torque import acceleration
 from .trajectory import Trajectory
+from .walker import EDGE, END, FAILED, REST, TURN, Segment, Walk, compile_walk
 
 __all__ = ["solve_rk4"]
 
@@ -93,142 +94,104 @@ def _row(rows, n_rows, state, where, regime):
     t0, x, v = state
     s, swing, h = where
     w2, xc, _ = regime
-    rows[n_rows, 0] = t0
-    rows[n_rows, 1] = 0.0
-    rows[n_rows, 2] = s
-    rows[n_rows, 3] = x
-    rows[n_rows, 4] = v
-    rows[n_rows, 5] = xc
-    rows[n_rows, 6] = w2
-    rows[n_rows, 7] = h
-    rows[n_rows, 8] = swing
+    write_row(rows, n_rows, (t0, 0.0, s, x, v), (xc, w2), h, swing)
     rows[n_rows, 9] = 0.0
     return True
 
 
 @kernel
-def _run_located(k, run, out, rows):
-    """Fixed steps with events located on the step map; returns ``(n_done, status, steps, t, theta,
-    omega, rows)``."""
-    theta0 = k.theta0
-    hold = k.r_static - k.r  # static friction beyond the sliding one (rad/s^2)
-    bank = k.bank
-    restitution = k.restitution
-    pend = k.pendulum != 0
+def _rk4_scratch(k):
+    """Fixed steps keep nothing from one region to the next."""
+    return 0
+
+
+@kernel
+def advance_rk4(k, run, start, region, work, rows, n_rows):
+    """One region of a half swing by fixed RK4 steps of ``run.h``: the walk's step
+    (:mod:`escfit.balance.walker`).
+
+    A step that passes the edge ahead or a turning point is cut back to the event, located by
+    regula falsi on the step map (:func:`_locate`).  Ends early (``REST``) when no event comes
+    within :func:`~escfit.balance.segment.creep_horizon`, (``END``) at the first step reaching
+    ``run.t_end``, or fails: the step budget (status ``max_segments``), a pendulum over the top,
+    no room for a dense row.  With ``run.dense`` a row is kept at the region's start and every
+    :data:`ROW_STEPS` steps.
+    """
+    t0, x, v, s, swing, steps0 = start
+    w2, xc, xb, _ = region
+    regime = (w2, xc, k)
     h = run.h
-    max_steps = run.max_steps
-    t_end = run.t_end
     record = run.dense != 0
-    s = 1.0 if theta0 < 0.0 else -1.0
-    x = s * theta0
-    v = 0.0
-    t = 0.0
-    t_last = 0.0
-    n_done = 0
-    steps = 0
-    status = 0
-    n_rows = 0
-    any_bank = False
-    edges = np.empty(2 * k.n_windows + k.n_pieces)
-    n_edges = swing_edges(s, k, edges)
-    at_start = True
-    scale = -1.0
-    while n_done < run.n_swings:
-        j, w2, xc = region_at(x, s, edges, n_edges, k)
-        regime = (w2, xc, k)
-        if at_start and v <= 0.0 and acceleration(x, 0.0, w2, xc, k) <= max(hold, 0.0):
-            status = _STOPPED
+    pend = k.pendulum != 0
+    budget = run.max_steps - steps0
+    motion = math.sqrt(acceleration(x, 0.0, w2, xc, k) ** 2 + w2 * v * v) / w2
+    horizon = creep_horizon(k.c, w2)
+    n = 0  # whole steps
+    taken = 0  # steps tried, the cut-back one included
+    event = -1
+    fail = 0
+    t = t0
+    row_start = 0
+    if record:
+        if not _row(rows, n_rows, (t0, x, v), (s, swing, h), regime):
+            return Segment(FAILED, 0.0, x, v, 0.0, x, motion, ROWS_FULL, 0, n_rows)
+        n_rows += 1
+    while True:
+        if taken >= budget:
+            fail = _MAX_SEGMENTS
             break
-        xb = edges[j] if j < n_edges else math.inf
-        t0 = t
-        n = 0
-        event = -1
-        x_seg, v_seg = x, v
-        if scale < 0.0:  # the run's scale: the release's offset from its rest position (rad)
-            scale = math.sqrt(acceleration(x, 0.0, w2, xc, k) ** 2 + w2 * v * v) / w2
-        horizon = creep_horizon(k.c, w2)
-        row_start = 0
-        if record:
-            if not _row(rows, n_rows, (t0, x, v), (s, n_done, h), regime):
-                status = ROWS_FULL
+        if n * h > horizon:
+            event = REST  # no event within many time constants: creeping to rest
+            break
+        xn, vn = rk4_step(x, v, h, regime)
+        taken += 1
+        if pend and xn >= math.pi:
+            fail = _OVER_THE_TOP
+            break
+        hit_edge = xn >= xb
+        hit_turn = vn <= 0.0
+        if hit_edge or hit_turn:
+            te = _locate(x, v, h, regime, (0, xb)) if hit_edge else math.inf
+            tt = _locate(x, v, h, regime, (1, 0.0)) if hit_turn else math.inf
+            tau = min(te, tt)
+            x, v = rk4_step(x, v, tau, regime)
+            if te <= tt:
+                x = xb
+                event = EDGE
+            else:
+                v = 0.0
+                event = TURN
+            t = t0 + n * h + tau
+            if record:
+                rows[n_rows - 1, 1] = t - rows[n_rows - 1, 0]
+                rows[n_rows - 1, 9] = n - row_start
+            break
+        x, v = xn, vn
+        n += 1
+        t = t0 + n * h
+        if record and n - row_start == ROW_STEPS:
+            rows[n_rows - 1, 1] = t - rows[n_rows - 1, 0]
+            rows[n_rows - 1, 9] = ROW_STEPS
+            if not _row(rows, n_rows, (t, x, v), (s, swing, h), regime):
+                fail = ROWS_FULL
                 break
             n_rows += 1
-        while True:
-            if steps >= max_steps:
-                status = _MAX_SEGMENTS
-                break
-            if n * h > horizon:
-                status = _STOPPED  # no event within many time constants: creeping to rest
-                break
-            xn, vn = rk4_step(x, v, h, regime)
-            steps += 1
-            if pend and xn >= math.pi:
-                status = _OVER_THE_TOP
-                break
-            hit_edge = xn >= xb
-            hit_turn = vn <= 0.0
-            if hit_edge or hit_turn:
-                te = _locate(x, v, h, regime, (0, xb)) if hit_edge else math.inf
-                tt = _locate(x, v, h, regime, (1, 0.0)) if hit_turn else math.inf
-                tau = min(te, tt)
-                x, v = rk4_step(x, v, tau, regime)
-                if te <= tt:
-                    x = xb
-                    event = 0
-                else:
-                    v = 0.0
-                    event = 1
-                t = t0 + n * h + tau
-                if record:
-                    rows[n_rows - 1, 1] = t - rows[n_rows - 1, 0]
-                    rows[n_rows - 1, 9] = n - row_start
-                break
-            x, v = xn, vn
-            n += 1
-            t = t0 + n * h
-            if record and n - row_start == ROW_STEPS:
-                rows[n_rows - 1, 1] = t - rows[n_rows - 1, 0]
-                rows[n_rows - 1, 9] = ROW_STEPS
-                if not _row(rows, n_rows, (t, x, v), (s, n_done, h), regime):
-                    status = ROWS_FULL
-                    break
-                n_rows += 1
-                row_start = n
-            if t >= t_end:
-                break
-        if record:
-            rows[n_rows - 1, 1] = t - rows[n_rows - 1, 0]
-            if event < 0:
-                rows[n_rows - 1, 9] = n - row_start
-        if status != 0 or event < 0:
+            row_start = n
+        if t >= run.t_end:
+            event = END
             break
-        if event == 1 and creeps_to_rest(acceleration(x, 0.0, w2, xc, k) / w2, math.sqrt(
-                acceleration(x_seg, 0.0, w2, xc, k) ** 2 + w2 * v_seg * v_seg) / w2, scale):
-            status = _STOPPED  # a turn on the rest position to within rounding: a creep to rest
-            break
-        at_start = False
-        is_bank = event == 0 and j == n_edges - 1 and math.isfinite(bank)
-        if event == 0 and not is_bank:
-            continue
-        rec = out[n_done]
-        rec.amplitude = abs(x)
-        rec.theta_turn = s * x
-        rec.half_period = t - t_last
-        rec.time = t
-        rec.banked = 1 if is_bank else 0
-        any_bank = any_bank or is_bank
-        t_last = t
-        n_done += 1
-        s = -s
-        x = -x
-        v = restitution * v if is_bank else 0.0
-        at_start = v == 0.0
-        n_edges = swing_edges(s, k, edges)
-        if t >= t_end:
-            break
-    if status == 0 and any_bank:
-        status = _BANKED
-    return n_done, status, steps, t, s * x, s * v, n_rows
+    if record and event != EDGE and event != TURN:
+        rows[n_rows - 1, 1] = t - rows[n_rows - 1, 0]
+        rows[n_rows - 1, 9] = n - row_start
+    if fail != 0:
+        return Segment(FAILED, t - t0, x, v, 0.0, x, motion, fail, taken, n_rows)
+    a_rest = acceleration(x, 0.0, w2, xc, k)  # a turn's offset from the rest position is -a/w2
+    return Segment(event, t - t0, x, v, a_rest / w2, x + a_rest / w2, motion, 0, taken, n_rows)
+
+
+#: Fixed steps with events located on the step map: the walk of :mod:`escfit.balance.walker` with
+#: :func:`advance_rk4`, ``_run_located(k, run, out, rows) -> Walk``.
+_run_located = compile_walk(advance_rk4, _rk4_scratch, "rk4")
 
 
 @kernel(inline="always")
@@ -324,7 +287,7 @@ def _run_naive(k, run, out):
                 break
             s_prev = s_new
         th, om = thn, omn
-    return n_done, status, n, n * h, th, om
+    return Walk(n_done, status, 0, n, n * h, th, om, 0)
 
 
 @kernel
@@ -332,8 +295,7 @@ def _run_one(ks, runs, out, rows):
     """The front end's single call: located (``rows`` returned) or naive (no rows)."""
     run = runs[0]
     if run.mode == 1:
-        res = _run_naive(ks[0], run, out)
-        return res[0], res[1], res[2], res[3], res[4], res[5], 0
+        return _run_naive(ks[0], run, out)
     return _run_located(ks[0], run, out, rows)
 
 
@@ -365,14 +327,15 @@ def solve_rk4(system: System, n_swings: int, *, h: float = 1e-6, locate_events: 
     if max_steps is None:
         max_steps = int(min(50.0 * n_swings * math.pi / (system.omega0 * h) + 10_000, 2**62))
     out = half_swings(n_swings)
-    run = run_options(n_swings, max_steps=int(max_steps), t_end=t_end, dense=dense, h=h,
+    run = run_options(n_swings, max_segments=2**62, max_steps=int(max_steps), t_end=t_end, dense=dense, h=h,
                       mode=0 if locate_events else 1)
     # room for the rows of ~4 regions and 10_000 steps per half swing; more is made when needed
     rows_per_swing = 4 + int(min(math.pi / (system.omega0 * h), 1e7)) // ROW_STEPS
-    (n_done, status, steps, t, th, om, n_rows), rows = with_rows(
-        lambda buf: _run_one(system.k, run, out, buf), rows_per_swing * min(n_swings, 1000) + 64, 10, dense)
-    traj = Trajectory(*columns(out, n_done), Status(status), system.omega0, "rk4",
-                      {"h": h, "locate_events": locate_events, "max_steps": max_steps}, 0, steps, (t, th, om))
+    res, rows = with_rows(lambda buf: _run_one(system.k, run, out, buf), rows_per_swing * min(n_swings, 1000) + 64,
+                          10, dense)
+    traj = Trajectory(*columns(out, res.n_done), Status(res.status), system.omega0, "rk4",
+                      {"h": h, "locate_events": locate_events, "max_steps": max_steps}, 0, res.steps,
+                      (res.t, res.theta, res.omega))
     if dense:
-        traj.dense = RowSolution(rows[:n_rows].copy(), ROW_RK4, system.k, traj)
+        traj.dense = RowSolution(rows[:res.rows].copy(), ROW_RK4, system.k, traj)
     return traj

@@ -36,9 +36,26 @@ from ..core.status import Status
 from .segment import cross_time, propagate
 from .steps import N_STAGES, dop853_step, rk4_step
 
-__all__ = ["DenseSolution", "RowSolution", "ROW_EXACT", "ROW_DOP853", "ROW_RK4", "swing_starts"]
+__all__ = ["DenseSolution", "RowSolution", "ROW_EXACT", "ROW_DOP853", "ROW_RK4", "swing_starts", "write_row"]
 
 ROW_EXACT, ROW_DOP853, ROW_RK4 = 0, 1, 2
+
+
+@kernel(inline="always")
+def write_row(rows, n, start, region, extra, swing):
+    """Row ``n`` of a dense solution: ``start = (t0, tau, s, x0, v0)``, ``region = (xc, w2)``, the
+    solver's ``extra`` and the half swing (the columns of the module docstring)."""
+    t0, tau, s, x0, v0 = start
+    xc, w2 = region
+    rows[n, 0] = t0
+    rows[n, 1] = tau
+    rows[n, 2] = s
+    rows[n, 3] = x0
+    rows[n, 4] = v0
+    rows[n, 5] = xc
+    rows[n, 6] = w2
+    rows[n, 7] = extra
+    rows[n, 8] = swing
 
 
 class DenseSolution(ABC):

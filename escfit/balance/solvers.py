@@ -67,12 +67,11 @@ def solve_exact(system: System, n_swings: int, *, max_segments: int | None = Non
     run = run_options(n_swings, max_segments=nseg, t_end=t_end, dense=dense)
     kernel = run_phase_one if system.switching == "phase" else run_one
     # room for the segments of ~4 regions per half swing; more is made when a run needs it
-    (n_done, status, n_seg, t, theta, omega), log = with_rows(
-        lambda rows: kernel(system.k, run, out, rows), min(nseg, 4 * n_swings + 64), 9, dense)
-    traj = Trajectory(*columns(out, n_done), Status(status), system.omega0, "exact",
-                      {"max_segments": nseg}, n_seg, 0, (t, theta, omega))
+    res, log = with_rows(lambda rows: kernel(system.k, run, out, rows), min(nseg, 4 * n_swings + 64), 9, dense)
+    traj = Trajectory(*columns(out, res.n_done), Status(res.status), system.omega0, "exact",
+                      {"max_segments": nseg}, res.n_seg, 0, (res.t, res.theta, res.omega))
     if dense:
-        traj.dense = RowSolution(log[:n_seg].copy(), ROW_EXACT, system.k, traj)
+        traj.dense = RowSolution(log[:res.rows].copy(), ROW_EXACT, system.k, traj)
     return traj
 
 
@@ -96,21 +95,28 @@ class SolverSpec(NamedTuple):
         The needs (:data:`escfit.balance.effects.base.NEEDS`) it can meet.
     batch
         Whether :func:`escfit.balance.batch.solve_batch` runs it on many parameter sets at once.
+    sampler
+        ``sampler(system, times, shift, which=THETA)``: theta (or theta') of many parameter sets
+        at sample times in one compiled call, each set's samples those of its one-set dense
+        solution; ``None`` when the solver has none.
     """
 
     function: Callable[..., Trajectory]
     options: frozenset[str]
     handles: frozenset[str]
     batch: bool = False
+    sampler: Callable[..., tuple] | None = None
 
 
-def _spec(function, options, handles, batch=False) -> SolverSpec:
-    return SolverSpec(function, frozenset(options) | {"dense", "t_end"}, frozenset(handles), batch)
+def _spec(function, options, handles, batch=False, sampler=None) -> SolverSpec:
+    return SolverSpec(function, frozenset(options) | {"dense", "t_end"}, frozenset(handles), batch, sampler)
 
 
 SOLVERS: dict[str, SolverSpec] = {
-    "exact": _spec(solve_exact, {"max_segments"}, _CLOSED_FORM, batch=True),
-    "dop853": _spec(_lazy(".dop853", "solve_dop853"), {"rtol", "atol", "max_segments", "max_steps"}, _INTEGRATED),
+    "exact": _spec(solve_exact, {"max_segments"}, _CLOSED_FORM, batch=True,
+                   sampler=_lazy(".batch_dense", "sample_batch")),
+    "dop853": _spec(_lazy(".dop853", "solve_dop853"), {"rtol", "atol", "max_segments", "max_steps"}, _INTEGRATED,
+                    sampler=_lazy(".batch_dop853", "sample_batch_dop853")),
     "rk4": _spec(_lazy(".rk4", "solve_rk4"), {"h", "locate_events", "max_steps"}, _INTEGRATED),
     "ivp": _spec(_lazy(".ivp", "solve_ivp_events"), {"method", "rtol", "atol", "max_segments"}, _INTEGRATED),
 }

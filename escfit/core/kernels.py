@@ -47,7 +47,7 @@ from typing import Any, Callable, Iterable
 import numba
 from numba.core import caching
 
-__all__ = ["kernel", "kernel_sources", "notice_compilation"]
+__all__ = ["kernel", "kernel_sources", "module_sources", "notice_compilation"]
 
 # py_func -> (files hashed, fingerprint); read by the cache implementation when numba builds it
 _SOURCES: "weakref.WeakKeyDictionary[Callable, tuple[tuple[Path, ...], str]]" = weakref.WeakKeyDictionary()
@@ -304,6 +304,16 @@ def kernel(func: Callable | None = None, /, *, sources=(), cache: bool = True, *
         return disp
 
     return wrap(func) if func is not None else wrap
+
+
+def module_sources(path: Path, module: str) -> tuple[Path, ...]:
+    """The files a kernel defined in module ``module`` (source ``path``) is keyed on: that file
+    and every module of its package it imports, transitively.
+
+    For a kernel assembled from functions of another module (a jitted function bound into a
+    copy of a shared loop): pass these as its ``sources=``.
+    """
+    return _import_closure(Path(path).resolve(), module)
 
 
 def kernel_sources(obj: Callable) -> tuple[Path, ...]:

@@ -47,6 +47,14 @@ class Banking:
                        meaning="coefficient of restitution at the banking pins", where=f"{where}.restitution")
         return cls(angle), [e]
 
+    @staticmethod
+    def example(w0: float, a0: float) -> dict[str, str]:
+        """A typical instance for the conformance suite: an impulse that drives the balance onto
+        pins 1.1 ``a0`` out (rad), restitution 0.5, and viscous damping."""
+        window = f'[[effects.escapement]]\nkind = "impulse"\nfrom = {-0.1 * a0!r}\nto = {0.1 * a0!r}\nX = {2.0 * w0 * w0 * a0!r}\n'
+        return {"viscous": f"C = {0.02 * w0!r}\n", "escapement": window,
+                "banking": f"angle = {1.1 * a0!r}\nrestitution = 0.5\n"}
+
     def prepare(self, k: np.ndarray) -> None:
         k["bank"] = self.angle
 

@@ -30,6 +30,13 @@ scene is read.  Each effect module says, in one place, everything the solvers ne
     :mod:`escfit.balance.torque` adds up for every integrating solver.
 ``refusals(k)`` (optional)
     Relations between its parameters a parameter set must satisfy (vectorised).
+``example(w0, a0)``
+    A typical instance, as the TOML tables of a balance scene of natural frequency ``w0``
+    (rad/s) released at ``a0`` (rad): ``{table key: table body}``, with any other effect it
+    needs to show (an escapement for the banking pins to be reached) and, under the key
+    ``"oscillator"``, the oscillator's lines when it sets them itself.  The conformance suite
+    (``tests/test_conformance.py``) runs every effect's example through every solver that
+    claims it: an effect with no example fails there.
 
 Values are passed in, never stored, so effects are cheap to send to worker processes and a fit
 never mutates them.

@@ -53,6 +53,11 @@ class Drag:
                        where=f"{where}.D")
         return cls(), [p]
 
+    @staticmethod
+    def example(w0: float, a0: float) -> dict[str, str]:
+        """A typical instance for the conformance suite: about 3 % of the amplitude lost per half swing."""
+        return {"drag": f"D = {0.02 / a0!r}\n"}
+
     def fill(self, values: Mapping[str, float], k: np.ndarray) -> None:
         k["drag"] = values["drag.D"]
 

@@ -73,6 +73,17 @@ class Escapement:
              size=MAX_WINDOWS, count="n_windows", dtype="i8"),
     )
 
+    @staticmethod
+    def example(w0: float, a0: float) -> dict[str, str]:
+        """A typical instance for the conformance suite: a lever escapement's unlocking and impulse
+        windows about the centre, with viscous damping to balance the impulse."""
+        unit = w0 * w0 * a0
+        window = '[[effects.escapement]]\nkind = "{}"\nfrom = {!r}\nto = {!r}\nX = {!r}\nswings = "{}"\n'
+        text = (window.format("unlock", -0.3 * a0, -0.1 * a0, 0.05 * unit, "both")
+                + window.format("impulse", -0.1 * a0, 0.1 * a0, 0.6 * unit, "positive")
+                + window.format("impulse", -0.1 * a0, 0.12 * a0, 0.5 * unit, "negative"))
+        return {"viscous": f"C = {0.05 * w0!r}\n", "escapement": text}
+
     @classmethod
     def read(cls, tables: Sequence, ctx: ReadContext) -> tuple["Escapement", list[Param]]:
         if isinstance(tables, Mapping):

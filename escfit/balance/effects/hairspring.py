@@ -56,6 +56,13 @@ class Hairspring:
         ]
         return cls(ang), params
 
+    @staticmethod
+    def example(w0: float, a0: float) -> dict[str, str]:
+        """A typical instance for the conformance suite: three pieces, the central one of ``w0``
+        (it gives the oscillator's omega0, so ``oscillator`` names the release only)."""
+        return {"oscillator": f"theta0 = {a0!r}\n",
+                "hairspring": f"angles = [{-0.5 * a0!r}, {0.4 * a0!r}]\nomega0 = [{1.2 * w0!r}, {w0!r}, {0.8 * w0!r}]\n"}
+
     def prepare(self, k: np.ndarray) -> None:
         n = len(self.angles) + 1
         k["n_pieces"] = n

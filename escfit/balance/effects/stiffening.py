@@ -54,6 +54,11 @@ class Stiffening:
                        where=f"{where}.k3")
         return cls(), [p]
 
+    @staticmethod
+    def example(w0: float, a0: float) -> dict[str, str]:
+        """A typical instance for the conformance suite: the spring 30 % stiffer at the release."""
+        return {"stiffening": f"k3 = {0.3 / (a0 * a0)!r}\n"}
+
     def fill(self, values: Mapping[str, float], k: np.ndarray) -> None:
         k["k3_w2"] = k["omega0"] ** 2 * values["stiffening.k3"]
 

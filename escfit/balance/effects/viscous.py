@@ -35,5 +35,10 @@ class Viscous:
                         direct=("C", "rate_per_s"), physical=("c", "damping"))
         return cls(), [p]
 
+    @staticmethod
+    def example(w0: float, a0: float) -> dict[str, str]:
+        """A typical instance for the conformance suite: damping ratio 0.015 at ``w0`` (rad/s)."""
+        return {"viscous": f"C = {0.03 * w0!r}\n"}
+
     def fill(self, values: Mapping[str, float], k: np.ndarray) -> None:
         k["c"] = values["viscous.C"]

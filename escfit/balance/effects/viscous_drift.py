@@ -56,6 +56,12 @@ class ViscousDrift:
             raise SceneError(f"rates must exceed -1 (fractional change per cycle), got {rates!r}", f"{where}.rates")
         return cls(tuple(map(float, th)), tuple(map(float, rates))), []
 
+    @staticmethod
+    def example(w0: float, a0: float) -> dict[str, str]:
+        """A typical instance for the conformance suite, with the viscous damping it changes."""
+        return {"viscous": f"C = {0.05 * w0!r}\n",
+                "viscous_drift": "thresholds = [0.8, 0.5]\nrates = [0.05, 0.02, 0.0]\n"}
+
     def prepare(self, k: np.ndarray) -> None:
         n = len(self.thresholds)
         k["n_bands"] = n

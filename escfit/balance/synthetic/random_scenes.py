@@ -23,7 +23,7 @@ from typing import Callable
 
 import numpy as np
 
-__all__ = ["Scale", "Effect", "EFFECTS", "random_scene", "near_critical_damping"]
+__all__ = ["Scale", "Effect", "EFFECTS", "ALL_EFFECTS", "random_scene", "near_critical_damping"]
 
 
 @dataclass(frozen=True)
@@ -112,6 +112,22 @@ def _banking(rng: np.random.Generator, s: Scale) -> str:
     return f"[effects.banking]\nangle = {_num(angle)}\nrestitution = {_num(rng.choice([0.0, 0.3, 0.7, 1.0]))}\n"
 
 
+def _drag(rng: np.random.Generator, s: Scale) -> str:
+    """Quadratic drag taking up to about 13 % of the amplitude off a half swing (``4 D A / 3``)."""
+    return f"[effects.drag]\nD = {_num(rng.uniform(0.0, 0.1) / s.a0)}\n"
+
+
+def _stiffening(rng: np.random.Generator, s: Scale) -> str:
+    """A cubic stiffening up to doubling the spring's pull at the release angle."""
+    return f"[effects.stiffening]\nk3 = {_num(rng.uniform(0.0, 1.0) / (s.a0 * s.a0))}\n"
+
+
+def _viscous_drift(rng: np.random.Generator, s: Scale) -> str:
+    """Damping that grows by up to 5 % a cycle as the envelope decays."""
+    r1, r2 = rng.uniform(0.0, 0.05), rng.uniform(0.0, 0.05)
+    return f"[effects.viscous_drift]\nthresholds = [0.5, 0.1]\nrates = [{_num(r1)}, {_num(r2)}, 0.0]\n"
+
+
 # name -> Effect; the order is the order of the tables in the scene
 EFFECTS: dict[str, Effect] = {
     "viscous": Effect(0.9, _viscous),
@@ -120,6 +136,12 @@ EFFECTS: dict[str, Effect] = {
     "hairspring": Effect(0.25, _hairspring),
     "banking": Effect(0.2, _banking),
 }
+
+#: Every registered effect (:data:`escfit.balance.effects.EFFECTS`), the smooth ones and the
+#: damping drift too: scenes drawn from these need an integrator (drag, stiffening) or the closed
+#: form (drift) for some of them, and the solvers that cannot run one refuse it.
+ALL_EFFECTS: dict[str, Effect] = {**EFFECTS, "viscous_drift": Effect(0.1, _viscous_drift),
+                                  "stiffening": Effect(0.2, _stiffening), "drag": Effect(0.25, _drag)}
 
 
 def random_scene(rng: np.random.Generator, *, swings: int = 30, effects: dict[str, Effect] | None = None,

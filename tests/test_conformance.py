@@ -1,0 +1,202 @@
+"""What every balance effect and every solver must honour, checked over the registries.
+
+Like scikit-learn's ``check_estimator``: the cases are generated from
+:data:`escfit.balance.effects.EFFECTS` and :data:`escfit.balance.solvers.SOLVERS`, so a new
+effect (with its ``example``) or a new solver gets every check without an edit here.  For
+every effect and every solver that claims the effect's example scene:
+
+- **defaults mean absence**: the record with the effect's slots at their defaults runs as the
+  scene without the effect;
+- **batch equals single**: a solver's batch path and its sampler give each set what the
+  one-set solve gives;
+- **agreement**: its turning points agree with an independent scipy integration
+  (``tests/conformance_reference.py``);
+
+for every solver that does not claim it, the refusal names a solver that can, and that solver
+runs it; and every smooth effect's ``torque`` has derivatives that match finite differences
+and is one of the terms the integrating solvers add up.
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib
+import math
+
+import numpy as np
+import pytest
+
+import escfit
+from escfit.balance import torque as torque_module
+from escfit.balance.batch import solve_batch
+from escfit.balance.effects import EFFECTS
+from escfit.balance.records import SLOTS
+from escfit.balance.solvers import SOLVERS, capability, solve_system
+from escfit.balance.system import System
+from escfit.balance.waveform import sample_state
+from escfit.core.errors import SolverError
+
+from .conformance_reference import reference_turns, smooth_torques
+
+W0, A0, SWINGS = 10.0, 1.0, 12
+#: solver options for the agreement checks (rk4: 4000 steps per period of the stiffest piece)
+OPTIONS = {"dop853": {"rtol": 1e-12}, "rk4": {"h": 2.0 * math.pi / (1.2 * W0) / 4000}, "ivp": {"rtol": 1e-12,
+                                                                                                  "atol": 1e-14}}
+TOLERANCE = {"exact": 1e-9, "dop853": 1e-9, "ivp": 1e-8, "rk4": 1e-8}  # of the release angle
+
+
+def example_tables(key: str) -> dict[str, str]:
+    cls = EFFECTS[key]
+    assert hasattr(cls, "example"), f"effect {key!r} declares no example(w0, a0): it cannot join the conformance suite"
+    return cls.example(W0, A0)
+
+
+def scene_text(tables: dict[str, str]) -> str:
+    oscillator = tables.get("oscillator", f"omega0 = {W0!r}\ntheta0 = {A0!r}\n")
+    body = ""
+    for key, text in tables.items():
+        if key == "oscillator":
+            continue
+        body += text if text.startswith("[[") else f"[effects.{key}]\n{text}"
+    return f'model = "balance"\nswitching = "angle"\n[oscillator]\n{oscillator}[run]\nswings = {SWINGS}\n{body}'
+
+
+def load(tables: dict[str, str]):
+    return escfit.load_scene("conformance.toml", text=scene_text(tables))
+
+
+def claims(solver: str, scene) -> bool:
+    try:
+        capability(scene.build(), solver)
+    except SolverError:
+        return False
+    return True
+
+
+CASES = [(e, s) for e in EFFECTS for s in SOLVERS]
+
+
+def claimed(effect: str, solver: str):
+    scene = load(example_tables(effect))
+    if not claims(solver, scene):
+        pytest.skip(f"{solver} does not claim {effect} (refusal checked separately)")
+    return scene
+
+
+# -- defaults mean absence -----------------------------------------------------------------
+
+@pytest.mark.parametrize("effect, solver", CASES)
+def test_defaults_mean_absence(effect, solver):
+    scene = claimed(effect, solver)
+    own = [s.name for s in SLOTS if s.name in {x.name for x in getattr(EFFECTS[effect], "SLOTS", ())}]
+    if not own:
+        pytest.skip(f"{effect} owns no record slot (it fills the oscillator's)")
+    without = load({k: v for k, v in example_tables(effect).items() if k != effect})
+    k = scene.build().k.copy()
+    for slot in SLOTS:
+        if slot.name in own:
+            k[slot.name] = slot.default
+    reset = solve_system(System(k, scene.structure), SWINGS, solver, **OPTIONS.get(solver, {}))
+    plain = solve_system(without.build(), SWINGS, solver, **OPTIONS.get(solver, {}))
+    assert reset.status == plain.status
+    np.testing.assert_array_equal(reset.theta_turn, plain.theta_turn)
+    np.testing.assert_array_equal(reset.time, plain.time)
+
+
+# -- batch equals single -------------------------------------------------------------------
+
+def _spread(scene, n=5, seed=0):
+    rng = np.random.default_rng(seed)
+    free = [name for name, value in scene.params.values().items() if value > 0 and name != "oscillator.theta0"]
+    return [scene.build({name: scene.params[name].value * rng.uniform(0.8, 1.2) for name in free})
+            for _ in range(n)]
+
+
+@pytest.mark.parametrize("effect, solver", CASES)
+def test_batch_equals_single(effect, solver):
+    scene = claimed(effect, solver)
+    spec = SOLVERS[solver]
+    if not spec.batch and spec.sampler is None:
+        pytest.skip(f"{solver} has no batch path")
+    systems = _spread(scene)
+    if spec.batch:
+        batch = solve_batch(systems, SWINGS)
+        for i, one_set in enumerate(systems):
+            one = solve_system(one_set, SWINGS, solver)
+            np.testing.assert_array_equal(batch[i].theta_turn, one.theta_turn)
+            np.testing.assert_array_equal(batch[i].time, one.time)
+            assert batch[i].status == one.status and batch[i].final == one.final
+    if spec.sampler is not None:
+        times = np.linspace(0.0, 3.0 * math.pi / W0, 41)
+        values, summary = spec.sampler(System.stack(systems), times, np.zeros(len(systems)))
+        for i, one_set in enumerate(systems):
+            theta, _, _ = sample_state(one_set, times, solver)
+            assert summary["usable"][i] == 1
+            np.testing.assert_array_equal(values[i], theta)
+
+
+# -- agreement with an independent integration ---------------------------------------------
+
+@functools.lru_cache(maxsize=None)
+def _reference(effect: str) -> tuple[np.ndarray, str]:
+    return reference_turns(load(example_tables(effect)).build().k[0], SWINGS)
+
+
+@pytest.mark.parametrize("effect, solver", CASES)
+def test_agrees_with_an_independent_integration(effect, solver):
+    scene = claimed(effect, solver)
+    traj = solve_system(scene.build(), SWINGS, solver, **OPTIONS.get(solver, {}))
+    turns, status = _reference(effect)
+    assert traj.status == status, (traj.status, status, traj.theta_turn, turns)
+    assert traj.theta_turn.size == turns.size
+    assert turns.size >= 3, "the example should swing a few times"
+    np.testing.assert_allclose(traj.theta_turn, turns, rtol=0.0, atol=TOLERANCE[solver] * A0)
+
+
+# -- refusals name a solver that can -------------------------------------------------------
+
+@pytest.mark.parametrize("effect, solver", CASES)
+def test_refusal_names_a_solver_that_can(effect, solver):
+    scene = load(example_tables(effect))
+    if claims(solver, scene):
+        pytest.skip(f"{solver} claims {effect}")
+    with pytest.raises(SolverError) as info:
+        capability(scene.build(), solver)
+    named = [name for name in SOLVERS if f"'{name}'" in str(info.value).split("use solver", 1)[-1]]
+    assert "use solver" in str(info.value) and named, str(info.value)
+    for name in named:
+        traj = solve_system(scene.build(), SWINGS, name, **OPTIONS.get(name, {}))
+        assert traj.theta_turn.size >= 1
+
+
+# -- smooth torques ------------------------------------------------------------------------
+
+SMOOTH = [key for key, cls in EFFECTS.items() if hasattr(importlib.import_module(cls.__module__), "torque")]
+
+
+@pytest.mark.parametrize("effect", SMOOTH)
+def test_torque_derivatives_match_finite_differences(effect):
+    torque = importlib.import_module(EFFECTS[effect].__module__).torque
+    k = load(example_tables(effect)).build().k[0]
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        x, v = rng.uniform(-1.5, 1.5) * A0, rng.uniform(-1.5, 1.5) * A0 * W0
+        a, a_x, a_v = torque(x, v, k)
+        hx, hv = 1e-6 * A0, 1e-6 * A0 * W0
+        fd_x = (torque(x + hx, v, k)[0] - torque(x - hx, v, k)[0]) / (2 * hx)
+        fd_v = (torque(x, v + hv, k)[0] - torque(x, v - hv, k)[0]) / (2 * hv)
+        scale = abs(a) + 1e-12
+        assert a_x == pytest.approx(fd_x, rel=1e-6, abs=1e-6 * scale / A0), (effect, x, v)
+        assert a_v == pytest.approx(fd_v, rel=1e-6, abs=1e-6 * scale / (A0 * W0)), (effect, x, v)
+
+
+def test_every_smooth_torque_is_added_up():
+    """The integrators' smooth term is the sum of every registered effect's torque, derivatives too."""
+    tables = {}
+    for effect in SMOOTH:
+        tables.update(example_tables(effect))
+    k = load(tables).build().k[0]
+    for x, v in ((0.3, -2.0), (-0.9, 5.0), (1.2, 0.7)):
+        total = np.sum([f(x, v, k) for f in smooth_torques()], axis=0)
+        assert all(f(x, v, k)[0] != 0.0 for f in smooth_torques())  # each example's torque acts here
+        np.testing.assert_allclose(torque_module.smooth_terms(x, v, k), total, rtol=1e-15, atol=0.0)
