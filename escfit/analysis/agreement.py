@@ -63,7 +63,7 @@ WANDER_TURNS = 6  # turning points averaged (three of each side) to see an envel
 WANDER_NOISE = 3.0  # a wander counts when its averages spread this many times what reading noise gives
 WANDER_SHARE = 0.2  # ... and it reaches this share of what separates a viscous from a friction decay (a fit
 # absorbs what it can of a wander, so what is left understates how far it moved the split)
-SPLIT = ("viscous.C", "coulomb.R")  # the parameters a wandering envelope leaves unsplit
+SPLIT = ("viscous.C", "coulomb.R", "drag.D")  # the losses a wandering envelope leaves unsplit (those fitted)
 
 
 def _materiality() -> str:
@@ -332,8 +332,11 @@ class EnvelopeWander:
         spread = math.hypot(self.wander, self.noise)
         return spread > WANDER_NOISE * self.noise and self.wander >= WANDER_SHARE * self.separation
 
-    def clause(self, unit: str) -> str:
-        return (f"C and R are not determined by this record: its envelope wanders by {_shown(self.wander, unit)} "
+    def clause(self, unit: str, names: tuple = SPLIT[:2]) -> str:
+        """The caution, for the loss parameters ``names``."""
+        short = [_short(n) for n in names]
+        which = ", ".join(short[:-1]) + " and " + short[-1]
+        return (f"{which} are not determined by this record: its envelope wanders by {_shown(self.wander, unit)} "
                 f"(root mean square, over {WANDER_TURNS} turning points) about the fitted decay, "
                 f"{100.0 * self.wander / self.separation:.0f} % of the {_shown(self.separation, unit)} that "
                 "separates a viscous decay from a friction decay through the same amplitudes; the swing's loss "
@@ -417,16 +420,21 @@ def judge(phase: TurnDifferences | None, amplitude: TurnDifferences | None, para
     bad = [p for p in parameters if p.sigmas > PARAMETER_SIGMAS]
     wander = envelope_wander(amplitude) if amplitude is not None and not findings else None
     unsplit = wander is not None and wander.splits and {"viscous", "coulomb"} <= model.effects
-    if unsplit:  # the split of C and R is the wander's: they are not compared, the rest is
-        bad = [p for p in bad if p.name not in SPLIT]
+    losses = tuple(n for n in SPLIT if n.split(".")[0] in model.effects)
+    traded = [p for p in bad if p.material and p.name in losses] if unsplit else []
+    if unsplit:  # the split of the losses is the wander's: their differences decide nothing, the rest does
+        bad = [p for p in bad if p.name not in losses]
     said = ", ".join(f"{_short(p.name)} by {p.sigmas:.2g} standard errors ({p.waveform:.4g} against "
                      f"{p.turning_points:.4g}, {100 * p.relative:.2g} %)" for p in bad)
     material = [p for p in bad if p.material]
     split = _split_only(material) and not findings
     undetermined: tuple = ()
     if unsplit:
-        undetermined = SPLIT
-        cautions.insert(0, wander.clause(model.unit))
+        undetermined = losses
+        trade = ", ".join(f"{_short(p.name)} {p.waveform:.4g} against {p.turning_points:.4g}" for p in traded)
+        cautions.insert(0, wander.clause(model.unit, losses) + (
+            f"; the waveform and turning-point fits trade one loss for the other too ({trade})"
+            if _split_only(traded) else ""))
     if split:  # one loss traded for another: the split is not determined, the rest stands
         undetermined = tuple(p.name for p in material)
         cautions.insert(0, f"{' and '.join(_short(n) for n in undetermined)} are not determined by this record: the "
