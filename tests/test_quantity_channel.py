@@ -193,3 +193,33 @@ def test_two_equally_good_decays_are_refused_listing_both_with_scores(tmp_path):
         result.output  # q is 0.8 p: one decay, two calibrations
     assert "'p' 1.00" in result.output and "'q' 1.00" in result.output
     assert "angle_column" in result.output
+
+
+def _gyro_axes(main: str, scale_other: float):
+    """A phone swinging about one axis (``main``): its rate there, the tilt's projection on a
+    second axis (``scale_other`` of it) and, on the third, the body's wobble at half the frequency."""
+    t, _, rate = _decay()
+    wobble = 0.02 * np.exp(-C * t / 2) * np.sin(0.5 * OMEGA0 * t)
+    axes = {"x": wobble, "y": scale_other * rate, "z": scale_other * rate}
+    axes[main] = rate
+    noise = {a: 2e-3 * RNG.standard_normal(t.size) for a in "xyz"}
+    return t, [axes[a] + noise[a] for a in "xyz"]
+
+
+def test_the_axis_a_phone_swings_about_is_chosen_among_a_gyroscopes_three(tmp_path):
+    t, columns = _gyro_axes("y", 0.05)  # y turns 20 times faster than z; x holds a wobble at half the frequency
+    data = _write(tmp_path / "Gyroscope.csv", ["Time (s)", "Gyroscope x (rad/s)", "Gyroscope y (rad/s)",
+                                               "Gyroscope z (rad/s)"], [t, *columns])
+    result, scene = _init(tmp_path, data)
+    assert result.exit_code == 0, result.output
+    assert "velocity_column = 'Gyroscope y (rad/s)'" in result.output
+    assert "axes of one sensor: 'Gyroscope y (rad/s)' oscillates" in result.output
+    table = tomllib.loads(scene.read_text())
+    assert table["recording"]["velocity_column"] == "Gyroscope y (rad/s)"
+
+
+def test_axes_that_swing_alike_are_not_chosen_between(tmp_path):
+    t, columns = _gyro_axes("y", 0.6)  # y and z within a factor 3: a tilted axis, no dominant one
+    choice = choose_channel(t, {f"Gyroscope {a} (rad/s)": c for a, c in zip("xyz", columns)},
+                            units={f"Gyroscope {a} (rad/s)": "rad/s" for a in "xyz"}, key="velocity_column")
+    assert choice.chosen is None

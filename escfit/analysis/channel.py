@@ -20,13 +20,18 @@ falls by the same share (within :data:`SAME_FALL`), the columns record one decay
 coil on one mass, x and y of one tracked bob): they give the same frequency and decay rate, but
 their amplitudes, and so the friction, are only as right as each one's calibration, so the one
 column whose label names an angle (else a displacement) is chosen, the note naming the others;
-when no label or several decide, the refusal says they hold one motion.  Otherwise :class:`ChannelChoice` has no ``chosen``
+when no label or several decide, the refusal says they hold one motion.  Axes of one sensor (labels
+that differ only in an axis letter, ``Gyroscope x``, ``y`` and ``z``, one unit): a body swinging
+about one axis turns fastest about it, the others seeing only the sensor's tilt and the body's
+wobble, so the axis whose oscillation is :data:`AXIS_DOMINANCE` times every other's is chosen when
+it scores :data:`MIN_SCORE` (the note says so).  Otherwise :class:`ChannelChoice` has no ``chosen``
 and :meth:`ChannelChoice.refusal` names the candidates with their scores and the key to set.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -38,6 +43,7 @@ __all__ = ["ChannelChoice", "choose_channel", "decay_score", "MIN_SCORE", "MARGI
 MIN_SCORE = 0.2
 MARGIN = 0.5
 FULL_FALL = 0.5  # a swing losing half its amplitude over the record counts fully as a decay
+AXIS_DOMINANCE = 3.0  # an axis of one sensor oscillating this many times more than the others is the motion's
 SAME_FREQUENCY = 0.005  # columns whose frequencies agree this closely (relative) ...
 SAME_FALL = 0.1  # ... and whose amplitudes fall by shares this close hold one motion
 
@@ -151,6 +157,41 @@ def _one_motion(best: str, rivals: list[str], shapes: dict[str, SwingShape]) -> 
     return rivals
 
 
+def axis_base(label: str) -> tuple[str, str] | None:
+    """``(label without its axis letter, the letter)`` for a label naming one axis (a word ``x``,
+    ``y`` or ``z``, any case); None otherwise."""
+    words = re.split(r"([^\w]+)", label)
+    axes = [i for i, w in enumerate(words) if w.lower() in ("x", "y", "z")]
+    if len(axes) != 1:
+        return None
+    i = axes[0]
+    return "".join(words[:i] + ["*"] + words[i + 1:]).lower(), words[i].lower()
+
+
+def _size(shape: SwingShape) -> float:
+    """A column's typical oscillation amplitude (its unit): the median over its stretches."""
+    a = np.asarray(shape.amplitudes, float)
+    a = a[np.isfinite(a)]
+    return float(np.median(a)) if a.size else 0.0
+
+
+def _dominant_axis(candidates: list[str], shapes: dict[str, SwingShape], units: dict[str, str | None]) -> str | None:
+    """Of two or more columns that are axes of one sensor (one unit), the one oscillating
+    :data:`AXIS_DOMINANCE` times more than every other; None when they are not axes or none dominates."""
+    if len(candidates) < 2:
+        return None
+    bases = [axis_base(c) for c in candidates]
+    if any(b is None for b in bases) or len({b[0] for b in bases}) != 1 or len({b[1] for b in bases}) != len(bases):
+        return None
+    if len({units.get(c) for c in candidates}) != 1:
+        return None
+    sizes = {c: _size(shapes[c]) for c in candidates}
+    top = max(sizes, key=sizes.get)
+    if all(sizes[top] >= AXIS_DOMINANCE * sizes[c] for c in candidates if c != top):
+        return top
+    return None
+
+
 def _plainest(best: str, same: list[str], units: dict[str, str | None]) -> str | None:
     """Of columns holding one motion, the only one whose label says the quantity fitted (an
     angle, else a displacement); None when no label, or several, say so (the amplitudes, and so
@@ -196,6 +237,13 @@ def choose_channel(time: np.ndarray | dict[str, np.ndarray], columns: dict[str, 
     second = scores[order[1]] if len(order) > 1 else 0.0
     if best is not None and scores[best] >= MIN_SCORE and second <= MARGIN * scores[best]:
         return ChannelChoice(best, scores, why, "clear winner", key, shapes, units=dict(units))
+    axis = _dominant_axis([c for c in order if scores[c] > MARGIN * scores[best]] if best else [], shapes, units)
+    if axis is not None and scores[axis] >= MIN_SCORE:
+        others = [c for c in order if c != axis]
+        ratio = min(_size(shapes[axis]) / max(_size(shapes[c]), 1e-300) for c in others)
+        reason = (f"axes of one sensor: {_shown(axis)} oscillates {ratio:.3g} times more than "
+                  f"{' and '.join(_shown(c) for c in others)}, the axis the body swings about")
+        return ChannelChoice(axis, scores, why, reason, key, shapes, units=dict(units))
     if best is not None and scores[best] >= MIN_SCORE:
         same = _one_motion(best, [c for c in order[1:] if scores[c] > MARGIN * scores[best]], shapes)
         if same is not None:

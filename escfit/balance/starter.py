@@ -155,7 +155,7 @@ def read_with_help(path: str | Path, recording: dict | None = None, *, fmt: str 
 
 
 _OTHER_QUANTITY = re.compile(r"column '([^']+)' looks like (angular velocity|displacement): set \[recording\] "
-                             r"(velocity_column|displacement_column)")
+                             r"(velocity_column|displacement_column)(?:; (.*)\)\s*$)?")
 
 
 def _help(path, table: dict, exc: DataError, fmt) -> tuple[str, object, str] | None:
@@ -164,7 +164,8 @@ def _help(path, table: dict, exc: DataError, fmt) -> tuple[str, object, str] | N
     other = _OTHER_QUANTITY.search(message)
     if other and other.group(3) not in table:
         return other.group(3), other.group(1), (f"column {other.group(1)!r} holds the {other.group(2)}, not an angle: "
-                                                "it is fitted as measured")
+                                                "it is fitted as measured"
+                                                + (f" ({other.group(4)})" if other.group(4) else ""))
     if "gives no unit: set [recording] velocity_unit" in message and "velocity_unit" not in table:
         return "velocity_unit", "rad/s", ("the file names no unit for the rate: rad/s assumed; CHECK it (deg/s, "
                                           "rpm, or V with scale)")

@@ -168,6 +168,18 @@ def _hint_other_quantities(cols: Columns, roles: list[str | None]) -> str:
                 "scale)")
     for role, key in (("angular_velocity", "velocity_column"), ("displacement", "displacement_column")):
         hits = [i for i, r in enumerate(roles) if r == role]
+        if len(hits) > 1:
+            hits = _measured_candidates(cols, hits)
+        if len(hits) > 1:  # several: the shapes choose, or the user
+            choice = _shape_choice(cols, hits, roles, key)
+            if choice is None or choice.chosen is None:
+                listing = f": {choice.listing()}" if choice is not None and choice.scores else ""
+                return (f" (columns {', '.join(repr(cols.label(i)) for i in hits)} look like "
+                        f"{role.replace('_', ' ')}, and none is clearly the free decay{listing}; set [recording] "
+                        f"{key})")
+            hits = [hits[[cols.label(i) for i in hits].index(choice.chosen)]]
+            return (f" (column {cols.label(hits[0])!r} looks like {role.replace('_', ' ')}: set [recording] {key}; "
+                    f"{choice.reason})")
         if hits:
             return f" (column {cols.label(hits[0])!r} looks like {role.replace('_', ' ')}: set [recording] {key})"
     return ""
@@ -383,7 +395,7 @@ def _measured_candidates(cols: Columns, hits: list[int]) -> list[int]:
             passed.append(f"{cols.label(i)!r} ({counts.get(i, 0)} readings of {longest})")
         else:
             kept.append(i)
-    if len(kept) > 1:
+    if len(kept) > 1 and not _axes_of_one_sensor(cols, kept):  # x, y, z of one sensor: the shapes decide
         words = {i: set(re.findall(r"[^\W\d_]+", re.sub(r"\s*[(\[/].*$", "", cols.label(i).lower()))) for i in kept}
         plain = [i for i in kept if words[i] & _MEASURED_WORDS and not any(d in w for w in words[i] for d in _DERIVED_WORDS)]
         if len(plain) == 1:
@@ -393,6 +405,14 @@ def _measured_candidates(cols: Columns, hits: list[int]) -> list[int]:
         cols.notes.append(f"column {cols.label(kept[0])!r} is the measured one, passing over {', '.join(passed)} "
                           "([recording] angle_column, velocity_column or displacement_column chooses another)")
     return kept or hits
+
+
+def _axes_of_one_sensor(cols: Columns, columns: list[int]) -> bool:
+    """Whether the columns' labels differ only in an axis letter (``Gyroscope x``, ``y``, ``z``)."""
+    from ...analysis.channel import axis_base
+
+    bases = [axis_base(cols.label(i)) for i in columns]
+    return all(b is not None for b in bases) and len({b[0] for b in bases}) == 1
 
 
 def _readings(cols: Columns, i: int) -> int:
