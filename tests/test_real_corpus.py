@@ -43,6 +43,7 @@ class Decay:
     reference: tuple = ()  # (what, check(result) -> (value, source value, tolerance))
     slow: bool = False
     pending: str = ""  # what it waits for
+    verdict: str = "determined"  # what the fit should say it determines
 
 
 @dataclass(frozen=True)
@@ -150,10 +151,15 @@ DECAYS = [
           "arduino_encoder_galileo_ferrucci" / "galileo_2024-07-19_15-25-54.csv", "galileo_encoder_pendulum.toml",
           129, slack=2, slow=True,
           reference=(("the source's period, 1.36 s", lambda r: (small_swing_period(r), 1.36, 0.02)),)),
+    # an 82-degree swing fitted without drag: the envelope wanders about the C + R decay by half of
+    # what separates a viscous from a friction decay (the model's damping law is not the record's),
+    # so the split of C and R is not determined; the loss and omega0 are
     Decay("string pendulum, 17 s from 82 deg (video)", OURS / "string_pendulum_video" / "trial1_rawdata.txt",
-          "string_pendulum_trial1.toml", 19),
+          "string_pendulum_trial1.toml", 19, verdict="partly determined"),
+    # fitted without drag, the record swings 2.4 deg (29 standard errors) more than the model at its end
+    # and its envelope wanders by 0.8 of what separates a viscous from a friction decay: C and R not split
     Decay("string pendulum, 116 s (video)", OURS / "string_pendulum_video" / "lab1_data.txt",
-          "string_pendulum_lab1.toml", 142, slow=True,
+          "string_pendulum_lab1.toml", 142, slow=True, verdict="partly determined",
           reference=(("the source's Q ~ 140", lambda r: (omega0(r) / float(r.summary()["viscous.C"]["estimate"]),
                                                           140.0, 35.0)),)),
     Decay("Pohl wheel, video-tracked rim marker", OURS / "pohl_heilaut" / "derived" / "tracker_video_frames.csv",
@@ -162,8 +168,10 @@ DECAYS = [
     Decay("multi-arm pendulum, free swing (10 kHz encoder)", OURS / "multiarm_pendulum" /
           "SingleDataFreeSwing_1_Dt_0_0001.mat", "multiarm_free_swing.toml", 15, slow=True,
           reference=(("the authors' omega0 = 8.01 rad/s", lambda r: (omega0(r), 8.01, 0.12)),)),
+    # a 90-degree swing: the envelope wanders about the C + R decay, which leaves their split open
     Decay("multi-arm pendulum, 55 s from 90 deg", OURS / "multiarm_pendulum" /
           "SinglePendulumDataForParameterEstimation.mat", "multiarm_estimation.toml", 134, slow=True,
+          verdict="partly determined",
           reference=(("the authors' omega0 = 8.01 rad/s", lambda r: (omega0(r), 8.01, 0.12)),)),
     Decay("torsion pendulum, CASSY Lab 2 .labx", REAL / "gpl_tests_only" / "cassy_phyprakit" / "Drehpendel.labx",
           "cassy_torsion_pendulum.toml", 186, slack=2, slow=True,
@@ -217,7 +225,7 @@ def test_every_real_decay_reads_counts_and_fits(tmp_path, case: Decay):
     assert result.exit_code == 0, result.output
     res = load_fit(out)
     assert abs(counted(res) - case.turns) <= case.slack, (counted(res), case.turns, res.notes)
-    assert res.verdict == "determined", res.warnings
+    assert res.verdict == case.verdict, res.warnings
     for what, check in case.reference:
         value, source, tolerance = check(res)
         assert abs(value - source) <= tolerance, (what, value, source, tolerance)

@@ -133,10 +133,16 @@ def test_pohl_wheel_by_least_squares(tmp_path):
 
 
 @pytest.mark.slow  # the drag needs the integrating solver: a minute of CPU
-def test_string_pendulum_with_drag_shares_the_loss_three_ways(tmp_path):
+def test_string_pendulum_with_drag_gives_its_loss_but_not_a_split_the_record_cannot_make(tmp_path):
+    """The record's envelope wanders about the fitted decay (by about a quarter of what separates a
+    viscous from a friction decay) and C, R and D correlate beyond 0.99: the loss per period, Q and
+    the halving time are stated, the three-way split is not."""
     res, text, _ = _fit(tmp_path, "fits/real/string_pendulum_lab1_drag.toml")
     shares = _check_free_decay(res, text)
-    assert "D" in shares and "C" in shares
+    assert not shares, text
+    assert set(res.undetermined) == {"viscous.C", "coulomb.R", "drag.D"}, res.warnings
+    assert ("How that loss divides between viscous damping (C), friction in the pivot (R) and air drag (D) is "
+            "not determined by this record") in " ".join(text.split())
 
 
 @pytest.mark.slow  # a timegrapher least-squares fit: half a minute of CPU

@@ -71,6 +71,72 @@ def test_irregular_bursts_are_retimed_by_the_fitted_rate(tmp_path):
     assert "re-timed by a straight line" in warning and " 48 Hz" in warning
 
 
+def arrivals(t, seed=5):
+    """Stamps of a computer that stamps rows as they come out of an evenly sampling logger's buffer:
+    clusters of 5 to 30 rows, the cluster's last row taken at ``t`` then 0 to 0.15 s of latency
+    (exponential, mean 0.03 s), the rows of a cluster 1 ms apart."""
+    rng = np.random.default_rng(seed)
+    stamps, i, last = np.empty_like(t), 0, -np.inf
+    while i < t.size:
+        k = min(int(rng.integers(5, 31)), t.size - i)
+        arrive = max(t[i + k - 1] + min(rng.exponential(0.03), 0.15), last + 1e-3)
+        stamps[i:i + k] = arrive + 1e-3 * np.arange(k)
+        last, i = stamps[i + k - 1], i + k
+    return stamps
+
+
+def test_arrival_stamps_of_an_even_logger_are_retimed_on_a_line(tmp_path):
+    """Stamps off the true clock by up to 0.15 s (a ninth of a period): the readings step evenly across
+    the clusters' gaps, so every row goes on the line; the times are then off the truth by one
+    constant latency only (0.03 s on average), not by the stamps' scatter."""
+    t, a = truth()
+    stamps = arrivals(t)
+    assert np.max(np.abs(np.diff(stamps - t))) > 0.05  # the stamps' own steps are far off the truth
+    ts = read_data(write(tmp_path, "arrive.csv", stamps, a))
+    err = ts.time - t
+    assert np.std(err) < 0.2 / RATE and 0.0 < np.mean(err) < 0.1
+    assert 1.0 / np.mean(np.diff(ts.time)) == pytest.approx(RATE, rel=2e-3)
+    (warning,) = warnings_of(ts.meta)
+    assert "time stamps arrive in clusters" in warning and "the logger sampled evenly" in warning, warning
+
+
+def test_stamps_of_a_logger_sampling_in_bursts_are_kept(tmp_path):
+    """A logger that really samples in bursts (10 rows 1 ms apart every 0.2 s): the readings step
+    far more across the gaps than within a burst, so the stamps are the sample times."""
+    t = (np.arange(N) // 10) * 0.2 + (np.arange(N) % 10) * 1e-3
+    a = 0.1 * np.exp(-0.05 * t) * np.cos(2 * math.pi * t / PERIOD)
+    ts = read_data(write(tmp_path, "burst_sampled.csv", t, a))
+    np.testing.assert_allclose(ts.time, t, rtol=0, atol=STAMP)
+    assert any("stamps are kept as the sample times" in n and "as samples taken in bursts do" in n
+               for n in notes_of(ts.meta)), notes_of(ts.meta)
+
+
+def test_arrival_stamps_with_noisy_readings_are_kept_with_a_warning(tmp_path):
+    """Readings dominated by noise cannot say whether the rows were even: the stamps are kept and
+    the user is warned, with the fix."""
+    t, _ = truth()
+    stamps = arrivals(t)
+    noise = np.random.default_rng(8).standard_normal(N)
+    ts = read_data(write(tmp_path, "noisy.csv", stamps, noise))
+    np.testing.assert_allclose(ts.time - ts.time[0], stamps - stamps[0], rtol=0, atol=1e-9)
+    (warning,) = warnings_of(ts.meta)
+    assert "the readings cannot tell whether the rows were taken evenly" in warning
+    assert "set [recording] sample_rate" in warning
+
+
+@pytest.mark.parametrize("stamps", [
+    lambda t: np.r_[t[:700], t[:800]],  # the clock reset
+    lambda t: np.r_[t[:300], np.full(1200, t[300])],  # the clock stalled
+])
+def test_a_refusal_suggests_the_true_rate(stamps):
+    t, a = truth()
+    s = stamps(t)
+    with pytest.raises(DataError) as info:
+        time_base(s, np.resize(a, s.size))
+    rate = float(re.search(r"about ([\d.]+) Hz", str(info.value)).group(1))
+    assert rate == pytest.approx(RATE, rel=0.02), str(info.value)
+
+
 def test_one_backwards_row_is_dropped(tmp_path):
     t, a = truth()
     stamps = t.copy()

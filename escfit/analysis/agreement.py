@@ -59,6 +59,11 @@ MIN_TURNS = 8  # fewer turning points measure no scatter and no drift
 COMPARED = ("oscillator.omega0", "viscous.C", "coulomb.R", "drag.D")  # what both fits estimate
 MATERIAL = {"oscillator.omega0": 0.005, "damping": 0.10}  # differences that change what a user concludes
 PHASE_GROSS = math.pi / 2  # rad: a model a quarter period out of phase describes another motion
+WANDER_TURNS = 6  # turning points averaged (three of each side) to see an envelope's slow wander
+WANDER_NOISE = 3.0  # a wander counts when its averages spread this many times what reading noise gives
+WANDER_SHARE = 0.2  # ... and it reaches this share of what separates a viscous from a friction decay (a fit
+# absorbs what it can of a wander, so what is left understates how far it moved the split)
+SPLIT = ("viscous.C", "coulomb.R", "drag.D")  # the losses a wandering envelope leaves unsplit (those fitted)
 
 
 def _materiality() -> str:
@@ -291,6 +296,77 @@ def smooth_trend(swing: np.ndarray, difference: np.ndarray, at: np.ndarray | Non
     return design(at)[:, :3] @ coef[:3]
 
 
+@dataclass(frozen=True)
+class EnvelopeWander:
+    """How far a record's envelope wanders about the model's, against what splits C from R.
+
+    A viscous loss (C) takes a fixed share of the amplitude each swing, a friction loss (R) a
+    fixed amount: the two are told apart only by the curvature of the decay.  An envelope that
+    wanders slowly about any smooth decay (a bob that does not swing in a plane, a tracking
+    drift), by a fair share of the difference between the two decays, leaves their split to that
+    wander, whatever the standard errors computed for white noise say.
+
+    Attributes
+    ----------
+    wander : float
+        Root mean square of the record-minus-model amplitudes averaged over
+        :data:`WANDER_TURNS` turning points, less what the reading noise alone gives (the
+        readings' unit; 0 when within it).
+    noise : float
+        What reading noise alone gives those averages: the point scatter over
+        ``sqrt(WANDER_TURNS)``.
+    separation : float
+        Root mean square difference between an exponential decay (viscous only) and a straight
+        decay (friction only), each fitted to the record's turning-point amplitudes (the readings'
+        unit).
+    """
+
+    wander: float
+    noise: float
+    separation: float
+
+    @property
+    def splits(self) -> bool:
+        """Whether the wander leaves C and R unsplit: its averages spread more than
+        :data:`WANDER_NOISE` times the noise's and it reaches :data:`WANDER_SHARE` of the separation."""
+        spread = math.hypot(self.wander, self.noise)
+        return spread > WANDER_NOISE * self.noise and self.wander >= WANDER_SHARE * self.separation
+
+    def clause(self, unit: str, names: tuple = SPLIT[:2]) -> str:
+        """The caution, for the loss parameters ``names``."""
+        short = [_short(n) for n in names]
+        which = ", ".join(short[:-1]) + " and " + short[-1]
+        return (f"{which} are not determined by this record: its envelope wanders by {_shown(self.wander, unit)} "
+                f"(root mean square, over {WANDER_TURNS} turning points) about the fitted decay, "
+                f"{100.0 * self.wander / self.separation:.0f} % of the {_shown(self.separation, unit)} that "
+                "separates a viscous decay from a friction decay through the same amplitudes; the swing's loss "
+                "and the other parameters stand; a record without the wander, a longer one, or fixing one of "
+                "them separates them")
+
+
+def envelope_wander(amplitude: TurnDifferences) -> EnvelopeWander | None:
+    """The wander of ``amplitude``'s differences against the C-R separation (None with fewer than
+    two averages of :data:`WANDER_TURNS` turning points, or no record amplitudes)."""
+    if amplitude.size is None or amplitude.swing.size < 3 * WANDER_TURNS:
+        return None
+    d = amplitude.difference
+    m = (d.size // 2) * 2
+    pairs = 0.5 * (d[0:m:2] + d[1:m:2])  # both sides: no side bias
+    w = WANDER_TURNS // 2
+    means = np.convolve(pairs, np.ones(w) / w, mode="valid")
+    noise = amplitude.scatter / math.sqrt(WANDER_TURNS)
+    spread = float(np.sqrt(np.mean(means ** 2)))
+    wander = math.sqrt(max(spread ** 2 - noise ** 2, 0.0))
+    k = amplitude.swing.astype(float)
+    a = np.abs(amplitude.size)
+    if np.any(a <= 0):
+        return None
+    exp_fit = np.exp(np.polyval(np.polyfit(k, np.log(a), 1), k))
+    line_fit = np.polyval(np.polyfit(k, a, 1), k)
+    separation = float(np.sqrt(np.mean((exp_fit - line_fit) ** 2)))
+    return EnvelopeWander(wander, noise, separation)
+
+
 # -- the decision -------------------------------------------------------------------------------
 
 @dataclass(frozen=True)
@@ -342,11 +418,23 @@ def judge(phase: TurnDifferences | None, amplitude: TurnDifferences | None, para
             else:
                 cautions.append(clause + _remedy(model, d))
     bad = [p for p in parameters if p.sigmas > PARAMETER_SIGMAS]
+    wander = envelope_wander(amplitude) if amplitude is not None and not findings else None
+    unsplit = wander is not None and wander.splits and {"viscous", "coulomb"} <= model.effects
+    losses = tuple(n for n in SPLIT if n.split(".")[0] in model.effects)
+    traded = [p for p in bad if p.material and p.name in losses] if unsplit else []
+    if unsplit:  # the split of the losses is the wander's: their differences decide nothing, the rest does
+        bad = [p for p in bad if p.name not in losses]
     said = ", ".join(f"{_short(p.name)} by {p.sigmas:.2g} standard errors ({p.waveform:.4g} against "
                      f"{p.turning_points:.4g}, {100 * p.relative:.2g} %)" for p in bad)
     material = [p for p in bad if p.material]
     split = _split_only(material) and not findings
     undetermined: tuple = ()
+    if unsplit:
+        undetermined = losses
+        trade = ", ".join(f"{_short(p.name)} {p.waveform:.4g} against {p.turning_points:.4g}" for p in traded)
+        cautions.insert(0, wander.clause(model.unit, losses) + (
+            f"; the waveform and turning-point fits trade one loss for the other too ({trade})"
+            if _split_only(traded) else ""))
     if split:  # one loss traded for another: the split is not determined, the rest stands
         undetermined = tuple(p.name for p in material)
         cautions.insert(0, f"{' and '.join(_short(n) for n in undetermined)} are not determined by this record: the "

@@ -22,7 +22,11 @@ Repairs, in this order, each recorded as a :class:`Repair` whose sentence says w
    burst spans.  A few short runs of a repeated stamp in a record stamped row by row are
    instead re-timed evenly between the neighbouring stamps;
    Stamps written with too few digits (never falling, a fifth of the rows sharing a stamp in
-   short runs) are re-timed on the same line;
+   short runs) are re-timed on the same line.  So are stamps that arrive in *clusters* (a
+   computer stamping rows as they come out of a logger's buffer: most steps shorter than half
+   the mean step, many of them above zero), but only when the readings show that the rows were
+   taken evenly: they step no more across a cluster's gap than within a cluster.  Otherwise the
+   stamps are kept as the sample times, with a note;
 5. *gaps*: a step longer than :data:`GAP_INTERVALS` intervals is kept (the fits take irregular
    times) and noted, as is a jitter of the steps above :data:`JITTER_NOTE` of the interval.
 
@@ -58,6 +62,10 @@ STALL_BURSTS = 4
 KEEP_FRACTION = 0.25  # a cut must keep at least this fraction of the rows
 INTERVAL_RANGE = (1e-9, 1e7)  # s: sampling intervals outside are not a recording's
 CATCH_UP = (2.0 / 3.0, 1.5)  # a repeated stamp re-timed locally: the steps it implies, in intervals
+CLUSTER_STEP = 0.5  # a step shorter than this many mean intervals lies inside a cluster of stamps
+EVEN_STEPS = 2.0  # readings stepping less than this many times more across a gap than inside: rows even
+RATE_WINDOW = 64  # rows: the stretches over which a refusal measures the rate it suggests
+SMOOTH = 0.5  # readings are smooth in row order: median |second difference| under this share of |first|
 
 
 @dataclass(frozen=True)
@@ -73,11 +81,14 @@ class Repair:
         Rows dropped or re-timed (0 for a note that changes nothing).
     text : str
         What was found and done, a plain sentence with counts and times (s).
+    doubt : bool
+        Whether the repair leaves the time base in doubt (a warning however few rows it touches).
     """
 
     kind: str
     rows: int
     text: str
+    doubt: bool = False
 
 
 @dataclass(frozen=True)
@@ -127,12 +138,13 @@ class TimeBase:
     @property
     def notes(self) -> list[str]:
         """Sentences of the repairs that are notes (all of them unless :attr:`large`)."""
-        return [r.text for r in self.repairs if not (self.large and r.rows)]
+        return [r.text for r in self.repairs if not (self.large and r.rows) and not r.doubt]
 
     @property
     def warnings(self) -> list[str]:
-        """Sentences of the repairs that are warnings: those changing rows, when :attr:`large`."""
-        return [r.text for r in self.repairs if self.large and r.rows]
+        """Sentences of the repairs that are warnings: those changing rows, when :attr:`large`, and
+        those that leave the time base in doubt."""
+        return [r.text for r in self.repairs if (self.large and r.rows) or r.doubt]
 
 
 def time_base(time, values=None, *, where_of_row: Callable[[int], str] | None = None,
@@ -174,16 +186,22 @@ def time_base(time, values=None, *, where_of_row: Callable[[int], str] | None = 
     if bad.size:
         raise _refuse(f"time value {float(t[bad[0]])!r} is not a finite number", where(bad[0]), t)
     idx = np.arange(t.size)
+    v_read = v
     repairs: list[Repair] = []
     with np.errstate(over="ignore", invalid="ignore"):
         if t.size >= 2 and not np.all(np.isfinite(np.diff(t))):
             raise _refuse(f"the time stamps span more than a float holds ({t.min():.3g} to {t.max():.3g} s)",
                           where(0), t)
         t, idx, v = _order(t, idx, v, where, repairs)
-        bursty = _bursty(t) or _rounded(t)
+        clusters = _clustered(t)
+        bursty = _bursty(t) or _rounded(t) or clusters
         t, idx = _repeated_rows(t, idx, v, bursty, repairs)
         t, idx = _stalls(t, idx, bursty, where, repairs)
-        t = _retime(t, idx, bursty, where, repairs)
+        kept = None if v_read is None else v_read[idx]
+        if clusters:
+            t = _clusters(t, idx, kept, where, repairs)
+        else:
+            t = _retime(t, idx, bursty, where, repairs)
         return _finish(t, idx, repairs, where, int(np.size(time)))
 
 
@@ -279,6 +297,20 @@ def _rounded(t) -> bool:
     d = np.diff(t)
     _, runs = _runs(t)
     return bool(np.all(d >= 0) and np.mean(d == 0) >= 0.2 and runs.max() < STALL_ROWS)
+
+
+def _clustered(t) -> bool:
+    """Whether the stamps arrive in clusters: never falling, most steps shorter than
+    :data:`CLUSTER_STEP` of the mean step, and most of those short steps above zero (stamps
+    written with too few digits repeat exactly instead)."""
+    if t.size < 20:
+        return False
+    d = np.diff(t)
+    mean = (t[-1] - t[0]) / (t.size - 1)
+    if not (mean > 0 and np.all(d >= 0)):
+        return False
+    short = d < CLUSTER_STEP * mean
+    return bool(short.mean() >= 0.5 and (~short).sum() >= 3 and np.mean(d[short] > 0) >= 0.5)
 
 
 def _repeated_rows(t, idx, v, bursty: bool, repairs):
@@ -382,8 +414,60 @@ def _retime(t, idx, bursty: bool, where, repairs):
     return t
 
 
+def _clusters(t, idx, v, where, repairs):
+    """Stamps in clusters: every row on a line when the readings say the rows are even, else the
+    stamps kept (a note).  The line goes through the clusters' last rows: a buffer is sent after its
+    last row is taken, so the last row's stamp is late by the transfer's latency only."""
+    mean = (t[-1] - t[0]) / (t.size - 1)
+    d = np.diff(t)
+    starts = np.flatnonzero(np.r_[True, d >= CLUSTER_STEP * mean])
+    runs = np.diff(np.r_[starts, t.size])
+    across, inside = _steps_of_readings(t, v)
+    said = (f"time stamps arrive in clusters (up to {runs.max()} rows; "
+            f"{100.0 * np.mean(d < CLUSTER_STEP * mean):.0f} % of the steps under half the mean step)")
+    if not (math.isfinite(across) and across / inside < EVEN_STEPS):
+        if math.isfinite(across):
+            repairs.append(Repair("clusters", 0, f"{said}: the readings step {across / inside:.3g} times more "
+                                                 "across a cluster's gap than within it, as samples taken in bursts "
+                                                 "do, so the stamps are kept as the sample times"))
+        else:
+            repairs.append(Repair("clusters", 0, f"{said}: the readings cannot tell whether the rows were taken "
+                                                 "evenly (stamps of arrival can be a tenth of a second late), so the "
+                                                 f"stamps are kept as the sample times; if the logger samples evenly, "
+                                                 f"{FIX}", doubt=True))
+        return t
+    line = _burst_line(t, idx, starts + runs - 1, runs, where, [])  # rows arrive after the last is taken
+    off = float(np.max(np.abs(t - line)))
+    repairs.append(Repair("clusters", int(t.size),
+                          f"{said}, but the readings step as evenly across a cluster's gap as within it "
+                          f"({across / inside:.2f} times): the logger sampled evenly and the stamps are arrival "
+                          f"times. All {t.size} rows re-timed by a straight line of stamp on row number, "
+                          f"{(t.size - 1) / (line[-1] - line[0]):.6g} Hz (every stamp within {off:.3g} s of it)"))
+    return line
+
+
+def _steps_of_readings(t, v) -> tuple[float, float]:
+    """Median size of the readings' steps across the clusters' gaps and within the clusters.
+
+    ``(nan, nan)`` when the readings cannot say: none given, fewer than ten steps of either kind,
+    or readings not smooth in row order (noise: the median second difference over
+    :data:`SMOOTH` of the median first difference)."""
+    if v is None or t.size < 20:
+        return math.nan, math.nan
+    mean = (t[-1] - t[0]) / (t.size - 1)
+    d, dv = np.diff(t), np.abs(np.diff(v))
+    gap, inside = d > 2.0 * mean, d < CLUSTER_STEP * mean
+    if gap.sum() < 10 or inside.sum() < 10:
+        return math.nan, math.nan
+    small = float(np.median(dv[inside]))
+    if not (small > 0 and np.median(np.abs(np.diff(v, 2))) <= SMOOTH * np.median(dv)):
+        return math.nan, math.nan
+    return float(np.median(dv[gap])), small
+
+
 def _burst_line(t, idx, starts, runs, where, repairs):
-    """Every row on a robust line of stamp on row number through the bursts' first rows."""
+    """Every row on a robust line of stamp on row number through the rows ``starts`` (the bursts'
+    first rows)."""
     x, y = starts.astype(float), t[starts]
     keep = np.ones(x.size, bool)
     slope = intercept = math.nan
@@ -451,15 +535,16 @@ def _typical_step(t) -> float:
 
 
 def _rate_guess(t) -> float:
-    """Samples per second the stamps imply, or nan when they do not say: the rows per stamp
-    (bursts, a stall left out) over the median step between stamps."""
+    """Samples per second the stamps imply, or nan when they do not say: the median over
+    stretches of :data:`RATE_WINDOW` rows or a twentieth of the record (the longer) of rows over
+    the time spanned (robust to bursts and clusters, a stall, a jump or a reset of the clock)."""
     t = t[np.isfinite(t)]
     if t.size < 3 or np.mean(np.diff(t) < 0) > 0.1:  # stamps mostly out of order say nothing of a rate
         return math.nan
-    _, runs = _runs(t)
-    runs = runs[runs < max(STALL_ROWS, STALL_BURSTS * float(np.median(runs)))]
-    step = _typical_step(t)
-    rate = float(np.mean(runs)) / step if runs.size and step > 0 else math.nan
+    w = min(max(RATE_WINDOW, t.size // 20), t.size - 1)
+    spans = t[w::w] - t[:-w:w][:t[w::w].size]
+    spans = spans[spans > 0]
+    rate = w / float(np.median(spans)) if spans.size else math.nan
     return rate if 1.0 / INTERVAL_RANGE[1] <= rate <= 1.0 / INTERVAL_RANGE[0] else math.nan
 
 

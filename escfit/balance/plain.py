@@ -24,6 +24,7 @@ torque ``R I`` in N m when the scene gives the inertia ``I``.
 
 from __future__ import annotations
 
+import json
 import math
 import re
 import tomllib
@@ -51,6 +52,15 @@ def _scene(attrs: Mapping[str, Any]) -> dict:
         return tomllib.loads(attrs.get("scene", "") or "")
     except tomllib.TOMLDecodeError:
         return {}
+
+
+def _undetermined(attrs: Mapping[str, Any]) -> list[str]:
+    """The parameters the fit marked as not determined by the record."""
+    try:
+        names = json.loads(attrs.get("undetermined", "[]") or "[]")
+    except (TypeError, ValueError):
+        return []
+    return [str(n) for n in names] if isinstance(names, list) else []
 
 
 def plain_sentences(draws: Mapping[str, Any], attrs: Mapping[str, Any], observed=None) -> list[str]:
@@ -90,10 +100,15 @@ def plain_sentences(draws: Mapping[str, Any], attrs: Mapping[str, Any], observed
         shares = [(share, words) for share, words in (
             (v / total, "viscous damping (C)"), (f / total, "friction in the pivot (R)"),
             (a / total, "air drag (D)")) if np.nanmedian(share) > 0]
-        if shares:
+        q = f"Q = {sig(quantiles(math.pi / (per_period / 100))[0])} at this amplitude."
+        unsplit = [words for words, n in (("viscous damping (C)", "viscous.C"), ("friction in the pivot (R)", "coulomb.R"),
+                                          ("air drag (D)", "drag.D")) if n in _undetermined(attrs)]
+        if len(unsplit) >= 2:
+            out.append(f"How that loss divides between {join_words(unsplit)} is not determined by this record "
+                       f"(the warnings say why); {q}")
+        elif shares:
             parts = [f"{share_words(s)} is {words}" for s, words in sorted(shares, key=lambda p: -np.nanmedian(p[0]))]
-            out.append(f"Of that loss, {join_words(parts)}; Q = {sig(quantiles(math.pi / (per_period / 100))[0])} "
-                       f"at this amplitude.")
+            out.append(f"Of that loss, {join_words(parts)}; {q}")
         halving = math.log(2) / -np.log1p(-np.minimum(per_period / 100, 1 - 1e-12)) * 2 * math.pi / w0
         out.append(f"At that rate the amplitude halves in {interval_words(halving, 's')}.")
         minute = total * w0 * HALF_SWINGS_PER_MINUTE * k
