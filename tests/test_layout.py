@@ -251,3 +251,18 @@ def test_layers_above_the_families_never_branch_on_a_family_name():
              for line in _compares_family_name(ast.parse(p.read_text(encoding="utf-8")), names)]
     assert not found, "comparisons with a family's name (ask the family instead): " + ", ".join(found)
     assert _compares_family_name(ast.parse('if m == "balance": pass'), names), "the check finds nothing"
+
+
+def test_every_long_test_named_exists():
+    """Each key of the long tests' list (tests/conftest.py) names a test function of its file, so that
+    a renamed test does not silently fall back into the default run."""
+    import re
+
+    from .conftest import LONG
+
+    tests = ROOT.parent / "tests"
+    for key in sorted(LONG):
+        file, _, name = key.partition("::")
+        function = name.split("[")[0]
+        text = (tests / file).read_text()
+        assert re.search(rf"^def {re.escape(function)}\(", text, re.M), f"{key}: no such test"
