@@ -118,24 +118,25 @@ def plain_sentences(draws: Mapping[str, Any], attrs: Mapping[str, Any], observed
 
 
 def _escapement(attrs, draws, scene, observed, w0, c, rs, k, unit) -> list[str]:
-    """Sentences for a balance driven by an escapement: where the impulse goes, the friction torque."""
+    """Sentences for a balance driven by an escapement: the friction torque, where the impulse goes
+    and the amplitude at which it makes up for the losses."""
     windows = scene.get("effects", {}).get("escapement", [])
     inertia = inertia_of(attrs)
     amp = _amplitude(draws, observed)
     out = []
     for name, r in rs.items():
         torque = f", a friction torque of {interval_words(r * inertia, 'N m')}" if inertia is not None else ""
-        out.append(f"Friction in the pivot{_load_words(name)} would take {interval_words(2 * r / w0 ** 2 * k, unit)} "
-                   f"of amplitude each half swing without the escapement{torque}.")
+        step = 2 * r / w0 ** 2  # rad of amplitude per half swing
+        if amp is not None and np.median(step) >= amp:
+            out.append(f"Friction in the pivot{_load_words(name)} is strong enough to stop the balance within a half "
+                       f"swing from {sig(amp * k, 3)} {unit} without the escapement: it takes "
+                       f"{interval_words(step * k, unit)} of amplitude each half swing{torque}.")
+        else:
+            out.append(f"Friction in the pivot{_load_words(name)} would take {interval_words(step * k, unit)} "
+                       f"of amplitude each half swing without the escapement{torque}.")
     if amp is None:
         return out
-    given = np.zeros_like(w0)
-    for i, window in enumerate(windows, start=1):
-        x = draws.get(f"escapement[{i}].X")
-        if x is None or window.get("kind") != "impulse":
-            continue
-        lo, hi = max(float(window.get("from", 0.0)), -amp), min(float(window.get("to", 0.0)), amp)
-        given = given + np.asarray(x, float) * max(hi - lo, 0.0)
+    given = _impulse(windows, draws, amp, w0)
     if not np.any(given > 0):
         return out
     for name, r in (rs or {"": np.zeros_like(w0)}).items():
@@ -147,7 +148,46 @@ def _escapement(attrs, draws, scene, observed, w0, c, rs, k, unit) -> list[str]:
                    " The rest of the impulse goes into the unlocking and a growing swing." if taken < 0.9 else "")
         out.append(f"At {sig(amp * k, 3)} {unit} of amplitude{_load_words(name)}, {join_words(parts)} of the energy "
                    f"the escapement's impulse gives each half swing.{verdict}")
+        # Monday's phase convention gains and loses constants per half swing: no energy balance in A
+        settles = balance_amplitude(windows, draws, w0, c, r) if scene.get("switching") != "phase" else [np.nan]
+        if np.all(np.isfinite(settles)) and np.median(settles) > 0:
+            out.append(f"The impulse makes up for these losses at an amplitude of {interval_words(settles * k, unit)}"
+                       f"{_load_words(name)}: there the balance settles.")
     return out
+
+
+def _impulse(windows, draws, amp, w0) -> np.ndarray:
+    """Energy per unit inertia the impulse windows give each half swing of amplitude ``amp`` (rad):
+    ``X`` times the part of each impulse window the swing crosses ((rad/s)^2)."""
+    given = np.zeros_like(w0)
+    amp = np.asarray(amp, float)
+    for i, window in enumerate(windows, start=1):
+        x = draws.get(f"escapement[{i}].X")
+        if x is None or window.get("kind") != "impulse":
+            continue
+        lo = np.maximum(float(window.get("from", 0.0)), -amp)
+        hi = np.minimum(float(window.get("to", 0.0)), amp)
+        given = given + np.asarray(x, float) * np.maximum(hi - lo, 0.0)
+    return given
+
+
+def balance_amplitude(windows, draws, w0, c, r) -> np.ndarray:
+    """The amplitude (rad) at which the impulse gives what friction and viscous damping take each
+    half swing, ``2 R A + (pi/2) C omega0 A^2 = X w(A)``, per draw (nan where none).
+
+    The impulse's width ``w(A)`` is the part of its windows a swing of amplitude ``A`` crosses, so
+    the balance is found by bisection on ``A`` up to a full turn either side (2 pi rad).
+    """
+    def excess(a):
+        return _impulse(windows, draws, a, w0) - 2 * r * a - math.pi / 2 * c * w0 * a ** 2
+
+    lo, hi = np.full_like(w0, 1e-9), np.full_like(w0, 2 * math.pi)
+    ok = (excess(lo) > 0) & (excess(hi) < 0)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        up = excess(mid) > 0
+        lo, hi = np.where(up, mid, lo), np.where(up, hi, mid)
+    return np.where(ok, 0.5 * (lo + hi), np.nan)
 
 
 def _amplitude(draws, observed) -> float | None:

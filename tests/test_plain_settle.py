@@ -1,0 +1,50 @@
+"""Where a balance driven by an escapement settles, in words (escfit.balance.plain).
+
+The plain summary states the amplitude at which the impulse makes up for friction and viscous
+damping, from the energy balance of a half swing (``2 R A + (pi/2) C omega0 A^2 = X w``).  The
+reference is the solver: the same balance run for 400 half swings from 3 rad settles at the
+amplitude the sentence gives.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from escfit.balance import solve
+from escfit.balance.plain import balance_amplitude, plain_sentences
+
+OMEGA0 = 15.78  # rad/s
+WINDOW = {"kind": "impulse", "from": -0.28, "to": 0.28}  # rad
+
+
+def _effects(c: float, r: float, x: float) -> str:
+    return (f"[effects.viscous]\nC = {c!r}\n[effects.coulomb]\nR = {r!r}\n[[effects.escapement]]\nkind = \"impulse\"\n"
+            f"from = -0.28\nto = 0.28\nX = {x!r}\n")
+
+
+@pytest.mark.parametrize("c, r, x", [(0.5, 100.0, 1000.0), (0.0, 100.0, 1000.0), (2.0, 20.0, 800.0)])
+def test_the_balance_settles_where_the_energy_of_a_half_swing_balances(make_scene, c, r, x):
+    run = solve(make_scene(omega0=OMEGA0, theta0=3.0, swings=400, switching="angle", effects=_effects(c, r, x)),
+                "exact")
+    settled = float(np.asarray(run.amplitude)[-1])
+    got = balance_amplitude([WINDOW], {"escapement[1].X": np.array([x])}, np.array([OMEGA0]), np.array([c]),
+                            np.array([r]))
+    assert float(got[0]) == pytest.approx(settled, rel=3e-3)
+
+
+def test_the_summary_says_it_and_that_strong_friction_stops_a_free_balance():
+    draws = {"oscillator.omega0": np.full(5, OMEGA0), "oscillator.theta0": np.full(5, 6.28),
+             "viscous.C": np.full(5, 0.5), "coulomb.R[load=330 g]": np.full(5, 1000.0),
+             "escapement[1].X": np.full(5, 4000.0)}
+    attrs = {"scene": 'model = "balance"\nswitching = "angle"\n[[effects.escapement]]\nkind = "impulse"\n'
+                      'from = -0.28\nto = 0.28\nX = 4000.0\n'}
+    text = " ".join(plain_sentences(draws, attrs))
+    # 2 R / omega0^2 = 8.03 rad per half swing, more than the 6.28 rad the balance starts from
+    assert "is strong enough to stop the balance within a half swing from 360 deg without the escapement" in text
+    want = np.degrees(balance_amplitude([WINDOW], {"escapement[1].X": np.array([4000.0])}, np.array([OMEGA0]),
+                                        np.array([0.5]), np.array([1000.0]))[0])
+    said = re.search(r"The impulse makes up for these losses at an amplitude of ([\d.]+) deg", text)
+    assert said and float(said.group(1)) == pytest.approx(want, rel=0.01), text
