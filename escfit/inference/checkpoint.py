@@ -14,7 +14,10 @@ SHA-256, a hash of the scene text, the family's options, walkers, moves and seed
 :func:`run_identity`), and a resume whose identity differs is refused with the first
 difference named.  What it holds is checked before it is used, checksums or not: finite
 draws, a generator state numpy can continue from (an all-zero key would hang it), counts
-within the run.
+within the run, moves that agree with the accepted counts and walkers that stood still with
+their log-probabilities unchanged (:func:`_check_moves`).  The draws of every step against
+the bounds, and the log-probabilities of five steps against the posterior, are checked by
+:func:`escfit.inference.mcmc.resumable`, which has the problem.
 
 The chain and log-probabilities are the sampler's own: in the coordinates it moves in
 (:mod:`escfit.inference.space`; ``coordinates`` names them, ``"identity"`` for the problem's
@@ -226,6 +229,27 @@ def _short(value: Any) -> str:
     return text if len(text) <= 60 else text[:57] + "...'"
 
 
+def _check_moves(ck: Checkpoint) -> str | None:
+    """What contradicts the chain's own record of its moves, or None.
+
+    Between two stored steps a walker either moved (an accepted proposal) or stayed where it
+    was with the same log-probability: emcee never changes one without the other.  So a walker
+    cannot have moved more often than it had proposals accepted, and one that stood still kept
+    its log-probability bit for bit.
+    """
+    moved = np.any(ck.chain[1:] != ck.chain[:-1], axis=2)
+    moves = moved.sum(axis=0)
+    if np.any(moves > ck.accepted):
+        w = int(np.argmax(moves > ck.accepted))
+        return f"walker {w} moved {int(moves[w])} times with {int(ck.accepted[w])} accepted proposals"
+    changed = ~moved & (ck.log_prob[1:] != ck.log_prob[:-1])
+    if np.any(changed):
+        t, w = (int(i[0]) for i in np.nonzero(changed))
+        return (f"walker {w} stood still at step {t + 2} of {ck.steps} but its log-probability changed "
+                f"from {ck.log_prob[t, w]:.10g} to {ck.log_prob[t + 1, w]:.10g}")
+    return None
+
+
 def _check_contents(ck: Checkpoint, where: str) -> None:
     """Refuse contents no run of escfit can have written (checksums catch damage, not tampering)."""
     shape = ck.chain.shape
@@ -241,5 +265,7 @@ def _check_contents(ck: Checkpoint, where: str) -> None:
     elif (not (np.any(keys[1:]) or keys[0] & 0x80000000)  # MT19937 uses only the top bit of the first word
           or not 0 <= pos <= 624 or has_gauss not in (0, 1) or not math.isfinite(gauss)):
         problem = "a random-generator state numpy cannot continue from"
+    else:
+        problem = _check_moves(ck)
     if problem is not None:
         raise ResultsError(f"damaged checkpoint ({problem}); pass --force to start again", where)
