@@ -19,6 +19,7 @@ import pytest
 
 from .conftest import DATASETS
 from .test_cli_safety import assert_refused, run
+from .test_fuzz_inputs import memory_ceiling
 
 RIG = DATASETS / "friction" / "monday1965_session_1095_steel.csv"
 RIG_SCENE = DATASETS / "friction" / "monday1965_rig.toml"
@@ -119,3 +120,114 @@ def test_an_untouched_checkpoint_still_resumes(work):
     r = run(*FIT, "--resume")
     assert r.exit_code == 0, r.output
     assert (work / "r.h5").is_file() and not (work / "r.h5.emcee").exists()
+
+
+# -- declared layouts of checkpoints and results files, checked before reading -------------------
+
+MEMORY_CEILING = 1024 << 20  # address space a refusal may add: reading a declared size would exceed it
+
+
+def unwritten(name: str, shape, dtype="f8"):
+    """Replace array ``name`` by one declaring ``shape`` whose chunks were never written."""
+    def change(f):
+        del f[name]
+        f.create_dataset(name, shape=shape, dtype=dtype, chunks=tuple(min(n, 1 << 14) for n in shape))
+    return change
+
+
+def replaced(name: str, fn):
+    def change(f):
+        data = fn(f[name][()])
+        del f[name]
+        f.create_dataset(name, data=data)
+    return change
+
+
+def deleted(*names):
+    def change(f):
+        for name in names:
+            del f[name]
+    return change
+
+
+def root_attr(key, value=None):
+    def change(f):
+        if value is None:
+            del f.attrs[key]
+        else:
+            f.attrs[key] = value
+    return change
+
+
+def shorter_along_its_dimension(name: str):
+    """``name`` cut to two values, still attached to its (longer) dimension."""
+    def change(f):
+        scale = f[f[name].dims[0][0].name]
+        data = f[name][()][:2]
+        del f[name]
+        f.create_dataset(name, data=data)
+        f[name].dims[0].attach_scale(scale)
+    return change
+
+
+def damage(path, change):
+    with h5py.File(path, "r+") as f:
+        change(f)
+
+
+@pytest.mark.parametrize("change, fragments", [
+    (unwritten("chain", (20_000_000, 12, 5)), ["array chain declares (20000000, 12, 5) values (9.6 GB)"]),
+    (unwritten("log_prob", (60, 12_000_000)), ["array log_prob declares"]),
+    (replaced("log_prob", lambda lp: lp[:, :6]), ["array log_prob has shape (60, 6), expected (60, 12)"]),
+    (deleted("accepted"), ["its accepted array is missing"]),
+    (replaced("mt_keys", lambda k: k.astype("f8")), ["mt_keys array holds 8-byte values"]),
+    (root_attr("names"), ["format version 3"]),
+], ids=["chain-of-9.6-gb-unwritten", "log-prob-declaring-144-mb", "log-prob-of-half-the-walkers", "no-accepted",
+        "generator-key-of-doubles", "no-names"])
+def test_a_checkpoint_with_a_missing_inconsistent_or_inflated_part_is_refused_before_reading(work, change,
+                                                                                            fragments):
+    damage(work / "r.h5.emcee", change)
+    with memory_ceiling(MEMORY_CEILING):
+        assert_refused(work, [*FIT, "--resume"], "r.h5.emcee", *fragments, "--force")
+
+
+EMCEE, LSQ = "e.h5", "l.h5"
+RESULTS_DAMAGE = [
+    ("posterior-declaring-80-gb", EMCEE, unwritten("posterior/rig.k", (10, 1_000_000_000)),
+     ["array posterior/rig.k declares (10, 1000000000) values (80 GB) but the file holds 0 bytes"]),
+    ("lsq-values-declaring-8-gb", LSQ, unwritten("least_squares/value", (1_000_000_000,)),
+     ["array least_squares/value declares"]),
+    ("predictive-declaring-800-mb", EMCEE, unwritten("posterior_predictive/expected", (10, 10, 10_000_000)),
+     ["posterior_predictive/expected"]),
+    ("posterior-group-removed", EMCEE, deleted("posterior"), ["its posterior group is missing"]),
+    ("diagnostics-group-removed", EMCEE, deleted("diagnostics"), ["its diagnostics group is missing"]),
+    ("least-squares-group-removed", LSQ, deleted("least_squares"), ["its least_squares group is missing"]),
+    ("a-parameter-removed", EMCEE, deleted("posterior/rig.k"), ["posterior/rig.k is missing"]),
+    ("rhat-removed", EMCEE, deleted("diagnostics/rhat"), ["diagnostics/rhat is missing"]),
+    ("values-shorter-than-their-dimension", LSQ, shorter_along_its_dimension("least_squares/value"),
+     ["least_squares/value has 2 values along 'parameter', which has 5"]),
+    ("values-without-a-dimension", LSQ, replaced("least_squares/stderr", lambda v: v),
+     ["least_squares/stderr has no named dimension"]),
+    ("parameters-attribute-removed", LSQ, root_attr("parameters"), ["'parameters' is missing"]),
+    ("parameters-attribute-not-json", LSQ, root_attr("parameters", "[rig.k"), ["'parameters' is not a JSON list"]),
+    ("units-attribute-a-list", LSQ, root_attr("units", "[1, 2]"), ["'units' is not a JSON object"]),
+]
+
+
+@pytest.mark.parametrize("file, change, fragments", [r[1:] for r in RESULTS_DAMAGE], ids=[r[0] for r in RESULTS_DAMAGE])
+@pytest.mark.parametrize("command", ["summary", "report", "compare"])
+def test_a_results_file_with_a_missing_inconsistent_or_inflated_part_is_refused_before_reading(
+        work, command, file, change, fragments):
+    shutil.copy(work / file, work / "whole.h5")  # the same fit undamaged, for compare
+    damage(work / file, change)
+    args = {"summary": ["summary", file], "report": ["report", file, "--format", "md"],
+            "compare": ["compare", "whole.h5", file]}[command]
+    with memory_ceiling(MEMORY_CEILING):
+        assert_refused(work, args, file, *fragments)
+
+
+def test_the_files_made_here_are_read_whole(work):
+    """The checks refuse nothing escfit writes: both results files are summarised."""
+    for args in (["summary", EMCEE], ["summary", LSQ]):
+        r = run(*args)
+        assert r.exit_code == 0, (args, r.output)
