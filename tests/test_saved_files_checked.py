@@ -231,3 +231,28 @@ def test_the_files_made_here_are_read_whole(work):
     for args in (["summary", EMCEE], ["summary", LSQ]):
         r = run(*args)
         assert r.exit_code == 0, (args, r.output)
+
+
+def test_a_file_given_twice_under_two_names_is_refused(work):
+    (work / "link.h5").symlink_to("l.h5")
+    assert_refused(work, ["compare", "l.h5", "./l.h5"], "the same results file is given twice (as 'l.h5' and './l.h5')")
+    assert_refused(work, ["compare", "l.h5", "link.h5"], "link.h5: the same results file is given twice")
+
+
+def test_a_refusal_of_a_results_file_is_one_line_without_third_party_warnings(work):
+    """In a process of its own (the test runner would catch the warnings): a data array with no
+    named dimension made xarray warn about 'phony_dims' on stderr before escfit's line."""
+    import os
+    import subprocess
+    import sys
+
+    from .conftest import ROOT
+
+    damage(work / "l.h5", replaced("least_squares/stderr", lambda v: v))
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    env.pop("PYTHONWARNINGS", None)
+    r = subprocess.run([sys.executable, "-c", "from escfit.cli.main import main; main()", "summary", "l.h5"],
+                       capture_output=True, text=True, env=env, cwd=work, timeout=300)
+    assert r.returncode == 2, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "l.h5" in r.stderr and "least_squares/stderr" in r.stderr
