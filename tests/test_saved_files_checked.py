@@ -20,6 +20,7 @@ import pytest
 from .conftest import DATASETS
 from .test_cli_safety import assert_refused, run
 from .test_fuzz_inputs import memory_ceiling
+from .test_resume_identity import _tamper as tamper  # datasets rewritten, checksums valid
 
 RIG = DATASETS / "friction" / "monday1965_session_1095_steel.csv"
 RIG_SCENE = DATASETS / "friction" / "monday1965_rig.toml"
@@ -58,15 +59,6 @@ def work(made, tmp_path, monkeypatch):
         shutil.copy(made / name, tmp_path / name)
     monkeypatch.chdir(tmp_path)
     return tmp_path
-
-
-def tamper(path, **changes):
-    """Rewrite datasets through h5py (valid checksums): ``name=fn(old values)``."""
-    with h5py.File(path, "r+") as f:
-        for name, fn in changes.items():
-            data = fn(f[name][()])
-            del f[name]
-            f.create_dataset(name, data=data, fletcher32=True)
 
 
 def first_steps(value_fn, steps=slice(0, 1)):

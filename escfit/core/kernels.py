@@ -236,7 +236,7 @@ def notice_compilation(py_func: Callable, *, stream=None) -> bool:
         Whether the line was written.
     """
     global _NOTICE_GIVEN
-    if _NOTICE_GIVEN or os.environ.get("ESCFIT_QUIET_COMPILE", "") not in ("", "0"):
+    if _NOTICE_GIVEN or _quiet():
         return False
     if stream is None:
         stream = sys.stderr
@@ -248,11 +248,23 @@ def notice_compilation(py_func: Callable, *, stream=None) -> bool:
     _NOTICE_GIVEN = True
     parts = str(getattr(py_func, "__module__", "") or "").split(".")
     what = _WHAT.get(parts[1] if len(parts) > 1 else "", "numerical kernels")
+    _write(stream, f"escfit: compiling {what} for this machine (first run only, up to a few minutes)\n")
+    return True
+
+
+def _quiet() -> bool:
+    """Whether ``ESCFIT_QUIET_COMPILE`` silences the notices."""
+    return os.environ.get("ESCFIT_QUIET_COMPILE", "") not in ("", "0")
+
+
+def _write(stream, text: str) -> bool:
+    """Write ``text`` to ``stream``; False when there is no usable stream (closed, replaced, or a
+    pipe whose reader left)."""
     try:
-        stream.write(f"escfit: compiling {what} for this machine (first run only, up to a few minutes)\n")
+        stream.write(text)
         stream.flush()
-    except (OSError, ValueError):  # no usable stderr (closed, or a pipe whose reader left)
-        pass
+    except (OSError, ValueError, AttributeError):
+        return False
     return True
 
 
@@ -296,16 +308,12 @@ def notice_uncached(*, stream=None) -> bool:
         Whether the line was written.
     """
     global _UNCACHED_GIVEN
-    if _UNCACHED_GIVEN or os.environ.get("ESCFIT_QUIET_COMPILE", "") not in ("", "0"):
+    if _UNCACHED_GIVEN or _quiet():
         return False
     _UNCACHED_GIVEN = True
-    try:
-        (stream or sys.stderr).write("note: no writable cache folder for compiled kernels (NUMBA_CACHE_DIR, the "
-                                     "package's __pycache__, the home cache folder): they are compiled in every "
-                                     "run; set NUMBA_CACHE_DIR to a writable folder to keep them\n")
-    except (OSError, ValueError, AttributeError):  # no usable stderr
-        return False
-    return True
+    return _write(stream or sys.stderr, "note: no writable cache folder for compiled kernels (NUMBA_CACHE_DIR, the "
+                  "package's __pycache__, the home cache folder): they are compiled in every run; set "
+                  "NUMBA_CACHE_DIR to a writable folder to keep them\n")
 
 
 class _Uncached(caching.NullCache):
