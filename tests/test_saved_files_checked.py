@@ -248,3 +248,22 @@ def test_a_refusal_of_a_results_file_is_one_line_without_third_party_warnings(wo
     assert r.returncode == 2, r.stderr
     assert len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert "l.h5" in r.stderr and "least_squares/stderr" in r.stderr
+
+
+def test_declared_sizes_are_judged_by_what_the_file_holds(tmp_path):
+    """The layout check itself: 2.4 MB of written values along a dimension without a coordinate
+    pass (netCDF-4 leaves that dimension's 1.2 MB placeholder unwritten, and no reader reads it);
+    the same values declared but never written are refused, naming the array."""
+    import xarray as xr
+
+    from escfit.core.errors import ResultsError
+    from escfit.core.h5layout import check_backed, read_layout
+    from escfit.core.h5write import write_netcdf
+
+    path = tmp_path / "long.h5"
+    write_netcdf(xr.Dataset({"x": (("obs",), np.arange(300_000.0))}), path)
+    check_backed(read_layout(path))
+    with h5py.File(path, "r+") as f:
+        f.create_dataset("y", shape=(300_000,), dtype="f8", chunks=(1 << 14,))
+    with pytest.raises(ResultsError, match=r"array y declares \(300000,\) values \(2.4 MB\) but the file holds 0 bytes"):
+        check_backed(read_layout(path))

@@ -11,7 +11,8 @@ metadata only (:func:`read_layout`), and check it:
 * against the file's size (:func:`check_backed`): together the arrays cannot occupy more bytes
   than the file has, and each must hold the bytes it declares (uncompressed arrays, which is
   all escfit writes) or a bounded multiple of them (compressed arrays, :data:`MAX_RATIO`),
-  apart from :data:`UNBACKED_SLACK` bytes in all; the memory a reader then needs is bounded by
+  apart from :data:`UNBACKED_SLACK` bytes in all and from the placeholders netCDF-4 writes for
+  dimensions without a coordinate (never read); the memory a reader then needs is bounded by
   the file's size;
 * against the dimensions each array is said to run along (:func:`check_dimensions`): every
   axis of an array is a netCDF dimension whose length is that of its dimension scale;
@@ -39,6 +40,8 @@ __all__ = ["Array", "Layout", "read_layout", "check_backed", "check_dimensions",
 MAX_RATIO = 64
 # Declared bytes not held in the file, over all arrays (empty or tiny arrays left unwritten)
 UNBACKED_SLACK = 1 << 20
+# How netCDF-4 names a dimension scale that holds no values (a dimension without a coordinate)
+NOT_A_VARIABLE = b"This is a netCDF dimension but not a netCDF variable"
 # HDF5 filters that do not compress: shuffle (2) and Fletcher-32 checksums (3)
 PLAIN_FILTERS = (2, 3)
 
@@ -60,6 +63,9 @@ class Array:
         Whether a compressing filter is applied.
     dims : tuple
         Per axis, ``(dimension name, its length)`` from the attached dimension scale, or None.
+    placeholder : bool
+        A netCDF dimension that is no variable: a scale whose values are never written nor
+        read (netCDF-4 readers take only its length).
     """
 
     name: str
@@ -68,6 +74,7 @@ class Array:
     stored: int
     compressed: bool
     dims: tuple[tuple[str, int] | None, ...]
+    placeholder: bool = False
 
     @property
     def declared(self) -> int:
@@ -146,8 +153,10 @@ def _array(name: str, ds) -> Array:
             continue
         scale = scales[0]
         dims.append((scale.name.rsplit("/", 1)[-1], int(scale.shape[0]) if scale.shape else 0))
+    label = ds.attrs.get("NAME", b"") if h5ds.is_scale(ds.id) else b""
+    placeholder = (label if isinstance(label, bytes) else str(label).encode()).startswith(NOT_A_VARIABLE)
     return Array(name, tuple(int(n) for n in ds.shape), int(ds.dtype.itemsize), int(ds.id.get_storage_size()),
-                 any(code not in PLAIN_FILTERS for code in filters), tuple(dims))
+                 any(code not in PLAIN_FILTERS for code in filters), tuple(dims), placeholder)
 
 
 def _human(nbytes: float) -> str:
@@ -164,7 +173,7 @@ def check_backed(layout: Layout) -> None:
         raise ResultsError(f"damaged file: its arrays say they occupy {_human(stored)}, the file has "
                            f"{_human(layout.size)}", layout.where)
     unbacked = 0
-    for a in sorted(layout.arrays.values(), key=lambda a: -a.declared):
+    for a in sorted((a for a in layout.arrays.values() if not a.placeholder), key=lambda a: -a.declared):
         held = a.stored * (MAX_RATIO if a.compressed else 1)
         unbacked += max(0, a.declared - held)
         if unbacked > UNBACKED_SLACK:
