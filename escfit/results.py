@@ -26,10 +26,11 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from .core.h5write import write_netcdf
 from .core.errors import ResultsError
+from .core.h5write import write_netcdf
+from .core.inputs import check_input_file
 
-__all__ = ["SCHEMA_VERSION", "FitResult", "load_fit", "write_fit"]
+__all__ = ["SCHEMA_VERSION", "FitResult", "load_fit", "write_fit", "check_results_file"]
 
 SCHEMA_VERSION = "escfit-fit/1"
 
@@ -162,28 +163,120 @@ def _lsq_intervals(sel: xr.Dataset, value: float, stderr: float) -> dict[str, fl
 def load_fit(path: str | Path) -> FitResult:
     """Read a results file written by :func:`escfit.fit`.
 
+    Its layout is checked first, from the file's metadata alone (:func:`check_results_file`),
+    so that a damaged, incomplete or inflated file is refused before its arrays are read.
+
     Raises
     ------
     ResultsError
-        Missing file, not an escfit results file, or an unknown schema version.
+        Missing file (or not a regular file), not an escfit results file, an unknown schema
+        version, or a file whose layout :func:`check_results_file` refuses.
     """
-    p = Path(path)
-    if not p.is_file():
-        raise ResultsError("results file not found", str(path))
-    try:
-        with xr.open_datatree(p, engine="h5netcdf") as opened:  # read into memory, then let go of the file
-            tree = opened.load()
-    except Exception as exc:
-        import h5py
+    import warnings
 
-        if not h5py.is_hdf5(p):
-            raise ResultsError("not an HDF5 file: give a results file written by escfit fit", str(path)) from None
+    p = Path(path)
+    check_input_file(p, "results", ResultsError)
+    check_results_file(p)
+    try:
+        with warnings.catch_warnings():  # a reader's remarks on a file already checked are not the user's business
+            warnings.simplefilter("ignore")
+            with xr.open_datatree(p, engine="h5netcdf") as opened:  # read into memory, then let go of the file
+                tree = opened.load()
+    except Exception as exc:
         first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise ResultsError(f"damaged or unreadable results file ({first[:160]})", str(path)) from None
-    schema = tree.attrs.get("schema_version")
+    return FitResult(tree, str(path))
+
+
+# Root attributes holding JSON, with the kind of value each must hold
+JSON_ATTRS = {"parameters": list, "derived": list, "warnings": list, "notes": list, "undetermined": list,
+              "units": dict, "meanings": dict, "misfit": dict, "held": dict, "failures": dict}
+# The arrays a group must hold when it is there, and the dimension its data arrays run along
+GROUP_ARRAYS = {"least_squares": (("value", "stderr"), ("parameter",)),
+                "sample_stats": (("lp",), ("chain", "draw")),
+                "diagnostics": (("rhat", "ess_bulk", "ess_tail", "tau"), ("parameter",))}
+# The groups every emcee fit has
+SAMPLED = ("posterior", "sample_stats", "diagnostics")
+
+
+def check_results_file(path: str | Path) -> None:
+    """Refuse a results file whose layout no fit of escfit writes, reading its metadata only.
+
+    Checked, in this order, before any array is read: an HDF5 file of :data:`SCHEMA_VERSION`;
+    arrays that declare no more than the file holds and agree with their dimensions
+    (:mod:`escfit.core.h5layout`); root attributes that hold the JSON they should
+    (:data:`JSON_ATTRS`), among them a non-empty list of parameters; a ``least_squares``
+    group, and for an emcee fit its ``posterior``, ``sample_stats`` and ``diagnostics``
+    (:data:`SAMPLED`); the arrays each group must hold along their dimensions
+    (:data:`GROUP_ARRAYS`); every parameter and derived quantity in the posterior along
+    (chain, draw), with as many chains and draws as the log-probabilities (when they are there).
+
+    Raises
+    ------
+    ResultsError
+        Naming the file and the first thing that is wrong.
+    """
+    import h5py
+
+    from .core import h5layout
+
+    if not h5py.is_hdf5(path):
+        raise ResultsError("not an HDF5 file: give a results file written by escfit fit", str(path))
+    layout = h5layout.read_layout(path, "damaged or unreadable results file")
+    schema = layout.attrs.get("schema_version")
     if schema != SCHEMA_VERSION:
         raise ResultsError(f"not an escfit fit file of schema {SCHEMA_VERSION!r} (found {schema!r})", str(path))
-    return FitResult(tree, str(path))
+    h5layout.check_backed(layout)
+    h5layout.check_dimensions(layout)
+    names = [*_json_attr(layout, "parameters"), *_json_attr(layout, "derived")]
+    for key in JSON_ATTRS:
+        _json_attr(layout, key)
+    _check_groups(layout, names)
+
+
+def _json_attr(layout, key: str) -> Any:
+    """Root attribute ``key`` decoded (its empty value when absent), or a refusal naming it."""
+    kind = JSON_ATTRS[key]
+    raw = layout.attrs.get(key, "")
+    if key == "parameters" and raw == "":
+        raise ResultsError("incomplete results file: the root attribute 'parameters' is missing", layout.where)
+    try:
+        value = json.loads(raw) if raw != "" else kind()
+    except (TypeError, ValueError):
+        value = None
+    if not isinstance(value, kind) or (kind is list and not all(isinstance(v, str) for v in value)) \
+            or (key == "parameters" and not value):
+        raise ResultsError(f"damaged results file: the root attribute {key!r} is not a JSON "
+                           f"{'list of names' if kind is list else 'object'} ({str(raw)[:40]!r})", layout.where)
+    return value
+
+
+def _check_groups(layout, names: list[str]) -> None:
+    """The groups a fit has, the arrays they hold and the posterior's parameters (see
+    :func:`check_results_file`)."""
+    from .core.h5layout import expect_arrays, expect_dims
+
+    missing = ["least_squares"] if "least_squares" not in layout.groups else []
+    if layout.attrs.get("method") == "emcee":
+        missing += [g for g in SAMPLED if g not in layout.groups]
+    if missing:
+        raise ResultsError(f"incomplete results file: its {missing[0]} group is missing", layout.where)
+    for group, (arrays, dims) in GROUP_ARRAYS.items():
+        if group in layout.groups:
+            expect_arrays(layout, group, arrays)
+            for name in arrays:
+                expect_dims(layout, f"{group}/{name}", dims)
+    if "posterior" not in layout.groups:
+        return
+    expect_arrays(layout, "posterior", names, " (a parameter of the fit)")
+    for name in names:
+        expect_dims(layout, f"posterior/{name}", ("chain", "draw"))
+    if "sample_stats" not in layout.groups:
+        return
+    post, stats = layout.arrays[f"posterior/{names[0]}"].shape, layout.arrays["sample_stats/lp"].shape
+    if post != stats:
+        raise ResultsError(f"inconsistent results file: the posterior holds {post[0]} chains x {post[1]} draws, "
+                           f"sample_stats/lp {stats[0]} x {stats[1]}", layout.where)
 
 
 def write_fit(result: FitResult, path: str | Path, *, force: bool = False) -> None:

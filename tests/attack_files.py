@@ -215,3 +215,40 @@ HOSTILE_FILES = [
     ("line-break-in-a-file-name", newline_in_name, ["fit", "a\nswitching = 1\n#.csv", "--scene", "rig.toml"],
      ["a\\nswitching = 1\\n#.csv"]),
 ]
+
+
+def fifo(name: str):
+    def setup(w) -> None:
+        import os
+
+        os.mkfifo(w / name)
+    return setup
+
+
+def utf16(name: str, encoding: str):
+    """The shipped sampled decay as UTF-16 text (with a byte-order mark, or without: utf-16-le)."""
+    def setup(w) -> None:
+        (w / name).write_bytes(TS.read_text().encode(encoding))
+    return setup
+
+
+def examples_with_a_fifo(w) -> None:
+    """An examples folder whose last example file's place holds a FIFO (never replaced)."""
+    import os
+
+    from escfit.cli.examples import _files, examples_root
+
+    last = _files(examples_root())[-1]
+    (w / "ex" / last).parent.mkdir(parents=True)
+    os.mkfifo(w / "ex" / last)
+
+
+HOSTILE_FILES += [
+    ("fifo-as-results-of-summary", fifo("q.h5"), ["summary", "q.h5"], ["q.h5: is a FIFO"]),
+    ("fifo-as-results-of-report", fifo("q.h5"), ["report", "q.h5"], ["q.h5: is a FIFO"]),
+    ("fifo-as-data-of-init", fifo("q.csv"), ["init", "q.csv"], ["q.csv: is a FIFO"]),
+    ("utf16-time-series", utf16("u.csv", "utf-16"), ["fit", "u.csv", *FIT_TS], ["u.csv: UTF-16 text"]),
+    ("utf16-time-series-without-mark", utf16("u.csv", "utf-16-le"), ["fit", "u.csv", *FIT_TS], ["u.csv: UTF-16 text"]),
+    ("utf16-time-series-init", utf16("u.csv", "utf-16"), ["init", "u.csv"], ["u.csv: UTF-16 text"]),
+    ("examples-force-over-a-fifo", examples_with_a_fifo, ["examples", "ex", "--force"], ["is a FIFO", "nothing was copied"]),
+]

@@ -23,6 +23,8 @@ import pytest
 from escfit.balance import dop853, exact, regions, rk4, solution
 from escfit.core.kernels import kernel, kernel_sources
 
+from .conftest import ROOT
+
 DECORATORS = {
     # the scheme of escfit: numba.njit(cache=True) plus the sources compiled in
     "kernel": "from escfit.core.kernels import kernel as jit",
@@ -200,3 +202,28 @@ def test_each_solvers_walk_is_keyed_on_the_walker_and_the_solvers_step(walk, mod
     files = set(kernel_sources(walk))
     assert {balance / "walker.py", Path(module.__file__).resolve()} <= files
     assert walk.py_func.__qualname__ == f"walk_{module.__name__.rsplit('.', 1)[-1]}"
+
+
+def test_a_kernel_compiles_without_a_cache_where_none_can_be_written(tmp_path):
+    """A read-only install without a writable home: no cache folder numba can use (the one of
+    NUMBA_CACHE_DIR, the package's __pycache__, the user's cache folder).  Each is blocked by a
+    regular file standing where a folder must be made (read-only folders do not stop root).
+    The kernels compile without a cache and give their results, with one note in all."""
+    blocked = tmp_path / "blocked"
+    blocked.write_text("a file where a folder would be made")
+    pkg = tmp_path / "roinstall" / "rokernels"
+    pkg.mkdir(parents=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "__pycache__").write_text("")  # numba cannot make its in-tree cache folder here
+    (pkg / "k.py").write_text("from escfit.core.kernels import kernel\n\n\n@kernel\ndef twice(x):\n    return 2.0 * x\n"
+                              "\n\n@kernel(inline='always')\ndef thrice(x):\n    return 3.0 * x\n")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), str(tmp_path / "roinstall")]),
+           "NUMBA_CACHE_DIR": str(blocked / "numba"), "HOME": str(blocked / "home"),
+           "XDG_CACHE_HOME": str(blocked / "cache"), "PYTHONDONTWRITEBYTECODE": "1"}
+    env.pop("ESCFIT_QUIET_COMPILE", None)
+    r = subprocess.run([sys.executable, "-c", "from rokernels.k import twice, thrice; print(twice(2.5), thrice(2.0))"],
+                       capture_output=True, text=True, env=env, timeout=300)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert r.stdout.split() == ["5.0", "6.0"]
+    notes = [line for line in r.stderr.splitlines() if line.strip()]
+    assert len(notes) == 1 and notes[0].startswith("note: ") and "cache" in notes[0], r.stderr

@@ -91,6 +91,7 @@ def copy_examples(dest: str | Path, *, force: bool = False, root: Path | None = 
         raise ResultsError(f"folder is not empty and {changed[0]} differs from the shipped example"
                            f"{f' (and {len(changed) - 1} more)' if len(changed) > 1 else ''}; pass --force to "
                            "replace them, or give another folder", str(target))
+    _refuse_special(target, [rel for rel in files if rel in changed or not (target / rel).exists()])
     written = []
     for rel in files:
         out = target / rel
@@ -101,6 +102,25 @@ def copy_examples(dest: str | Path, *, force: bool = False, root: Path | None = 
             shutil.copyfile(root / rel, tmp)
         written.append(rel)
     return written
+
+
+def _refuse_special(target: Path, files: list[Path]) -> None:
+    """Refuse, before copying anything, a destination where the place of an example file to be
+    written (``files``) holds something that is never replaced (a folder, link, FIFO, device; see
+    :func:`escfit.core.atomic.refuse_existing`) or one of its folders is something else."""
+    from ..core.atomic import existing_kind
+    from ..core.errors import ResultsError
+
+    for rel in files:
+        for parent in list(reversed(rel.parents))[1:]:
+            kind = existing_kind(target / parent)
+            if kind not in (None, "folder"):
+                raise ResultsError(f"is a {kind}, where the examples need a folder; nothing was copied: move it "
+                                   "away or give another folder", str(target / parent))
+        kind = existing_kind(target / rel)
+        if kind not in (None, "regular file"):
+            raise ResultsError(f"is a {kind}, where an example file goes; it is never replaced (--force or not) "
+                               "and nothing was copied: move it away or give another folder", str(target / rel))
 
 
 def _same(a: Path, b: Path) -> bool:

@@ -170,7 +170,9 @@ def init(data, out, kind, force, fmt, **options):
     """
     from ..balance.recordings.formats_list import FORMAT_NAMES
     from ..core.errors import DataError
+    from ..core.inputs import check_input_file
 
+    check_input_file(data, "data")  # a FIFO or a device is named, not reported missing (nor read)
     if fmt is not None and fmt not in FORMAT_NAMES:
         raise DataError(f"--format {fmt!r} is not a balance recording format; known: {', '.join(FORMAT_NAMES)}", data)
     out = Path(out) if out else default_scene_path(data)

@@ -25,6 +25,10 @@ directory, unchanged) is wrapped so that its source stamp includes the fingerpri
 ``tests/test_kernel_cache.py`` checks that an edit of a helper module recompiles a kernel
 of another module that calls it, and that plain ``numba.njit(cache=True)`` does not.
 
+Where numba can write no cache at all (a read-only install with no writable home, so no
+usable ``NUMBA_CACHE_DIR``, ``__pycache__`` or user cache folder), or a save fails, kernels
+are compiled without a cache and one note says so (:func:`notice_uncached`).
+
 Compiling the larger kernels takes minutes on a first run (a fresh install, an upgrade, a
 new machine or ``NUMBA_CACHE_DIR``), so the first time in a process that a cached kernel
 finds no usable cache entry one line says so on stderr when that is a terminal
@@ -47,7 +51,7 @@ from typing import Any, Callable, Iterable
 import numba
 from numba.core import caching
 
-__all__ = ["kernel", "kernel_sources", "module_sources", "notice_compilation"]
+__all__ = ["kernel", "kernel_sources", "module_sources", "notice_compilation", "notice_uncached"]
 
 # py_func -> (files hashed, fingerprint); read by the cache implementation when numba builds it
 _SOURCES: "weakref.WeakKeyDictionary[Callable, tuple[tuple[Path, ...], str]]" = weakref.WeakKeyDictionary()
@@ -232,7 +236,7 @@ def notice_compilation(py_func: Callable, *, stream=None) -> bool:
         Whether the line was written.
     """
     global _NOTICE_GIVEN
-    if _NOTICE_GIVEN or os.environ.get("ESCFIT_QUIET_COMPILE", "") not in ("", "0"):
+    if _NOTICE_GIVEN or _quiet():
         return False
     if stream is None:
         stream = sys.stderr
@@ -244,11 +248,23 @@ def notice_compilation(py_func: Callable, *, stream=None) -> bool:
     _NOTICE_GIVEN = True
     parts = str(getattr(py_func, "__module__", "") or "").split(".")
     what = _WHAT.get(parts[1] if len(parts) > 1 else "", "numerical kernels")
+    _write(stream, f"escfit: compiling {what} for this machine (first run only, up to a few minutes)\n")
+    return True
+
+
+def _quiet() -> bool:
+    """Whether ``ESCFIT_QUIET_COMPILE`` silences the notices."""
+    return os.environ.get("ESCFIT_QUIET_COMPILE", "") not in ("", "0")
+
+
+def _write(stream, text: str) -> bool:
+    """Write ``text`` to ``stream``; False when there is no usable stream (closed, replaced, or a
+    pipe whose reader left)."""
     try:
-        stream.write(f"escfit: compiling {what} for this machine (first run only, up to a few minutes)\n")
+        stream.write(text)
         stream.flush()
-    except (OSError, ValueError):  # no usable stderr (closed, or a pipe whose reader left)
-        pass
+    except (OSError, ValueError, AttributeError):
+        return False
     return True
 
 
@@ -263,6 +279,52 @@ class _KernelCache(caching.FunctionCache):
         if data is None:
             notice_compilation(self._py_func)
         return data
+
+    def save_overload(self, sig, data):
+        """numba's cache save; a folder that cannot be written (any more) leaves the kernel
+        compiled and uncached, said once (:func:`notice_uncached`), instead of failing the run."""
+        try:
+            super().save_overload(sig, data)
+        except OSError:
+            notice_uncached()
+
+
+# Whether this process has said that compiled kernels cannot be cached (said once per process)
+_UNCACHED_GIVEN = False
+
+
+def notice_uncached(*, stream=None) -> bool:
+    """Say once per process, on stderr, that kernels are compiled without an on-disk cache.
+
+    Said when the first kernel compiles without a cache: no folder numba can write its cache
+    in (``NUMBA_CACHE_DIR``, the package's ``__pycache__``, the user's cache folder; a
+    read-only install with no writable home) or a cache that could not be saved.  Unlike the
+    first-run notice it is said whether or not stderr is a terminal: every run of such an
+    install compiles again, which someone must be told.  ``ESCFIT_QUIET_COMPILE=1`` silences it.
+
+    Returns
+    -------
+    bool
+        Whether the line was written.
+    """
+    global _UNCACHED_GIVEN
+    if _UNCACHED_GIVEN or _quiet():
+        return False
+    _UNCACHED_GIVEN = True
+    return _write(stream or sys.stderr, "note: no writable cache folder for compiled kernels (NUMBA_CACHE_DIR, the "
+                  "package's __pycache__, the home cache folder): they are compiled in every run; set "
+                  "NUMBA_CACHE_DIR to a writable folder to keep them\n")
+
+
+class _Uncached(caching.NullCache):
+    """No on-disk cache (none can be written): every compilation is said to be uncached, once."""
+
+    def __init__(self, py_func: Callable) -> None:
+        self._py_func = py_func
+
+    def load_overload(self, sig, target_context):
+        notice_uncached()
+        return None
 
 
 def kernel(func: Callable | None = None, /, *, sources=(), cache: bool = True, **options: Any):
@@ -300,7 +362,10 @@ def kernel(func: Callable | None = None, /, *, sources=(), cache: bool = True, *
         files = tuple(sorted(set(_import_closure(path, fn.__module__)) | _expand(sources)))
         _SOURCES[fn] = (files, _fingerprint(files))
         # What Dispatcher.enable_caching does, with the stamped cache instead of FunctionCache
-        disp._cache = _KernelCache(fn)
+        try:
+            disp._cache = _KernelCache(fn)
+        except RuntimeError:  # numba found no folder it can write its cache in (a read-only install)
+            disp._cache = _Uncached(fn)
         return disp
 
     return wrap(func) if func is not None else wrap

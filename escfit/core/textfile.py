@@ -11,14 +11,35 @@ from __future__ import annotations
 
 from .errors import DataError
 
-__all__ = ["decode_text", "looks_binary", "BOM"]
+__all__ = ["decode_text", "looks_binary", "looks_utf16", "refuse_binary", "BOM", "UTF16_ADVICE"]
 
 BOM = b"\xef\xbb\xbf"
+UTF16_ADVICE = "UTF-16 text, not UTF-8: save the file as UTF-8 (in a spreadsheet: CSV UTF-8)"
 
 
 def looks_binary(raw: bytes) -> bool:
     """Whether ``raw`` (a file's first bytes) holds NUL bytes outside a UTF-16 text."""
     return b"\x00" in raw and not raw.startswith((b"\xff\xfe", b"\xfe\xff"))
+
+
+def looks_utf16(raw: bytes) -> bool:
+    """Whether ``raw`` (a file's first bytes) is UTF-16 text: a UTF-16 byte-order mark, or
+    (without one) a NUL in every other byte, as ASCII text in UTF-16 has."""
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+        return True
+    head = raw[:512] if len(raw) % 2 == 0 else raw[:min(len(raw) - 1, 512)]
+    if len(head) < 8:
+        return False
+    even, odd = head[0::2], head[1::2]
+    return any(half.count(0) == len(half) and other.count(0) == 0 for half, other in ((even, odd), (odd, even)))
+
+
+def refuse_binary(raw: bytes, where: str, what: str) -> None:
+    """Refuse a file whose first bytes ``raw`` hold NUL bytes, naming UTF-16 text as such (it is
+    text in another encoding, not a binary file)."""
+    if looks_utf16(raw):
+        raise DataError(UTF16_ADVICE, where)
+    raise DataError(f"binary file, not {what}", where)
 
 
 def decode_text(raw: bytes, where: str, *, what: str = "a text file") -> str:

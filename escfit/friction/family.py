@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from ..core.errors import DataError, FitError
+from ..core.textfile import decode_text
 from ..core.family import FamilyBase
 from ..core.scene import load_scene
 from .readers import Readings, read_readings
@@ -56,9 +57,10 @@ class RigFamily(FamilyBase):
         if not p.is_file():
             raise DataError("data file not found", where)
         try:
-            text = p.read_text(encoding="utf-8-sig")
-        except (OSError, UnicodeDecodeError) as exc:
-            raise DataError(f"not a text file: cannot detect its format ({exc})", where) from None
+            raw = p.read_bytes()
+        except OSError as exc:
+            raise DataError(f"cannot read ({exc.strerror or exc})", where) from None
+        text = decode_text(raw, where, what="a table of rig readings")
         for lineno, line in enumerate(text.splitlines(), start=1):
             line = line.strip()
             if not line or line.startswith("#"):

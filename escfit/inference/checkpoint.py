@@ -14,7 +14,10 @@ SHA-256, a hash of the scene text, the family's options, walkers, moves and seed
 :func:`run_identity`), and a resume whose identity differs is refused with the first
 difference named.  What it holds is checked before it is used, checksums or not: finite
 draws, a generator state numpy can continue from (an all-zero key would hang it), counts
-within the run.
+within the run, moves that agree with the accepted counts and walkers that stood still with
+their log-probabilities unchanged (:func:`_check_moves`).  The draws of every step against
+the bounds, and the log-probabilities of five steps against the posterior, are checked by
+:func:`escfit.inference.mcmc.resumable`, which has the problem.
 
 The chain and log-probabilities are the sampler's own: in the coordinates it moves in
 (:mod:`escfit.inference.space`; ``coordinates`` names them, ``"identity"`` for the problem's
@@ -176,24 +179,16 @@ def load_checkpoint(path: str | Path, walkers: int, names: list[str],
     where = str(path)
     if not Path(path).exists():
         raise ResultsError("nothing to resume: checkpoint file not found", where)
+    _check_declared(path, walkers, names)
     try:
         with h5py.File(path, "r") as f:
-            if f.attrs.get("format") != FORMAT:
-                raise ResultsError("not an escfit sampler checkpoint (written by another program or an older "
-                                   "version); pass --force to start again", where)
             version = int(f.attrs.get("version", 0))
-            if version not in READABLE or "identity" not in f.attrs or (version >= 3 and "coordinates" not in f.attrs):
-                raise ResultsError(f"a checkpoint of format version {f.attrs.get('version')} (this escfit writes "
-                                   f"{VERSION}) cannot be checked to belong to this run; pass --force to start again",
-                                   where)
             ck = Checkpoint(f["chain"][()], f["log_prob"][()], f["accepted"][()],
                             ("MT19937", f["mt_keys"][()], int(f.attrs["mt_pos"]), int(f.attrs["mt_has_gauss"]),
                              float(f.attrs["mt_gauss"])),
                             list(json.loads(f.attrs["names"])), int(f.attrs["seed"]), str(f.attrs["moves"]),
                             dict(json.loads(f.attrs["identity"])),
                             str(f.attrs["coordinates"]) if version >= 3 else "identity")
-    except ResultsError:
-        raise
     except (OSError, KeyError, ValueError, TypeError) as exc:  # truncated, checksum failure, missing parts
         raise ResultsError(f"cannot resume from this checkpoint ({type(exc).__name__}: {exc}); pass --force to "
                            "start again", where) from None
@@ -208,6 +203,51 @@ def load_checkpoint(path: str | Path, walkers: int, names: list[str],
     if identity is not None:
         check_identity(ck, identity, where)
     return ck
+
+
+# The arrays of a checkpoint, the element size each holds, and their shapes for a run of
+# ``walkers`` walkers over ``ndim`` parameters (None: the number of steps, any)
+ARRAYS = {"chain": (8, lambda walkers, ndim: (None, walkers, ndim)),
+          "log_prob": (8, lambda walkers, ndim: (None, walkers)),
+          "accepted": (8, lambda walkers, ndim: (walkers,)),
+          "mt_keys": (4, lambda walkers, ndim: (624,))}
+
+
+def _check_declared(path: str | Path, walkers: int, names: list[str]) -> None:
+    """Refuse, from the file's metadata alone, a checkpoint that is not this escfit's, or whose
+    arrays are missing, declare more than the file holds, or have shapes that disagree with each
+    other or with this run (``walkers`` x ``len(names)``): nothing is read before this passes."""
+    from ..core import h5layout
+
+    where, again = str(path), "; pass --force to start again"
+    try:
+        layout = h5layout.read_layout(path, "cannot resume from this checkpoint")
+        if layout.attrs.get("format") != FORMAT:
+            raise ResultsError("not an escfit sampler checkpoint (written by another program or an older version)",
+                               where)
+        version = layout.attrs.get("version", 0)
+        attrs = ("identity", "names", "seed", "moves", "mt_pos", "mt_has_gauss", "mt_gauss") + (
+            ("coordinates",) if version == 3 else ())
+        if version not in READABLE or any(a not in layout.attrs for a in attrs):
+            raise ResultsError(f"a checkpoint of format version {version} (this escfit writes {VERSION}) cannot be "
+                               "checked to belong to this run", where)
+        missing = [name for name in ARRAYS if name not in layout.arrays]
+        if missing:
+            raise ResultsError(f"damaged checkpoint: its {missing[0]} array is missing", where)
+        h5layout.check_backed(layout)
+        chain = layout.arrays["chain"].shape
+        if len(chain) == 3 and chain[1:] != (walkers, len(names)):
+            raise ResultsError(f"checkpoint holds {chain[1]} walkers x {chain[2]} parameters, this fit has "
+                               f"{walkers} x {len(names)}", where)
+        steps = chain[0] if chain else None
+        for name, (itemsize, shape) in ARRAYS.items():
+            want = tuple(steps if n is None and name != "chain" else n for n in shape(walkers, len(names)))
+            h5layout.expect_shape(layout, name, want, " in a checkpoint of this run")
+            if layout.arrays[name].itemsize != itemsize:
+                raise ResultsError(f"damaged checkpoint: its {name} array holds {layout.arrays[name].itemsize}-byte "
+                                   f"values, not {itemsize}-byte ones", where)
+    except ResultsError as exc:
+        raise ResultsError(f"{exc.message}{again}", where) from None
 
 
 def check_identity(ck: Checkpoint, identity: Mapping[str, str], where: str) -> None:
@@ -226,6 +266,27 @@ def _short(value: Any) -> str:
     return text if len(text) <= 60 else text[:57] + "...'"
 
 
+def _check_moves(ck: Checkpoint) -> str | None:
+    """What contradicts the chain's own record of its moves, or None.
+
+    Between two stored steps a walker either moved (an accepted proposal) or stayed where it
+    was with the same log-probability: emcee never changes one without the other.  So a walker
+    cannot have moved more often than it had proposals accepted, and one that stood still kept
+    its log-probability bit for bit.
+    """
+    moved = np.any(ck.chain[1:] != ck.chain[:-1], axis=2)
+    moves = moved.sum(axis=0)
+    if np.any(moves > ck.accepted):
+        w = int(np.argmax(moves > ck.accepted))
+        return f"walker {w} moved {int(moves[w])} times with {int(ck.accepted[w])} accepted proposals"
+    changed = ~moved & (ck.log_prob[1:] != ck.log_prob[:-1])
+    if np.any(changed):
+        t, w = (int(i[0]) for i in np.nonzero(changed))
+        return (f"walker {w} stood still at step {t + 2} of {ck.steps} but its log-probability changed "
+                f"from {ck.log_prob[t, w]:.10g} to {ck.log_prob[t + 1, w]:.10g}")
+    return None
+
+
 def _check_contents(ck: Checkpoint, where: str) -> None:
     """Refuse contents no run of escfit can have written (checksums catch damage, not tampering)."""
     shape = ck.chain.shape
@@ -241,5 +302,7 @@ def _check_contents(ck: Checkpoint, where: str) -> None:
     elif (not (np.any(keys[1:]) or keys[0] & 0x80000000)  # MT19937 uses only the top bit of the first word
           or not 0 <= pos <= 624 or has_gauss not in (0, 1) or not math.isfinite(gauss)):
         problem = "a random-generator state numpy cannot continue from"
+    else:
+        problem = _check_moves(ck)
     if problem is not None:
         raise ResultsError(f"damaged checkpoint ({problem}); pass --force to start again", where)

@@ -132,9 +132,7 @@ def compare_fits(paths: Sequence[str | Path]) -> FitComparison:
     paths = [str(p) for p in paths]
     if len(paths) < 2:
         raise ResultsError(f"need at least two results files to compare, got {len(paths)}")
-    dupes = sorted({p for p in paths if paths.count(p) > 1})
-    if dupes:
-        raise ResultsError("the same results file is given twice", dupes[0])
+    _refuse_repeats(paths)
     fits = [load_fit(p) for p in paths]
     data = _same_readings(fits)
     methods = {f.path: _method(f) for f in fits}
@@ -174,6 +172,17 @@ def _observation_signature(res: FitResult) -> dict:
     return {"family": a.get("model", "balance"), "kind": a.get("data_kind", ""),
             "observation model": obs.get("model", "") if isinstance(obs, dict) else "",
             "notch angle": a.get("notch_deg", ""), "notch reading": a.get("notch_reading", "")}
+
+
+def _refuse_repeats(paths: list[str]) -> None:
+    """Refuse a file given twice, under one name or two (``r1.h5`` and ``./r1.h5``, a link)."""
+    from ..core.atomic import same_file
+
+    for i, p in enumerate(paths):
+        for q in paths[:i]:
+            if same_file(p, q):
+                again = "" if p == q else f" (as {q!r} and {p!r})"
+                raise ResultsError(f"the same results file is given twice{again}: a fit ranked against itself", p)
 
 
 def _same_readings(fits: list[FitResult]) -> dict:

@@ -140,9 +140,10 @@ def resumable(problem: Problem, checkpoint: str | Path, *, walkers: int, moves: 
 
     Checked: its shape and parameters, its moves, its identity (:func:`run_identity`: data,
     scene, options, walkers, seed), that a fixed-length run (``target`` steps) is not shorter
-    than what it holds, and that the posterior gives its last walker positions the stored
-    log-probabilities.  Cheap (one evaluation per walker), so :func:`escfit.fit` calls it
-    before any other work too.
+    than what it holds, that every draw of every step lies inside the bounds, and that the
+    posterior gives the walker positions of :data:`CHECKED_STEPS` steps (the first and the last
+    among them) the stored log-probabilities.  Cheap (five evaluations per walker), so
+    :func:`escfit.fit` calls it before any other work too.
 
     Raises
     ------
@@ -167,22 +168,39 @@ def resumable(problem: Problem, checkpoint: str | Path, *, walkers: int, moves: 
     return previous
 
 
+# Steps of a checkpoint whose log-probabilities are recomputed before resuming (first and last among them)
+CHECKED_STEPS = 5
+
+
 def _check_support(problem: Problem, ck: Checkpoint, where: str, space: SamplerSpace = IDENTITY) -> None:
-    """Refuse a checkpoint whose last walker positions this posterior does not give the stored
-    log-probabilities (outside the bounds, or another posterior): continuing would reuse them."""
+    """Refuse a checkpoint whose draws this posterior cannot have given: any draw (of any step)
+    outside the bounds, or stored log-probabilities that it does not give at the walker
+    positions of :data:`CHECKED_STEPS` steps spread over the run, the first and the last among
+    them (continuing would reuse them, and the kept draws would not be this posterior's)."""
+    _check_bounds(problem, ck, where, space)
+    steps = np.unique(np.linspace(0, ck.steps - 1, min(ck.steps, CHECKED_STEPS)).round().astype(int))
+    for t in steps[::-1]:  # the last step first: the one a resumed run continues from
+        now = space.log_prob_many(ck.chain[t]) if space.transformed else np.array(
+            [problem.log_prob(x) for x in ck.chain[t]])
+        tol = 1e-8 * (1.0 + np.abs(ck.log_prob[t]))  # rounding of another library version, not another posterior
+        bad = ~(np.abs(now - ck.log_prob[t]) <= tol)
+        if np.any(bad):
+            w = int(np.argmax(bad))
+            raise ResultsError(f"the checkpoint belongs to another posterior: walker {w}'s stored log-probability "
+                               f"at step {t + 1} of {ck.steps} is {ck.log_prob[t][w]:.10g}, {now[w]:.10g} now; "
+                               "pass --force to start again", where)
+
+
+def _check_bounds(problem: Problem, ck: Checkpoint, where: str, space: SamplerSpace) -> None:
+    """Refuse a checkpoint with a draw, at any step, outside the bounds (or not finite in the
+    problem's parameters), naming the first step and parameter."""
     lo, hi = problem.bounds
-    last = space.to_problem(ck.chain[-1])
-    outside = np.nonzero(np.any((last < lo) | (last > hi), axis=0))[0]
-    if outside.size:
-        i = int(outside[0])
-        raise ResultsError(f"damaged checkpoint: its walkers stand outside the bounds of {problem.names[i]} "
-                           f"([{lo[i]:g}, {hi[i]:g}]); pass --force to start again", where)
-    now = np.array([problem.log_prob(x) for x in last]) if not space.transformed else space.log_prob_many(ck.chain[-1])
-    tol = 1e-8 * (1.0 + np.abs(ck.log_prob[-1]))  # rounding of another library version, not another posterior
-    if not np.all(np.abs(now - ck.log_prob[-1]) <= tol):
-        w = int(np.argmax(~(np.abs(now - ck.log_prob[-1]) <= tol)))
-        raise ResultsError(f"the checkpoint belongs to another posterior: walker {w}'s stored log-probability "
-                           f"{ck.log_prob[-1][w]:.10g} is {now[w]:.10g} now; pass --force to start again", where)
+    x = space.to_problem(ck.chain.reshape(-1, ck.chain.shape[-1])).reshape(ck.chain.shape)
+    outside = ~np.isfinite(x) | (x < lo) | (x > hi)
+    if np.any(outside):
+        t, _, i = (int(k[0]) for k in np.nonzero(outside))
+        raise ResultsError(f"damaged checkpoint: step {t + 1} of {ck.steps} stands outside the bounds of "
+                           f"{problem.names[i]} ([{lo[i]:g}, {hi[i]:g}]); pass --force to start again", where)
 
 
 AUTO_MIN_STEPS = 400  # first look at convergence

@@ -16,6 +16,7 @@ from pathlib import Path
 
 from ...core.csvtable import refuses_unreadable
 from ...core.errors import DataError
+from ...core.textfile import refuse_binary
 from ...core.tabletext import decode_lenient, numbered_lines, split_fields
 from .cassy import read_cassy_labx, read_cassy_text, sniff_cassy_text
 from .foreign import cassy_member, refuse_foreign, zip_names
@@ -68,7 +69,7 @@ def candidates(path: str | Path) -> list[str]:
     if raw.startswith(b"MATLAB") or p.suffix.lower() == ".mat":
         return ["raw"]
     if kind == "binary" and not raw.startswith((b"\xff\xfe", b"\xfe\xff")):
-        raise DataError("binary file, not a recording", str(path))
+        refuse_binary(p.read_bytes()[:512], str(path), "a recording")
     head = _text_head(p)
     stripped = head.lstrip("\ufeff \t\r\n")
     if stripped.startswith("<"):

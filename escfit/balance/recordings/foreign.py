@@ -22,6 +22,7 @@ import zipfile
 from pathlib import Path
 
 from ...core.errors import DataError
+from ...core.textfile import UTF16_ADVICE, looks_utf16
 from .packed import read_head
 
 __all__ = ["refuse_foreign", "cassy_member", "zip_names"]
@@ -70,6 +71,8 @@ def refuse_foreign(path: str | Path) -> None:
         why = "an HDF5 file, not a recording (a MATLAB v7.3 file needs its .mat suffix; escfit's results: escfit summary)"
     elif suffix == ".cmbl" and not head.lstrip(b"\xef\xbb\xbf \t\r\n").startswith(b"<"):
         why = f"a Logger Pro file (.cmbl) that is not plain XML (saved compressed?): {_LOGGER_PRO}"
+    elif looks_utf16(head) and not head.startswith((b"\xff\xfe", b"\xfe\xff")):  # with a mark: read where readable
+        why = UTF16_ADVICE
     elif b"\x00" in head and not head.startswith((b"\xff\xfe", b"\xfe\xff", b"MATLAB")) and suffix != ".mat":
         why = ("a binary file of unknown layout (an instrument's or a program's own format), not a table of numbers: "
                + _AS_CSV)

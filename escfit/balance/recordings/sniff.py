@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Iterable
 
 from ...core.errors import DataError
+from ...core.textfile import refuse_binary
 
 __all__ = ["file_kind", "refuse_unless_csv", "match_header", "canonical_header", "did_you_mean",
            "KNOWN_COLUMNS", "KNOWN_PREFIXES"]
@@ -121,6 +122,6 @@ def refuse_unless_csv(path: str | Path, what: str) -> None:
         raise DataError(f"this is a JSON file, not the CSV table of {what} (a timegrapher dump? read it with "
                         "read_timegrapher or --format timegrapher)", str(path))
     if kind == "binary":
-        raise DataError(f"binary file, not the CSV text table of {what}", str(path))
+        refuse_binary(Path(path).read_bytes()[:512], str(path), f"the CSV text table of {what}")
     if kind == "empty":
         raise DataError("empty file (no header and no rows)", str(path))

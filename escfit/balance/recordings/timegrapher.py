@@ -47,6 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from ...core.errors import DataError
+from ...core.textfile import refuse_binary
 from ...core.csvtable import read_table
 from .sniff import canonical_header, did_you_mean, file_kind, refuse_unless_csv
 
@@ -166,7 +167,7 @@ def read_tg_json(path: str | Path) -> TimegrapherRecording:
     where = str(path)
     kind = file_kind(p)
     if kind == "binary":
-        raise DataError("binary file, not a JSON timegrapher dump", where)
+        refuse_binary(p.read_bytes()[:512], where, "a JSON timegrapher dump")
     if kind == "empty":
         raise DataError("empty file (no JSON object)", where)
     raw = p.read_bytes()
