@@ -26,6 +26,8 @@ from ...core.tabletext import column_floats, parse_number, time_seconds
 from ...core.units import angular_frequency_factor, ureg
 from .rawsteps import build_series, file_options, merge_file_meta
 from .recording_spec import COUNT_WORDS, RecordingSpec, header_role, rad_per_unit, safe_unit_text, seconds_per_unit
+from .candidates import TEXT_KINDS as _TEXT_KINDS
+from .candidates import measured_candidates
 from .series import TimeSeries
 from ...analysis.quantity import label_quantity
 
@@ -34,7 +36,6 @@ __all__ = ["Columns", "series_from_columns", "signal_role"]
 _VELOCITY_WORDS = ("gyro", "omega", "angular velocity", "angular_velocity", "angularvelocity", "rotation rate",
                    "rate gyro", "angular speed", "winkelgeschwindigkeit", "rotation x", "rotation y", "rotation z")
 _DISPLACEMENT_WORDS = ("displacement", "position", "distance", "weg", "s", "x", "y", "z", "auslenkung", "elongation")
-_TEXT_KINDS = ("text", "flag", "date")
 
 
 @dataclass
@@ -169,7 +170,7 @@ def _hint_other_quantities(cols: Columns, roles: list[str | None]) -> str:
     for role, key in (("angular_velocity", "velocity_column"), ("displacement", "displacement_column")):
         hits = [i for i, r in enumerate(roles) if r == role]
         if len(hits) > 1:
-            hits = _measured_candidates(cols, hits)
+            hits = measured_candidates(cols, hits)
         if len(hits) > 1:  # several: the shapes choose, or the user
             choice = _shape_choice(cols, hits, roles, key)
             if choice is None or choice.chosen is None:
@@ -233,7 +234,7 @@ def _choose(cols: Columns, spec: RecordingSpec, rate: float | None) -> tuple[int
             if n == 1 and roles[0] != "time":
                 hits = [0]
             if len(hits) > 1:
-                hits = _measured_candidates(cols, hits)
+                hits = measured_candidates(cols, hits)
             choice = None
             if len(hits) > 1:  # names cannot tell: the shapes may
                 choice = _shape_choice(cols, hits, roles, key)
@@ -367,61 +368,6 @@ def _by_position(cols: Columns, choice):
     if choice is None:
         return None
     return replace(choice, positions={cols.label(i): i + 1 for i in range(cols.ncols)})
-
-
-_SPECTRUM_WORDS = ("fft", "fourier", "spektrum", "spectrum", "spectra", "psd", "frequenz", "frequency", "periodogram")
-_DERIVED_WORDS = ("mittel", "mean", "average", "avg", "smooth", "glätt", "glaett", "filter", "fit", "model", "theor",
-                  "energie", "energy", "ableitung", "derivative", "diff", "delta", "integral", "berechnet", "calc",
-                  "residu", "error", "fehler", "sigma", "std")
-_MEASURED_WORDS = {"weg", "s", "x", "y", "winkel", "alpha", "α", "phi", "φ", "theta", "θ", "angle", "position", "pos",
-                   "displacement", "auslenkung", "elongation", "encoder"}
-
-
-def _measured_candidates(cols: Columns, hits: list[int]) -> list[int]:
-    """Of several columns that could hold the signal, those that are the measured one (a note says why
-    the others were passed over): a column with fewer readings than the table's longest (an FFT's
-    axis or spectrum, a derivative's or a fit's column padded with empty cells) or named as a
-    spectrum is no candidate; of the rest, a plainly named measured quantity (CASSY's ``Winkel``,
-    ``Weg``, ``s``, ``x``, ``alpha``) is preferred over derived ones (a mean, a fit, an energy)."""
-    counts = {i: _readings(cols, i) for i in range(cols.ncols) if cols.kind(i) not in _TEXT_KINDS}
-    longest = max(counts.values(), default=0)
-    passed = []
-    kept = []
-    for i in hits:
-        low = cols.label(i).lower()
-        if any(w in low for w in _SPECTRUM_WORDS):
-            passed.append(f"{cols.label(i)!r} (a spectrum)")
-        elif counts.get(i, 0) < 0.95 * longest - 2:
-            passed.append(f"{cols.label(i)!r} ({counts.get(i, 0)} readings of {longest})")
-        else:
-            kept.append(i)
-    if len(kept) > 1 and not _axes_of_one_sensor(cols, kept):  # x, y, z of one sensor: the shapes decide
-        words = {i: set(re.findall(r"[^\W\d_]+", re.sub(r"\s*[(\[/].*$", "", cols.label(i).lower()))) for i in kept}
-        plain = [i for i in kept if words[i] & _MEASURED_WORDS and not any(d in w for w in words[i] for d in _DERIVED_WORDS)]
-        if len(plain) == 1:
-            passed += [f"{cols.label(i)!r} (derived)" for i in kept if i != plain[0]]
-            kept = plain
-    if len(kept) == 1 and passed:
-        cols.notes.append(f"column {cols.label(kept[0])!r} is the measured one, passing over {', '.join(passed)} "
-                          "([recording] angle_column, velocity_column or displacement_column chooses another)")
-    return kept or hits
-
-
-def _axes_of_one_sensor(cols: Columns, columns: list[int]) -> bool:
-    """Whether the columns' labels differ only in an axis letter (``Gyroscope x``, ``y``, ``z``)."""
-    from ...analysis.channel import axis_base
-
-    bases = [axis_base(cols.label(i)) for i in columns]
-    return all(b is not None for b in bases) and len({b[0] for b in bases}) == 1
-
-
-def _readings(cols: Columns, i: int) -> int:
-    """How many cells of column i hold a reading (not empty, not NaN)."""
-    if i in cols.values:
-        return int(np.isfinite(np.asarray(cols.values[i], dtype=float)).sum())
-    if i >= len(cols.cells):
-        return 0
-    return sum(1 for c in cols.cells[i] if c.strip() and c.strip().strip('"').lower() not in ("nan", "-nan", "na"))
 
 
 _NO_CLOCK = ("{what} and no time: set the samples per second with [recording] sample_rate (e.g. "
