@@ -12,9 +12,12 @@ posterior where a prior pins what the data alone cannot.  Noise parameters
 (:attr:`Problem.noise_names`, e.g. ``observation.sigma``) are not fitted:
 
 * when one is free, the noise scale is *profiled*: without Gaussian priors the fit rescales the
-  covariance by the reduced chi-square; with them the scale is re-estimated from the reading
-  residuals and the fit repeated until the two agree (degrees of freedom: readings minus the
-  parameters no prior pins), because rescaling would also inflate the priors' terms;
+  covariance by the reduced chi-square; with them the scale must equal the scatter the reading
+  residuals leave at the optimum found with it (degrees of freedom: readings minus the
+  parameters no prior pins), because rescaling would also inflate the priors' terms; that fixed
+  point is settled on the optimum's Jacobian (:func:`~escfit.inference.noise_scale.settle_scale`:
+  linear steps, a trust-region run only to confirm a step of more than a fiftieth of a
+  standard error);
 * when none is free the scene's noise is known and the covariance is not rescaled.
 
 ``sigma_hat`` reports the profiled reading scatter.
@@ -40,6 +43,7 @@ import numpy as np
 from ..core.errors import EscfitError, FitError
 from ..likelihood.problem import FAIL_RESIDUAL, Problem, gaussian_prior_residuals
 from .fdjac import batch_jacobian
+from .noise_scale import settle_scale
 from .starts import multistart_points
 from .trf import minimize, single_blas_thread
 
@@ -228,19 +232,11 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
         if best is None:
             raise FitError("least squares failed from every start point")
         free_dof = _data_dof(best, priors, n, len(names) - pinned)
-        if iterate_scale:
-            for _ in range(50):
-                r = best.residual[:n] * scale[0]
-                new = math.sqrt(float(r @ r) / free_dof)
-                if not new > 0:
-                    raise FitError("the readings are fitted exactly: the noise scale cannot be estimated; fix "
-                                   "observation.sigma in the scene")
-                done = abs(new - scale[0]) <= 1e-9 * scale[0]
-                scale[0] = new
-                if done:
-                    break
-                best = optimizer(residual, best.x, lo, hi, scale_covar=False, names=names, **options)
-                free_dof = _data_dof(best, priors, n, len(names) - pinned)
+        if iterate_scale:  # the scale and the optimum settled together on the optimum's Jacobian
+            best, _ = settle_scale(
+                best, scale, n, lo, hi, dof=lambda b: _data_dof(b, priors, n, len(names) - pinned), evaluate=residual,
+                polish=lambda x: optimizer(residual, x, lo, hi, scale_covar=False, names=names, **options))
+            free_dof = _data_dof(best, priors, n, len(names) - pinned)
     value = best.x.copy()
     covar_scale = float(best.redchi) if (profile_noise and not iterate_scale) else 1.0
     cov, undetermined = _covariance(best, len(names), covar_scale)
