@@ -31,7 +31,7 @@ from .trf import Optimum, optimum
 __all__ = ["settle_scale", "STEP_SE", "SCALE_RTOL", "MAX_POLISH"]
 
 #: a linear step larger than this many standard errors (any parameter) is confirmed by a trust-region run
-STEP_SE = 0.02
+STEP_SE = 0.25
 
 #: the scale is settled when a round changes it by less than this fraction
 SCALE_RTOL = 1e-9
