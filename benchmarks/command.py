@@ -45,6 +45,8 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from previous import ROOT, checkout  # noqa: E402
 
@@ -202,12 +204,38 @@ def measure(job: str, previous: Path, repeat: int, tmp: Path, cold: bool) -> dic
             runs[label].append(run_once(folder, _abs(job_args(job, tmp / f"{label}-{job}.h5"), folder), folder,
                                         pycache))
     record = {"runs": runs}
+    if job == "leastsq":
+        record["shift"] = estimate_shift(tmp / f"previous-{job}.h5", tmp / f"current-{job}.h5")
     if cold:
         for label, folder in (("previous", previous), ("current", ROOT)):
             cache = Path(tempfile.mkdtemp(prefix="numba-cold-", dir=tmp))
             record[f"{label} cold"] = run_once(folder, _abs(job_args(job, tmp / f"{label}-cold.h5"), folder),
                                                folder, pycache, numba_cache=cache)
     return record
+
+
+SHIFT = r'''
+import json, sys
+import numpy as np
+from escfit.results import load_fit
+old, new = (load_fit(p).group("least_squares") for p in sys.argv[1:3])
+se = old["stderr"].values
+print(json.dumps({"names": [str(n) for n in old["parameter"].values],
+                  "value_se": ((new["value"].values - old["value"].values) / se).tolist(),
+                  "stderr_rel": (new["stderr"].values / se - 1.0).tolist(),
+                  "rtol": load_fit(sys.argv[2]).attrs.get("solver_options", "")}))
+'''
+
+
+def estimate_shift(previous: Path, current: Path) -> dict:
+    """How far the current least-squares estimates lie from the previous version's, in the
+    previous standard errors, and how the standard errors changed (read by this checkout's escfit)."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    out = subprocess.run([sys.executable, "-c", SHIFT, str(previous), str(current)], env=env, capture_output=True,
+                         text=True)
+    if out.returncode != 0:
+        return {"error": out.stderr[-500:]}
+    return json.loads(out.stdout)
 
 
 def _abs(args: list[str], folder: Path) -> list[str]:
@@ -234,6 +262,12 @@ def report(job: str, record: dict) -> list[str]:
         old, new = (med(label, lambda r: r["counts"].get(key, 0)) for label in ("previous", "current"))
         what = "least-squares runs (scipy)" if key == "fits" else "model runs (a batch call counts its sets)"
         lines.append(f"| {what} | {old:.0f} | {new:.0f} |")
+    shift = record.get("shift")
+    if shift and "names" in shift:
+        worst = int(np.argmax(np.abs(shift["value_se"])))
+        lines.append(f"| largest estimate shift, previous standard errors | | {shift['value_se'][worst]:+.2e} "
+                     f"({shift['names'][worst]}); standard errors within {max(map(abs, shift['stderr_rel'])):.1e} "
+                     f"relative; current solver options {shift['rtol']} |")
     for label in ("previous", "current"):
         cold = record.get(f"{label} cold")
         if cold:

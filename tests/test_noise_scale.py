@@ -143,3 +143,50 @@ def test_one_leastsq_command_stays_within_its_count_of_fits_and_model_runs(monke
     assert result.group("least_squares") is not None
     assert 0 < counts.fits <= MAX_FITS, counts.fits
     assert 0 < counts.runs <= MAX_MODEL_RUNS, counts.runs
+
+
+def _line_with_prior():
+    """A straight line of 200 noisy readings (scene noise 0.1, true scatter 0.3) and a Gaussian
+    prior 0.5 +- 0.2 on its intercept: the profiled scale is a fixed point away from 1."""
+    rng = np.random.default_rng(3)
+    t = np.linspace(0.0, 1.0, 200)
+    y = 1.0 + 2.0 * t + 0.3 * rng.standard_normal(t.size)
+    return t, y
+
+
+def _fixed_point_by_normal_equations(t, y, dof):
+    """The reference: weighted linear least squares (numpy) and the scale iterated to its fixed point."""
+    a = np.column_stack([np.ones_like(t), t])
+    s = 1.0
+    for _ in range(500):
+        rows = np.vstack([a / (0.1 * s), [[1.0 / 0.2, 0.0]]])
+        rhs = np.r_[y / (0.1 * s), 0.5 / 0.2]
+        x = np.linalg.lstsq(rows, rhs, rcond=None)[0]
+        r = (y - a @ x) / 0.1
+        s = math.sqrt(float(r @ r) / dof)
+    return x, s
+
+
+@pytest.mark.parametrize("jacobian", [True, False])
+def test_settle_scale_finds_the_fixed_point_of_a_line_with_a_prior(jacobian):
+    from escfit.inference.noise_scale import settle_scale
+    from escfit.inference.trf import minimize
+
+    t, y = _line_with_prior()
+    n, dof = t.size, t.size - 2.0
+    scale = [1.0]
+
+    def residual(x):
+        return np.r_[(y - x[0] - x[1] * t) / 0.1 / scale[0], (x[0] - 0.5) / 0.2]
+
+    lo, hi = np.full(2, -np.inf), np.full(2, np.inf)
+    best = minimize(residual, np.zeros(2), lo, hi)
+    if not jacobian:  # an optimiser without a Jacobian: the refits
+        best.jac = None
+    out, polished = settle_scale(best, scale, n, lo, hi, dof=lambda _: dof, evaluate=residual,
+                                 polish=lambda x: minimize(residual, x, lo, hi))
+    x_ref, s_ref = _fixed_point_by_normal_equations(t, y, dof)
+    assert 2.5 < s_ref < 3.5  # far from the scene's noise: the settling matters
+    assert scale[0] == pytest.approx(s_ref, rel=1e-6)
+    assert out.x == pytest.approx(x_ref, rel=1e-6)
+    assert polished <= (1 if jacobian else 50)

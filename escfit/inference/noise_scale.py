@@ -15,7 +15,8 @@ fixed point of the linearised problem is found with no model run at all
 (:func:`scipy.optimize.lsq_linear`) and a new scale.  When that moves a parameter by more than
 :data:`STEP_SE` of its standard error, one trust-region run from the linear solution confirms
 it (the linear step's own error is second order in the step) and the settling is repeated
-there; otherwise one model run gives the residuals at the settled point.
+there; otherwise one model run gives the residuals at the settled point.  An optimiser that
+returns no usable Jacobian gets the refits.
 """
 
 from __future__ import annotations
@@ -80,6 +81,8 @@ def settle_scale(best: Optimum, scale: list[float], n: int, lower: np.ndarray, u
     """
     polished = 0
     while True:
+        if not _has_jacobian(best, n):  # nothing to linearise: refit at each new scale until it settles
+            return _refit_until_settled(best, scale, n, dof, polish, polished)
         x, dx, jac, s = _linear_fixed_point(best, scale[0], n, lower, upper, dof)
         scale[0] = s
         se = _stderr(jac)
@@ -90,6 +93,33 @@ def settle_scale(best: Optimum, scale: list[float], n: int, lower: np.ndarray, u
                            message=best.message, nfev=best.nfev + 1), polished
         best = polish(np.clip(x + dx, lower, upper))
         polished += 1
+
+
+def _has_jacobian(best: Optimum, n: int) -> bool:
+    jac = getattr(best, "jac", None)
+    if jac is None:
+        return False
+    jac = np.asarray(jac, float)
+    return jac.ndim == 2 and jac.shape == (np.size(best.residual), np.size(best.x)) and jac.shape[0] >= n \
+        and bool(np.all(np.isfinite(jac)))
+
+
+def _refit_until_settled(best: Optimum, scale: list[float], n: int, dof, polish, polished: int) -> tuple[Optimum, int]:
+    """The scale re-estimated from the reading residuals and the fit repeated, until it moves by
+    less than :data:`SCALE_RTOL` (50 rounds at most)."""
+    for _ in range(50):
+        r = np.asarray(best.residual[:n], float) * scale[0]
+        new = math.sqrt(float(r @ r) / dof(best))
+        if not new > 0:
+            raise FitError("the readings are fitted exactly: the noise scale cannot be estimated; fix "
+                           "observation.sigma in the scene")
+        done = abs(new - scale[0]) <= SCALE_RTOL * scale[0]
+        scale[0] = new
+        if done:
+            break
+        best = polish(best.x)
+        polished += 1
+    return best, polished
 
 
 def _stderr(jac: np.ndarray) -> np.ndarray:
