@@ -118,7 +118,7 @@ class WaveformProblem(RecordingProblem):
         # the exact or dop853 dense solution is sampled for a whole ensemble in one call (log_prob_many)
         self.tolerance_basis = ""
         if self.solver == "dop853" and not {"rtol", "atol"} & set(self.solver_options):
-            # the integrator's error matched to the readings' noise instead of a fixed 1e-10
+            # the tolerance from the readings' noise and the Jacobian's steps, stated in the results
             span = float(self.sample_time[-1] - t_ref)
             rtol, self.tolerance_basis = noise_rtol(sigma0, 0.5 * float(np.ptp(series.theta[idx])), idx.size,
                                                     span / period if period > 0 else math.nan)
