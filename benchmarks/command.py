@@ -4,6 +4,8 @@ Run from a checkout::
 
     python benchmarks/command.py [--previous DIR | --baseline REV] [--repeat 5] [--quickstart] [--cold]
 
+(``--previous`` a checkout of the previous main, e.g. ``git worktree add --detach DIR main``.)
+
 Each job runs as a user runs it (``python -m escfit fit RECIPE ...``), in a fresh process, the
 previous version and this checkout in turn (A B A B ...), so that a drift of the shared
 machine's speed hits both alike; the ratio previous/current is taken pair by pair and its
@@ -13,12 +15,15 @@ median printed.  Jobs: the string pendulum's least squares (``fits/real/string_p
 
 Phases are timed the same way in both versions, from outside escfit's code: a small harness
 wraps, as each module finishes importing, the functions that start each phase (the scene's
-loading, the fit, least squares, sampling, the results tree, the write, the printed summary,
+loading, the fit, least squares (with the agreement check's turning-point refit), the rest of
+the agreement check of the fit with the record's turning points, sampling, the results tree, the write, the printed summary,
 the report) and reads the process's wall and CPU clocks around them ("record" is what the fit
-spends outside those: reading and analysing the record, and checks such as the agreement of the
-fit with the record's turning points); start-up and imports are
-the time from the process's start (``/proc``) to the first of them.  The whole process's wall
-time and CPU seconds (user + system, from the operating system's accounting of the finished
+spends outside those: reading and analysing the record); start-up and imports are
+the time from the process's start (``/proc``) to the first of them.  The same harness counts
+the least-squares runs (calls of ``scipy.optimize.least_squares``, one per start, per noise
+stage and per refit) and the model runs (a solver's run of one parameter set; a batch call
+counts its sets).  The whole process's wall time and CPU seconds (user + system, from the
+operating system's accounting of the finished
 child) are measured outside.  ``--cold`` adds one run of each version with an empty numba cache
 (everything compiled): the first run after an install.
 
@@ -40,11 +45,13 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from previous import ROOT, checkout  # noqa: E402
 
 BASELINE = "16b1105"
-PHASES = ["start-up + imports", "scene", "record", "least squares", "sampling", "results", "write", "summary",
+PHASES = ["start-up + imports", "scene", "record", "least squares", "agreement", "sampling", "results", "write", "summary",
           "report", "other"]
 
 # Run as ``python -c HARNESS ARGS...``: escfit's own ``python -m escfit`` with phase clocks.
@@ -63,9 +70,23 @@ TARGETS = {"escfit.core.scene": [("load_scene", "scene")],
            "escfit.inference.fit": [("fit", "fit"), ("fit_problem", "fit_problem"), ("least_squares", "least squares"),
                                     ("reconcile", "least squares"), ("with_held_uncertainty", "least squares"),
                                     ("run_emcee", "sampling"), ("build_tree", "results"), ("write_fit", "write")],
+           "escfit.balance.problems.agreement": [("check_agreement", "agreement")],
            "escfit.cli.summary": [("print_summary", "summary")],
            "escfit.report": [("make_report", "report")]}
-totals, stack, first = {}, [], []
+# module -> [(attribute, counter)]: scipy's least-squares runs, and the model runs (a batch call counts its sets)
+COUNTED = {"scipy.optimize": [("least_squares", "fits")],
+           "escfit.balance.solvers": [("solve_system", "model runs")],
+           "escfit.balance.batch_dense": [("sample_batch", "model runs")],
+           "escfit.balance.batch_dop853": [("sample_batch_dop853", "model runs")]}
+totals, stack, first, counts = {}, [], [], {"fits": 0, "model runs": 0}
+
+def counted(func, name):
+    def run(*a, **k):
+        out = func(*a, **k)
+        sets = out[0].shape[0] if name == "model runs" and isinstance(out, tuple) and hasattr(out[0], "shape") else 1
+        counts[name] += int(sets)
+        return out
+    return run
 
 def timed(func, name):
     def run(*a, **k):
@@ -88,7 +109,7 @@ def timed(func, name):
 
 class Hook(importlib.abc.MetaPathFinder):
     def find_spec(self, name, path, target=None):
-        if name not in TARGETS:
+        if name not in TARGETS and name not in COUNTED:
             return None
         sys.meta_path.remove(self)
         try:
@@ -98,16 +119,19 @@ class Hook(importlib.abc.MetaPathFinder):
         inner = spec.loader.exec_module
         def exec_module(module):
             inner(module)
-            for attr, label in TARGETS[name]:
+            for attr, label in TARGETS.get(name, ()):
                 if callable(getattr(module, attr, None)) and not isinstance(getattr(module, attr), type):
                     setattr(module, attr, timed(getattr(module, attr), label))
+            for attr, label in COUNTED.get(name, ()):
+                if callable(getattr(module, attr, None)):
+                    setattr(module, attr, counted(getattr(module, attr), label))
         spec.loader.exec_module = exec_module
         return spec
 
 def report():  # at exit: escfit's command line may end the process without returning here
     end = since_start()
     startup = first[0] if first else end
-    out = {"start-up + imports": list(startup), **totals, "process": list(end)}
+    out = {"start-up + imports": list(startup), **totals, "process": list(end), "counts": counts}
     os.write(1, ("\nPHASES " + json.dumps(out) + "\n").encode())
 
 import atexit
@@ -123,7 +147,7 @@ def _phases(raw: dict) -> dict[str, tuple[float, float]]:
     the process less every phase."""
     get = lambda k: tuple(raw.get(k, (0.0, 0.0)))  # noqa: E731
     out = {"start-up + imports": get("start-up + imports")}
-    for key in ("scene", "least squares", "sampling", "results", "write", "summary", "report"):
+    for key in ("scene", "least squares", "agreement", "sampling", "results", "write", "summary", "report"):
         out[key] = get(key)
     # ``fit`` and ``fit_problem`` were charged only what their inner phases left: reading and
     # analysing the record (and the checks around it)
@@ -159,7 +183,7 @@ def run_once(folder: Path, args: list[str], work: Path, pycache: Path, numba_cac
     raw = json.loads(lines[-1][len("PHASES "):])
     if proc.returncode not in (0, 3):  # 3: a fit that ran but determined nothing
         raise SystemExit(f"escfit {' '.join(args)} under {folder} exited {proc.returncode}:\n{stderr.decode()[-3000:]}")
-    return {"phases": _phases(raw), "wall": wall, "cpu": cpu}
+    return {"phases": _phases(raw), "wall": wall, "cpu": cpu, "counts": raw.get("counts", {})}
 
 
 def job_args(job: str, out: Path) -> list[str]:
@@ -180,12 +204,38 @@ def measure(job: str, previous: Path, repeat: int, tmp: Path, cold: bool) -> dic
             runs[label].append(run_once(folder, _abs(job_args(job, tmp / f"{label}-{job}.h5"), folder), folder,
                                         pycache))
     record = {"runs": runs}
+    if job == "leastsq":
+        record["shift"] = estimate_shift(tmp / f"previous-{job}.h5", tmp / f"current-{job}.h5")
     if cold:
         for label, folder in (("previous", previous), ("current", ROOT)):
             cache = Path(tempfile.mkdtemp(prefix="numba-cold-", dir=tmp))
             record[f"{label} cold"] = run_once(folder, _abs(job_args(job, tmp / f"{label}-cold.h5"), folder),
                                                folder, pycache, numba_cache=cache)
     return record
+
+
+SHIFT = r'''
+import json, sys
+import numpy as np
+from escfit.results import load_fit
+old, new = (load_fit(p).group("least_squares") for p in sys.argv[1:3])
+se = old["stderr"].values
+print(json.dumps({"names": [str(n) for n in old["parameter"].values],
+                  "value_se": ((new["value"].values - old["value"].values) / se).tolist(),
+                  "stderr_rel": (new["stderr"].values / se - 1.0).tolist(),
+                  "rtol": load_fit(sys.argv[2]).attrs.get("solver_options", "")}))
+'''
+
+
+def estimate_shift(previous: Path, current: Path) -> dict:
+    """How far the current least-squares estimates lie from the previous version's, in the
+    previous standard errors, and how the standard errors changed (read by this checkout's escfit)."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    out = subprocess.run([sys.executable, "-c", SHIFT, str(previous), str(current)], env=env, capture_output=True,
+                         text=True)
+    if out.returncode != 0:
+        return {"error": out.stderr[-500:]}
+    return json.loads(out.stdout)
 
 
 def _abs(args: list[str], folder: Path) -> list[str]:
@@ -208,6 +258,16 @@ def report(job: str, record: dict) -> list[str]:
         old, new = med("previous", lambda r: r[key]), med("current", lambda r: r[key])
         ratio = statistics.median(a[key] / b[key] for a, b in pairs)
         lines.append(f"| **{name}** | {old:.3f} | {new:.3f} (previous/current, pairwise median {ratio:.2f}x) |")
+    for key in ("fits", "model runs"):
+        old, new = (med(label, lambda r: r["counts"].get(key, 0)) for label in ("previous", "current"))
+        what = "least-squares runs (scipy)" if key == "fits" else "model runs (a batch call counts its sets)"
+        lines.append(f"| {what} | {old:.0f} | {new:.0f} |")
+    shift = record.get("shift")
+    if shift and "names" in shift:
+        worst = int(np.argmax(np.abs(shift["value_se"])))
+        lines.append(f"| largest estimate shift, previous standard errors | | {shift['value_se'][worst]:+.2e} "
+                     f"({shift['names'][worst]}); standard errors within {max(map(abs, shift['stderr_rel'])):.1e} "
+                     f"relative; current solver options {shift['rtol']} |")
     for label in ("previous", "current"):
         cold = record.get(f"{label} cold")
         if cold:

@@ -129,9 +129,10 @@ def _best_scale(problem, values: Mapping[str, float]) -> float:
     from scipy.optimize import minimize_scalar
 
     start = float(values[SIGMA])
+    loglike = _noise_loglike(problem, values)
 
     def cost(log_s: float) -> float:
-        ll = float(np.sum(problem.loglike_pointwise({**values, SIGMA: math.exp(log_s)})))
+        ll = loglike({SIGMA: math.exp(log_s)})
         return -ll if math.isfinite(ll) else math.inf
 
     res = minimize_scalar(cost, bounds=(math.log(start) - 3.0, math.log(start) + 3.0), method="bounded",
@@ -154,12 +155,23 @@ def _best_noise(problem, values: Mapping[str, float], scale_free: bool) -> dict[
             out[SIGMA] = math.exp(x[1])
         return out
 
+    loglike = _noise_loglike(problem, values)
+
     def cost(x) -> float:
-        ll = float(np.sum(problem.loglike_pointwise({**values, **trial(x)})))
+        ll = loglike(trial(x))
         return -ll if math.isfinite(ll) else math.inf
 
     res = minimize(cost, x0, method="Nelder-Mead", options={"xatol": 1e-7, "fatol": 1e-9, "maxiter": 2000})
     return trial(res.x) if res.fun <= cost(x0) else trial(x0)
+
+
+def _noise_loglike(problem, values: Mapping[str, float]):
+    """The summed log-likelihood as a function of the noise parameters, the structural ones at
+    ``values``: the problem's own (one model run) where it has one, else a model run per call."""
+    own = getattr(problem, "noise_loglike", None)
+    if callable(own):
+        return own(values)
+    return lambda noise: float(np.sum(problem.loglike_pointwise({**values, **noise})))
 
 
 def noise_model(problem, values: Mapping[str, float], profiled: bool, rho_free: bool = False) -> tuple[str, bool]:

@@ -12,9 +12,12 @@ posterior where a prior pins what the data alone cannot.  Noise parameters
 (:attr:`Problem.noise_names`, e.g. ``observation.sigma``) are not fitted:
 
 * when one is free, the noise scale is *profiled*: without Gaussian priors the fit rescales the
-  covariance by the reduced chi-square; with them the scale is re-estimated from the reading
-  residuals and the fit repeated until the two agree (degrees of freedom: readings minus the
-  parameters no prior pins), because rescaling would also inflate the priors' terms;
+  covariance by the reduced chi-square; with them the scale must equal the scatter the reading
+  residuals leave at the optimum found with it (degrees of freedom: readings minus the
+  parameters no prior pins), because rescaling would also inflate the priors' terms; that fixed
+  point is settled on the optimum's Jacobian (:func:`~escfit.inference.noise_scale.settle_scale`:
+  linear steps, a trust-region run only to confirm a step of more than a quarter of a
+  standard error);
 * when none is free the scene's noise is known and the covariance is not rescaled.
 
 ``sigma_hat`` reports the profiled reading scatter.
@@ -40,10 +43,11 @@ import numpy as np
 from ..core.errors import EscfitError, FitError
 from ..likelihood.problem import FAIL_RESIDUAL, Problem, gaussian_prior_residuals
 from .fdjac import batch_jacobian
+from .noise_scale import settle_scale
 from .starts import multistart_points
 from .trf import minimize, single_blas_thread
 
-__all__ = ["LeastSquaresResult", "least_squares", "bounded_interval", "bound_flags", "stacked_residuals", "INTERVAL_Z"]
+__all__ = ["LeastSquaresResult", "least_squares", "profiled_scale", "bounded_interval", "bound_flags", "stacked_residuals", "INTERVAL_Z"]
 
 _GAUSSIAN = ("normal", "halfnormal", "lognormal")
 
@@ -130,7 +134,8 @@ class LeastSquaresResult:
 
 def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None = None, seed: int = 0,
                   fixed: dict[str, float] | None = None, start: dict[str, float] | None = None,
-                  priors_count: bool = False, optimizer=minimize) -> LeastSquaresResult:
+                  priors_count: bool = False, optimizer=minimize, scale_start: float | None = None
+                  ) -> LeastSquaresResult:
     """Minimise the standardised residuals over the structural free parameters.
 
     Parameters
@@ -161,6 +166,10 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
         The run from one start: :func:`~escfit.inference.trf.minimize` (scipy's trust region) or
         any callable of its signature returning an :class:`~escfit.inference.trf.Optimum`
         (:func:`~escfit.inference.lmfit_path.lmfit_optimizer`: an lmfit minimiser).
+    scale_start
+        Where the profiled noise scale starts when Gaussian priors make it a fixed point, relative
+        to the scene's ``observation.sigma`` (default 1): a second noise stage starts at the first
+        one's scale, so that settling it hardly moves the optimum.
 
     Raises
     ------
@@ -196,7 +205,8 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
     starts = multistart_points(priors, x0, lo, hi, n_starts, seed)
     n = problem.n_data
     options = dict(getattr(problem, "lsq_options", {}) or {})
-    scale = [1.0]  # reading residuals are divided by this (the profiled noise over the scene's)
+    # reading residuals are divided by this (the profiled noise over the scene's)
+    scale = [float(scale_start) if iterate_scale and scale_start and scale_start > 0 else 1.0]
 
     last = {}  # the latest residual evaluation, which scipy differentiates at next
 
@@ -228,19 +238,11 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
         if best is None:
             raise FitError("least squares failed from every start point")
         free_dof = _data_dof(best, priors, n, len(names) - pinned)
-        if iterate_scale:
-            for _ in range(50):
-                r = best.residual[:n] * scale[0]
-                new = math.sqrt(float(r @ r) / free_dof)
-                if not new > 0:
-                    raise FitError("the readings are fitted exactly: the noise scale cannot be estimated; fix "
-                                   "observation.sigma in the scene")
-                done = abs(new - scale[0]) <= 1e-9 * scale[0]
-                scale[0] = new
-                if done:
-                    break
-                best = optimizer(residual, best.x, lo, hi, scale_covar=False, names=names, **options)
-                free_dof = _data_dof(best, priors, n, len(names) - pinned)
+        if iterate_scale:  # the scale and the optimum settled together on the optimum's Jacobian
+            best, _ = settle_scale(
+                best, scale, n, lo, hi, dof=lambda b: _data_dof(b, priors, n, len(names) - pinned), evaluate=residual,
+                polish=lambda x: optimizer(residual, x, lo, hi, scale_covar=False, names=names, **options))
+            free_dof = _data_dof(best, priors, n, len(names) - pinned)
     value = best.x.copy()
     covar_scale = float(best.redchi) if (profile_noise and not iterate_scale) else 1.0
     cov, undetermined = _covariance(best, len(names), covar_scale)
@@ -564,7 +566,17 @@ def _two_stage_ar1(problem, *, n_starts, n_refine, seed, fixed, start, optimizer
     lo, hi = (float(np.asarray(b)[i]) for b in problem.bounds)
     rho = float(np.clip((r[1:] @ r[:-1]) / (r @ r), max(lo, -0.99), min(hi, 0.99)))
     return least_squares(problem, n_starts=1, seed=seed, fixed={**(fixed or {}), "observation.rho": rho},
-                         start={n: first.values[n] for n in first.names}, optimizer=optimizer)
+                         start={n: first.values[n] for n in first.names}, optimizer=optimizer,
+                         scale_start=profiled_scale(problem, first))
+
+
+def profiled_scale(problem: Problem, lsq: LeastSquaresResult) -> float | None:
+    """The reading scale ``lsq`` profiled, relative to the scene's ``observation.sigma`` (the
+    ``scale_start`` of a refit of the same readings), or ``None``."""
+    sigma = problem.values({}).get("observation.sigma", math.nan)  # the scene's, not the profiled one
+    if not (lsq.profiled and math.isfinite(lsq.sigma_hat) and math.isfinite(sigma) and sigma > 0):
+        return None
+    return float(lsq.sigma_hat / sigma)
 
 
 def _ranked(starts: list[np.ndarray], residual, lo: np.ndarray, hi: np.ndarray,

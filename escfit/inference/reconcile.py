@@ -25,7 +25,7 @@ import math
 import numpy as np
 
 from ..likelihood.consistency import Implied
-from .lsq import LeastSquaresResult, least_squares
+from .lsq import LeastSquaresResult, least_squares, profiled_scale
 from .trf import minimize
 
 __all__ = ["reconcile", "with_held_uncertainty", "verdict", "NOT_DETERMINED", "PARTLY", "DETERMINED"]
@@ -69,7 +69,7 @@ def reconcile(problem, lsq: LeastSquaresResult, *, seed: int = 0, priors_count: 
         if c.name in held:
             problem.hold(c.name, c.implied)
             lsq = least_squares(problem, n_starts=1, seed=seed, start=_start(lsq), priors_count=priors_count,
-                                optimizer=optimizer)
+                                optimizer=optimizer, scale_start=profiled_scale(problem, lsq))
             if not notes or not notes[-1].startswith(f"{c.name} moved"):
                 notes.append(f"{c.name} moved from {c.fitted:.6g} to {c.implied:.6g} so that the model's period "
                              f"matches the record's ({c.facts} at the first value)")
@@ -82,7 +82,7 @@ def reconcile(problem, lsq: LeastSquaresResult, *, seed: int = 0, priors_count: 
         start = _start(lsq)
         start[c.name] = float(np.clip(c.implied, lsq.lower[i], lsq.upper[i]))
         refit = least_squares(problem, n_starts=1, seed=seed, start=start, priors_count=priors_count,
-                              optimizer=optimizer)
+                              optimizer=optimizer, scale_start=profiled_scale(problem, lsq))
         again = [x for x in consistency(refit.values) if x.name == c.name]
         if again and not again[0].agrees:
             return lsq, notes, [c]

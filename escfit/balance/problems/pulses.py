@@ -129,6 +129,13 @@ class RecordingProblem(FreeParameters, BalanceProblem, ABC):
         """Noise-free expected readings of all data points, concatenated."""
         return self._expected(self._predict(vals), vals)
 
+    def noise_loglike(self, vals: Mapping[str, float]):
+        """The summed log-likelihood as a function of the noise parameters alone (a mapping of
+        ``observation.sigma``, ``observation.rho``, ...), the model run once at ``vals``: the
+        noise parameters change the observation model, never the prediction."""
+        pred = self._predict(vals)
+        return lambda noise: float(np.sum(self._pointwise(pred, {**vals, **noise})))
+
     # -- what each recording defines ------------------------------------------------------------
     @abstractmethod
     def _predict(self, vals):

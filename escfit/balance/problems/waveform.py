@@ -31,6 +31,7 @@ from .curves import FAIL_RESIDUAL, Curve, _column
 from .pulses import RecordingProblem
 from .nuisance import centre_priors
 from .release import release_from_record
+from .tolerance import noise_rtol
 
 __all__ = ["WaveformProblem", "noise_from_samples"]
 
@@ -115,7 +116,21 @@ class WaveformProblem(RecordingProblem):
             self.notes.append(f"waveform: one sample in {thin} used ({idx.size} of {np.count_nonzero(keep)})")
         self.curves = [Curve("waveform", math.nan, np.arange(idx.size), series.theta[idx], self.sample_time)]
         # the exact or dop853 dense solution is sampled for a whole ensemble in one call (log_prob_many)
+        self.tolerance_basis = ""
+        if self.solver == "dop853" and not {"rtol", "atol"} & set(self.solver_options):
+            # the tolerance from the readings' noise and the Jacobian's steps, stated in the results
+            span = float(self.sample_time[-1] - t_ref)
+            rtol, self.tolerance_basis = noise_rtol(sigma0, 0.5 * float(np.ptp(series.theta[idx])), idx.size,
+                                                    span / period if period > 0 else math.nan)
+            self.solver_options = {**self.solver_options, "rtol": rtol}
         self.vectorized = self.solver in _BATCH_OPTIONS and set(self.solver_options) <= _BATCH_OPTIONS[self.solver]
+
+    def provenance(self) -> dict:
+        """As every recording problem's, and how the integrator's tolerance was chosen (``solver_tolerance``)."""
+        out = super().provenance()
+        if self.tolerance_basis:
+            out["solver_tolerance"] = self.tolerance_basis
+        return out
 
     @property
     def sampler_coordinates(self):
