@@ -125,7 +125,7 @@ def test_arrival_stamps_with_noisy_readings_are_kept_with_a_warning(tmp_path):
 
 
 @pytest.mark.parametrize("stamps", [
-    lambda t: np.r_[t[:700], t[:800]],  # the clock reset
+    lambda t: np.r_[t[:700], t[:800] + 3.0],  # the clock set back by 11 s
     lambda t: np.r_[t[:300], np.full(1200, t[300])],  # the clock stalled
 ])
 def test_a_refusal_suggests_the_true_rate(stamps):
@@ -135,6 +135,20 @@ def test_a_refusal_suggests_the_true_rate(stamps):
         time_base(s, np.resize(a, s.size))
     rate = float(re.search(r"about ([\d.]+) Hz", str(info.value)).group(1))
     assert rate == pytest.approx(RATE, rel=0.02), str(info.value)
+
+
+def test_a_restarted_clock_keeps_the_longest_run(tmp_path):
+    """Three runs appended, the clock starting again at each: the longest (800 rows) is kept whole,
+    with a warning naming the others, not joined into one record nor refused."""
+    t, a = truth()
+    stamps = np.r_[t[:400], t[:300], t[:800]]
+    theta = np.r_[a[:400], a[:300], a[:800]]
+    ts = read_data(write(tmp_path, "runs.csv", stamps, theta))
+    np.testing.assert_allclose(ts.time - ts.time[0], t[:800], rtol=0, atol=STAMP)
+    np.testing.assert_array_equal(ts.theta, np.round(a[:800], 8))
+    (warning,) = warnings_of(ts.meta)
+    assert "the clock starts again 2 time(s)" in warning and "the file holds 3 runs" in warning
+    assert "rows 701-1500" in warning and "rows 1-400, rows 401-700" in warning, warning
 
 
 def test_one_backwards_row_is_dropped(tmp_path):
@@ -229,7 +243,8 @@ def _often_backwards():
 
 @pytest.mark.parametrize("stamps, message, rate", [
     (lambda t: _often_backwards(), r"time goes backwards at 30 of 1500 rows", True),
-    (lambda t: np.r_[t[:700], t[:800]], r"time goes backwards: 13.98 then 0.0 s, and neither dropping nor swapping",
+    (lambda t: np.r_[t[:700], t[:800] + 3.0], r"time goes backwards: 13.98 then 3.0 s, and neither dropping nor "
+                                              r"swapping",
      True),
     (lambda t: np.full(N, 3.0), r"the clock stalls \(the stamp 3 s repeats over 1500 rows\)", False),
     (lambda t: np.r_[t[:300], np.full(1200, t[300])], r"the stamp 6 s repeats over 1200 rows", True),
