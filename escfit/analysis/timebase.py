@@ -54,6 +54,7 @@ from typing import Callable
 import numpy as np
 
 from ..core.errors import DataError
+from .runs import appended_runs
 
 __all__ = ["TimeBase", "Repair", "time_base", "FIX", "LARGE_FRACTION"]
 
@@ -66,11 +67,6 @@ STALL_ROWS = 8  # a run of one stamp over this many rows (or STALL_BURSTS bursts
 STALL_BURSTS = 4
 KEEP_FRACTION = 0.25  # a cut must keep at least this fraction of the rows
 INTERVAL_RANGE = (1e-9, 1e7)  # s: sampling intervals outside are not a recording's
-RESTART_SHARE = 0.1  # a step back to within this share of the run's span from its start: a restarted clock
-MAX_RUNS = 10  # more restarts than this are no runs appended
-MIN_RUN_ROWS = 20  # a run shorter than this is no run
-LONGEST_BY = 1.1  # the run kept is at least this many times longer than the next
-RESTART_JUMP = 5.0  # a new run's first reading jumps this many median steps from the last
 CATCH_UP = (2.0 / 3.0, 1.5)  # a repeated stamp re-timed locally: the steps it implies, in intervals
 CLUSTER_STEP = 0.5  # a step shorter than this many mean intervals lies inside a cluster of stamps
 EVEN_STEPS = 2.0  # readings stepping less than this many times more across a gap than inside: rows even
@@ -217,37 +213,12 @@ def time_base(time, values=None, *, where_of_row: Callable[[int], str] | None = 
 
 
 # -- the steps, in order --------------------------------------------------------------------------------
-def _motion_restarts(v, starts: list[int]) -> bool:
-    """Whether the readings jump where the clock restarts (a new run), by more than
-    :data:`RESTART_JUMP` times the median step of the 20 rows before: a motion that goes on
-    while the clock starts again is one record, timed by the logger's rate."""
-    if v is None:
-        return False
-    for i in starts:
-        before = np.abs(np.diff(v[max(0, i - 21):i]))
-        if not abs(v[i] - v[i - 1]) > RESTART_JUMP * float(np.median(before)) + 1e-300:
-            return False
-    return True
-
-
 def _restarts(t, idx, v, repairs):
-    """Keep the longest run of a file whose clock restarts: a step back to within
-    :data:`RESTART_SHARE` of the current run's span from its first stamp, at most
-    :data:`MAX_RUNS` runs of at least :data:`MIN_RUN_ROWS` rows each."""
-    back = np.flatnonzero(np.diff(t) < 0)
-    if not 0 < back.size < MAX_RUNS:
+    """Keep the longest run of a file of runs appended (:func:`~escfit.analysis.runs.appended_runs`)."""
+    found = appended_runs(t, v)
+    if found is None:
         return t, idx, v
-    starts = [0]
-    for i in back.tolist():
-        first, last = t[starts[-1]], t[i]
-        if not (t[i + 1] <= first + RESTART_SHARE * (last - first) and i + 1 - starts[-1] >= MIN_RUN_ROWS):
-            return t, idx, v  # a row out of order, not a restart: the next step's
-        starts.append(i + 1)
-    bounds = list(zip(starts, starts[1:] + [t.size]))
-    sizes = sorted((b - a for a, b in bounds), reverse=True)
-    if sizes[-1] < MIN_RUN_ROWS or sizes[0] < LONGEST_BY * sizes[1] or not _motion_restarts(v, starts[1:]):
-        return t, idx, v  # one motion whose clock restarted, or runs alike: sample_rate or the user decides
-    lo, hi = max(bounds, key=lambda b: b[1] - b[0])
+    (lo, hi), bounds, back = found
     others = ", ".join(f"rows {int(idx[a]) + 1}-{int(idx[b - 1]) + 1}" for a, b in bounds if a != lo)
     repairs.append(Repair("restarts", int(t.size - (hi - lo)),
                           f"the clock starts again {back.size} time(s) (at t = {float(t[back[0]]):g} s back to "
