@@ -223,3 +223,16 @@ def test_axes_that_swing_alike_are_not_chosen_between(tmp_path):
     choice = choose_channel(t, {f"Gyroscope {a} (rad/s)": c for a, c in zip("xyz", columns)},
                             units={f"Gyroscope {a} (rad/s)": "rad/s" for a in "xyz"}, key="velocity_column")
     assert choice.chosen is None
+
+
+def test_a_light_gates_pass_times_are_refused_as_event_times(tmp_path):
+    """A light gate's log (pass number, pass time in ms) has no swing to sample: the column read as
+    the angle only rises, and the refusal says what such a column is."""
+    passes = np.arange(1, 421)
+    ms = np.cumsum(np.full(420, 752.0) + RNG.normal(0, 2, 420))  # a pass every half period of 1.5 s
+    data = tmp_path / "gate.csv"
+    data.write_text("".join(f"{n},{m:.0f}\n" for n, m in zip(passes, ms)))
+    result, scene = _init(tmp_path, data)
+    assert result.exit_code == 2 and scene is None
+    assert "only rises over all 420 samples and never turns" in result.output
+    assert "a list of event times" in result.output and result.output.count("\n") == 1

@@ -419,7 +419,13 @@ def prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, whe
     if np.any(dts <= 0):
         i = int(np.flatnonzero(dts <= 0)[0])
         raise DataError(f"times must increase: {t[i]!r} then {t[i + 1]!r}", where)
-    jump = np.abs(np.diff(x)) if quantity == "angle" else np.zeros(0)
+    steps = np.diff(x)
+    if np.ptp(x) > 0 and (np.all(steps >= 0) or np.all(steps <= 0)):
+        raise DataError(f"the {quantity_words(quantity)} only {'rises' if steps.sum() > 0 else 'falls'} over all "
+                        f"{x.size} samples and never turns: a clock, a running count "
+                        "or a list of event times (a light gate's passes?), or a motion that creeps to rest without "
+                        "a swing; escfit needs the sampled swing's turning points", where)
+    jump = np.abs(steps) if quantity == "angle" else np.zeros(0)
     if np.any(jump > 1.5 * math.pi):  # no motion sampled 16 times a period moves that far
         i = int(np.argmax(jump))
         within_turn = np.ptp(x) <= 2.1 * math.pi
