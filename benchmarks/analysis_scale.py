@@ -10,7 +10,7 @@ folder, the damping scaled to the length so that every record is one whole decay
 (so that its peak resident memory is its own):
 
 * ``read``: :func:`escfit.balance.family.read_data` on the CSV (as ``escfit fit`` reads it);
-* ``analysis``: :func:`escfit.balance.recordings.turning_points.reduce_series` (``strict=False``)
+* ``analysis``: :func:`escfit.analysis.recordings.turning_points.reduce_series` (``strict=False``)
   on the samples, loaded from a ``.npy`` copy: the whole record analysis up to the fit's
   inputs, the call ``escfit fit`` and ``escfit init`` make (init makes it twice);
 * ``init`` (with ``--init``): ``escfit init FILE --pendulum`` as a command, under
@@ -108,8 +108,8 @@ def worker(phase: str, path: Path, limit_mb: float) -> dict:
     import numpy as np
 
     from escfit.balance.family import read_data
-    from escfit.balance.recordings.timeseries import TimeSeries
-    from escfit.balance.recordings.turning_points import reduce_series
+    from escfit.analysis.recordings.timeseries import TimeSeries
+    from escfit.analysis.recordings.turning_points import reduce_series
 
     import scipy.stats  # noqa: F401  (imported by the analysis; its cost is not the phase's)
 

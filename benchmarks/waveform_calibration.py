@@ -19,7 +19,7 @@ import numpy as np
 
 from escfit.balance.waveform import sample_theta
 from escfit.inference import fit
-from escfit.balance.recordings.timeseries import TimeSeries
+from escfit.analysis.recordings.timeseries import TimeSeries
 from escfit.core.scene import load_scene
 
 TRUTH = {"oscillator.omega0": 2 * math.pi, "viscous.C": 0.3, "coulomb.R": 0.5}

@@ -14,7 +14,7 @@ import math
 import numpy as np
 import pytest
 
-from escfit.balance.recordings.timeseries import TimeSeries
+from escfit.analysis.recordings.timeseries import TimeSeries
 from escfit.balance.waveform import sample_theta
 from escfit.core.scene import load_scene
 from escfit.inference import make_problem

@@ -63,7 +63,7 @@ def test_peak_amplitudes_every_few_swings_recover_the_pendulums_damping(tmp_path
 
 def test_rows_every_few_swings_need_omega0_and_distinct_turning_points(tmp_path):
     from escfit.balance.problems.amplitude_rows import amplitude_readings_curve
-    from escfit.balance.recordings.series import TimeSeries
+    from escfit.analysis.recordings.series import TimeSeries
 
     t = np.array([0.0, 4.0, 9.0, 13.5, 22.0])
     amps = np.array([0.2, 0.18, 0.16, 0.15, 0.13])

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.stats import theilslopes
 
-from escfit.balance.recordings.centre import measure_centre, theil_sen
+from escfit.analysis.recordings.centre import measure_centre, theil_sen
 
 
 @pytest.mark.parametrize("n", [4, 37, 500, 1414])

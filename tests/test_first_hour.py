@@ -234,7 +234,7 @@ def test_compile_notice_not_in_captured_stderr(monkeypatch, capsys):
 # 8. recording headers in another case, and near misses -------------------------------------------
 
 def test_header_case_and_spaces_do_not_matter(tmp_path):
-    from escfit.balance.recordings.detect import detect_format, read_recording
+    from escfit.analysis.recordings.detect import detect_format, read_recording
 
     lower, upper = tmp_path / "lower.csv", tmp_path / "upper.csv"
     body = "0,30\n2,28\n4,26\n6,24\n"
@@ -249,7 +249,7 @@ def test_header_case_and_spaces_do_not_matter(tmp_path):
 
 
 def test_close_but_unknown_column_is_named(tmp_path):
-    from escfit.balance.recordings.detect import read_recording
+    from escfit.analysis.recordings.detect import read_recording
     from escfit.core.errors import DataError
 
     typo = tmp_path / "typo.csv"

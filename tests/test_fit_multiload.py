@@ -10,7 +10,7 @@ import pytest
 import escfit
 from escfit.core.errors import SceneError
 from escfit.inference import fit
-from escfit.balance.recordings import read_unit_curve
+from escfit.analysis.recordings import read_unit_curve
 
 from .conftest import DATASETS
 

@@ -13,7 +13,7 @@ import escfit
 from escfit.core.errors import FitError, ResultsError
 from escfit.balance.problems.curves import FitProblem
 from escfit.inference import fit, least_squares, profile
-from escfit.balance.recordings import read_unit_curve, write_unit_curve
+from escfit.analysis.recordings import read_unit_curve, write_unit_curve
 from escfit.balance.synthetic.unit_curves import record_unit_curve
 from escfit.results import load_fit
 

@@ -151,14 +151,14 @@ def test_the_examples_of_the_rule():
 @pytest.mark.parametrize("value, hz", [("500 Hz", 500.0), ("0.5 kHz", 500.0), ("500 /s", 500.0), ("500 s^-1", 500.0),
                                        ("30000 /min", 500.0)])
 def test_a_sample_rate_takes_hz(value, hz):
-    from escfit.balance.recordings.recording_spec import recording_spec_from_table
+    from escfit.analysis.recordings.recording_spec import recording_spec_from_table
 
     assert recording_spec_from_table({"sample_rate": value}, "s.toml").sample_rate == pytest.approx(hz, rel=1e-14)
 
 
 @pytest.mark.parametrize("value", ["3141.6 rad/s", "30000 rpm", "500 turn/s", "5 m"])
 def test_a_sample_rate_refuses_an_angle_per_time(value):
-    from escfit.balance.recordings.recording_spec import recording_spec_from_table
+    from escfit.analysis.recordings.recording_spec import recording_spec_from_table
 
     with pytest.raises(SceneError) as err:
         recording_spec_from_table({"sample_rate": value}, "s.toml")
@@ -195,8 +195,8 @@ def test_viscous_c_refuses_a_frequency(value):
                                                   ("Hz", 2 * math.pi), ("turn/s", 2 * math.pi),
                                                   ("bph", 2 * math.pi / 7200), ("1/s", 1.0)])
 def test_a_velocity_column_in_any_frequency_unit(tmp_path, unit, rad_s_per_unit):
-    from escfit.balance.recordings.detect import read_with_spec
-    from escfit.balance.recordings.recording_spec import RecordingSpec, parse_option
+    from escfit.analysis.recordings.detect import read_with_spec
+    from escfit.analysis.recordings.recording_spec import RecordingSpec, parse_option
 
     assert parse_option("velocity_unit", unit, "--velocity-unit") == unit
     t = np.arange(600) / 100.0
@@ -209,7 +209,7 @@ def test_a_velocity_column_in_any_frequency_unit(tmp_path, unit, rad_s_per_unit)
 
 @pytest.mark.parametrize("unit", ["percent/s", "m/s", "turn"])
 def test_a_velocity_unit_that_is_no_angular_frequency_is_refused(unit):
-    from escfit.balance.recordings.recording_spec import parse_option
+    from escfit.analysis.recordings.recording_spec import parse_option
 
     with pytest.raises(SceneError, match=r"--velocity-unit: expected an angular velocity unit"):
         parse_option("velocity_unit", unit, "--velocity-unit")

@@ -134,7 +134,7 @@ def test_scene_parser_reads_or_refuses(scene, which, value):
 # --------------------------------------------------------------------------- recordings
 
 def _balance_reader(path):
-    from escfit.balance.recordings.detect import read_recording
+    from escfit.analysis.recordings.detect import read_recording
 
     return read_recording(path)
 
@@ -142,7 +142,7 @@ def _balance_reader(path):
 def _format_reader(spec=None):
     """An instrument's or program's file read with the scene's [recording] options."""
     def read(path):
-        from escfit.balance.recordings.detect import read_with_spec
+        from escfit.analysis.recordings.detect import read_with_spec
 
         return read_with_spec(path, spec)
     return read
@@ -183,7 +183,7 @@ DATA = [
 def _format_specs():
     import math
 
-    from escfit.balance.recordings.recording_spec import RecordingSpec
+    from escfit.analysis.recordings.recording_spec import RecordingSpec
 
     special = {"arduino_serial.txt": RecordingSpec(angle_unit="deg"), "phyphox_gyroscope.csv": RecordingSpec(
         velocity_column=2), "timegrapher_slices.csv": RecordingSpec(bph=28800, lift_angle=math.radians(52.0))}

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from escfit.analysis.glitches import find_glitches
-from escfit.balance.recordings.extrema import smooth
-from escfit.balance.recordings.series import TimeSeries
-from escfit.balance.recordings.turning_points import reduce_series
+from escfit.analysis.recordings.extrema import smooth
+from escfit.analysis.recordings.series import TimeSeries
+from escfit.analysis.recordings.turning_points import reduce_series
 
 from .test_turning_points import decay
 

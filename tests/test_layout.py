@@ -188,7 +188,7 @@ def test_graph_is_built():
     assert f"{PACKAGE}.core.errors" in MODULES
     assert any(GRAPH.values()), "no import edges found: the graph builder is broken"
     # a from-import of a module is an edge to that module
-    assert f"{PACKAGE}.balance.recordings.unit_curve" in GRAPH[f"{PACKAGE}.balance.recordings"]
+    assert f"{PACKAGE}.analysis.recordings.unit_curve" in GRAPH[f"{PACKAGE}.analysis.recordings"]
 
 
 def test_cycle_finder_finds_a_cycle():

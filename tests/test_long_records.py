@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from escfit.balance.recordings.compiled import kinked_design, kinked_lstsq
-from escfit.balance.recordings.extrema import kinked_vertex
-from escfit.balance.recordings.motion import _window_range
-from escfit.balance.recordings.timeseries import read_timeseries
+from escfit.analysis.recordings.compiled import kinked_design, kinked_lstsq
+from escfit.analysis.recordings.extrema import kinked_vertex
+from escfit.analysis.recordings.motion import _window_range
+from escfit.analysis.recordings.timeseries import read_timeseries
 from escfit.core.csvtable import read_numbers, read_table
 from escfit.core.errors import DataError
 

@@ -258,7 +258,7 @@ def _unit3_scene(tmp_path, switching: str):
 def test_phase_convention_at_several_loads_warns_what_the_data_determine(tmp_path):
     from escfit import fit, load_scene
     from escfit.balance.problems.curves import FitProblem
-    from escfit.balance.recordings import read_unit_curve
+    from escfit.analysis.recordings import read_unit_curve
 
     scene, data = _unit3_scene(tmp_path, "phase")
     res = fit(scene, data, method="leastsq", n_starts=2)

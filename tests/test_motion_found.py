@@ -15,8 +15,8 @@ import math
 import numpy as np
 import pytest
 
-from escfit.balance.recordings.timeseries import TimeSeries
-from escfit.balance.recordings.turning_points import reduce_series
+from escfit.analysis.recordings.timeseries import TimeSeries
+from escfit.analysis.recordings.turning_points import reduce_series
 from escfit.core.errors import DataError
 
 

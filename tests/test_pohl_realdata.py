@@ -15,7 +15,7 @@ import escfit
 from escfit.balance.problems.curves import FitProblem
 from escfit.inference import least_squares
 from escfit.inference.information import bic, information_attrs
-from escfit.balance.recordings import UnitCurve
+from escfit.analysis.recordings import UnitCurve
 from escfit.core.csvtable import read_table
 
 from .conftest import SHARED

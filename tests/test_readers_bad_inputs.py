@@ -14,10 +14,10 @@ import pytest
 
 import escfit
 from escfit.core.errors import DataError, EscfitError, FitError
-from escfit.balance.recordings.pulses import assign_pulses, read_pulses
-from escfit.balance.recordings.detect import detect_format, read_recording
-from escfit.balance.recordings.timegrapher import beat_swings, read_tg_json, read_timegrapher_csv
-from escfit.balance.recordings.timeseries import read_timeseries, timeseries_to_unit_curve
+from escfit.analysis.recordings.pulses import assign_pulses, read_pulses
+from escfit.analysis.recordings.detect import detect_format, read_recording
+from escfit.analysis.recordings.timegrapher import beat_swings, read_tg_json, read_timegrapher_csv
+from escfit.analysis.recordings.timeseries import read_timeseries, timeseries_to_unit_curve
 
 from .conftest import DATASETS
 
@@ -106,7 +106,7 @@ TRUNCATED = json.dumps(_tg_doc(), indent=1)[:-40]
 # id, reader, file name, content, message pattern, location pattern (after the file name)
 def _unit_curve_release_mismatch(tmp):
     from escfit.balance.problems.curves import FitProblem
-    from escfit.balance.recordings import read_unit_curve
+    from escfit.analysis.recordings import read_unit_curve
 
     scene = escfit.load_scene("s.toml", text=(DATASETS / "monday1965" / "unit1_fit.toml").read_text()
                               .replace("theta0 = 6.28", "theta0 = 0.1"))

@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 from escfit.core.errors import DataError
-from escfit.balance.recordings.detect import read_with_spec
-from escfit.balance.recordings.recording_spec import RecordingSpec
+from escfit.analysis.recordings.detect import read_with_spec
+from escfit.analysis.recordings.recording_spec import RecordingSpec
 
 
 def decay(n=800, rate=100.0, amp=0.8):
@@ -295,8 +295,8 @@ def test_tracker_track_held_before_the_release(tmp_path, hanging_first):
 def test_escfit_formats_read_any_line_end_and_name_the_editors_line(tmp_path, end):
     """A unit curve and a pulse train saved with Windows, old-Mac or CASSY-style line ends read as
     with LF, and an error names the line an editor shows (the tokenizer's lines)."""
-    from escfit.balance.recordings.pulses import read_pulses
-    from escfit.balance.recordings.unit_curve import read_unit_curve
+    from escfit.analysis.recordings.pulses import read_pulses
+    from escfit.analysis.recordings.unit_curve import read_unit_curve
 
     curve = ["# notch_deg: 6", "swing,amplitude_deg", *(f"{k},{200 * math.exp(-0.05 * k):.4f}" for k in range(12))]
     ref = read_unit_curve(write(tmp_path, "lf.csv", "\n".join(curve) + "\n"))
@@ -316,7 +316,7 @@ def test_escfit_formats_read_any_line_end_and_name_the_editors_line(tmp_path, en
 def test_escfit_formats_still_refuse_what_they_refused(tmp_path):
     """The tokenizer does not widen what escfit's own formats accept: numbers are plain (no decimal
     comma), the text UTF-8, the fields comma-separated."""
-    from escfit.balance.recordings.unit_curve import read_unit_curve
+    from escfit.analysis.recordings.unit_curve import read_unit_curve
 
     with pytest.raises(DataError, match=r"dc.csv:3: expected 1 fields \(swing;amplitude_deg\), found 2"):
         read_unit_curve(write(tmp_path, "dc.csv", "# notch_deg: 6\nswing;amplitude_deg\n0;199,5\n1;190,2\n"))
@@ -326,7 +326,7 @@ def test_escfit_formats_still_refuse_what_they_refused(tmp_path):
 
 def test_a_compressed_cassy_labx_reads_as_the_plain_one(tmp_path):
     """CASSY Lab 2 saves a .labx compressed as a zip whose data.xml is the XML."""
-    from escfit.balance.recordings.detect import detect_format
+    from escfit.analysis.recordings.detect import detect_format
 
     from .test_readers_formats import _labx
 

@@ -15,12 +15,12 @@ import pytest
 
 from escfit.core.errors import DataError, FitError, SceneError
 from escfit.core.tabletext import cell_kind, numbered_lines, parse_number, time_seconds
-from escfit.balance.recordings.detect import candidates, detect_format, read_with_spec
-from escfit.balance.recordings.labfiles import write_cmbl
-from escfit.balance.recordings.phyphox import write_phyphox_csv, write_phyphox_zip
-from escfit.balance.recordings.rawseries import notes_of
-from escfit.balance.recordings.recording_spec import RecordingSpec, recording_spec_from_table
-from escfit.balance.recordings.tracker import arc_angle
+from escfit.analysis.recordings.detect import candidates, detect_format, read_with_spec
+from escfit.analysis.recordings.labfiles import write_cmbl
+from escfit.analysis.recordings.phyphox import write_phyphox_csv, write_phyphox_zip
+from escfit.analysis.recordings.rawseries import notes_of
+from escfit.analysis.recordings.recording_spec import RecordingSpec, recording_spec_from_table
+from escfit.analysis.recordings.tracker import arc_angle
 
 
 def decay(n=600, rate=100.0, amp=0.8):
@@ -306,7 +306,7 @@ def _zip_two_sets(tmp_path):
 
 
 def _tgnet_two_sessions(tmp_path):
-    from escfit.balance.recordings.tg_logs import TGNET_HEADER
+    from escfit.analysis.recordings.tg_logs import TGNET_HEADER
 
     rows = [",".join(TGNET_HEADER)]
     for s in (1, 2):
@@ -340,9 +340,9 @@ def test_a_title_line_naming_one_run_is_not_a_header_of_runs(tmp_path):
     """DataStudio's text export: a title line (``Output Voltage, Run #16``) above the real header
     (``Time ( s )<TAB>Voltage ( V )``); the title's comma split it into two names, one of them a
     run label, and the file was taken for a runs-side-by-side CSV ("no run labels ...")."""
-    from escfit.balance.recordings.detect import detect_format
-    from escfit.balance.recordings.rawseries import read_raw_series
-    from escfit.balance.recordings.recording_spec import RecordingSpec
+    from escfit.analysis.recordings.detect import detect_format
+    from escfit.analysis.recordings.rawseries import read_raw_series
+    from escfit.analysis.recordings.recording_spec import RecordingSpec
 
     t = np.arange(0, 40, 0.1)
     x = 0.2 * np.exp(-0.03 * t) * np.cos(2 * np.pi * t / 14.3)
@@ -362,8 +362,8 @@ def test_a_stalled_clock_at_the_end_is_cut_with_a_warning(tmp_path):
     """An encoder log whose time column stops advancing for its last rows (the logger's clock
     stalled while the angle went on): the record is cut at the stall, with a warning (a fifth of
     the rows go) naming it; `stop` cuts it as before."""
-    from escfit.balance.recordings.rawseries import read_raw_series, warnings_of
-    from escfit.balance.recordings.recording_spec import RecordingSpec
+    from escfit.analysis.recordings.rawseries import read_raw_series, warnings_of
+    from escfit.analysis.recordings.recording_spec import RecordingSpec
 
     t = np.arange(0, 30, 0.02)
     x = 1.2 * np.exp(-0.05 * t) * np.cos(4.8 * t)
@@ -387,7 +387,7 @@ def test_graphical_analysis_runs_numbered_first(tmp_path):
     row of numbers.  Read as runs side by side: refused without a run, naming them."""
     from click.testing import CliRunner
 
-    from escfit.balance.recordings.detect import detect_format
+    from escfit.analysis.recordings.detect import detect_format
     from escfit.cli.main import cli
 
     t = np.arange(0, 5, 0.05)

@@ -18,7 +18,7 @@ from escfit.balance.problems.curves import FitProblem
 from escfit.inference import least_squares, run_emcee
 from escfit.balance.problems.pulses import PulseFitProblem
 from escfit.balance.synthetic.recorders import record_pulses, swing_directions
-from escfit.balance.recordings.pulses import assign_pulses, pulses_to_unit_curve, read_pulses, write_pulses
+from escfit.analysis.recordings.pulses import assign_pulses, pulses_to_unit_curve, read_pulses, write_pulses
 
 from .conftest import DATASETS
 

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from escfit.core.errors import DataError, SceneError
-from escfit.balance.recordings.rawseries import warnings_of, notes_of, read_raw_series
-from escfit.balance.recordings.recording_spec import (RecordingSpec, header_role, merge_spec, recording_spec_from_table,
+from escfit.analysis.recordings.rawseries import warnings_of, notes_of, read_raw_series
+from escfit.analysis.recordings.recording_spec import (RecordingSpec, header_role, merge_spec, recording_spec_from_table,
                                               safe_unit_text)
 
 from .conftest import SHARED

@@ -11,8 +11,8 @@ import pytest
 import escfit
 from escfit.core.errors import DataError
 from escfit.inference import least_squares, make_problem
-from escfit.balance.recordings.tg_applog import STEADY_STATE_WARNING, is_steady_state, read_tg_applog
-from escfit.balance.recordings.detect import detect_format, read_recording, read_timegrapher
+from escfit.analysis.recordings.tg_applog import STEADY_STATE_WARNING, is_steady_state, read_tg_applog
+from escfit.analysis.recordings.detect import detect_format, read_recording, read_timegrapher
 
 from .conftest import DATASETS
 

@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 from escfit.core.errors import DataError
-from escfit.balance.recordings.detect import detect_format, read_with_spec
-from escfit.balance.recordings.recording_spec import RecordingSpec
-from escfit.balance.recordings.tg_applog import read_tg_applog
-from escfit.balance.recordings.tg_logs import TGNET_HEADER, rate_grid
-from escfit.balance.recordings.timegrapher import read_tg_json
+from escfit.analysis.recordings.detect import detect_format, read_with_spec
+from escfit.analysis.recordings.recording_spec import RecordingSpec
+from escfit.analysis.recordings.tg_applog import read_tg_applog
+from escfit.analysis.recordings.tg_logs import TGNET_HEADER, rate_grid
+from escfit.analysis.recordings.timegrapher import read_tg_json
 
 BEAT = 0.2  # s, 18000 bph
 

@@ -12,8 +12,8 @@ from escfit.balance import solve
 from escfit.balance.problems.curves import FitProblem
 from escfit.inference import least_squares
 from escfit.balance.synthetic.recorders import record_timeseries
-from escfit.balance.recordings.detect import detect_format, read_recording
-from escfit.balance.recordings.timeseries import (TimeSeries, read_timeseries, timeseries_to_unit_curve, turning_points,
+from escfit.analysis.recordings.detect import detect_format, read_recording
+from escfit.analysis.recordings.timeseries import (TimeSeries, read_timeseries, timeseries_to_unit_curve, turning_points,
                                           write_timeseries)
 
 from .conftest import DATASETS

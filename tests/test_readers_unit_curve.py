@@ -11,7 +11,7 @@ from escfit.cli.main import cli
 from escfit.core.errors import DataError, FitError, SceneError
 from escfit.balance.problems.curves import FitProblem
 from escfit.balance.synthetic.unit_curves import record_unit_curve
-from escfit.balance.recordings import read_unit_curve, write_unit_curve
+from escfit.analysis.recordings import read_unit_curve, write_unit_curve
 
 from .conftest import DATASETS
 

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from escfit.core.errors import DataError
-from escfit.balance.recordings.detect import candidates, read_with_spec
-from escfit.balance.recordings.recording_spec import RecordingSpec
+from escfit.analysis.recordings.detect import candidates, read_with_spec
+from escfit.analysis.recordings.recording_spec import RecordingSpec
 
 from .conftest import SHARED
 

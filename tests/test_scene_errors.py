@@ -81,7 +81,7 @@ def test_a_scene_without_theta0_simulates_nothing_and_fits_only_sampled_recordin
     from escfit.balance import solve
     from escfit.core.errors import FitError, SolverError
     from escfit.inference import make_problem
-    from escfit.balance.recordings import UnitCurve
+    from escfit.analysis.recordings import UnitCurve
 
     scene = load_scene("bad.toml", text=balance_toml().replace("theta0 = 1.0\n", ""))
     with pytest.raises(SolverError, match="theta0 is not given"):

@@ -8,7 +8,7 @@ import pytest
 import escfit
 from escfit.inference import fit
 from escfit.balance.synthetic.unit_curves import record_unit_curve
-from escfit.balance.recordings import UnitCurve, write_unit_curve
+from escfit.analysis.recordings import UnitCurve, write_unit_curve
 
 from .conftest import DATASETS, balance_toml
 

@@ -13,7 +13,7 @@ from click.testing import CliRunner
 
 from escfit.cli.main import cli
 from escfit.core.errors import DataError, FitError, ResultsError
-from escfit.balance.recordings import read_unit_curve, write_unit_curve
+from escfit.analysis.recordings import read_unit_curve, write_unit_curve
 from escfit.results import load_fit
 from escfit.study import LazyClient, discover_units, fit_many, load_fleet, load_summary, unit_seed
 

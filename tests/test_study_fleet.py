@@ -10,7 +10,7 @@ import pytest
 import escfit
 from escfit.core.errors import DataError, ResultsError, SceneError
 from escfit.balance.problems.curves import FitProblem
-from escfit.balance.recordings import read_unit_curve
+from escfit.analysis.recordings import read_unit_curve
 from escfit.study import (MODELS, POPULATION_PARAMS, LogNormal, Rig, fit_scene, generate_fleet, load_fleet, preset,
                           record_unit)
 

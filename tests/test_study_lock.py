@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from escfit.balance.recordings import read_unit_curve, write_unit_curve
+from escfit.analysis.recordings import read_unit_curve, write_unit_curve
 from escfit.cli.main import cli
 from escfit.core.errors import ResultsError
 from escfit.results import load_fit

@@ -20,7 +20,7 @@ from click.testing import CliRunner
 
 from escfit.analysis.timebase import time_base
 from escfit.balance.family import read_data
-from escfit.balance.recordings.rawseries import notes_of, warnings_of
+from escfit.analysis.recordings.rawseries import notes_of, warnings_of
 from escfit.cli.main import cli
 from escfit.core.errors import DataError
 

@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 from escfit.core.errors import DataError
-from escfit.balance.recordings.extrema import spectral_period
-from escfit.balance.recordings.timeseries import TimeSeries, timeseries_to_unit_curve
-from escfit.balance.recordings.turning_points import TurningPoints, reduce_series
+from escfit.analysis.recordings.extrema import spectral_period
+from escfit.analysis.recordings.timeseries import TimeSeries, timeseries_to_unit_curve
+from escfit.analysis.recordings.turning_points import TurningPoints, reduce_series
 
 from .conftest import SHARED
 

@@ -24,7 +24,7 @@ from click.testing import CliRunner
 
 import escfit
 from escfit.balance.family import read_data
-from escfit.balance.recordings.turning_points import reduce_series
+from escfit.analysis.recordings.turning_points import reduce_series
 from escfit.cli.main import cli
 from escfit.core.errors import DataError
 from escfit.inference import fit
@@ -105,8 +105,8 @@ def test_release_snaps_to_the_turning_point_within_a_tenth_of_a_period_else_take
 
 
 def test_release_after_a_hold_is_the_users_instant_at_the_held_angle():
-    from escfit.balance.recordings.timeseries import TimeSeries
-    from escfit.balance.recordings.window import RecordWindow
+    from escfit.analysis.recordings.timeseries import TimeSeries
+    from escfit.analysis.recordings.window import RecordWindow
 
     t = np.arange(0.0, 30.0, 0.02)
     w, g = 2 * math.pi, 0.05
@@ -195,7 +195,7 @@ def test_a_tracker_trk_takes_start_and_stop():
 
 
 def test_window_keys_are_checked_in_one_line():
-    from escfit.balance.recordings.recording_spec import recording_spec_from_table
+    from escfit.analysis.recordings.recording_spec import recording_spec_from_table
     from escfit.core.errors import SceneError
 
     spec = recording_spec_from_table({"start": "abs 1407000013 s", "release": "14 s", "stop": 60}, "s.toml")

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from escfit.balance.batch_dense import OMEGA, THETA, sample_batch
-from escfit.balance.recordings.timeseries import TimeSeries
+from escfit.analysis.recordings.timeseries import TimeSeries
 from escfit.balance.waveform import sample_state
 from escfit.core.scene import load_scene
 from escfit.inference import make_problem

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from escfit.balance.batch_dop853 import OMEGA, THETA, sample_batch_dop853
-from escfit.balance.recordings.timeseries import TimeSeries
+from escfit.analysis.recordings.timeseries import TimeSeries
 from escfit.balance.waveform import sample_state
 from escfit.core.scene import load_scene
 from escfit.inference import make_problem

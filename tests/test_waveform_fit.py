@@ -15,7 +15,7 @@ import pytest
 
 from escfit.balance.waveform import sample_theta
 from escfit.inference import least_squares, make_problem
-from escfit.balance.recordings.timeseries import TimeSeries
+from escfit.analysis.recordings.timeseries import TimeSeries
 from escfit.core.scene import load_scene
 
 TRUTH = {"oscillator.omega0": 2 * math.pi, "viscous.C": 0.3, "coulomb.R": 0.5}

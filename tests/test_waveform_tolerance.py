@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from escfit.balance.problems.tolerance import ERROR_SE, JACOBIAN_RTOL, TIGHTEST, noise_allowed_rtol, noise_rtol
-from escfit.balance.recordings.timeseries import TimeSeries
+from escfit.analysis.recordings.timeseries import TimeSeries
 from escfit.balance.waveform import sample_theta
 from escfit.core.scene import load_scene
 from escfit.inference import make_problem

@@ -26,7 +26,7 @@ from escfit.inference import least_squares, run_emcee
 from escfit.balance.problems.pulses import PulseFitProblem
 from escfit.balance.problems.timegrapher import TimegrapherFitProblem
 from escfit.balance.synthetic.recorders import record_pulses, record_timegrapher
-from escfit.balance.recordings.pulses import pulses_to_unit_curve
+from escfit.analysis.recordings.pulses import pulses_to_unit_curve
 
 HERE = Path(__file__).resolve().parent
 NAMES = ("viscous.C", "coulomb.R", "escapement[2].X")

@@ -23,7 +23,7 @@ The app's first update (still locking) and three later ones (noise) are flagged 
 with junk values, and the log ends in the middle of a row, as when an app is stopped mid-write.
 The ``Release`` settings line is escfit's addition (the instant the balance was let go, needed
 to fit the decay); the rest is what an app writes.  Read it with
-:func:`escfit.balance.recordings.tg_applog.read_tg_applog` and fit it with ``beats = false``.
+:func:`escfit.analysis.recordings.tg_applog.read_tg_applog` and fit it with ``beats = false``.
 """
 
 from __future__ import annotations

@@ -21,7 +21,7 @@ other escfit module is imported, so every reader binds the wrappers, and then
 3. every balance effect of the registry (``escfit.balance.effects.EFFECTS``) that no shipped
    scene names is probed the same way from an empty table;
 4. the observation models of the balance family (classes with ``kind`` and ``KEYS``), the
-   ``[recording]`` options (:class:`~escfit.balance.recordings.recording_spec.RecordingSpec`,
+   ``[recording]`` options (:class:`~escfit.analysis.recordings.recording_spec.RecordingSpec`,
    with its numpydoc attributes) and the keys of a parameter table are read from the code.
 
 A new key, effect or observation model therefore appears in the reference without editing the
@@ -395,11 +395,11 @@ def declared(cat: Catalogue) -> dict:
     from escfit.balance.effects import EFFECTS
 
     out["effects"] = {name: (cls.__doc__ or "").strip().splitlines()[0] for name, cls in EFFECTS.items()}
-    spec_mod = _quiet(importlib.import_module, "escfit.balance.recordings.recording_spec")
+    spec_mod = _quiet(importlib.import_module, "escfit.analysis.recordings.recording_spec")
     if spec_mod is not None and hasattr(spec_mod, "RecordingSpec"):
         keys = list(getattr(spec_mod, "KEYS", ()))
         out["recording"] = {"keys": keys, "doc": _attributes(spec_mod.RecordingSpec.__doc__ or "")}
-        cat.table("balance", "recording", None, keys, (), False, "balance/recordings/recording_spec.py:RecordingSpec")
+        cat.table("balance", "recording", None, keys, (), False, "analysis/recordings/recording_spec.py:RecordingSpec")
     import escfit.core.params as cp
 
     out["param_table_keys"] = sorted(getattr(cp, "_TABLE_KEYS", ()))

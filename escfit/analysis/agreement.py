@@ -7,7 +7,7 @@ itself measured, independently of the likelihood:
 
 1. **Turning points.**  The model is run once from the fitted release to the record's last
    turning point; each of its turning points is compared with the record's (the turning-point
-   analysis, :mod:`escfit.balance.recordings.turning_points`): the time difference as a phase,
+   analysis, :mod:`escfit.analysis.recordings.turning_points`): the time difference as a phase,
    ``2 pi (t_record - t_model) / period`` (rad, positive: the record turns later), and the
    amplitude difference (the record's amplitude minus the model's, in the readings' unit).
    Each is measured in units of the record's own point-to-point scatter of that difference

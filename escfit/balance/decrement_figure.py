@@ -106,7 +106,7 @@ def _decrements_of_samples(t: np.ndarray, y: np.ndarray, model: np.ndarray, rate
     :data:`WINDOW_PERIODS` periods of it (kinked at the vertex, where Coulomb friction reverses).
     A drifting centre (``offset_rate``, rad/s) is removed before the spans are taken.
     """
-    from .recordings.extrema import kinked_vertex
+    from ..analysis.recordings.extrema import kinked_vertex
 
     turns = _model_turns(model)
     if turns.size < 3:

@@ -34,10 +34,10 @@ def make_problem(scene, data, *, solver: str | None = None, solver_options: dict
     scene
         Balance scene (object or path).
     data
-        A :class:`~escfit.balance.recordings.UnitCurve` (amplitudes or notch counts per swing), a
-        :class:`~escfit.balance.recordings.pulses.PulseTrain` (photo-cell passage times), a
-        :class:`~escfit.balance.recordings.timegrapher.TimegrapherRecording`, a
-        :class:`~escfit.balance.recordings.timeseries.TimeSeries` (a sampled angle: turning points or
+        A :class:`~escfit.analysis.recordings.UnitCurve` (amplitudes or notch counts per swing), a
+        :class:`~escfit.analysis.recordings.pulses.PulseTrain` (photo-cell passage times), a
+        :class:`~escfit.analysis.recordings.timegrapher.TimegrapherRecording`, a
+        :class:`~escfit.analysis.recordings.timeseries.TimeSeries` (a sampled angle: turning points or
         the whole waveform are fitted, see :mod:`escfit.balance.problems.recorded`), or the path of a
         file holding one of them, including raw tables and MATLAB files.
     solver, solver_options
@@ -59,13 +59,13 @@ def make_problem(scene, data, *, solver: str | None = None, solver_options: dict
     FitProblem, WaveformProblem or RecordingProblem
     """
     from . import default_solver
-    from .recordings.pulses import PulseTrain
-    from .recordings.timegrapher import TimegrapherRecording
-    from .recordings.timeseries import TimeSeries
+    from ..analysis.recordings.pulses import PulseTrain
+    from ..analysis.recordings.timegrapher import TimegrapherRecording
+    from ..analysis.recordings.timeseries import TimeSeries
     from .problems.curves import FitProblem
     from .problems.recorded import problem_from_series
-    from .recordings import UnitCurve
-    from .recordings.rawsteps import warnings_of
+    from ..analysis.recordings import UnitCurve
+    from ..analysis.recordings.rawsteps import warnings_of
 
     sc = load_scene(scene) if not hasattr(scene, "model") else scene
     solver = solver or default_solver(sc)
@@ -112,7 +112,7 @@ def make_problem(scene, data, *, solver: str | None = None, solver_options: dict
 
 def _recording_spec(scene, overrides: dict | None):
     """The scene's ``[recording]`` options with command-line overrides, or ``None`` if neither."""
-    from .recordings.recording_spec import merge_spec, recording_spec_from_table
+    from ..analysis.recordings.recording_spec import merge_spec, recording_spec_from_table
 
     table = scene.extra.get("recording")
     given = {k: v for k, v in (overrides or {}).items() if v is not None}
@@ -163,7 +163,7 @@ def read_data(path, *, recording: dict | None = None, fmt: str | None = None, no
     -------
     UnitCurve, PulseTrain, TimegrapherRecording or TimeSeries
     """
-    from .recordings.recording_spec import recording_spec_from_table
+    from ..analysis.recordings.recording_spec import recording_spec_from_table
 
     spec = recording_spec_from_table(recording, where or f"{path} [recording]") if recording else None
     return _read_data(path, spec, fmt, notch_deg)
@@ -172,9 +172,9 @@ def read_data(path, *, recording: dict | None = None, fmt: str | None = None, no
 def _read_data(path, spec, fmt: str | None, notch_deg: float | None, default_notch_deg: float | None = None):
     """Read a recording file: escfit's own formats, an instrument's or program's file, or a raw
     table or MATLAB file (read with the scene's ``[recording]`` options)."""
-    from .recordings.rawseries import read_raw_series
-    from .recordings.detect import detect_format, read_recording, read_with_spec
-    from .recordings.formats_list import ESCFIT_FORMATS
+    from ..analysis.recordings.rawseries import read_raw_series
+    from ..analysis.recordings.detect import detect_format, read_recording, read_with_spec
+    from ..analysis.recordings.formats_list import ESCFIT_FORMATS
 
     fmt = fmt or (spec.format if spec is not None else None)
     if fmt == "raw" or (spec is not None and fmt not in ESCFIT_FORMATS):
@@ -248,10 +248,10 @@ class BalanceFamily(FamilyBase):
         return scene.extra.get("recording") is None
 
     def units_of(self, path, *, notch_deg: float | None = None):
-        """The units of a unit-curve file (each a :class:`~escfit.balance.recordings.UnitCurve`);
+        """The units of a unit-curve file (each a :class:`~escfit.analysis.recordings.UnitCurve`);
         None for any other file."""
-        from .recordings import read_unit_curve
-        from .recordings.detect import detect_format
+        from ..analysis.recordings import read_unit_curve
+        from ..analysis.recordings.detect import detect_format
 
         try:
             if detect_format(path) != "unit-curve":
@@ -265,11 +265,11 @@ class BalanceFamily(FamilyBase):
         """Format name -> reader ``(path) -> recording``."""
         from functools import partial
 
-        from .recordings.rawseries import read_raw_series
-        from .recordings.detect import read_recording
+        from ..analysis.recordings.rawseries import read_raw_series
+        from ..analysis.recordings.detect import read_recording
 
-        from .recordings.detect import read_with_spec
-        from .recordings.formats_list import ESCFIT_FORMATS, FORMAT_NAMES
+        from ..analysis.recordings.detect import read_with_spec
+        from ..analysis.recordings.formats_list import ESCFIT_FORMATS, FORMAT_NAMES
 
         readers = {n: partial(read_recording, fmt=n) for n in ESCFIT_FORMATS}
         readers.update({n: partial(read_with_spec, spec=None, fmt=n) for n in FORMAT_NAMES if n not in ESCFIT_FORMATS})
@@ -280,7 +280,7 @@ class BalanceFamily(FamilyBase):
         return read_data(path, fmt=fmt, **options)
 
     def detect(self, path) -> str:
-        from .recordings.detect import detect_format
+        from ..analysis.recordings.detect import detect_format
 
         return detect_format(path)
 

@@ -31,9 +31,9 @@ import numpy as np
 
 from ..core.errors import DataError
 from .family import read_data
-from .recordings import UnitCurve
-from .recordings.timegrapher import TimegrapherRecording
-from .recordings.timeseries import TimeSeries
+from ..analysis.recordings import UnitCurve
+from ..analysis.recordings.timegrapher import TimegrapherRecording
+from ..analysis.recordings.timeseries import TimeSeries
 
 __all__ = ["Survey", "read_with_help", "survey", "decay_estimates", "BOUND_FACTOR"]
 
@@ -250,7 +250,7 @@ def _swinging_column(path, table: dict, fmt, *, amplitudes_only: bool = False) -
 
 def _swing_score(series: TimeSeries) -> tuple[float, str]:
     """How much a column looks like a recorded free decay: turning points found, else amplitude rows."""
-    from .recordings.turning_points import reduce_series
+    from ..analysis.recordings.turning_points import reduce_series
 
     try:
         tp = reduce_series(series, strict=False, user_window=series.window)
@@ -275,7 +275,7 @@ def _looks_like_amplitudes(values: np.ndarray) -> bool:
 
 def _amplitude_rows(path, series: TimeSeries, table: dict, why: dict, fmt, reduced: dict | None = None) -> TimeSeries:
     """Switch to ``readings = "amplitudes"`` when the samples are amplitudes, one per half swing."""
-    from .recordings.turning_points import reduce_series
+    from ..analysis.recordings.turning_points import reduce_series
 
     if "readings" in table:
         return series
@@ -327,10 +327,10 @@ def _survey_samples(s: Survey, series: TimeSeries, restoring: str, turns=None) -
     """The survey of a sampled record; ``turns``: its turning points when already found."""
     from .problems.period import implied_omega0, measured_period
     from .problems.release import swing_unit_warnings
-    from .recordings.turning_points import reduce_series
+    from ..analysis.recordings.turning_points import reduce_series
 
     if series.quantity == "angular_velocity":  # the angle's turning points are the rate's zeros
-        from .recordings.rate import reduce_rate
+        from ..analysis.recordings.rate import reduce_rate
 
         rate = reduce_rate(series, user_window=series.window)
         tp = rate.turns
@@ -510,7 +510,7 @@ def decay_estimates(amplitudes: np.ndarray, omega0: float, times: np.ndarray | N
 def _excess_lag1(x: np.ndarray, period_samples: float) -> float:
     """Lag-1 correlation of the samples about their smoothing, minus what white noise would give."""
     from ..core.filters import savgol_coeffs
-    from .recordings.extrema import smooth
+    from ..analysis.recordings.extrema import smooth
 
     if x.size < 50 or not math.isfinite(period_samples):
         return math.nan

@@ -313,7 +313,7 @@ def _summary(s: Survey) -> list[str]:
             out.append(f"[recording] {key} = {value!r}: {s.why[key]}")
     meta = getattr(s.data, "meta", None)
     if isinstance(meta, dict):  # what reading did to the record (the time base's repairs), as a fit prints it
-        from .recordings.rawsteps import notes_of, warnings_of
+        from ..analysis.recordings.rawsteps import notes_of, warnings_of
 
         out += [f"note: {n}" for n in notes_of(meta)] + [f"warning: {w}" for w in warnings_of(meta)]
     for line in _window_keys(s)[0]:  # the window the analysis chose where it left part of the record out

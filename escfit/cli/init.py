@@ -168,7 +168,7 @@ def init(data, out, kind, force, fmt, **options):
     The period, the decay and the columns are measured from the record; options the record
     cannot settle (which column, its unit, a clock) are written in a [recording] table.
     """
-    from ..balance.recordings.formats_list import FORMAT_NAMES
+    from ..analysis.recordings.formats_list import FORMAT_NAMES
     from ..core.errors import DataError
     from ..core.inputs import check_input_file
 

@@ -449,7 +449,7 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoi
     if scene_path is None:  # a record of one's own: offer a starter scene (on a terminal) or name `escfit init`
         from .init import offer_starter, recording_table
 
-        from ..balance.recordings.formats_list import FORMAT_NAMES
+        from ..analysis.recordings.formats_list import FORMAT_NAMES
 
         fmt_raw = fmt if fmt in FORMAT_NAMES else None
         scene_path = offer_starter(data, recording_table(

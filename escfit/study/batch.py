@@ -7,7 +7,7 @@ column holds several units.
 
 Each unit is one task.  A task carries the scene text and the unit's data (not file names),
 so workers need no shared file system: a balance unit curve travels as its in-memory
-:class:`~escfit.balance.recordings.UnitCurve` (one unit of a multi-unit file), any other
+:class:`~escfit.analysis.recordings.UnitCurve` (one unit of a multi-unit file), any other
 recording as the file's name and bytes (:class:`RecordingFile`), which the worker writes to
 a temporary directory for the family's reader.  A task returns the results file as bytes,
 which the client writes to ``<out>/<unit>.h5`` atomically, and the unit's summary row.  A unit
@@ -52,7 +52,7 @@ from ..core.errors import DataError, FitError, ResultsError
 from ..core.h5write import write_bytes
 from ..core.interrupts import deferred_interrupts
 from ..balance.family import split_units
-from ..balance.recordings import UnitCurve
+from ..analysis.recordings import UnitCurve
 from ..core.provenance import dependency_versions
 from ..results import SCHEMA_VERSION, FitResult, clean_attrs
 from .cluster import LazyClient, Runner, local_cluster, require_distributed
@@ -75,7 +75,7 @@ NOT_RECORDINGS = frozenset({".toml", ".md", ".rst", ".html", ".htm", ".png", ".s
 class UnitTask:
     """One unit to fit: its name, data, source file and results file.
 
-    ``data`` is a :class:`~escfit.balance.recordings.UnitCurve` (one unit of a balance
+    ``data`` is a :class:`~escfit.analysis.recordings.UnitCurve` (one unit of a balance
     unit-curve file, read by the client) or a :class:`RecordingFile` (any family's recording,
     read by the family's reader on the worker).
     """
@@ -169,7 +169,7 @@ def discover_units(data: Sequence[str | Path | UnitCurve], out_dir: str | Path, 
 
     A folder contributes its recording files (:func:`recording_files`), in name order.  With
     a balance scene (or ``scene=None``), a unit-curve file with a ``unit`` column contributes
-    each of its units (read here, carried as :class:`~escfit.balance.recordings.UnitCurve`);
+    each of its units (read here, carried as :class:`~escfit.analysis.recordings.UnitCurve`);
     any other file is one unit named after the file (its stem), carried as a
     :class:`RecordingFile` and read on the worker by the scene's family.
 
@@ -247,7 +247,7 @@ def fit_many(data: str | Path | UnitCurve | Iterable[str | Path | UnitCurve], sc
     data
         A folder of recording files (one unit per file, named after the file's stem; any
         family the scene names), recording file(s), or
-        :class:`~escfit.balance.recordings.UnitCurve` objects.  A balance unit-curve file with a
+        :class:`~escfit.analysis.recordings.UnitCurve` objects.  A balance unit-curve file with a
         ``unit`` column holds several units.
     scene
         Scene file (TOML) with the free parameters, the same for every unit; its ``model =``

@@ -5,7 +5,7 @@ A fleet directory holds
 - ``fleet.toml``: the specification (model, population, load rule, rig, reading jitter,
   seed) and provenance;
 - ``recordings.csv``: notch counts of every unit at every load (``unit`` and ``load_g``
-  columns), readable by :func:`escfit.balance.recordings.read_unit_curve` and ``escfit fit-many``;
+  columns), readable by :func:`escfit.analysis.recordings.read_unit_curve` and ``escfit fit-many``;
 - ``truth.csv``: each unit's true parameters and its seed;
 - ``scenes/<unit>.toml``: the generating scene of each unit (its true values, nothing free).
 
@@ -28,7 +28,7 @@ import numpy as np
 from ..core.atomic import atomic_path
 from ..core.errors import DataError, ResultsError, SceneError
 from ..balance.synthetic.unit_curves import record_unit_curve
-from ..balance.recordings import UnitCurve, write_unit_curve
+from ..analysis.recordings import UnitCurve, write_unit_curve
 from ..core.scene import load_scene
 from .scenes import MODELS, POPULATION_PARAMS, Rig, generating_scene, kappa_for, load_rule
 

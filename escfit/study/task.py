@@ -2,7 +2,7 @@
 its results file as bytes and its row of the fleet summary.
 
 A task carries the scene text and the unit's data, never a file name of the client's: a
-balance unit curve as its in-memory :class:`~escfit.balance.recordings.UnitCurve`, any other
+balance unit curve as its in-memory :class:`~escfit.analysis.recordings.UnitCurve`, any other
 recording as a :class:`RecordingFile` (name and bytes) that :func:`readable` writes to a
 temporary directory for the family's reader.
 """
@@ -19,7 +19,7 @@ from typing import Any, Iterator
 
 import xarray as xr
 
-from ..balance.recordings import UnitCurve
+from ..analysis.recordings import UnitCurve
 from ..core.errors import DataError, EscfitError, ResultsError
 from ..core.h5write import netcdf_image
 from ..results import FitResult

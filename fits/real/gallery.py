@@ -72,8 +72,8 @@ def records():
 
 def envelope_c(problem) -> float:
     """C (1/s) of an exponential through the turning-point amplitudes (the naive method)."""
-    from escfit.balance.recordings.turning_points import reduce_series
-    from escfit.balance.recordings.unit_curve import UnitCurve
+    from escfit.analysis.recordings.turning_points import reduce_series
+    from escfit.analysis.recordings.unit_curve import UnitCurve
 
     data = problem.data
     if isinstance(data, UnitCurve):

@@ -17,9 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
-from escfit.balance.recordings.labfiles import write_cmbl
-from escfit.balance.recordings.phyphox import write_phyphox_csv
-from escfit.balance.recordings.tg_logs import TGNET_HEADER
+from escfit.analysis.recordings.labfiles import write_cmbl
+from escfit.analysis.recordings.phyphox import write_phyphox_csv
+from escfit.analysis.recordings.tg_logs import TGNET_HEADER
 
 HERE = Path(__file__).resolve().parent
 T = np.arange(300) / 50.0

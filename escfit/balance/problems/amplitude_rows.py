@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from ...core.errors import DataError
-from ..recordings import UnitCurve
+from ...analysis.recordings import UnitCurve
 
 __all__ = ["amplitude_readings_curve", "UNEVEN"]
 

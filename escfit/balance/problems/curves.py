@@ -20,7 +20,7 @@ from ...core.errors import EscfitError, FitError
 from ...core.status import LABELS, Status
 from ..observation import observation_from_table
 from ...core.params import ParamSet
-from ..recordings import UnitCurve
+from ...analysis.recordings import UnitCurve
 from ...core.scene import check_keys
 from ...likelihood.freeparams import FreeParameters
 from ...likelihood.problem import FAIL_RESIDUAL

@@ -28,7 +28,7 @@ import numpy as np
 from .. import BalanceScene
 from ...core.errors import SceneError
 from ...core.params import ParamSet, read_param
-from ..recordings import UnitCurve
+from ...analysis.recordings import UnitCurve
 from ...core.scene import check_keys
 from ...core.units import to_canonical, ureg
 

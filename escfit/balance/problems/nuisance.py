@@ -1,7 +1,7 @@
 """The nuisance parameters escfit adds to a sampled record's fit, held within what the record shows.
 
 The centre of oscillation and its drift are kinematic facts of the record, measured from the
-turning points' midpoints (:mod:`escfit.balance.recordings.centre`) with their standard
+turning points' midpoints (:mod:`escfit.analysis.recordings.centre`) with their standard
 errors.  Left free over wide ranges, a centre offset and a drift trade off with the decay
 itself (a large-amplitude pendulum's losses are not exactly viscous or Coulomb, and a drift
 can take up the difference: the damping doubles and the Coulomb friction vanishes).  So both
@@ -34,7 +34,7 @@ def centre_priors(tp, *, sign: float = 1.0, removed: bool = False) -> dict:
     Parameters
     ----------
     tp
-        The record's :class:`~escfit.balance.recordings.turning_points.TurningPoints`.
+        The record's :class:`~escfit.analysis.recordings.turning_points.TurningPoints`.
     sign
         ``+1``: the observation's offset is the centre on the sensor's scale; ``-1``: it is
         minus that (the waveform convention, a reading being ``theta - offset``).

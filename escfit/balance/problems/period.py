@@ -1,7 +1,7 @@
 """What a sampled record's measured period says about omega0, before and after a fit.
 
 A record of the angle in time measures its own period (twice the slope of the turning times
-on their number, :func:`~escfit.balance.recordings.turning_points.period_of`).  That fixes the
+on their number, :func:`~escfit.analysis.recordings.turning_points.period_of`).  That fixes the
 natural frequency far better than any amplitude does, so it is used three ways:
 
 - **before the fit**, a scene that fixes ``oscillator.omega0`` (or bounds it) where the
@@ -156,7 +156,7 @@ def hold_omega0(scene, mp: MeasuredPeriod) -> list[str]:
 
 def model_period(problem, values) -> float:
     """The fitted model's period (s), its turning times reduced as the record's were."""
-    from ..recordings.turning_points import period_of
+    from ...analysis.recordings.turning_points import period_of
     from ..solvers import solve_system
 
     mp = problem.measured_period

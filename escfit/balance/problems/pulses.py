@@ -14,7 +14,7 @@ Least squares (:mod:`escfit.inference.lsq`) adds a residual per Gaussian prior, 
 nuisance the data alone cannot pin (a timegrapher's true lift angle) is held by its prior
 as it is in the posterior.
 
-:class:`PulseFitProblem` fits a :class:`~escfit.balance.recordings.pulses.PulseTrain`: every pulse is
+:class:`PulseFitProblem` fits a :class:`~escfit.analysis.recordings.pulses.PulseTrain`: every pulse is
 a notch at a known angle crossed at a measured time (see
 :mod:`escfit.balance.observation.passage_times`).
 """
@@ -34,7 +34,7 @@ from ..trajectory import Trajectory
 from ...core.errors import DataError, EscfitError, FitError
 from ..observation.passage_times import PassageTimeObservation
 from ...core.params import ParamSet
-from ..recordings.pulses import PulseTrain, assign_pulses
+from ...analysis.recordings.pulses import PulseTrain, assign_pulses
 from ...likelihood.freeparams import FreeParameters
 from .common import BalanceProblem
 from .curves import FAIL_RESIDUAL, Curve
@@ -157,7 +157,7 @@ class RecordingProblem(FreeParameters, BalanceProblem, ABC):
 class PulseFitProblem(RecordingProblem):
     """Fit a balance scene to the passage times of a photo-cell pulse train.
 
-    Each pulse used (see :func:`~escfit.balance.recordings.pulses.assign_pulses`) is the crossing of
+    Each pulse used (see :func:`~escfit.analysis.recordings.pulses.assign_pulses`) is the crossing of
     notch ``tooth * notch`` in the swing frame of its half swing, observed at its time with
     Gaussian timing noise ``observation.sigma`` (s).  The scene's ``[observation]`` table, if
     any, must say ``model = "passage_times"`` (keys ``sigma``, ``t0``, ``offset``); ``t0``

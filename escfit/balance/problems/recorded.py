@@ -1,7 +1,7 @@
 """Fit problems for sampled recordings: turning points or the whole waveform.
 
-A sampled record (:class:`~escfit.balance.recordings.timeseries.TimeSeries`) is first analysed once
-(:func:`~escfit.balance.recordings.turning_points.reduce_series`): turning points counted as
+A sampled record (:class:`~escfit.analysis.recordings.timeseries.TimeSeries`) is first analysed once
+(:func:`~escfit.analysis.recordings.turning_points.reduce_series`): turning points counted as
 alternating extrema, the reference instant where the model is released at rest, the centre and
 its drift, the end of motion.  Then, by the scene's ``[observation] model``:
 
@@ -19,7 +19,7 @@ and what was done is kept as plain-sentence ``notes``.
 
 A record of what was measured other than an angle (the series' ``quantity``) is fitted sample
 by sample: an angular velocity (a gyroscope, a velocity pickup) as theta'(t) of the scene's
-oscillator, its turning points the rate's zeros (:func:`~escfit.balance.recordings.rate.reduce_rate`),
+oscillator, its turning points the rate's zeros (:func:`~escfit.analysis.recordings.rate.reduce_rate`),
 its sensor zero the bias measured from the rate's extrema; a displacement as the x(t) of a linear
 oscillator scene (``[oscillator] coordinate = "linear"``), analysed as an angle is, in m.
 """
@@ -33,8 +33,8 @@ import numpy as np
 
 from .. import BalanceScene
 from ...core.params import ParamSet
-from ..recordings import UnitCurve
-from ..recordings.rawseries import notes_of
+from ...analysis.recordings import UnitCurve
+from ...analysis.recordings.rawseries import notes_of
 from .amplitude_rows import amplitude_readings_curve
 from .curves import FitProblem
 from .nuisance import centre_priors
@@ -89,7 +89,7 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
         amplitude of one half swing.
     turns
         The record's turning points when already found
-        (:class:`~escfit.balance.recordings.turning_points.TurningPoints` of an angle): they are
+        (:class:`~escfit.analysis.recordings.turning_points.TurningPoints` of an angle): they are
         then not looked for again.
 
     Returns
@@ -107,7 +107,7 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
     model = dict(scene.extra.get("observation", {})).get("model", "amplitude")
     if readings == "amplitudes":
         return _amplitude_rows_problem(scene, series, notes, solver, solver_options)
-    from ..recordings.turning_points import reduce_series
+    from ...analysis.recordings.turning_points import reduce_series
 
     # a waveform fit uses the turning points only for its start (reference, period, centre): an
     # irregular interval late in the record is a note there, not a refusal
@@ -156,7 +156,7 @@ def _record_kept(problem, scene: BalanceScene, tp=None):
 def _without_steps(series, tp):
     """The series without the glitches and with the offset steps the analysis found taken out
     (the record itself if none)."""
-    from ..recordings.turning_points import drop_samples, remove_steps
+    from ...analysis.recordings.turning_points import drop_samples, remove_steps
 
     if getattr(tp, "dropped", ()):
         series = drop_samples(series, tp.dropped)
@@ -224,13 +224,13 @@ def _sampled_problem(scene: BalanceScene, series, notes: list, solver, solver_op
         obs["model"] = "waveform"
         scene = replace(scene, extra={**scene.extra, "observation": obs})
     if series.quantity == "angular_velocity":
-        from ..recordings.rate import reduce_rate
+        from ...analysis.recordings.rate import reduce_rate
 
         rate = reduce_rate(series, user_window=series.window)
         tp, centre, noise = rate.turns, rate, rate.noise
         notes += rate.notes
     else:
-        from ..recordings.turning_points import reduce_series
+        from ...analysis.recordings.turning_points import reduce_series
 
         tp = reduce_series(series, strict=False, user_window=series.window)
         centre, noise = tp, None

@@ -25,7 +25,7 @@ import numpy as np
 from .. import BalanceScene
 from ...core.errors import DataError, FitError
 from ..observation.timegrapher import TimegrapherObservation, beat_events, window_readings
-from ..recordings.timegrapher import TimegrapherRecording, beat_swings
+from ...analysis.recordings.timegrapher import TimegrapherRecording, beat_swings
 from .curves import Curve
 from .pulses import RecordingProblem
 
@@ -70,7 +70,7 @@ class TimegrapherFitProblem(RecordingProblem):
                                                              f"{scene.where} [observation]",
                                                              lift_set=data.lift_angle, release_s=data.release_s)
         self.notes = [n.strip() for n in str(data.meta.get("notes", "") or "").split(";") if n.strip()]
-        from ..recordings.tg_applog import STEADY_STATE_WARNING, is_steady_state
+        from ...analysis.recordings.tg_applog import STEADY_STATE_WARNING, is_steady_state
 
         steady = is_steady_state(data.amp_deg, data.amp_time, resolution_deg=data.resolution_deg)
         self.data_warnings = [STEADY_STATE_WARNING] if steady else []

@@ -59,9 +59,9 @@ class WaveformProblem(RecordingProblem):
     scene
         Balance scene (angle switching); its ``[observation]`` says ``model = "waveform"``.
     series
-        The samples (:class:`~escfit.balance.recordings.timeseries.TimeSeries`).
+        The samples (:class:`~escfit.analysis.recordings.timeseries.TimeSeries`).
     reference
-        The record's turning-point analysis (:class:`~escfit.balance.recordings.timeseries.TurningPoints`):
+        The record's turning-point analysis (:class:`~escfit.analysis.recordings.timeseries.TurningPoints`):
         reference instant and angle (or displacement), period, offset and drift estimates, end of
         motion; for an angular velocity, the angle's turning points (the rate's zeros).
     solver, solver_options
@@ -70,7 +70,7 @@ class WaveformProblem(RecordingProblem):
         Where the sensor's zero and its drift were measured, with standard errors (attributes
         ``offset``, ``offset_stderr``, ``offset_rate``, ``offset_rate_measured``,
         ``offset_rate_stderr``, in the readings' units): for an angular velocity the rate's bias
-        (:class:`~escfit.balance.recordings.rate.RateAnalysis`); default ``reference``.
+        (:class:`~escfit.analysis.recordings.rate.RateAnalysis`); default ``reference``.
     noise
         The readings' noise scale (their unit), a start for ``observation.sigma``; default: from
         the samples' second differences.

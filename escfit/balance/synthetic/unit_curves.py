@@ -14,7 +14,7 @@ from ...core.errors import SceneError
 from ..observation import AmplitudeObservation, NotchObservation
 from ..observation.notches import NOTCH_READINGS, notch_count
 from ...core.params import Param
-from ..recordings import UnitCurve
+from ...analysis.recordings import UnitCurve
 from .runs import complete
 
 __all__ = ["record_unit_curve"]

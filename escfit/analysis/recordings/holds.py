@@ -4,7 +4,7 @@ A held oscillator is flat within the rest band for at least :data:`HOLD_PERIODS`
 moves; the release is where that motion starts (:func:`release_instant`: the swing that follows
 fitted as a free start from rest).  A record that starts at a turning point has its vertex within
 :data:`START_TURN_PERIODS` periods of the first sample (:func:`turn_at_start`).  The functions
-take the analysis record of :mod:`escfit.balance.recordings.sampled`.
+take the analysis record of :mod:`escfit.analysis.recordings.sampled`.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ RELEASE_DEGREE = 3
 
 
 def held_release(rec, turn, amplitude: float = math.inf) -> tuple[float, float] | None:
-    """The release from a hold at ``turn`` (a :class:`~escfit.balance.recordings.motion.Turn`): the
+    """The release from a hold at ``turn`` (a :class:`~escfit.analysis.recordings.motion.Turn`): the
     instant motion starts and the held angle.
 
     ``None`` unless the angle stays within the rest band of the turn's level for at least
@@ -109,7 +109,7 @@ def turn_at_start(rec) -> tuple[float, float, bool] | None:
 
     A cubic through the first fifth of a period decides (its slope vanishes there); the
     vertex itself comes from a one-sided polynomial without linear term whose vertex time is
-    searched within 0.02 periods of that (:func:`~escfit.balance.recordings.extrema.vertex_at`).
+    searched within 0.02 periods of that (:func:`~escfit.analysis.recordings.extrema.vertex_at`).
     """
     t, x, period = rec.t, rec.x, rec.period
     sel = t <= t[0] + 0.2 * period

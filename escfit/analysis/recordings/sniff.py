@@ -1,9 +1,9 @@
 """What a file holds, from its first bytes: the check every CSV reader makes before parsing.
 
-Shared by the readers (:mod:`~escfit.balance.recordings.timegrapher`,
-:mod:`~escfit.balance.recordings.pulses`, :mod:`~escfit.balance.recordings.timeseries`,
-:mod:`~escfit.balance.recordings.tg_applog`) and by format detection
-(:mod:`~escfit.balance.recordings.detect`); it imports none of them.
+Shared by the readers (:mod:`~escfit.analysis.recordings.timegrapher`,
+:mod:`~escfit.analysis.recordings.pulses`, :mod:`~escfit.analysis.recordings.timeseries`,
+:mod:`~escfit.analysis.recordings.tg_applog`) and by format detection
+(:mod:`~escfit.analysis.recordings.detect`); it imports none of them.
 """
 
 from __future__ import annotations

@@ -1,10 +1,10 @@
 """Which of several columns that could hold the signal is the measured one, by what the table says.
 
-Used by :mod:`escfit.balance.recordings.columns` before the columns' shapes are compared
+Used by :mod:`escfit.analysis.recordings.columns` before the columns' shapes are compared
 (:func:`escfit.analysis.channel.choose_channel`): a column with fewer readings than the table's
 longest, or named as a spectrum, is no candidate; of the rest, a plainly named measured quantity
 is preferred over derived ones, except among the axes of one sensor, which only their shapes tell
-apart.  ``cols`` is a :class:`~escfit.balance.recordings.columns.Columns` table.
+apart.  ``cols`` is a :class:`~escfit.analysis.recordings.columns.Columns` table.
 """
 
 from __future__ import annotations

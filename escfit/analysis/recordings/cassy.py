@@ -103,7 +103,7 @@ def read_cassy_labx(path: str | Path, spec: RecordingSpec | None = None) -> Time
     ------
     DataError
         Not a CASSY Lab file, no time channel, a run that is not there, and the column
-        refusals of :func:`~escfit.balance.recordings.columns.series_from_columns`.
+        refusals of :func:`~escfit.analysis.recordings.columns.series_from_columns`.
     """
     spec = spec or RecordingSpec()
     where = str(path)

@@ -1,9 +1,9 @@
 """The free decay's start where the user set it: ``[recording] release`` or ``start``.
 
-The user always wins over the automatic search of :mod:`escfit.balance.recordings.motion`: with
-a window (:class:`~escfit.balance.recordings.window.RecordWindow`) whose ``release`` or ``start``
-is set, :func:`~escfit.balance.recordings.turning_points.reduce_series` calls :func:`user_reference`
-instead of :func:`~escfit.balance.recordings.motion.reference`, and no push, pull, hold or drive
+The user always wins over the automatic search of :mod:`escfit.analysis.recordings.motion`: with
+a window (:class:`~escfit.analysis.recordings.window.RecordWindow`) whose ``release`` or ``start``
+is set, :func:`~escfit.analysis.recordings.turning_points.reduce_series` calls :func:`user_reference`
+instead of :func:`~escfit.analysis.recordings.motion.reference`, and no push, pull, hold or drive
 before that instant is looked for.
 
 - ``release`` at ``T``: the model is released at rest there.  When the record is flat over the
@@ -17,7 +17,7 @@ before that instant is looked for.
   found as the automatic analysis finds a record's first turning point (one at the first
   sample, a held start).
 
-The faded end of the record is still cut afterwards (:func:`~escfit.balance.recordings.motion.faded_end`):
+The faded end of the record is still cut afterwards (:func:`~escfit.analysis.recordings.motion.faded_end`):
 the end is ``stop``'s, or the analysis'.
 """
 
@@ -41,7 +41,7 @@ def user_reference(rec, turns: list[Turn], window) -> tuple[float, float, list[T
     Parameters
     ----------
     rec
-        The analysis record of :mod:`~escfit.balance.recordings.turning_points`.
+        The analysis record of :mod:`~escfit.analysis.recordings.turning_points`.
     turns
         Its refined extrema, in order (``time`` ``None`` where no local fit fits).
     window

@@ -1,19 +1,19 @@
 """Raw recordings read into a TimeSeries: the entry point.
 
 :func:`read_raw_series` dispatches on content: MATLAB files (a ``MATLAB`` header, HDF5 v7.3 or
-a ``.mat`` name) go to :mod:`escfit.balance.recordings.matfile`, everything else to the text-table
-reader :mod:`escfit.balance.recordings.rawtable`.  Both hand their converted columns (time s, angle
-rad) to :func:`~escfit.balance.recordings.rawsteps.build_series`, which repairs the time base
-(:mod:`escfit.analysis.timebase`), applies the ``start``/``stop`` window and checks what is left.  The shared steps live in :mod:`escfit.balance.recordings.rawsteps`
+a ``.mat`` name) go to :mod:`escfit.analysis.recordings.matfile`, everything else to the text-table
+reader :mod:`escfit.analysis.recordings.rawtable`.  Both hand their converted columns (time s, angle
+rad) to :func:`~escfit.analysis.recordings.rawsteps.build_series`, which repairs the time base
+(:mod:`escfit.analysis.timebase`), applies the ``start``/``stop`` window and checks what is left.  The shared steps live in :mod:`escfit.analysis.recordings.rawsteps`
 (so the readers need not import this module) and are re-exported here.
 
 Metadata convention
 -------------------
 Readers fill :attr:`TimeSeries.meta` with strings only (so it survives
-:func:`~escfit.balance.recordings.timeseries.write_timeseries` and HDF5 attributes):
+:func:`~escfit.analysis.recordings.timeseries.write_timeseries` and HDF5 attributes):
 ``source_format``, ``time_column``, ``angle_column``, ``angle_unit``, ``window``, ``notes`` and
 ``warnings``, each one string of sentences joined by ``"; "``
-(:func:`~escfit.balance.recordings.rawsteps.notes_of` splits it), next to the file's own ``# key: value`` metadata (a file key that collides is kept as
+(:func:`~escfit.analysis.recordings.rawsteps.notes_of` splits it), next to the file's own ``# key: value`` metadata (a file key that collides is kept as
 ``file_<key>``).
 """
 
@@ -44,8 +44,8 @@ def read_raw_series(path: str | Path, spec: RecordingSpec | None = None) -> Time
         The file.  MATLAB files are recognised by their header (or a ``.mat`` name).
     spec
         Reading options (``None``: detect everything); see
-        :mod:`escfit.balance.recordings.recording_spec`, and :mod:`~escfit.balance.recordings.rawtable` and
-        :mod:`~escfit.balance.recordings.matfile` for the file shapes understood.
+        :mod:`escfit.analysis.recordings.recording_spec`, and :mod:`~escfit.analysis.recordings.rawtable` and
+        :mod:`~escfit.analysis.recordings.matfile` for the file shapes understood.
 
     Returns
     -------

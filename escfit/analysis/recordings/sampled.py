@@ -1,7 +1,7 @@
 """A sampled record as the turning-point analysis holds it, and the local fits that place a turn.
 
 :class:`SampledRecord` carries the samples, their smoothing and what the first steps of
-:func:`~escfit.balance.recordings.turning_points.reduce_series` learnt about them (period,
+:func:`~escfit.analysis.recordings.turning_points.reduce_series` learnt about them (period,
 noise, quantisation, the rest band and the extremum search's hysteresis), and places a turning
 point from the raw samples around it: a kinked polynomial (the curvature jumps where Coulomb
 friction reverses), a plain parabola when that fails, or, for a coarse record of fewer than

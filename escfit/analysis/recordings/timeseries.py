@@ -11,8 +11,8 @@ samples may carry noise, quantisation (an encoder's steps), a zero offset and it
 
 Reduction
 ---------
-The analysis of a decay lives in :mod:`escfit.balance.recordings.turning_points`:
-:func:`~escfit.balance.recordings.turning_points.reduce_series` is the entry point other code uses
+The analysis of a decay lives in :mod:`escfit.analysis.recordings.turning_points`:
+:func:`~escfit.analysis.recordings.turning_points.reduce_series` is the entry point other code uses
 (re-exported here, as is its earlier name ``turning_points``).  :func:`timeseries_to_unit_curve`
 turns its result into amplitude readings per half swing for the unit-curve fit.
 """
@@ -149,7 +149,7 @@ def timeseries_to_unit_curve(series: "TimeSeries", *, window: float | None = Non
     series
         The samples.
     window, degree, strict
-        See :func:`~escfit.balance.recordings.turning_points.reduce_series`.
+        See :func:`~escfit.analysis.recordings.turning_points.reduce_series`.
     remove_offset
         Subtract the estimated centre ``offset + offset_rate*(t - release_time)`` before
         taking ``|theta|``.
@@ -177,7 +177,7 @@ def timeseries_to_unit_curve(series: "TimeSeries", *, window: float | None = Non
     ------
     DataError
         When the record does not match ``release_theta`` or
-        :func:`~escfit.balance.recordings.turning_points.reduce_series` refuses it.
+        :func:`~escfit.analysis.recordings.turning_points.reduce_series` refuses it.
     """
     tp = reduce_series(series, window=window, degree=degree, strict=strict)
     notes = list(tp.notes)

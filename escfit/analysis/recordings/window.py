@@ -2,9 +2,9 @@
 
 A leaf module (it imports neither a reader nor the analysis): the readers resolve the keys
 against the clock of the file they read (:func:`resolve_window`, called once, by
-:func:`~escfit.balance.recordings.rawsteps.build_series`, for every format that yields a
+:func:`~escfit.analysis.recordings.rawsteps.build_series`, for every format that yields a
 sampled series) and the analysis takes the result as an explicit argument
-(:class:`RecordWindow`, see :func:`~escfit.balance.recordings.turning_points.reduce_series`).
+(:class:`RecordWindow`, see :func:`~escfit.analysis.recordings.turning_points.reduce_series`).
 
 The clock rule
 --------------
@@ -21,7 +21,7 @@ A time the user gives is read on the record's own clock **measured from its firs
 
 A value that lies beyond the record on both readings is refused in one line naming the key,
 the value and the record's span.  The analysis and its notes count time from the first sample
-too (:func:`~escfit.balance.recordings.turning_points.reduce_series` works on that clock), so a
+too (:func:`~escfit.analysis.recordings.turning_points.reduce_series` works on that clock), so a
 time read off a note can be written back as a key unchanged.
 """
 

@@ -1,6 +1,6 @@
 """Signal-level tools for sampled oscillations: period, resolution, extrema, vertex fits.
 
-These know nothing of swings, releases or files; :mod:`escfit.balance.recordings.turning_points`
+These know nothing of swings, releases or files; :mod:`escfit.analysis.recordings.turning_points`
 composes them into the analysis of a recorded decay.  Angles are in the series' unit (rad),
 times in s.
 """

@@ -115,7 +115,7 @@ class TimegrapherRecording:
     sample_rate : float
         Audio sample rate, Hz (``nan`` for CSV).
     format : str
-        ``"tg-json"``, ``"csv"`` or ``"tg-applog"`` (see :mod:`escfit.balance.recordings.tg_applog`).
+        ``"tg-json"``, ``"csv"`` or ``"tg-applog"`` (see :mod:`escfit.analysis.recordings.tg_applog`).
     """
 
     beat_time: np.ndarray

@@ -2,15 +2,15 @@
 
 A zero of the angular velocity is a turning point of the angle, and the velocity's extrema lie
 between them, where the oscillator passes its centre.  What a fit of the rate needs from the
-record is what a fit of the angle needs (:mod:`escfit.balance.recordings.turning_points`): where
+record is what a fit of the angle needs (:mod:`escfit.analysis.recordings.turning_points`): where
 the free decay starts (after the last hold, pull or push), where it ends in the noise, the
 period, the release angle, and the sensor's zero (a gyro's bias) with its uncertainty.
 
 Method
 ------
-1. **The rate's own analysis** (:func:`~escfit.balance.recordings.turning_points.prepare`): its
+1. **The rate's own analysis** (:func:`~escfit.analysis.recordings.turning_points.prepare`): its
    period, smoothing, noise in rad/s, and the end of motion where the rate has sunk into that
-   noise for a period (:func:`~escfit.balance.recordings.turning_points.resting_tail`); a first
+   noise for a period (:func:`~escfit.analysis.recordings.turning_points.resting_tail`); a first
    bias estimate is the rate at rest there (else the median of the moving part).
 2. **The angle's turning points** are the zeros of the rate less its bias.  They are found, with
    the record's hysteresis and the same motion finding as a recorded angle (a hold is a rate flat
@@ -23,7 +23,7 @@ Method
    (:mod:`escfit.balance.problems.waveform`).
 3. **The bias** (the sensor's zero, rad/s) and its drift (rad/s^2) are measured from the rate's
    extrema after the reference, as a recorded angle's centre is from its turning points
-   (:func:`~escfit.balance.recordings.centre.measure_centre`): the midpoints of the two sides'
+   (:func:`~escfit.analysis.recordings.centre.measure_centre`): the midpoints of the two sides'
    envelopes.  A rate's bias is also what a drifting centre of the angle would leave, so one
    constant covers both.
 """
@@ -82,7 +82,7 @@ def reduce_rate(series: TimeSeries, *, user_window=None) -> RateAnalysis:
     """The analysis of a sampled angular velocity (see the module docstring).
 
     ``user_window``: the user's ``[recording]`` window, as for
-    :func:`~escfit.balance.recordings.turning_points.reduce_series` (the swept angle's reference).
+    :func:`~escfit.analysis.recordings.turning_points.reduce_series` (the swept angle's reference).
 
     Raises
     ------

@@ -3,9 +3,9 @@
 A reader (a text table, a phyphox export, a CASSY file, a LabVIEW file ...) hands over a
 :class:`Columns`: the columns' names and units as the file gives them, their cells or values, the
 line of each row.  :func:`series_from_columns` picks the time and the signal column (by the
-``[recording]`` options, else by the names: :func:`~escfit.balance.recordings.recording_spec.header_role`),
+``[recording]`` options, else by the names: :func:`~escfit.analysis.recordings.recording_spec.header_role`),
 converts them to SI (s; rad, rad/s or m), drops rows without a reading with a note, and hands the
-result to :func:`~escfit.balance.recordings.rawsteps.build_series`.  Refusals name the file, the
+result to :func:`~escfit.analysis.recordings.rawsteps.build_series`.  Refusals name the file, the
 line and column, and the option to set.
 
 Time columns may hold numbers (with a unit in the header, else s), times of day
@@ -64,7 +64,7 @@ class Columns:
         How the file was read (``source_format`` in the series' metadata).
     meta, options, notes
         The file's metadata (strings), options it gives itself (``{key: (value, where)}``, see
-        :func:`~escfit.balance.recordings.rawsteps.file_options`) and the reader's notes.
+        :func:`~escfit.analysis.recordings.rawsteps.file_options`) and the reader's notes.
     uniform_clock : (float, float) or None
         ``(t0, dt)``, s: a clock the format declares (LabVIEW's X0 and Delta_X) for a table
         without a time column.
@@ -497,7 +497,7 @@ def series_from_columns(cols: Columns, spec: RecordingSpec | None, *, sha256: st
     ------
     DataError
         Ambiguous or missing columns, text or non-finite values, units that are not of the
-        quantity, and everything :func:`~escfit.balance.recordings.rawsteps.build_series` refuses.
+        quantity, and everything :func:`~escfit.analysis.recordings.rawsteps.build_series` refuses.
     """
     spec = spec or RecordingSpec()
     opts = file_options(cols.options)

@@ -1,8 +1,8 @@
 """Text tables as written by loggers, trackers and lab scripts, read into a TimeSeries.
 
-:func:`~escfit.balance.recordings.rawseries.read_raw_series` sends every text file that is not
+:func:`~escfit.analysis.recordings.rawseries.read_raw_series` sends every text file that is not
 another known format here; the options of a
-:class:`~escfit.balance.recordings.recording_spec.RecordingSpec` settle what the file does not say.
+:class:`~escfit.analysis.recordings.recording_spec.RecordingSpec` settle what the file does not say.
 The cells are tokenized by :mod:`escfit.core.tabletext` (the one path under every text format);
 detected automatically:
 
@@ -18,11 +18,11 @@ detected automatically:
   ``angle_column``;
 - a metadata header over a single column: a line of names and a line of values such as
   ``rate,units`` / ``500,deg`` or ``sample_rate`` / ``1000`` (names in
-  :data:`~escfit.balance.recordings.rawsteps.FILE_OPTIONS`); the ``[recording]`` options win.
+  :data:`~escfit.analysis.recordings.rawsteps.FILE_OPTIONS`); the ``[recording]`` options win.
 
 A last row with too few fields (a logger stopped mid-line) is dropped with a note; anywhere
 else it is an error.  The columns then go to
-:func:`~escfit.balance.recordings.columns.series_from_columns`.
+:func:`~escfit.analysis.recordings.columns.series_from_columns`.
 """
 
 from __future__ import annotations
@@ -302,7 +302,7 @@ def read_raw_table(path: str | Path, spec: RecordingSpec | None = None) -> TimeS
     Raises
     ------
     DataError
-        As :func:`~escfit.balance.recordings.rawseries.read_raw_series`.
+        As :func:`~escfit.analysis.recordings.rawseries.read_raw_series`.
     """
     where = str(path)
     raw = Path(path).read_bytes()

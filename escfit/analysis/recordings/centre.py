@@ -157,7 +157,7 @@ def measure_centre(times: np.ndarray, values: np.ndarray, band: float, quantity:
         Half width of the rest band (rad): a drift smaller than a quarter of it over the
         record is not kept.
     quantity
-        What the values are (:data:`~escfit.balance.recordings.series.QUANTITIES`; the units
+        What the values are (:data:`~escfit.analysis.recordings.series.QUANTITIES`; the units
         above are then rad/s or m), for the note.
     """
     t = np.asarray(times, float)

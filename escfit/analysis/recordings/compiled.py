@@ -1,10 +1,10 @@
 """The loops of the record analysis that run per sample or per trial vertex, compiled.
 
 **Extremum scan** (:func:`extremum_scan`): the hysteresis search of
-:func:`~escfit.balance.recordings.extrema.alternating_extrema`, one pass over the samples
+:func:`~escfit.analysis.recordings.extrema.alternating_extrema`, one pass over the samples
 (a second per million samples in Python).
 
-**Kinked vertex**: :func:`~escfit.balance.recordings.extrema.kinked_vertex` fits, for each trial vertex time, a
+**Kinked vertex**: :func:`~escfit.analysis.recordings.extrema.kinked_vertex` fits, for each trial vertex time, a
 polynomial each side of the vertex without a linear term, and searches the time that leaves the
 smallest residual: some 30 small least-squares problems (a few dozen samples, at most 11
 columns) per turning point.  Through numpy each costs some 100 us of call overhead, which at
@@ -36,7 +36,7 @@ _RANK_TOL = 1e-11
 def extremum_scan(xs: np.ndarray, threshold: float, start: int, stop: int, seek: int,
                   eps: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """First and last sample of each extremum's plateau and whether it is a maximum, for
-    :func:`~escfit.balance.recordings.extrema.alternating_extrema` (which documents the rule)."""
+    :func:`~escfit.analysis.recordings.extrema.alternating_extrema` (which documents the rule)."""
     first = np.empty(stop - start, np.int64)
     last = np.empty(stop - start, np.int64)
     is_max = np.empty(stop - start, np.bool_)

@@ -57,7 +57,7 @@ def read_lvm(path: str | Path, spec: RecordingSpec | None = None) -> TimeSeries:
     ------
     DataError
         Not an LVM file, a header without its end, a row of the wrong width, and the column
-        refusals of :func:`~escfit.balance.recordings.columns.series_from_columns`.
+        refusals of :func:`~escfit.analysis.recordings.columns.series_from_columns`.
     """
     where = str(path)
     raw = Path(path).read_bytes()

@@ -12,7 +12,7 @@ name.  ``latest_time_s`` is the time of the latest beat of the update, so rows f
 The last row may be cut mid-field (the app stopped while writing): dropped with a note.
 Several sessions (``session_id``) in one log: ``[recording] run`` picks one (default: refused,
 listing them).  The rows become display readings as for the app logs
-(:func:`~escfit.balance.recordings.tg_applog.applog_recording`).
+(:func:`~escfit.analysis.recordings.tg_applog.applog_recording`).
 
 **peterhudson/timegrapher** (``crates/timegrapher-cli/src/main.rs`` 005014c9, ``output.rs``
 1e2ab54b, ``docs``; GPL): ``analyze --beats`` ``index,time_s,quality,residual_us`` (one row per

@@ -1,17 +1,17 @@
 """The steps every raw-recording reader shares: checking, re-timing and windowing samples.
 
-:mod:`~escfit.balance.recordings.rawtable` and :mod:`~escfit.balance.recordings.matfile` hand their
+:mod:`~escfit.analysis.recordings.rawtable` and :mod:`~escfit.analysis.recordings.matfile` hand their
 converted columns (time s, angle rad) to :func:`build_series`, which passes the stamps through the
 time-base stage (:func:`repaired_times`, :mod:`escfit.analysis.timebase`: rows out of order,
 repeated rows, a stalled clock, stamps in bursts), applies the ``start``/``stop`` window and
 checks what is left.
-The entry point that picks the reader is :func:`~escfit.balance.recordings.rawseries.read_raw_series`
+The entry point that picks the reader is :func:`~escfit.analysis.recordings.rawseries.read_raw_series`
 (which re-exports these names); this module imports neither reader.
 
 Metadata convention
 -------------------
 Readers fill :attr:`TimeSeries.meta` with strings only (so it survives
-:func:`~escfit.balance.recordings.timeseries.write_timeseries` and HDF5 attributes):
+:func:`~escfit.analysis.recordings.timeseries.write_timeseries` and HDF5 attributes):
 ``source_format``, ``time_column``, ``angle_column``, ``angle_unit``, ``window``, ``notes`` and
 ``warnings`` (large repairs of the time base), each one string of sentences joined by ``"; "``
 (:func:`notes_of` and :func:`warnings_of` split them), next to the file's own
@@ -89,7 +89,7 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
     from ``unit_from``: ``"file"``, ``"option"`` or ``"assumed"``): a refusal is a DataError
     naming the key to set, a suspicion a note.  ``meta`` gets ``window``, ``notes`` and ``warnings``.
     The ``start``, ``stop`` and ``release`` keys are read on the file's clock from its first row
-    (the clock rule of :mod:`~escfit.balance.recordings.window`); the series carries them
+    (the clock rule of :mod:`~escfit.analysis.recordings.window`); the series carries them
     (``window``) for the analysis.
     """
     for name, values in (("time", time), ("angle", theta)):

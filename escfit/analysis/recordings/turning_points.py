@@ -1,12 +1,12 @@
 """Turning points of a recorded free decay, numbered from a reference at rest.
 
 :func:`reduce_series` is the one entry point: it takes a
-:class:`~escfit.balance.recordings.timeseries.TimeSeries` and returns :class:`TurningPoints`.
+:class:`~escfit.analysis.recordings.timeseries.TimeSeries` and returns :class:`TurningPoints`.
 
 Steps
 -----
 1. **Period** from the periodogram peak of the detrended series
-   (:func:`~escfit.balance.recordings.extrema.spectral_period`): robust to noise, quantisation, a
+   (:func:`~escfit.analysis.recordings.extrema.spectral_period`): robust to noise, quantisation, a
    drifting centre and a resting tail.  Below :data:`MIN_SAMPLES_PER_PERIOD` samples per
    period the turning points are placed by sinusoid arcs, with a note saying what that costs;
    below :data:`COARSE_SAMPLES_PER_PERIOD` the record is refused.
@@ -15,14 +15,14 @@ Steps
    band within which the balance counts as at rest.
 3. **Resting tail**: where the smoothed angle stays within that band of its final value for
    at least a period and the swing measured over whole periods
-   (:func:`~escfit.balance.recordings.extrema.local_amplitude`) has sunk into the noise,
+   (:func:`~escfit.analysis.recordings.extrema.local_amplitude`) has sunk into the noise,
    motion has stopped; the rest is cut and reported (``stop_time``, ``rest_theta``).  With
    dry friction the balance stops at a turning point short of the centre, so when the last
    half swing runs into the rest that stop is the last turning point.
 4. **Reference** (``release_time``, ``release_theta``, the instant the model is released at
    rest): where the user set it (``[recording] release`` or ``start``, passed as ``user_window``:
-   :mod:`~escfit.balance.recordings.given_start`); else the series' ``release_s`` when given; else the start of the record's **last** free
-   decay (:mod:`escfit.balance.recordings.motion`): after the last push, pull, hold or drive,
+   :mod:`~escfit.analysis.recordings.given_start`); else the series' ``release_s`` when given; else the start of the record's **last** free
+   decay (:mod:`escfit.analysis.recordings.motion`): after the last push, pull, hold or drive,
    the release from a hold (the angle flat for a tenth of a period or more, then moving
    freely: the release is where motion starts and its angle the held one) or a turning point
    (a turning point at the first sample, the first one of a record that starts mid-swing, or
@@ -30,14 +30,14 @@ Steps
    velocity being zero there).  Either sign.  At least three turning points (the reference
    included) must stand above the noise.
 5. **Extrema** by hysteresis on the smoothed series
-   (:func:`~escfit.balance.recordings.extrema.alternating_extrema`): maxima and minima alternate and
+   (:func:`~escfit.analysis.recordings.extrema.alternating_extrema`): maxima and minima alternate and
    a plateau of equal samples is one extremum at its centre.  Turning points are numbered by
    **counting** them: swing ``k`` ends at the ``k``-th turning point after the reference.
    Times serve as a check only: every interval between consecutive turning points must lie
    within 0.6 to 1.6 local half periods, else an extremum is missing (or spurious) and the
    record is refused (``strict=True``) or the result carries a note.
 6. **Values and times** by the local kinked polynomial fit
-   (:func:`~escfit.balance.recordings.extrema.kinked_vertex`) to the raw samples within
+   (:func:`~escfit.analysis.recordings.extrema.kinked_vertex`) to the raw samples within
    ``+-window*period``: the velocity vanishes at the turn but the curvature jumps there as
    Coulomb friction reverses.  Unless given, the window is a fifth of a period when the noise
    or the quantisation step exceeds 2e-4 of the amplitude, or an eighth would hold fewer
@@ -49,7 +49,7 @@ Steps
    quartic terms are common to both sides): fewer parameters, less scatter, and a bias (up
    to some 2e-4 of the amplitude) well below that resolution.
 7. **Centre** and its drift, with their standard errors
-   (:func:`~escfit.balance.recordings.centre.measure_centre`): the centre is
+   (:func:`~escfit.analysis.recordings.centre.measure_centre`): the centre is
    ``offset + offset_rate*(t - release_time)``.
 
 Sign convention: angles are the series' own (signed, the sensor's zero offset still in
@@ -194,12 +194,12 @@ def reduce_series(series: TimeSeries, *, window: float | None = None, degree: in
     min_noise
         A floor for the noise scale the rest band and the hysteresis are set from (rad): for a
         series whose slow wander the scatter about a smoothing does not show (the running
-        integral of a rate, :mod:`escfit.balance.recordings.rate`).
+        integral of a rate, :mod:`escfit.analysis.recordings.rate`).
     user_window
         The user's ``[recording]`` window on the series' clock
-        (:class:`~escfit.balance.recordings.window.RecordWindow`, usually ``series.window``): a
+        (:class:`~escfit.analysis.recordings.window.RecordWindow`, usually ``series.window``): a
         ``release`` or ``start`` in it fixes where the free decay starts, over the series' own
-        ``release_s`` and the automatic search (:mod:`~escfit.balance.recordings.given_start`).
+        ``release_s`` and the automatic search (:mod:`~escfit.analysis.recordings.given_start`).
 
     Returns
     -------
@@ -408,7 +408,7 @@ def prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, whe
             quantity: str = "angle", min_noise: float = 0.0) -> SampledRecord:
     """Check the samples; period, smoothing and resolution (steps 1 and 2).
 
-    ``quantity`` is what the samples are (:data:`~escfit.balance.recordings.series.QUANTITIES`):
+    ``quantity`` is what the samples are (:data:`~escfit.analysis.recordings.series.QUANTITIES`):
     only an angle can be wrapped, and the notes speak in its unit.
     """
     if t.size < 20:
@@ -498,7 +498,7 @@ def resting_tail(rec: SampledRecord) -> tuple[int, float]:
 
     At rest means within the rest band of the final level for at least a period *and* no
     swing left above the noise: a slow record's small swings hide in the band sample by
-    sample but stand out over a whole period (:func:`~escfit.balance.recordings.extrema.local_amplitude`).
+    sample but stand out over a whole period (:func:`~escfit.analysis.recordings.extrema.local_amplitude`).
     """
     t, n = rec.t, rec.t.size
     final = t >= t[-1] - rec.period

@@ -23,7 +23,7 @@ oscillator still moves outwards leaves it to reach that turning point freely).
 
 The end: turning points whose spacing breaks down once the swing has faded are noise, not
 motion (:func:`faded_end`).  Functions here take the analysis record of
-:mod:`escfit.balance.recordings.turning_points` (``t``, ``x``, ``xs``, ``period``, ``band``,
+:mod:`escfit.analysis.recordings.turning_points` (``t``, ``x``, ``xs``, ``period``, ``band``,
 ``step``, ``notes``, ``refine``) and its refined turning points (:class:`Turn`).
 """
 
@@ -457,7 +457,7 @@ def _note_pull(rec, turn: Turn) -> None:
 
 def reference(rec, turns: list[Turn]) -> tuple[float, float, list[Turn]]:
     """The reference instant and angle of a record without a given release, and the turning
-    points after it (see the module docstring and :mod:`escfit.balance.recordings.turning_points`)."""
+    points after it (see the module docstring and :mod:`escfit.analysis.recordings.turning_points`)."""
     if not turns:
         raise DataError(f"no turning point found: the {rec.quantity.replace('_', ' ')} never comes back by more than "
                         f"{rec.show(rec.step, 3)}", rec.where)

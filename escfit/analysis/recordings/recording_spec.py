@@ -35,11 +35,11 @@ or by a bare value that exceeds the record's span but lies within the file's clo
 (``start = 1407000013.0``); a value that fits both readings is a time after the first sample
 (a note names the ``abs`` form).  A value beyond the record is refused, naming the key, the
 value and the record's span.  Every format that yields a sampled series applies them, in one
-place (:func:`~escfit.balance.recordings.rawsteps.build_series`, through
-:func:`~escfit.balance.recordings.window.resolve_window`).
+place (:func:`~escfit.analysis.recordings.rawsteps.build_series`, through
+:func:`~escfit.analysis.recordings.window.resolve_window`).
 
 The user's choice wins over the analysis' own search for the free decay
-(:func:`~escfit.balance.recordings.turning_points.reduce_series`): with ``release`` the model is
+(:func:`~escfit.analysis.recordings.turning_points.reduce_series`): with ``release`` the model is
 released at that instant (at the turning point there, or at the held angle when the record is
 flat up to it; an instant more than a tenth of a period from both takes the next turning point,
 with a note); with ``start`` alone the free decay starts at the first turning point at or after
@@ -113,7 +113,7 @@ class RecordingSpec:
         a voltage (V, mV) means the sensor's reading, and ``scale`` (required) is then the SI
         value per that unit (rad/s per V, m per V).
     format : str or None
-        The file's format (one of :data:`escfit.balance.recordings.detect.FORMATS`) where detection
+        The file's format (one of :data:`escfit.analysis.recordings.detect.FORMATS`) where detection
         cannot decide.
     run : int or None
         Which run (from 1) of a file holding several side by side (CASSY, PASCO, Vernier).

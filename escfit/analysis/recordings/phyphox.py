@@ -17,7 +17,7 @@ Column names come from each experiment's definition, e.g. ``"Time (s)"``, ``"Gyr
 (rad/s)"`` (gyroscope) or ``"Rotation x (rad/s)"`` (pendulum): a gyroscope records an angular
 velocity, read with ``[recording] velocity_column``.
 
-What is read: the set's CSV through :mod:`~escfit.balance.recordings.rawtable` (the shared
+What is read: the set's CSV through :mod:`~escfit.analysis.recordings.rawtable` (the shared
 tokenizer), NaN padding dropped with a note.  From the zip: ``Raw Data.csv`` when it is there,
 else the only set that has a time column; the device's model and the start time go to the
 metadata, and a measurement paused and resumed (several START events in ``meta/time.csv``)
@@ -126,7 +126,7 @@ def read_phyphox(path: str | Path, spec: RecordingSpec | None = None) -> TimeSer
     ------
     DataError
         Not a phyphox export, several candidate sets, and all the column refusals of
-        :func:`~escfit.balance.recordings.columns.series_from_columns`.
+        :func:`~escfit.analysis.recordings.columns.series_from_columns`.
     """
     p = Path(path)
     where = str(path)

@@ -12,8 +12,8 @@ program.  The signatures are the formats' own magic numbers: zip ``PK\\x03\\x04`
 ``%PDF``, HDF5 ``\\x89HDF``.  MATLAB files, phyphox's zip and a compressed CASSY ``.labx`` (a zip
 whose ``data.xml`` is the XML) are readable and pass.
 
-This module imports nothing of the readers; :mod:`escfit.balance.recordings.detect` and
-:mod:`escfit.balance.recordings.rawseries` call :func:`refuse_foreign` first.
+This module imports nothing of the readers; :mod:`escfit.analysis.recordings.detect` and
+:mod:`escfit.analysis.recordings.rawseries` call :func:`refuse_foreign` first.
 """
 
 from __future__ import annotations

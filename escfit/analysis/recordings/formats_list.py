@@ -1,7 +1,7 @@
 """The names of the recording formats escfit reads (a leaf: the scene's ``[recording] format`` key
 is checked against it without importing the readers).
 
-See :mod:`escfit.balance.recordings.detect` for what each holds and which reader reads it.
+See :mod:`escfit.analysis.recordings.detect` for what each holds and which reader reads it.
 """
 
 from __future__ import annotations

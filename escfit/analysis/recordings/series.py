@@ -1,7 +1,7 @@
 """The readers' record of a sampled signal: :class:`TimeSeries`.
 
 A leaf module: every reader builds a TimeSeries and the turning-point analysis
-(:mod:`~escfit.balance.recordings.turning_points`) takes one; this module imports neither, so the
+(:mod:`~escfit.analysis.recordings.turning_points`) takes one; this module imports neither, so the
 data flows one way (file -> reader -> TimeSeries -> analysis -> fit problem).
 
 What was measured
@@ -51,14 +51,14 @@ class TimeSeries:
         :attr:`values` is the same array.
     release_s : float
         Release instant, s (``nan``: found from the record, see
-        :func:`~escfit.balance.recordings.turning_points.reduce_series`).
+        :func:`~escfit.analysis.recordings.turning_points.reduce_series`).
     source, sha256, meta
         File name, content hash and metadata (strings: how the file was read, its notes).
     quantity : str
         ``"angle"`` (rad), ``"angular_velocity"`` (rad/s) or ``"displacement"`` (m).
     window : RecordWindow or None
         The ``[recording]`` start, stop and release the reader resolved on this clock, and the
-        file's first sample (:mod:`~escfit.balance.recordings.window`); ``None``: none given and
+        file's first sample (:mod:`~escfit.analysis.recordings.window`); ``None``: none given and
         the first sample is ``time[0]``.
     """
 

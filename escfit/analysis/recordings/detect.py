@@ -144,7 +144,7 @@ def _header_above_numbers(text: str) -> list[str]:
 @refuses_unreadable
 def detect_format(path: str | Path) -> str:
     """Which format a recording file holds, from its content (one of
-    :data:`~escfit.balance.recordings.formats_list.FORMAT_NAMES`).
+    :data:`~escfit.analysis.recordings.formats_list.FORMAT_NAMES`).
 
     Raises
     ------
@@ -215,7 +215,7 @@ def read_recording(path: str | Path, fmt: str | None = None, **options):
     path
         The file.
     fmt
-        One of :data:`~escfit.balance.recordings.formats_list.FORMAT_NAMES`, or ``None`` to detect it.
+        One of :data:`~escfit.analysis.recordings.formats_list.FORMAT_NAMES`, or ``None`` to detect it.
     **options
         Passed to the format's reader (e.g. ``notch_deg`` for unit curves).
 
