@@ -111,6 +111,11 @@ def _last_line(text: str) -> str:
     return lines[-1][:200] if lines else ""
 
 
+def _pct(errors: dict, key: str) -> str:
+    """A relative error in per cent, or "n.d." where the fit marks it not determined (not judged)."""
+    return f"{100 * errors[key]:+.1f}" if key in errors else "n.d."
+
+
 def _fmt_row(row: dict) -> str:
     tr, r = row["truth"], row["result"]
     true_w = f"[{tr.t_free_start:.2f}, {tr.t_free_end:.1f}]"
@@ -122,7 +127,7 @@ def _fmt_row(row: dict) -> str:
     push = next((n for n in r["notes"] if PUSH_NOTE.search(n)), "")
     return (f"| {row['name']} | {row['seed']} | {'/'.join(tr.accept)} | **{row['outcome']}** | "
             f"{'yes' if row['ok'] else 'NO'} | {true_w} | {ref} [{r['t_first']:.2f}, {r['t_last']:.1f}] | "
-            f"{100 * e['omega0']:+.3f} | {100 * e['C']:+.1f} | {100 * e['R']:+.1f} | "
+            f"{100 * e['omega0']:+.3f} | {_pct(e, 'C')} | {_pct(e, 'R')} | "
             f"{push[:120].replace('|', '/')} |")
 
 

@@ -4,12 +4,14 @@ A 300-period free decay (viscous C, Coulomb R) sampled with white noise: fitted 
 model's turning points follow the record's and the estimates hold the truth; with the record's
 frequency drifting by 0.3 % along it (time warped), the constant-omega0 waveform fit drifts out
 of phase and the fit is not determined.  A record whose first two swings are hand-driven
-(amplitude growing), with the release forced at its start, is not determined either.
+(amplitude growing), with the release forced at its start, is not determined either; so is one
+whose swing a hand stops a period before its end, and the stop the check names gives the truth.
 """
 
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -64,6 +66,24 @@ def hand_started_record(*, periods: int = 60, seed: int = 2) -> TimeSeries:
     return TimeSeries(t, y, source="hand-started", release_s=0.0)
 
 
+def hand_stopped_record(*, periods: int = 60, seed: int = 3) -> tuple[TimeSeries, float]:
+    """The free decay from rest at 0.5 rad at t = 0 until its turning point near ``periods - 4``
+    s, where a hand brings the swing to rest within three quarters of a period; then the bob hangs
+    still to the record's end, ``periods`` s.  Returns the record and the hand's turning point (s)."""
+    t = np.arange(0.0, float(periods), 1.0 / RATE)
+    fine = np.arange(0.0, periods - 3.0, 1e-3)
+    theta_f, _ = sample_theta(truth_system(), fine, "exact")
+    near = np.abs(fine - (periods - 4.0)) < 0.3  # the turning point: the largest swing there
+    k = np.flatnonzero(near)[np.argmax(np.abs(theta_f[near]))]
+    t_stop, a_stop = float(fine[k]), float(theta_f[k])
+    theta, _ = sample_theta(truth_system(), np.minimum(t, t_stop), "exact")
+    after = t > t_stop
+    s = np.clip((t[after] - t_stop) / 0.75, 0.0, 1.0)
+    theta[after] = a_stop * (1.0 - s * s * (3.0 - 2.0 * s)) * np.cos(2 * math.pi * (t[after] - t_stop))
+    y = theta + OFFSET + SIGMA * np.random.default_rng(seed).standard_normal(t.size)
+    return TimeSeries(t, y, source="hand-stopped"), t_stop
+
+
 def fitted(record: TimeSeries, model: str = "waveform"):
     return fit_problem(make_problem(load_scene("fit.toml", text=SCENE % model), record), n_starts=1)
 
@@ -96,7 +116,7 @@ def test_a_drifting_frequency_leaves_the_waveform_fits_damping_split_undetermine
     # quarter of 0.5 * 0.003 * 2 pi * 300 rad at the ends after the best line is taken out, at least a tenth of it
     drift = [w for w in res.warnings if w.startswith("the model's turning points drift out of phase")]
     assert drift, res.warnings
-    rad = float(drift[0].split("the record's (they ")[1].split("): ")[1].split(" rad")[0])
+    rad = float(re.search(r"by up to ([0-9.e+-]+) rad", drift[0]).group(1))
     assert 0.1 * 0.5 * 0.003 * 2 * math.pi * 300 < rad < 0.5 * 0.003 * 2 * math.pi * 300, drift[0]
 
 
@@ -115,6 +135,23 @@ def test_the_same_record_released_where_the_hand_lets_go_agrees():
     res = fitted(replace(record, release_s=2.0), "amplitude")
     assert res.verdict == "determined", res.warnings
     assert not any("free decay from the release" in w for w in res.warnings)
+
+
+def test_a_hand_stopped_end_is_not_determined_and_the_stop_it_names_gives_the_truth():
+    record, t_stop = hand_stopped_record()
+    res = fitted(record)
+    assert res.verdict == "not determined", res.warnings
+    first = res.warnings[0]
+    assert "last turning points do not follow the decay" in first, first
+    stop = float(re.search(r"\[recording\] stop = ([0-9.]+)", first).group(1))
+    assert t_stop - 0.6 < stop <= t_stop + 0.01, (stop, t_stop)  # the hand's turning point or the one before
+    keep = record.time <= stop
+    res = fitted(TimeSeries(record.time[keep], record.theta[keep], source="hand-stopped, cut"))
+    assert res.verdict == "determined", res.warnings
+    rows = res.summary()
+    for name in ("oscillator.omega0", "viscous.C", "coulomb.R"):
+        est, lo, hi = rows[name]["estimate"], rows[name]["lo95"], rows[name]["hi95"]
+        assert abs(est - TRUTH[name]) < 3.5 * (hi - lo) / (2 * 1.96), (name, est, TRUTH[name])
 
 
 def test_a_trade_between_two_losses_leaves_them_undetermined_and_a_common_shift_does_not():

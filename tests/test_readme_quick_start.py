@@ -1,4 +1,4 @@
-"""The README's quick-start line runs as written, twice in a row, from a fresh home folder.
+"""The README's quick-start line runs as written, twice in a row, from a fresh home folder; then its second example.
 
 The line is read from the README itself (the fenced ``bash`` block whose command starts with
 ``escfit examples``), so the test follows the README when it changes.  It runs in bash with
@@ -27,6 +27,14 @@ def quick_start_line() -> str:
     return lines[0]
 
 
+def second_example_line() -> str:
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    blocks = re.findall(r"^```bash\n(.*?)^```", text, re.S | re.M)
+    lines = [line for block in blocks for line in block.splitlines() if line.startswith("cd ~/escfit-examples")]
+    assert len(lines) == 1, lines
+    return lines[0]
+
+
 def test_quick_start_line_is_a_pendulum_outside_the_clone():
     line = quick_start_line()
     assert "cd ~/escfit-examples" in line and "fits/real/encoder_pendulum_jensen.toml" in line
@@ -34,7 +42,7 @@ def test_quick_start_line_is_a_pendulum_outside_the_clone():
     assert "--force" in line and "a second run replaces the results" in (ROOT / "README.md").read_text()
 
 
-@pytest.mark.slow  # two fits with reports: 20-90 s depending on the machine's load
+@pytest.mark.slow  # three fits with reports: 1-3 min depending on the machine's load
 def test_quick_start_line_runs_twice_in_a_row(tmp_path):
     home = tmp_path / "home"
     home.mkdir()
@@ -54,3 +62,9 @@ def test_quick_start_line_runs_twice_in_a_row(tmp_path):
     assert "copied 0 files" in outputs[1]  # the second run reuses the examples
     assert "The swing loses" in outputs[1]
     assert not list(tmp_path.glob("*.h5")) and not list(ROOT.glob("encoder_pendulum_jensen.*"))
+    # the README's second example, from the same folder
+    second = second_example_line()
+    r = subprocess.run(["bash", "-c", f"set -eo pipefail\n{second}"], cwd=tmp_path, env=env, capture_output=True,
+                       text=True, timeout=900, stdin=subprocess.DEVNULL)
+    assert r.returncode == 0, f"{r.stdout[-3000:]}\n{r.stderr[-3000:]}"
+    assert (folder / "monday_unit3.html").is_file()

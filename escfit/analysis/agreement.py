@@ -23,7 +23,13 @@ itself measured, independently of the likelihood:
    holds it whole): a finding when the record's amplitude grows among them (a free decay never
    does) and at least two of them leave the trend of the rest of the record by more than
    :data:`START_SIGMAS` of the scatter, as when a hand-guided start is fitted as a free decay.
-3. **Two fits of one record.**  For a waveform fit, the turning-point fit of the same scene and
+3. **End.**  The last :data:`END_TURNS` turning points: a finding when, from one of them to the
+   record's end, every one leaves the trend of the rest of the record by more than
+   :data:`START_SIGMAS` of the scatter and :data:`START_RATIO` times the 95th percentile of the
+   others' departures from it, in amplitude or in time: the record ends in another motion (a
+   hand that stops the swing, a take spliced on), which a free decay fitted to the whole record
+   bends to.  The advice names ``[recording] stop`` at the last turning point that follows.
+4. **Two fits of one record.**  For a waveform fit, the turning-point fit of the same scene and
    record (``[observation] model = "amplitude"``, fitted by least squares from the waveform's
    values) and the estimates they share (omega0, the damping, the friction) compared: a
    difference beyond :data:`PARAMETER_SIGMAS` combined standard errors is a finding when it is
@@ -52,6 +58,7 @@ DRIFT_SIGMAS = 5.0  # a smooth drift larger than this many point scatters is a f
 START_SIGMAS = 5.0  # ... as are two of the first START_TURNS turning points beyond this many
 START_TURNS = 3
 START_RATIO = 2.0
+END_TURNS = 3  # the last turning points checked for an end in another motion (a hand, a take spliced on)
 PARAMETER_SIGMAS = 3.0  # waveform and turning-point estimates further apart than this (combined) disagree
 GROSS_SHARE = 0.3  # a model's amplitudes this far from the record's (a share of them) describe another motion
 MIN_DRIFT_TURNS = 20  # below this the scatter is too uncertain for a drift to decide the status (a warning then)
@@ -174,6 +181,30 @@ class TurnDifferences:
         return int(np.sum((excess > START_SIGMAS * self.scatter) & (excess > level))) >= 2
 
 
+    @property
+    def end_break(self) -> int | None:
+        """Index of the first turning point of the record's end in another motion, or None.
+
+        From that turning point (one of the last :data:`END_TURNS`) to the last, every one leaves
+        the trend of the others, extrapolated, by more than :data:`START_SIGMAS` times its spread
+        (its own scatter and the extrapolated trend's, combined) and more than :data:`START_RATIO`
+        times the 95th percentile of the others' departures from the trend."""
+        n = self.swing.size
+        if n < END_TURNS + MIN_TURNS:
+            return None
+        rest, tail = slice(None, n - END_TURNS), slice(n - END_TURNS, None)
+        trend = smooth_trend(self.swing[rest], self.difference[rest], at=self.swing)
+        others = self.difference[rest] - trend[rest]
+        # a tail turning point's own scatter and that of the trend extrapolated to it
+        spread = self.scatter * np.sqrt(1.0 + trend_spread(self.swing[rest], self.swing[tail]) ** 2)
+        level = np.maximum(START_SIGMAS * spread, START_RATIO * float(np.quantile(np.abs(others), 0.95)))
+        out = np.abs(self.difference[tail] - trend[tail]) > level
+        for k in range(END_TURNS):
+            if out[k:].all():
+                return n - END_TURNS + k
+        return None
+
+
 @dataclass(frozen=True)
 class ParameterDifference:
     """One estimate of the waveform fit against the turning-point fit of the same record."""
@@ -281,19 +312,30 @@ def turn_scatter(difference: np.ndarray, floor: float) -> float:
     return max(s, floor)
 
 
+def _trend_design(swing: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """Columns of :func:`smooth_trend`'s fit at the turning points ``at``: 1, u, u**2 (u the
+    turning-point number scaled to the span of ``swing``) and the alternating side term."""
+    scale = max(float(swing[-1] - swing[0]), 1.0)
+    u = (at - swing[0]) / scale
+    return np.column_stack([np.ones_like(u, dtype=float), u, u * u, np.where(at % 2 == 0, 1.0, -1.0)])
+
+
 def smooth_trend(swing: np.ndarray, difference: np.ndarray, at: np.ndarray | None = None) -> np.ndarray:
     """The smooth part of ``difference`` along the record: a quadratic in the turning-point
     number fitted with an alternating term (a side bias), the alternating term left out;
     evaluated at the turning points ``at`` (default ``swing``)."""
     at = swing if at is None else np.asarray(at)
-    scale = max(float(swing[-1] - swing[0]), 1.0)
+    coef, *_ = np.linalg.lstsq(_trend_design(swing, swing), difference, rcond=None)
+    return _trend_design(swing, at)[:, :3] @ coef[:3]
 
-    def design(k):
-        u = (k - swing[0]) / scale
-        return np.column_stack([np.ones_like(u, dtype=float), u, u * u, np.where(k % 2 == 0, 1.0, -1.0)])
 
-    coef, *_ = np.linalg.lstsq(design(swing), difference, rcond=None)
-    return design(at)[:, :3] @ coef[:3]
+def trend_spread(swing: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """Standard error of :func:`smooth_trend` fitted at ``swing`` and evaluated at ``at``, in units
+    of one difference's scatter (it grows where the trend is extrapolated)."""
+    x = _trend_design(swing, swing)
+    cov = np.linalg.pinv(x.T @ x)[:3, :3]
+    y = _trend_design(swing, np.asarray(at))[:, :3]
+    return np.sqrt(np.einsum("ij,jk,ik->i", y, cov, y))
 
 
 @dataclass(frozen=True)
@@ -417,6 +459,9 @@ def judge(phase: TurnDifferences | None, amplitude: TurnDifferences | None, para
                 findings.append(clause)
             else:
                 cautions.append(clause + _remedy(model, d))
+    ends = [d for d in (amplitude, phase) if d is not None and d.end_break is not None]
+    if ends and not findings:
+        findings.append(_end_clause(ends[0], model.unit))
     bad = [p for p in parameters if p.sigmas > PARAMETER_SIGMAS]
     wander = envelope_wander(amplitude) if amplitude is not None and not findings else None
     unsplit = wander is not None and wander.splits and {"viscous", "coulomb"} <= model.effects
@@ -473,8 +518,8 @@ def _drift_clause(d: TurnDifferences, unit: str) -> str:
     i = d.drift_index
     if d.what == "phase":
         how = "run ahead of" if d.drift > 0 else "lag behind"  # the record turning later: the model runs ahead
-        return (f"the model's turning points drift out of phase with the record's (they {how} them): "
-                f"{abs(d.drift):.2g} rad ({d.drift_sigmas:.0f} standard errors) by t = {d.time[i]:.4g} s")
+        return (f"the model's turning points drift out of phase with the record's (they {how} them by up "
+                f"to {abs(d.drift):.2g} rad, {d.drift_sigmas:.0f} standard errors, at t = {d.time[i]:.4g} s)")
     more = "more" if d.drift > 0 else "less"
     return (f"the record swings {_shown(abs(d.drift), unit)} {more} than the model at t = {d.time[i]:.4g} s "
             f"({d.drift_sigmas:.0f} standard errors of a turning point)")
@@ -500,12 +545,34 @@ def _start_clause(d: TurnDifferences, unit: str) -> str:
             f"{int(d.swing[k])} at t = {d.time[k]:.4g} s lies {what} ({z[k]:.0f} standard errors) from the model's")
 
 
+def _end_clause(d: TurnDifferences, unit: str) -> str:
+    k = d.end_break
+    off = float(d.difference[k] - smooth_trend(d.swing[:-END_TURNS], d.difference[:-END_TURNS], at=d.swing[k:k + 1])[0])
+    what = f"{abs(off):.2g} rad of phase" if d.what == "phase" else _shown(abs(off), unit)
+    return (f"the record's last turning points do not follow the decay of the others (the swing was stopped, or "
+            f"the record ends in another motion): turning point {int(d.swing[k])} at t = {d.time[k]:.4g} s lies "
+            f"{what} ({abs(off) / d.scatter:.0f} standard errors) from the trend of the rest")
+
+
+def _end_stop(phase, amplitude) -> float | None:
+    """The time of the last turning point before the record's end in another motion, s."""
+    ks = [(d.end_break, d) for d in (amplitude, phase) if d is not None and d.end_break is not None]
+    if not ks:
+        return None
+    k, d = min(ks, key=lambda kd: kd[1].time[kd[0]])
+    return float(d.time[k - 1])
+
+
 def _advice(model: ModelFacts, phase, amplitude) -> str:
     start = amplitude is not None and amplitude.start_growth > START_SIGMAS and any(
         d is not None and d.start_stands_out for d in (phase, amplitude))
     if start:
-        return ("start the fit where the free decay starts: [recording] start (or release_s) after the last push, "
+        return ("start the fit where the free decay starts: [recording] start (or release) after the last push, "
                 "or leave them out so that escfit finds it")
+    stop = _end_stop(phase, amplitude)
+    if stop is not None:
+        return (f"end the fit where the free decay ends: [recording] stop = {stop:.4g} (or --stop {stop:.4g}), the "
+                "last turning point that follows it")
     steps = []
     if model.waveform:
         steps.append('fit the turning points ([observation] model = "amplitude"), which a drifting phase does '

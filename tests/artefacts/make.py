@@ -486,10 +486,39 @@ def two_modes(seed: int, periods: int | None = None):
         "small misfit, not a push")
 
 
+def hand_stop(seed: int, periods: int | None = None):
+    p = draw(seed, periods)
+    turns_t, turns_a = turning_times(p, p.a0, p.duration)
+    k = turns_t.size - 3  # a hand stops the swing from a turning point about a period before the end
+    t_stop, a_stop = float(turns_t[k]), float(turns_a[k])
+    t = grid(p, t_stop + 3 * p.period)  # then the bob hangs still for two and a half periods
+    theta = free_record(p, 0.0, p.a0, t)
+    after = t >= t_stop
+    s = np.clip((t[after] - t_stop) / (0.75 * p.period), 0.0, 1.0)  # brought to rest in three quarter swings
+    theta[after] = a_stop * (1.0 - smoothstep(s)) * np.cos(p.omega0 * (t[after] - t_stop))
+    return angle_csv(t, noisy(p, theta)), truth(
+        p, 0.0, t_stop, p.a0, accept=("fit", "not determined"), reason=r"\[recording\] stop = |--stop ",
+        expect="fit up to the hand (the turning point where the swing is stopped), or say that the end does "
+        "not follow the decay and name [recording] stop")
+
+
+def spliced_end(seed: int, periods: int | None = None):
+    p = draw(seed, periods)
+    t = grid(p, p.duration)
+    theta = free_record(p, 0.0, p.a0, t)
+    t_cut = t[-1] - 1.2 * p.period  # the last 1.2 periods come from another take: half a period out of phase
+    late = t >= t_cut
+    theta[late] = free_record(p, -0.5 * p.period, p.a0, t[late])
+    return angle_csv(t, noisy(p, theta)), truth(
+        p, 0.0, t_cut, p.a0, accept=("fit", "not determined"), reason=r"\[recording\] stop = |--stop ",
+        expect="fit up to the splice, or say that the end does not follow the decay and name [recording] stop")
+
+
 CLASSES = {f.__name__: f for f in (
     clean, guided_start, hold_release, wobble, offset_step, glitch, push_middle, drive_off, burst_stamps,
     backwards_row, stalled_clock, noise_column_white, noise_column_sine, energy_only, energy_first,
-    displacement_mm, acceleration, three_pushes, two_runs, long_jitter, radians_as_degrees, two_modes)}
+    displacement_mm, acceleration, three_pushes, two_runs, long_jitter, radians_as_degrees, two_modes,
+    hand_stop, spliced_end)}
 SLOW = {"long_jitter"}
 
 

@@ -6,7 +6,8 @@ Shared by ``benchmarks/artefact_suite.py`` (subprocesses, any code under test) a
 Outcomes: ``RIGHT`` (exit 0, estimates within tolerance, window right), ``WRONG-WINDOW``
 (estimates right, window not the true free one), ``WRONG-SILENT`` (exit 0, an estimate outside
 its tolerance), ``REFUSED-WITH-REASON`` / ``REFUSED-OTHER`` (exit 2, the message matches / does
-not match the truth's reason), ``NOT-DETERMINED`` (exit 3), ``ERROR`` (anything else).
+not match the truth's reason), ``NOT-DETERMINED`` / ``NOT-DETERMINED-OTHER`` (exit 3, the message
+matches / does not match the truth's reason, where it names one), ``ERROR`` (anything else).
 
 Tolerances: omega0 within 0.5 %; C and R each within the larger of 3 standard errors and the
 class's floor (``Truth.rel_tol``, 15 % by default).  A free decay's omega0 is fixed by its zero
@@ -108,6 +109,6 @@ def classify(truth, code: int, text: str, r: dict | None) -> str:
         return "RIGHT" if window_right(truth, r["ref"], r["t_first"], r["t_last"]) else "WRONG-WINDOW"
     if code == 2:
         return "REFUSED-WITH-REASON" if truth.reason and re.search(truth.reason, text, re.I) else "REFUSED-OTHER"
-    if code == 3:
-        return "NOT-DETERMINED"
+    if code == 3:  # with the reason the truth expects, where it names one
+        return "NOT-DETERMINED" if not truth.reason or re.search(truth.reason, text, re.I) else "NOT-DETERMINED-OTHER"
     return "ERROR"
