@@ -58,9 +58,10 @@ def _draws(res, n: int = 20000) -> dict[str, np.ndarray]:
         names = [str(x) for x in lsq["parameter"].values]
         se = np.nan_to_num(lsq["stderr"].values.astype(float))
         cov = np.nan_to_num(lsq["correlation"].values.astype(float)) * np.outer(se, se)
-        z = np.random.default_rng(987).multivariate_normal(lsq["value"].values.astype(float), cov, size=n,
+        z = np.random.default_rng(987).multivariate_normal(lsq["value"].values.astype(float), cov, size=50 * n,
                                                            method="eigh", check_valid="ignore")
-        z = np.clip(z, lsq["min"].values, lsq["max"].values)
+        z = z[np.all((z >= lsq["min"].values) & (z <= lsq["max"].values), axis=1)][:n]
+        assert len(z) == n
         out = {name: z[:, i] for i, name in enumerate(names)}
     size = len(next(iter(out.values())))
     for name, value in json.loads(res.attrs.get("held", "{}")).items():

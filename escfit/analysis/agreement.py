@@ -26,7 +26,8 @@ itself measured, independently of the likelihood:
 3. **End.**  The last :data:`END_TURNS` turning points: a finding when, from one of them to the
    record's end, every one leaves the trend of the rest of the record by more than
    :data:`START_SIGMAS` of the scatter and :data:`START_RATIO` times the 95th percentile of the
-   others' departures from it, in amplitude or in time: the record ends in another motion (a
+   others' departures from it, more than the model misses any of the others by, and by more
+   than :data:`END_PHASE` of phase or :data:`GROSS_SHARE` of the amplitude: the record ends in another motion (a
    hand that stops the swing, a take spliced on), which a free decay fitted to the whole record
    bends to.  The advice names ``[recording] stop`` at the last turning point that follows.
 4. **Two fits of one record.**  For a waveform fit, the turning-point fit of the same scene and
@@ -59,6 +60,8 @@ START_SIGMAS = 5.0  # ... as are two of the first START_TURNS turning points bey
 START_TURNS = 3
 START_RATIO = 2.0
 END_TURNS = 3  # the last turning points checked for an end in another motion (a hand, a take spliced on)
+END_PHASE = math.pi / 4  # rad: an end out of phase by an eighth of a period is another motion
+END_SHARE = 0.1  # ... as is one whose amplitude leaves the trend by this share of the first amplitude
 PARAMETER_SIGMAS = 3.0  # waveform and turning-point estimates further apart than this (combined) disagree
 GROSS_SHARE = 0.3  # a model's amplitudes this far from the record's (a share of them) describe another motion
 MIN_DRIFT_TURNS = 20  # below this the scatter is too uncertain for a drift to decide the status (a warning then)
@@ -181,16 +184,27 @@ class TurnDifferences:
         return int(np.sum((excess > START_SIGMAS * self.scatter) & (excess > level))) >= 2
 
 
-    @property
-    def end_break(self) -> int | None:
+    def end_break(self, size: np.ndarray | None = None) -> int | None:
         """Index of the first turning point of the record's end in another motion, or None.
 
         From that turning point (one of the last :data:`END_TURNS`) to the last, every one leaves
         the trend of the others, extrapolated, by more than :data:`START_SIGMAS` times its spread
         (its own scatter and the extrapolated trend's, combined) and more than :data:`START_RATIO`
-        times the 95th percentile of the others' departures from the trend."""
+        times the 95th percentile of the others' departures from the trend, more than the model
+        misses any of the others by, and by what makes it another motion: :data:`END_PHASE` of
+        phase where the swing is still at least :data:`END_SHARE` of its first amplitude, or
+        :data:`GROSS_SHARE` of the amplitude there and :data:`END_SHARE` of the first.  Smaller
+        departures move the estimates by less than matters, and are left to the drift warnings.
+
+        Parameters
+        ----------
+        size : ndarray, optional
+            The record's amplitudes at the same turning points (default: :attr:`size`); without
+            them nothing is decided.
+        """
         n = self.swing.size
-        if n < END_TURNS + MIN_TURNS:
+        size = self.size if size is None else size
+        if n < END_TURNS + MIN_TURNS or size is None or np.shape(size) != self.swing.shape:
             return None
         rest, tail = slice(None, n - END_TURNS), slice(n - END_TURNS, None)
         trend = smooth_trend(self.swing[rest], self.difference[rest], at=self.swing)
@@ -198,7 +212,16 @@ class TurnDifferences:
         # a tail turning point's own scatter and that of the trend extrapolated to it
         spread = self.scatter * np.sqrt(1.0 + trend_spread(self.swing[rest], self.swing[tail]) ** 2)
         level = np.maximum(START_SIGMAS * spread, START_RATIO * float(np.quantile(np.abs(others), 0.95)))
-        out = np.abs(self.difference[tail] - trend[tail]) > level
+        # ... and more than the model misses the record by anywhere before (a damping law the model
+        # lacks bends its misfit in ways a quadratic trend does not follow to the end)
+        level = np.maximum(level, float(np.max(np.abs(self.difference[rest]))))
+        excess = np.abs(self.difference[tail] - trend[tail])
+        first, here = float(np.max(np.abs(size[:3]))), np.abs(size[tail])
+        if self.what == "phase":  # a phase is measured where the swing is well above the noise
+            material = (excess > END_PHASE) & (here >= END_SHARE * first)
+        else:
+            material = (excess > GROSS_SHARE * here) & (excess > END_SHARE * first)
+        out = (excess > level) & material
         for k in range(END_TURNS):
             if out[k:].all():
                 return n - END_TURNS + k
@@ -459,9 +482,9 @@ def judge(phase: TurnDifferences | None, amplitude: TurnDifferences | None, para
                 findings.append(clause)
             else:
                 cautions.append(clause + _remedy(model, d))
-    ends = [d for d in (amplitude, phase) if d is not None and d.end_break is not None]
+    ends = _end_breaks(phase, amplitude)
     if ends and not findings:
-        findings.append(_end_clause(ends[0], model.unit))
+        findings.append(_end_clause(*ends[0], model.unit))
     bad = [p for p in parameters if p.sigmas > PARAMETER_SIGMAS]
     wander = envelope_wander(amplitude) if amplitude is not None and not findings else None
     unsplit = wander is not None and wander.splits and {"viscous", "coulomb"} <= model.effects
@@ -545,9 +568,21 @@ def _start_clause(d: TurnDifferences, unit: str) -> str:
             f"{int(d.swing[k])} at t = {d.time[k]:.4g} s lies {what} ({z[k]:.0f} standard errors) from the model's")
 
 
-def _end_clause(d: TurnDifferences, unit: str) -> str:
-    k = d.end_break
-    off = float(d.difference[k] - smooth_trend(d.swing[:-END_TURNS], d.difference[:-END_TURNS], at=d.swing[k:k + 1])[0])
+def _end_breaks(phase, amplitude) -> list[tuple[TurnDifferences, int]]:
+    """The comparisons whose record ends in another motion, with the index where it starts
+    (amplitudes first; the phase judged with the record's amplitudes at the same turning points)."""
+    size = amplitude.size if amplitude is not None else None
+    found = []
+    for d in (amplitude, phase):
+        k = d.end_break(size) if d is not None else None
+        if k is not None:
+            found.append((d, k))
+    return found
+
+
+def _end_clause(d: TurnDifferences, k: int, unit: str) -> str:
+    rest = slice(None, d.swing.size - END_TURNS)
+    off = float(d.difference[k] - smooth_trend(d.swing[rest], d.difference[rest], at=d.swing[k:k + 1])[0])
     what = f"{abs(off):.2g} rad of phase" if d.what == "phase" else _shown(abs(off), unit)
     return (f"the record's last turning points do not follow the decay of the others (the swing was stopped, or "
             f"the record ends in another motion): turning point {int(d.swing[k])} at t = {d.time[k]:.4g} s lies "
@@ -556,10 +591,10 @@ def _end_clause(d: TurnDifferences, unit: str) -> str:
 
 def _end_stop(phase, amplitude) -> float | None:
     """The time of the last turning point before the record's end in another motion, s."""
-    ks = [(d.end_break, d) for d in (amplitude, phase) if d is not None and d.end_break is not None]
-    if not ks:
+    ends = _end_breaks(phase, amplitude)
+    if not ends:
         return None
-    k, d = min(ks, key=lambda kd: kd[1].time[kd[0]])
+    d, k = min(ends, key=lambda dk: dk[0].time[dk[1]])
     return float(d.time[k - 1])
 
 

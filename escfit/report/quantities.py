@@ -19,11 +19,12 @@ from .params import held_values
 __all__ = ["derived_rows", "parameter_draws"]
 
 N_DRAWS = 4000
+MIN_INSIDE = 50  # below one draw in this many inside the bounds, the draws are clipped instead
 
 
 def parameter_draws(res, rng: np.random.Generator | None = None) -> dict[str, np.ndarray]:
     """Draws of every parameter (canonical units): the posterior's, else the least-squares normal
-    approximation clipped to the bounds; held parameters as constants."""
+    approximation restricted to the bounds (:func:`_bounded_normal`); held parameters as constants."""
     post, lsq = res.group("posterior"), res.group("least_squares")
     out: dict[str, np.ndarray] = {}
     if post is not None:
@@ -38,16 +39,33 @@ def parameter_draws(res, rng: np.random.Generator | None = None) -> dict[str, np
         corr = np.nan_to_num(lsq["correlation"].values.astype(float), nan=0.0)
         np.fill_diagonal(corr, 1.0)
         cov = corr * np.outer(se, se)
-        z = rng.multivariate_normal(np.zeros(len(names)), cov, size=N_DRAWS, method="eigh", check_valid="ignore")
-        draws = value + z
         lo = lsq["min"].values.astype(float) if "min" in lsq else np.full(len(names), -np.inf)
         hi = lsq["max"].values.astype(float) if "max" in lsq else np.full(len(names), np.inf)
-        draws = np.clip(draws, lo, hi)
+        draws = _bounded_normal(rng, value, cov, lo, hi)
         out = {n: draws[:, i] for i, n in enumerate(names)}
     size = max((v.size for v in out.values()), default=1)
     for name, value in held_values(res).items():
         out.setdefault(name, np.full(size, value))
     return out
+
+
+def _bounded_normal(rng: np.random.Generator, value: np.ndarray, cov: np.ndarray, lo: np.ndarray,
+                    hi: np.ndarray) -> np.ndarray:
+    """:data:`N_DRAWS` draws of the normal ``N(value, cov)`` that lie inside the bounds.
+
+    Draws outside are left out, not clipped: clipping each parameter on its own breaks their
+    correlation (two losses that trade along a ridge, one of them on its bound 0, would both be
+    pushed up, and the loss they share with them), while leaving draws out keeps every draw on
+    the ridge.  Where fewer than one draw in :data:`MIN_INSIDE` lies inside (a normal
+    approximation far out of its bounds), the draws are clipped as a last resort.
+    """
+    z = rng.multivariate_normal(np.zeros(value.size), cov, size=N_DRAWS * MIN_INSIDE, method="eigh",
+                                check_valid="ignore")
+    draws = value + z
+    inside = np.all((draws >= lo) & (draws <= hi), axis=1)
+    if inside.sum() >= N_DRAWS:
+        return draws[inside][:N_DRAWS]
+    return np.clip(draws[:N_DRAWS], lo, hi)
 
 
 def derived_rows(res) -> tuple[list[str], list[list[str]], str]:
