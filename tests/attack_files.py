@@ -251,4 +251,9 @@ HOSTILE_FILES += [
     ("utf16-time-series-without-mark", utf16("u.csv", "utf-16-le"), ["fit", "u.csv", *FIT_TS], ["u.csv: UTF-16 text"]),
     ("utf16-time-series-init", utf16("u.csv", "utf-16"), ["init", "u.csv"], ["u.csv: UTF-16 text"]),
     ("examples-force-over-a-fifo", examples_with_a_fifo, ["examples", "ex", "--force"], ["is a FIFO", "nothing was copied"]),
+    # a channel written along one line (200000 readings, 2.4 MB): refused before any field is parsed
+    ("one-line-of-readings-init", text_file("w.csv", ",".join(["0.123456789"] * 200_000)), ["init", "w.csv"],
+     ["w.csv:1: about 200000 fields on a line", "--sample-rate"]),
+    ("one-line-of-readings-fit", text_file("w.csv", ",".join(["0.123456789"] * 200_000)), ["fit", "w.csv", *FIT_TS],
+     ["w.csv:1: about 200000 fields on a line", "--sample-rate"]),
 ]

@@ -44,6 +44,7 @@ from .series import TimeSeries
 
 __all__ = ["read_raw_table", "scan_text", "table_columns"]
 
+MAX_COLUMNS = 1000  # more fields on a line are not columns of a record (a channel written along one line)
 _COMMENT = re.compile(r"^\s*(#|%|//)")
 _SEPARATOR = re.compile(r"^\s*[-=_*+| ]*[-=_*]{3,}[-=_*+| ]*$")
 _META = re.compile(r"^\s*(?:#+|%+|//+)\s*([A-Za-z_][\w.\-]*)\s*:\s*(.*?)\s*$")
@@ -153,9 +154,20 @@ def _unit_row(line: str, lay: _Layout) -> list[str | None] | None:
     return out
 
 
+def _refuse_wide(lines: list[str], where: str) -> None:
+    """Refuse lines of more than :data:`MAX_COLUMNS` fields before any is parsed (a counted guess:
+    the most frequent separator's count, spaces included)."""
+    fields = max((max(s.count(d) for d in ",;\t ") + 1 for s in lines), default=0)
+    if fields > MAX_COLUMNS:
+        raise DataError(f"about {fields} fields on a line: a table of samples has one row per sample (a time and "
+                        "the readings); one channel sampled at a fixed rate is read with one number per line and "
+                        "--sample-rate (or [recording] sample_rate)", where)
+
+
 def _layout(body: list[tuple[int, str]], where: str) -> _Layout:
     k = max(1, min(40, len(body) // 2))
     sample = [s for _, s in body[-k - 1:-1] if not _SEPARATOR.match(s)] if len(body) > 3 else [s for _, s in body]
+    _refuse_wide(sample or [body[-1][1]], f"{where}:{body[-1][0]}")
     dialect, ncols = detect_dialect(sample or [body[-1][1]], f"{where}:{body[-1][0]}")
     head = body[0][1].rstrip(" \r\n")
     if dialect.delimiter is not None and ncols > 1 and sample and \

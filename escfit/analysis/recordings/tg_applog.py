@@ -69,6 +69,8 @@ _COLUMNS = {  # role: (names, {unit: factor to s, s/day, deg, ms, bph})
 _SETTINGS = {"lift_angle": ("lift angle", "lift", "liftangle", "la"), "bph": _COLUMNS["bph"][0],
              "averaging": ("averaging", "average", "window", "averaging time", "integration"),
              "release": ("release", "released", "released at", "release time")}
+HEAD_BYTES = 1 << 20  # a header is looked for in the first MiB and 200 lines
+MAX_HEADER_FIELDS = 64  # a line of more fields is data, not an app log's header
 _TRUE = {"true", "1", "yes", "y", "ok", "valid", "good", "locked", "t"}
 _FALSE = {"false", "0", "no", "n", "invalid", "bad", "nok", "not ok", "error", "err", "f", "lost", "", "-", "---"}
 
@@ -101,7 +103,7 @@ def _find_header(lines: list[str], limit: int | None = None) -> tuple[int, str, 
     for i, line in enumerate(lines[:limit]):
         s = line.strip().lstrip("\ufeff")
         delim = max(("\t", ";", ","), key=s.count)
-        if s and not s.startswith("#") and s.count(delim):
+        if s and not s.startswith("#") and 0 < s.count(delim) <= MAX_HEADER_FIELDS:
             roles = {_role(f)[0] for f in _split(s, delim)}
             if "time" in roles and roles & {"rate", "beat_error"}:
                 return i, delim, _split(s, delim)
@@ -110,16 +112,17 @@ def _find_header(lines: list[str], limit: int | None = None) -> tuple[int, str, 
 
 def _head_lines(path: str | Path, count: int) -> list[str]:
     """The first ``count`` lines of a text file (as ``splitlines`` of the whole text gives them),
-    read in growing pieces from 64 kB: a long record is not read whole to look at its start."""
+    read in growing pieces from 64 kB up to :data:`HEAD_BYTES`: a long record is not read whole
+    to look at its start, nor a file of few, very long lines (no app log's header is so far in)."""
     data = b""
     size = 1 << 16
     with open(path, "rb") as f:
         while True:
             chunk = f.read(size)
-            size *= 2  # a file of few, long lines: linear time all the same
+            size *= 2
             data += chunk
             lines = data.decode("utf-8", errors="replace").replace("\r\n", "\n").replace("\r", "\n").splitlines()
-            if not chunk or len(lines) > count:
+            if not chunk or len(lines) > count or len(data) >= HEAD_BYTES:
                 return lines[:count]
 
 
