@@ -186,7 +186,7 @@ def _help(path, table: dict, exc: DataError, fmt) -> tuple[str, object, str] | N
         found = _swinging_column(path, table, fmt, amplitudes_only=choice is not None)
         if found is not None:
             return "angle_column", found[0], found[1]
-    if _TOO_FEW.search(message) and "readings" not in table:
+    if (_TOO_FEW.search(message) or _SORTED_TABLE.search(message)) and "readings" not in table:
         return _few_rows(path, table, fmt, exc)
     if "angle_unit" in message and '"deg"' in message and "no unit given" in message and "angle_unit" not in table:
         return "angle_unit", "deg", ("the readings span more than a turn if read as radians; degrees, as the reader "
@@ -195,12 +195,14 @@ def _help(path, table: dict, exc: DataError, fmt) -> tuple[str, object, str] | N
 
 
 _TOO_FEW = re.compile(r"only \d+ samples; a decay needs")
+_SORTED_TABLE = re.compile(r"sorted by the reading, a table of amplitudes\?")
 READINGS_HINT = "--readings amplitudes ([recording] readings = \"amplitudes\")"
 
 
 def _few_rows(path, table: dict, fmt, exc: DataError) -> tuple[str, object, str]:
-    """Too few rows for samples in time: turning points if the rows are (:func:`_table_reading`),
-    else refused in one line naming the option that reads them as turning points."""
+    """Too few rows for samples in time (or rows the reader found sorted by their readings):
+    turning points if the rows are (:func:`_table_reading`), else refused in one line naming the
+    option that reads them as turning points."""
     try:
         data = read_data(path, recording={**table, "readings": "amplitudes"}, fmt=fmt)
     except DataError:

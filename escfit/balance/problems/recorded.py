@@ -179,6 +179,10 @@ def _amplitude_rows_problem(scene: BalanceScene, series, notes: list[str], solve
             held = (p.name,)
             notes.append(f"omega0 held at the scene's {p.value:.5g} rad/s: amplitudes depend on it only through "
                          "C/omega0 and R/omega0^2 and their times were numbered with it")
+    if p is not None and not p.vary and not by_time:
+        small = " (small-swing)" if scene.restoring == "pendulum" else ""
+        notes.append(f"omega0 held at the scene's {p.value:.5g} rad/s, period {2 * math.pi / p.value:.5g} s{small}: "
+                     "amplitudes depend on it only through C/omega0 and R/omega0^2")
     notes += release_from_record(scene.params, float(curve.value[0]), series.source, scene.restoring)
     from ...analysis.recordings.row_kind import judge_rows
 

@@ -145,7 +145,7 @@ def _judged_unit(series) -> str:
 def _column(series) -> str:
     """``"column 'x' "`` for the column read as the angle (as the reader named it), or ``""``."""
     name = str((getattr(series, "meta", {}) or {}).get("angle_column", "")).strip()
-    return f"{name if name.startswith('column ') else repr(name)} " if name else ""
+    return f"{name if name.startswith('column ') else 'column ' + repr(name)} " if name else ""
 
 
 def _unit_warnings(series, amplitude: float, restoring: str, swings: float) -> list[str]:
