@@ -146,5 +146,24 @@ def test_init_asks_whether_one_sided_peaks_are_half_swings_or_periods(tmp_path):
     peaks = _write(tmp_path, "peaks.txt", t[::2], v[::2])
     result, _ = _init([peaks, "--pendulum"], tmp_path)
     assert result.exit_code == 2 and result.output.count("\n") == 1, result.output
+    assert "--readings amplitudes" in result.output
+    import re
+
+    found = re.search(r"omega0 = ([0-9.]+) \(([0-9.]+) for a gravity pendulum", result.output)
+    assert found, result.output
     step = float(np.median(np.diff(t[::2])))
-    assert "--readings amplitudes" in result.output and f"omega0 = {2 * math.pi / step:.5g}" in result.output
+    assert float(found.group(1)) == pytest.approx(2 * math.pi / step, rel=0.01)  # the period at these amplitudes
+    assert float(found.group(2)) == pytest.approx(OMEGA0, rel=2e-3)  # the truth's small-swing value
+
+
+def test_rows_between_a_table_and_samples_are_refused_naming_both_readings(tmp_path):
+    t, v = _pendulum_table()
+    rng = np.random.default_rng(9)
+    flip = rng.random(v.size) < 0.12  # one sign in eight misread: not clearly a table any more
+    v = np.where(flip, -v, v)
+    kind = judge_rows(t, v)
+    assert kind.verdict == "ambiguous", kind
+    result, here = _init([_write(tmp_path, "mixed.txt", t, v), "--pendulum"], tmp_path)
+    assert result.exit_code == 2 and result.output.count("\n") == 1, result.output
+    assert "--readings amplitudes" in result.output and "--readings samples" in result.output
+    assert not list(here.glob("*.toml"))

@@ -33,9 +33,12 @@ where ``sin(theta) < theta`` pulls it back less), by a third harmonic of exactly
 ``q (1 + q) / (3 (1 + q**3))`` of the fundamental (``q`` the elliptic nome,
 :func:`third_harmonic_ratio`; ``A**2/192`` to lowest order).  :func:`waveform_shape` measures the
 record's, period by period, from :data:`SHAPE_FROM` (60 deg, 0.6 %) up: a column read as an angle
-of 60-179 deg whose swing is a plain sinusoid (pixels, millimetres read as degrees) is no
-pendulum's angle.  A swing of 180 deg or more goes over the top: no pendulum swings back from it
-(:func:`escfit.analysis.quantity.swing_unit_check`).
+of 60-179 deg whose swing is a plain sinusoid (pixels, millimetres read as degrees) is suspect.
+Only suspect: an angle taken from a video track about a pivot placed a fraction ``e`` of the
+length off is ``theta - e sin(theta)`` to first order, which adds ``e A**2/24`` to the third
+harmonic in the opposite sense and cancels the pendulum's ``A**2/192`` at ``e = 1/8``.  A swing of
+180 deg or more goes over the top: no pendulum swings back from it, whatever the sensor
+(:func:`escfit.analysis.quantity.swing_unit_check` refuses it).
 """
 
 from __future__ import annotations

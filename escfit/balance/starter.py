@@ -232,10 +232,14 @@ def _table_reading(series: TimeSeries, exc: DataError) -> tuple[str, object, str
         return "readings", "amplitudes", f"each row is one of the swing's {how}: {kind.evidence()}"
     if kind.verdict == "turning points":
         step = kind.step
+        measured, small = _row_periods(series.time, np.abs(series.theta))
+        pendulum = (f" ({4 * math.pi / small:.5g} for a gravity pendulum: its small-swing value at these amplitudes)"
+                    if series.quantity == "angle" and math.isfinite(small) else "")
         raise DataError(f"the rows look like turning points of one sign ({kind.evidence()}), but they cannot say "
                         f"whether each is a half swing (magnitudes read each side: period {2 * step:.4g} s) or a "
                         f"period (the peaks of one side: period {step:.4g} s): give {READINGS_HINT} and, for peaks "
-                        f"a period apart, set omega0 = {2 * math.pi / step:.5g} in the scene", exc.where) from None
+                        f"a period apart, set omega0 = {4 * math.pi / measured:.5g}{pendulum} in the scene",
+                        exc.where) from None
     if kind.verdict == "ambiguous":
         raise DataError(f"{exc.message}; the rows could be turning points ({'; '.join(kind.reasons)}; "
                         f"{kind.evidence()}): give {READINGS_HINT} if each row is one, or --readings samples "
@@ -410,8 +414,7 @@ def _survey_amplitude_rows(s: Survey, series: TimeSeries, restoring: str = "spri
     time on the half-swing count, a missing row counted), omega0 from it (for a pendulum the
     small-swing value: each half swing's time lengthened by its amplitude, exactly), the
     amplitudes about the centre the rows alternate about."""
-    from ..analysis.pendulum_unit import pendulum_period_factor
-    from ..analysis.recordings.row_kind import judge_rows, row_steps
+    from ..analysis.recordings.row_kind import judge_rows
 
     t = np.asarray(series.time, float)
     v = np.asarray(series.theta, float)
@@ -421,19 +424,13 @@ def _survey_amplitude_rows(s: Survey, series: TimeSeries, restoring: str = "spri
     s.times = t - t[0]
     s.period, omega0 = math.nan, math.nan
     if t.size > 2:
-        whole = row_steps(t)
-        count = np.concatenate([[0], np.cumsum(whole)])
-        s.period = 2.0 * float(np.polyfit(count, t, 1)[0])
+        s.period, small = _row_periods(t, s.amplitudes)
         omega0 = 2 * math.pi / s.period
-        if restoring == "pendulum" and series.quantity == "angle":
-            mid = 0.5 * (s.amplitudes[1:] + s.amplitudes[:-1])
-            clock = np.concatenate([[0.0], np.cumsum(whole * pendulum_period_factor(mid))])
-            small = 2.0 * float(np.polyfit(clock, t, 1)[0])
-            if math.isfinite(small) and small > 0:
-                omega0 = 2 * math.pi / small
-                s.notes.append(f"small-swing period {small:.5g} s: the measured {s.period:.5g} s with each half "
-                               "swing shortened by its amplitude as a gravity pendulum's is (complete elliptic "
-                               "integral)")
+        if restoring == "pendulum" and series.quantity == "angle" and math.isfinite(small) and small > 0:
+            omega0 = 2 * math.pi / small
+            s.notes.append(f"small-swing period {small:.5g} s: the measured {s.period:.5g} s with each half "
+                           "swing shortened by its amplitude as a gravity pendulum's is (complete elliptic "
+                           "integral)")
     s.counts = {"readings": int(t.size), "duration": float(t[-1] - t[0]), "omega0": omega0}
     s.format_words = series.meta.get("source_format", "table")
     s.columns_words = _columns_words(series.meta)
@@ -443,6 +440,26 @@ def _survey_amplitude_rows(s: Survey, series: TimeSeries, restoring: str = "spri
                        f"spacing); if they are one per period (the peaks on one side), the period is "
                        f"{s.period / 2:.4g} s: set omega0 = {2 * omega0:.5g}")
     _check_table_angle(s, series, restoring)
+
+
+def _row_periods(time: np.ndarray, amplitudes: np.ndarray) -> tuple[float, float]:
+    """Period (s) of rows one per half swing, measured (a straight line of row time on the half-swing
+    count, a missing row counted) and a gravity pendulum's small-swing value (each half swing's time
+    divided by :func:`~escfit.analysis.pendulum_unit.pendulum_period_factor` of its amplitude, rad)."""
+    from ..analysis.pendulum_unit import pendulum_period_factor
+    from ..analysis.recordings.row_kind import row_steps
+
+    t = np.asarray(time, float)
+    a = np.asarray(amplitudes, float)
+    if t.size < 3:
+        return math.nan, math.nan
+    whole = row_steps(t)
+    measured = 2.0 * float(np.polyfit(np.concatenate([[0], np.cumsum(whole)]), t, 1)[0])
+    factor = pendulum_period_factor(0.5 * (a[1:] + a[:-1]))
+    if not np.all(np.isfinite(factor)):
+        return measured, math.nan
+    small = 2.0 * float(np.polyfit(np.concatenate([[0.0], np.cumsum(whole * factor)]), t, 1)[0])
+    return measured, small
 
 
 def _check_table_angle(s: Survey, series: TimeSeries, restoring: str) -> None:

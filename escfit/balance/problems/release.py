@@ -97,15 +97,18 @@ def swing_unit_warnings(series, tp, restoring: str = "spring") -> list[str]:
     Returns
     -------
     list of str
-        A warning naming ``[recording] angle_unit = "rad"`` when radians look read as degrees.
+        A warning naming ``[recording] angle_unit = "rad"`` when radians look read as degrees;
+        one naming the keys of :data:`escfit.analysis.quantity.OTHER_QUANTITY` when a large
+        pendulum swing is not flattened as a pendulum's is.
 
     Raises
     ------
     DataError
         Degrees read as radians: a pendulum past 180 deg or a swing of more than two turns,
         naming ``[recording] angle_unit = "deg"`` (``--angle-unit deg``); a pendulum "in degrees"
-        past 180 deg, or one of 60-179 deg with no pendulum's waveform, naming the keys that read
-        the column as what it is.
+        past 180 deg, naming the keys that read the column as what it is.  A pendulum of 60-179
+        deg without a pendulum's waveform is a warning naming the same keys (a tracked angle
+        about a misplaced pivot can lose the waveform's flattening).
     """
     import numpy as np
 
@@ -121,8 +124,13 @@ def swing_unit_warnings(series, tp, restoring: str = "spring") -> list[str]:
         t = np.asarray(series.time, float)
         shape = waveform_shape(t, np.asarray(series.theta, float) - tp.centre(t), times, amplitudes)
         if shape is not None and not shape.pendulum:
-            raise DataError(f"{_column(series)}read as an angle in {_judged_unit(series)}: {shape.sentence()}: not a "
-                            f"pendulum's angle; set [recording] {OTHER_QUANTITY}", series.source)
+            # a warning, not a refusal: an angle taken from a video track about a pivot placed a
+            # fraction e of the length off adds e A^2/24 to the third harmonic, which cancels the
+            # pendulum's A^2/192 at e = 1/8, so a true angle can look sinusoidal (or peaked)
+            warnings.append(f"{_column(series)}read as an angle in {_judged_unit(series)}: {shape.sentence()}: a "
+                            "pendulum's angle measured about its pivot has it (an angle from a track about a pivot "
+                            "placed an eighth of the length off can lose it); if the column is no angle in that "
+                            f"unit, set [recording] {OTHER_QUANTITY}")
     return warnings
 
 
