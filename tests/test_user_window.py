@@ -239,9 +239,13 @@ def test_init_reads_an_amplitude_table_with_the_option_and_the_fit_finds_the_tru
 def test_init_tells_a_short_amplitude_table_from_samples(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     path = _amplitude_table(tmp_path, 12)
-    result = _cli(["init", path, "--spring", "--out", "b.toml"], tmp_path)
+    # magnitudes of one sign, no zig-zag: a half swing each or the peaks a period apart, the rows
+    # cannot say which, so init asks (a period twice too long would otherwise be a silent guess)
+    asked = _cli(["init", path, "--spring", "--out", "b.toml"], tmp_path)
+    assert asked.exit_code == 2 and "turning points of one sign" in asked.output, asked.output
+    assert "--readings amplitudes" in asked.output and not (tmp_path / "b.toml").exists()
+    result = _cli(["init", path, "--spring", "--readings", "amplitudes", "--out", "b.toml"], tmp_path)
     assert result.exit_code == 0, result.output
-    assert "--readings amplitudes" in result.output
     assert tomllib.loads((tmp_path / "b.toml").read_text())["recording"]["readings"] == "amplitudes"
     wiggle = tmp_path / "wiggle.csv"  # too few rows, and no amplitudes either (signs and sizes at random)
     wiggle.write_text("t (s),angle (deg)\n" + "\n".join(f"{i * 0.1:.1f},{v:.2f}" for i, v in

@@ -27,6 +27,18 @@ misfit with that of a free curve ``T0 (1 + k1 A**2 + k2 A**4)`` (the noise).  Th
 
 Only free pendulums (a gravity restoring torque, no stiffening effect) are checked: a balance's
 hairspring and a mass on a spring have no such clock.
+
+Its waveform is a second witness: a large swing is flattened (it lingers at the turning points,
+where ``sin(theta) < theta`` pulls it back less), by a third harmonic of exactly
+``q (1 + q) / (3 (1 + q**3))`` of the fundamental (``q`` the elliptic nome,
+:func:`third_harmonic_ratio`; ``A**2/192`` to lowest order).  :func:`waveform_shape` measures the
+record's, period by period, from :data:`SHAPE_FROM` (60 deg, 0.6 %) up: a column read as an angle
+of 60-179 deg whose swing is a plain sinusoid (pixels, millimetres read as degrees) is suspect.
+Only suspect: an angle taken from a video track about a pivot placed a fraction ``e`` of the
+length off is ``theta - e sin(theta)`` to first order, which adds ``e A**2/24`` to the third
+harmonic in the opposite sense and cancels the pendulum's ``A**2/192`` at ``e = 1/8``.  A swing of
+180 deg or more goes over the top: no pendulum swings back from it, whatever the sensor
+(:func:`escfit.analysis.quantity.swing_unit_check` refuses it).
 """
 
 from __future__ import annotations
@@ -37,7 +49,8 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["UnitEvidence", "unit_from_period", "swing_periods", "pendulum_period_factor", "REJECT", "ACCEPT", "DECIDE",
-           "MIN_PERIODS"]
+           "MIN_PERIODS", "third_harmonic_ratio", "waveform_shape", "ShapeEvidence", "SHAPE_FROM", "SHAPE_TOL",
+           "SHAPE_SIGMA"]
 
 REJECT = 50.0  # chi-square above the free curve's: the scale is rejected
 DECIDE = 30.0  # one reading's chi-square this far below the other's decides between them (a likelihood ratio ~3e6)
@@ -178,3 +191,124 @@ def unit_from_period(time: np.ndarray, theta: np.ndarray) -> UnitEvidence | None
     else:
         verdict = "undecided"
     return UnitEvidence(misfit, int(period.size), (float(amp.min()), float(amp.max())), verdict)
+
+
+# -- the waveform: a large swing is flattened ------------------------------------------------------
+SHAPE_FROM = math.radians(60.0)  # from this amplitude on the third harmonic (0.6 % and more) is measured
+SHAPE_TOL = 0.5  # the record's third harmonic within this share of the pendulum's ...
+SHAPE_SIGMA = 4.0  # ... or within this many standard errors of it
+_SHAPE_MIN_SAMPLES = 12  # samples in a period to measure its third harmonic
+
+
+def third_harmonic_ratio(amplitude: np.ndarray | float) -> np.ndarray:
+    """The third harmonic of a free gravity pendulum's angle relative to its fundamental.
+
+    The pendulum swinging ``amplitude`` ``A`` (rad, below pi) has the Fourier series, in the
+    sine basis from an upward zero crossing, ``theta = 8 sum_{n odd} q**(n/2) / (n (1 + q**n))
+    sin(n w t)`` with the nome ``q = exp(-pi K(1 - m) / K(m))``, ``m = sin(A/2)**2``; so the
+    third harmonic over the first is ``q (1 + q) / (3 (1 + q**3))``, positive (a flattened
+    swing), ``A**2 / 192`` to lowest order: 0.61 % at 60 deg, 3.1 % at 120 deg.
+    """
+    from scipy.special import ellipk
+
+    a = np.abs(np.asarray(amplitude, dtype=float))
+    m = np.sin(np.minimum(a, math.pi) / 2.0) ** 2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        q = np.exp(-math.pi * ellipk(1.0 - m) / ellipk(m))
+    q = np.where(a > 0, q, 0.0)
+    return q * (1.0 + q) / (3.0 * (1.0 + q ** 3))
+
+
+@dataclass(frozen=True)
+class ShapeEvidence:
+    """The record's third harmonic against a pendulum's at the same amplitude.
+
+    Attributes
+    ----------
+    periods : int
+        Periods measured (swinging :data:`SHAPE_FROM` or more).
+    amplitude : float
+        Their largest amplitude, rad as read.
+    measured, expected : float
+        The third harmonic over the fundamental (in phase with the swing's turning points),
+        the record's (mean over the periods) and the pendulum's at each period's amplitude.
+    stderr : float
+        Standard error of ``measured``.
+    pendulum : bool
+        Whether they agree (within :data:`SHAPE_TOL` of ``expected`` or :data:`SHAPE_SIGMA` errors).
+    """
+
+    periods: int
+    amplitude: float
+    measured: float
+    expected: float
+    stderr: float
+    pendulum: bool
+
+    def sentence(self) -> str:
+        return (f"a gravity pendulum swinging {math.degrees(self.amplitude):.0f} deg is flattened, its third harmonic "
+                f"{100 * self.expected:.2g} % of the fundamental; the record's is {100 * self.measured:.2g} +- "
+                f"{100 * self.stderr:.1g} % over {self.periods} periods")
+
+
+def _period_harmonic(t: np.ndarray, x: np.ndarray, start: float, period: float) -> tuple[float, float]:
+    """Third harmonic over fundamental of one period from a turning point at ``start``, in phase
+    with it (cosines about the turning point; a linear envelope and drift absorbed), and its error."""
+    tau = t - start
+    w = 2.0 * math.pi / period
+    c, s = np.cos(w * tau), np.sin(w * tau)
+    design = np.column_stack([np.ones_like(tau), tau, c, s, tau * c, tau * s, np.cos(3 * w * tau), np.sin(3 * w * tau)])
+    coef, *_ = np.linalg.lstsq(design, x, rcond=None)
+    dof = max(x.size - design.shape[1], 1)
+    var = float(np.sum((x - design @ coef) ** 2)) / dof
+    cov = var * np.linalg.pinv(design.T @ design)
+    # in the cosine basis about a turning point the pendulum's third harmonic has the opposite sign
+    ratio = -coef[6] / coef[2]
+    return float(ratio), float(math.sqrt(max(cov[6, 6], 0.0)) / abs(coef[2]))
+
+
+def waveform_shape(time: np.ndarray, theta: np.ndarray, turn_times: np.ndarray, turn_amplitudes: np.ndarray
+                   ) -> ShapeEvidence | None:
+    """Hold a record's waveform against a gravity pendulum's at its amplitude (see
+    :func:`third_harmonic_ratio`).
+
+    Parameters
+    ----------
+    time, theta : ndarray
+        Samples, s and rad as read, about the swing's centre.
+    turn_times, turn_amplitudes : ndarray
+        The turning points (s) in time order and their amplitudes about the centre (rad).
+
+    Returns
+    -------
+    ShapeEvidence or None
+        None when no full period swings :data:`SHAPE_FROM` or more with enough samples.
+    """
+    t, x = np.asarray(time, float), np.asarray(theta, float)
+    tt, aa = np.asarray(turn_times, float), np.abs(np.asarray(turn_amplitudes, float))
+    measured, expected, weights, amps = [], [], [], []
+    for k in range(tt.size - 2):
+        amp = float(np.mean(aa[k:k + 3]))
+        if amp < SHAPE_FROM or amp >= math.pi:
+            continue
+        inside = (t >= tt[k]) & (t <= tt[k + 2])
+        if np.count_nonzero(inside) < _SHAPE_MIN_SAMPLES:
+            continue
+        ratio, err = _period_harmonic(t[inside], x[inside], tt[k], tt[k + 2] - tt[k])
+        if not (math.isfinite(ratio) and math.isfinite(err)):
+            continue
+        measured.append(ratio)
+        expected.append(float(third_harmonic_ratio(amp)))
+        weights.append(1.0 / max(err, 1e-6) ** 2)
+        amps.append(amp)
+    if not measured:
+        return None
+    w = np.asarray(weights)
+    mean = float(np.sum(w * np.asarray(measured)) / np.sum(w))
+    want = float(np.sum(w * np.asarray(expected)) / np.sum(w))
+    stderr = math.sqrt(1.0 / float(np.sum(w)))
+    if len(measured) > 2:  # the periods' own scatter, when larger than their fits' errors say
+        stderr = max(stderr, float(np.std(measured, ddof=1)) / math.sqrt(len(measured)))
+    off = abs(mean - want)
+    agree = off <= SHAPE_TOL * want or off <= SHAPE_SIGMA * stderr
+    return ShapeEvidence(len(measured), max(amps), mean, want, stderr, bool(agree))

@@ -42,7 +42,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = ["SwingShape", "QuantityCheck", "swing_shape", "check_quantity", "label_quantity", "swing_unit_check",
-           "COLUMN_KEYS", "SMALL_DEG", "SMALL_SWING_DEG", "MAX_TURNS", "ENERGY_FALL", "ENERGY_FLOOR"]
+           "COLUMN_KEYS", "OTHER_QUANTITY", "SMALL_DEG", "SMALL_SWING_DEG", "MAX_TURNS", "ENERGY_FALL", "ENERGY_FLOOR"]
 
 SMALL_DEG = 0.05
 CLEAN_SWINGS = 4
@@ -51,6 +51,10 @@ MAX_TURNS = 2.0
 SMALL_SWING_DEG = 1.0
 ENERGY_FALL = 0.3
 ENERGY_FLOOR = 0.05
+#: what fixes a column whose values cannot be the angle claimed
+OTHER_QUANTITY = ("angle_unit (--angle-unit) if it is an angle in another unit, displacement_column with "
+                  "displacement_unit (--displacement-column) if it is a position (a track's x), or angle_column "
+                  "(--angle-column) if another column is the angle")
 COLUMN_KEYS = {"angle": "angle_column", "angular_velocity": "velocity_column", "displacement": "displacement_column"}
 _CHUNK_PERIODS = 3.0
 _MIN_CHUNK = 24
@@ -339,8 +343,10 @@ def swing_unit_check(amplitude: float, unit: str, *, restoring: str = "spring", 
 
     Used by ``escfit init`` and by a fit alike, so that a unit slip is caught at the same point
     both ways: degrees read as radians (a pendulum past 180 degrees, or any swing beyond
-    :data:`MAX_TURNS` turns) are refused; radians read as degrees (a largest swing under
-    :data:`SMALL_SWING_DEG` over :data:`CLEAN_SWINGS` swings or more) are suspect.
+    :data:`MAX_TURNS` turns) are refused; a pendulum "in degrees" past 180 degrees is no angle
+    in degrees (pixels, millimetres) and is refused naming :data:`OTHER_QUANTITY`; radians read
+    as degrees (a largest swing under :data:`SMALL_SWING_DEG` over :data:`CLEAN_SWINGS` swings
+    or more) are suspect.
 
     Parameters
     ----------
@@ -371,6 +377,10 @@ def swing_unit_check(amplitude: float, unit: str, *, restoring: str = "spring", 
                 f"turns{past}; read in degrees it is {amplitude:.4g} deg",), "refuse", 'angle_unit = "deg"')
     elif _in_unit(unit, 1.0) is not None:  # degrees
         in_deg = math.degrees(amplitude)
+        if restoring == "pendulum" and amplitude >= math.pi:
+            return QuantityCheck("angle", unit, (
+                f"read as an angle in {unit} it swings {in_deg:.4g} deg from its centre, past the 180 deg a pendulum "
+                "can swing back from (it would go over the top): not an angle in degrees",), "refuse", OTHER_QUANTITY)
         if in_deg < SMALL_SWING_DEG and swings >= CLEAN_SWINGS:
             return QuantityCheck("angle", unit, (
                 f"read in {unit} the largest swing is {in_deg:.3g} deg over {swings:.0f} swings; read in radians it "

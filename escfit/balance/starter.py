@@ -186,7 +186,7 @@ def _help(path, table: dict, exc: DataError, fmt) -> tuple[str, object, str] | N
         found = _swinging_column(path, table, fmt, amplitudes_only=choice is not None)
         if found is not None:
             return "angle_column", found[0], found[1]
-    if _TOO_FEW.search(message) and "readings" not in table:
+    if (_TOO_FEW.search(message) or _SORTED_TABLE.search(message)) and "readings" not in table:
         return _few_rows(path, table, fmt, exc)
     if "angle_unit" in message and '"deg"' in message and "no unit given" in message and "angle_unit" not in table:
         return "angle_unit", "deg", ("the readings span more than a turn if read as radians; degrees, as the reader "
@@ -195,21 +195,56 @@ def _help(path, table: dict, exc: DataError, fmt) -> tuple[str, object, str] | N
 
 
 _TOO_FEW = re.compile(r"only \d+ samples; a decay needs")
+_SORTED_TABLE = re.compile(r"sorted by the reading, a table of amplitudes\?")
 READINGS_HINT = "--readings amplitudes ([recording] readings = \"amplitudes\")"
 
 
 def _few_rows(path, table: dict, fmt, exc: DataError) -> tuple[str, object, str]:
-    """Too few rows for samples in time: amplitude readings if the rows look like them, else refused
-    in one line naming the option that reads them as amplitudes."""
+    """Too few rows for samples in time (or rows the reader found sorted by their readings):
+    turning points if the rows are (:func:`_table_reading`), else refused in one line naming the
+    option that reads them as turning points."""
     try:
         data = read_data(path, recording={**table, "readings": "amplitudes"}, fmt=fmt)
     except DataError:
         data = None
-    if isinstance(data, TimeSeries) and _looks_like_amplitudes(data.theta):
-        return "readings", "amplitudes", (f"only {data.time.size} rows, each one amplitude (one sign or alternating, "
-                                          f"falling): read as amplitudes, as {READINGS_HINT} asks")
+    if isinstance(data, TimeSeries):
+        try:
+            key, value, reason = _table_reading(data, exc)
+        except DataError as err:
+            if err is not exc:
+                raise
+        else:
+            return key, value, f"{reason}: read as amplitudes, as {READINGS_HINT} asks"
     raise DataError(f"{exc.message}; if each row is one amplitude (a peak per period or per half swing) give "
                     f"{READINGS_HINT}", exc.where) from None
+
+
+def _table_reading(series: TimeSeries, exc: DataError) -> tuple[str, object, str]:
+    """``("readings", "amplitudes", why)`` when the rows are turning points
+    (:func:`escfit.analysis.recordings.row_kind.judge_rows`); else ``exc`` raised again, in one
+    line naming both readings when the rows could be either, or what a table of one sign cannot say."""
+    from ..analysis.recordings.row_kind import judge_rows
+
+    kind = judge_rows(series.time, series.theta)
+    if kind.verdict == "turning points" and kind.per_half_swing:
+        how = ("magnitudes read on each side, one per half swing (alternate rows differ: the scale's zero is off the "
+               "centre)" if kind.one_sided else "turning points, one per half swing on alternate sides")
+        return "readings", "amplitudes", f"each row is one of the swing's {how}: {kind.evidence()}"
+    if kind.verdict == "turning points":
+        step = kind.step
+        measured, small = _row_periods(series.time, np.abs(series.theta))
+        pendulum = (f" ({4 * math.pi / small:.5g} for a gravity pendulum: its small-swing value at these amplitudes)"
+                    if series.quantity == "angle" and math.isfinite(small) else "")
+        raise DataError(f"the rows look like turning points of one sign ({kind.evidence()}), but they cannot say "
+                        f"whether each is a half swing (magnitudes read each side: period {2 * step:.4g} s) or a "
+                        f"period (the peaks of one side: period {step:.4g} s): give {READINGS_HINT} and, for peaks "
+                        f"a period apart, set omega0 = {4 * math.pi / measured:.5g}{pendulum} in the scene",
+                        exc.where) from None
+    if kind.verdict == "ambiguous":
+        raise DataError(f"{exc.message}; the rows could be turning points ({'; '.join(kind.reasons)}; "
+                        f"{kind.evidence()}): give {READINGS_HINT} if each row is one, or --readings samples "
+                        "([recording] readings = \"samples\") if they are samples in time", exc.where) from None
+    raise exc
 
 
 def _swinging_column(path, table: dict, fmt, *, amplitudes_only: bool = False) -> tuple[int, str] | None:
@@ -250,31 +285,20 @@ def _swinging_column(path, table: dict, fmt, *, amplitudes_only: bool = False) -
 
 def _swing_score(series: TimeSeries) -> tuple[float, str]:
     """How much a column looks like a recorded free decay: turning points found, else amplitude rows."""
+    from ..analysis.recordings.row_kind import judge_rows
     from ..analysis.recordings.turning_points import reduce_series
 
     try:
         tp = reduce_series(series, strict=False, user_window=series.window)
     except DataError:
-        return (0.5, "holds one amplitude per row, decreasing") if _looks_like_amplitudes(series.theta) else (0.0, "")
+        kind = judge_rows(series.time, series.theta)
+        return (0.5, "holds one turning point per row") if kind.verdict == "turning points" else (0.0, "")
     return 1.0 + len(tp.theta), f"swings ({len(tp.theta)} turning points)"
 
 
-def _looks_like_amplitudes(values: np.ndarray) -> bool:
-    """One sign (or signs alternating row by row: a turning point each side), magnitudes mostly
-    falling, too few rows per swing to be samples: amplitude readings."""
-    v = np.asarray(values, float)
-    v = v[np.isfinite(v)]
-    if v.size < 4 or np.any(v == 0):
-        return False
-    one_sign = np.all(v > 0) or np.all(v < 0)
-    alternating = bool(np.all(np.sign(v[1:]) == -np.sign(v[:-1])))
-    if not (one_sign or alternating):
-        return False
-    return bool(np.mean(np.diff(np.abs(v)) < 0) >= 0.7)
-
-
 def _amplitude_rows(path, series: TimeSeries, table: dict, why: dict, fmt, reduced: dict | None = None) -> TimeSeries:
-    """Switch to ``readings = "amplitudes"`` when the samples are amplitudes, one per half swing."""
+    """Switch to ``readings = "amplitudes"`` when the rows are turning points, one per half swing
+    (:func:`_table_reading`); samples whose turning points are found are kept as samples."""
     from ..analysis.recordings.turning_points import reduce_series
 
     if "readings" in table:
@@ -284,12 +308,10 @@ def _amplitude_rows(path, series: TimeSeries, table: dict, why: dict, fmt, reduc
         if reduced is not None:
             reduced.update(series=series, turns=tp)
         return series
-    except DataError:
-        if not _looks_like_amplitudes(series.theta):
-            raise
-    table["readings"] = "amplitudes"
-    why["readings"] = ("each row is one amplitude (one sign or alternating, falling, no oscillation in the rows): "
-                       f"read as amplitudes, as {READINGS_HINT} asks")
+    except DataError as exc:
+        key, value, reason = _table_reading(series, exc)
+    table[key] = value
+    why[key] = f"{reason}: read as amplitudes, as {READINGS_HINT} asks"
     return series
 
 
@@ -309,7 +331,7 @@ def survey(path: str | Path, *, restoring: str = "spring", recording: dict | Non
     s = Survey(kind="", path=str(path), recording=table, why=why, data=data)
     if isinstance(data, TimeSeries):
         if table.get("readings") == "amplitudes":
-            _survey_amplitude_rows(s, data)
+            _survey_amplitude_rows(s, data, restoring)
         else:
             _survey_samples(s, data, restoring, reduced.get("turns") if reduced.get("series") is data else None)
     elif isinstance(data, UnitCurve):
@@ -387,22 +409,65 @@ def window_found(series: TimeSeries, tp) -> dict:
             "last_turn": (float(tp.time[-1]) if len(tp.time) else ref) - zero}
 
 
-def _survey_amplitude_rows(s: Survey, series: TimeSeries) -> None:
+def _survey_amplitude_rows(s: Survey, series: TimeSeries, restoring: str = "spring") -> None:
+    """The survey of rows that are turning points: the period from their times (a straight line of
+    time on the half-swing count, a missing row counted), omega0 from it (for a pendulum the
+    small-swing value: each half swing's time lengthened by its amplitude, exactly), the
+    amplitudes about the centre the rows alternate about."""
+    from ..analysis.recordings.row_kind import judge_rows
+
     t = np.asarray(series.time, float)
+    v = np.asarray(series.theta, float)
+    kind = judge_rows(t, v)
     s.kind = "amplitude"
-    s.amplitudes = np.abs(np.asarray(series.theta, float))
+    s.amplitudes = np.abs(v - kind.centre)
     s.times = t - t[0]
-    s.period = float(2.0 * np.median(np.diff(t))) if t.size > 2 else math.nan
-    s.counts = {"readings": int(t.size), "duration": float(t[-1] - t[0]),
-                "omega0": 2 * math.pi / s.period if math.isfinite(s.period) else math.nan}
+    s.period, omega0 = math.nan, math.nan
+    if t.size > 2:
+        s.period, small = _row_periods(t, s.amplitudes)
+        omega0 = 2 * math.pi / s.period
+        if restoring == "pendulum" and series.quantity == "angle" and math.isfinite(small) and small > 0:
+            omega0 = 2 * math.pi / small
+            s.notes.append(f"small-swing period {small:.5g} s: the measured {s.period:.5g} s with each half "
+                           "swing shortened by its amplitude as a gravity pendulum's is (complete elliptic "
+                           "integral)")
+    s.counts = {"readings": int(t.size), "duration": float(t[-1] - t[0]), "omega0": omega0}
     s.format_words = series.meta.get("source_format", "table")
     s.columns_words = _columns_words(series.meta)
-    v = np.asarray(series.theta, float)
-    if math.isfinite(s.period) and (np.all(v > 0) or np.all(v < 0)):
+    if math.isfinite(s.period) and kind.one_sided and kind.per_half_swing is None:
         # magnitudes read each side, or the peaks of one side: the rows cannot say which
         s.notes.append(f"the readings have one sign: taken as one per half swing (period {s.period:.4g} s, twice their "
                        f"spacing); if they are one per period (the peaks on one side), the period is "
-                       f"{s.period / 2:.4g} s: set omega0 = {4 * math.pi / s.period:.5g}")
+                       f"{s.period / 2:.4g} s: set omega0 = {2 * omega0:.5g}")
+    _check_table_angle(s, series, restoring)
+
+
+def _row_periods(time: np.ndarray, amplitudes: np.ndarray) -> tuple[float, float]:
+    """Period (s) of rows one per half swing, measured (a straight line of row time on the half-swing
+    count, a missing row counted) and a gravity pendulum's small-swing value (each half swing's time
+    divided by :func:`~escfit.analysis.pendulum_unit.pendulum_period_factor` of its amplitude, rad)."""
+    from ..analysis.pendulum_unit import pendulum_period_factor
+    from ..analysis.recordings.row_kind import row_steps
+
+    t = np.asarray(time, float)
+    a = np.asarray(amplitudes, float)
+    if t.size < 3:
+        return math.nan, math.nan
+    whole = row_steps(t)
+    measured = 2.0 * float(np.polyfit(np.concatenate([[0], np.cumsum(whole)]), t, 1)[0])
+    factor = pendulum_period_factor(0.5 * (a[1:] + a[:-1]))
+    if not np.all(np.isfinite(factor)):
+        return measured, math.nan
+    small = 2.0 * float(np.polyfit(np.concatenate([[0.0], np.cumsum(whole * factor)]), t, 1)[0])
+    return measured, small
+
+
+def _check_table_angle(s: Survey, series: TimeSeries, restoring: str) -> None:
+    """A table's largest amplitude held against its angle unit, as for samples
+    (:func:`escfit.analysis.quantity.swing_unit_check`)."""
+    from .problems.release import table_unit_warnings
+
+    s.checks += [f"warning: {w}" for w in table_unit_warnings(series, float(np.max(s.amplitudes)), restoring)]
 
 
 def _survey_unit_curve(s: Survey, curve: UnitCurve) -> None:

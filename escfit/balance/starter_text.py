@@ -209,7 +209,8 @@ def _decay_body(s: Survey, restoring: str, said: str) -> list[str]:
                 "# free within -20 % / +25 %: the fit of every sample pins it",
                 f"omega0 = {_param(omega0, OMEGA0_SPAN[0] * omega0, OMEGA0_SPAN[1] * omega0)}"]
     else:
-        out += [f"# natural frequency omega0 (rad/s) from the measured period {s.period:.5g} s, held: amplitudes",
+        small = " (its small-swing value)" if restoring == "pendulum" and s.kind == "amplitude" else ""
+        out += [f"# natural frequency omega0 (rad/s) from the measured period {s.period:.5g} s{small}, held: amplitudes",
                 "# alone fix omega0 only weakly (through the damping per swing)",
                 f"omega0 = {toml_number(omega0, 5)}"]
     if s.kind in ("amplitude", "notches") and "readings" not in s.recording:

@@ -39,7 +39,7 @@ from .amplitude_rows import amplitude_readings_curve
 from .curves import FitProblem
 from .nuisance import centre_priors
 from .period import check_scene_omega0, hold_omega0, measured_period, start_omega0
-from .release import release_from_record, swing_unit_warnings
+from .release import release_from_record, swing_unit_warnings, table_unit_warnings
 
 __all__ = ["problem_from_series", "turning_point_curve", "amplitude_readings_curve"]
 
@@ -179,10 +179,19 @@ def _amplitude_rows_problem(scene: BalanceScene, series, notes: list[str], solve
             held = (p.name,)
             notes.append(f"omega0 held at the scene's {p.value:.5g} rad/s: amplitudes depend on it only through "
                          "C/omega0 and R/omega0^2 and their times were numbered with it")
+    if p is not None and not p.vary and not by_time:
+        small = " (small-swing)" if scene.restoring == "pendulum" else ""
+        notes.append(f"omega0 held at the scene's {p.value:.5g} rad/s, period {2 * math.pi / p.value:.5g} s{small}: "
+                     "amplitudes depend on it only through C/omega0 and R/omega0^2")
     notes += release_from_record(scene.params, float(curve.value[0]), series.source, scene.restoring)
+    from ...analysis.recordings.row_kind import judge_rows
+
+    centre = judge_rows(series.time, series.theta).centre
+    unit_warnings = table_unit_warnings(series, float(np.max(np.abs(series.theta - centre))), scene.restoring)
     problem = FitProblem(scene, curve, solver, dict(solver_options or {}))
     problem.notes = notes
     problem.held = held
+    problem.data_warnings = list(getattr(problem, "data_warnings", [])) + unit_warnings
     return problem
 
 
