@@ -123,7 +123,7 @@ def _calls_current(root: Path, n_sets: int) -> dict:
     import escfit
     from escfit.balance import System, dop853, exact, solve
     from escfit.balance.batch import SUMMARY
-    from escfit.balance.records import half_swings, run_options
+    from escfit.balance.kernel_records import half_swings, run_options
 
     scene = escfit.load_scene(root / ANGLE_SCENE)
     k = scene.build().k

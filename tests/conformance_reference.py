@@ -23,7 +23,7 @@ import math
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from escfit.balance import torque as torque_module
+from escfit.balance import acceleration as acceleration_module
 from escfit.balance.effects import EFFECTS
 
 

@@ -27,10 +27,10 @@ import numpy as np
 import pytest
 
 import escfit
-from escfit.balance import torque as torque_module
+from escfit.balance import acceleration as acceleration_module
 from escfit.balance.batch import solve_batch
 from escfit.balance.effects import EFFECTS
-from escfit.balance.records import SLOTS
+from escfit.balance.kernel_records import SLOTS
 from escfit.balance.solvers import SOLVERS, capability, solve_system
 from escfit.balance.system import System
 from escfit.balance.waveform import sample_state
@@ -199,4 +199,4 @@ def test_every_smooth_torque_is_added_up():
     for x, v in ((0.3, -2.0), (-0.9, 5.0), (1.2, 0.7)):
         total = np.sum([f(x, v, k) for f in smooth_torques()], axis=0)
         assert all(f(x, v, k)[0] != 0.0 for f in smooth_torques())  # each example's torque acts here
-        np.testing.assert_allclose(torque_module.smooth_terms(x, v, k), total, rtol=1e-15, atol=0.0)
+        np.testing.assert_allclose(acceleration_module.smooth_terms(x, v, k), total, rtol=1e-15, atol=0.0)

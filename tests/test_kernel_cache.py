@@ -162,10 +162,10 @@ def test_escfit_kernels_are_keyed_on_the_modules_compiled_into_them(func):
     assert {balance / "segment.py", balance / "regions.py"} <= files or func.__module__.endswith("solution")
     if func in (rk4._run_located, rk4._run_naive, dop853.run_dop853):
         # region helpers, status codes, the shared torque and the smooth effects it adds up
-        assert {balance / "regions.py", balance / "torque.py", balance.parent / "core" / "status.py"} <= files
+        assert {balance / "regions.py", balance / "acceleration.py", balance.parent / "core" / "status.py"} <= files
     if func.__module__.endswith("solution"):
         # the closed form, the integrators' steps and the torque they evaluate between stored states
-        assert {balance / "segment.py", balance / "steps.py", balance / "torque.py"} <= files
+        assert {balance / "segment.py", balance / "steps.py", balance / "acceleration.py"} <= files
 
 
 def test_sources_adds_files_the_import_scan_cannot_see(tmp_path):

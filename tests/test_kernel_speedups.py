@@ -17,7 +17,7 @@ import pytest
 import escfit
 from escfit.balance import System, exact, regions
 from escfit.balance.batch import solve_batch
-from escfit.balance.records import blank, half_swings, run_options
+from escfit.balance.kernel_records import blank, half_swings, run_options
 from escfit.balance.segment import CREEP_OVERSHOOT, cross_time, propagate, turn_time
 from escfit.balance.solvers import solve_system
 from escfit.balance.walker import drift_factor

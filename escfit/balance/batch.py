@@ -24,7 +24,7 @@ from numba import config, get_num_threads, set_num_threads
 from ..core.errors import SolverError
 from ..core.status import LABELS, Status
 from .exact import run_angle_many, run_phase_many
-from .records import half_swings, run_options
+from .kernel_records import half_swings, run_options
 from .solvers import SOLVERS, capability
 from .system import System
 from .trajectory import Trajectory

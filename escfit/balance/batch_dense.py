@@ -7,7 +7,7 @@ model's angle (or angular velocity) at every sample time.  One set at a time tha
 times (:func:`escfit.balance.waveform.sample_state`), with Python between them.  Here the
 same steps run for every set inside one compiled ``prange`` loop: the same kernel with the same
 run options (the half swings asked for grow as :func:`~escfit.balance.waveform.sample_state`
-grows them, the log is enlarged as :func:`~escfit.balance.records.with_rows` enlarges it), then
+grows them, the log is enlarged as :func:`~escfit.balance.kernel_records.with_rows` enlarges it), then
 the same row evaluation (:func:`escfit.balance.solution._states_at`, the closed form of
 :mod:`escfit.balance.segment`), so each set's samples are bit for bit those of the one-set path
 (the tests check it).  It is not a second solver.
@@ -28,7 +28,7 @@ from ..core.errors import SolverError
 from ..core.kernels import kernel
 from ..core.status import Status
 from .exact import N_LOG, run_angle
-from .records import HALF_SWING, RUN, ROWS_FULL
+from .kernel_records import HALF_SWING, RUN, ROWS_FULL
 from .solvers import capability
 from .solution import ROW_EXACT, _states_at
 from .steps import N_STAGES
@@ -66,7 +66,7 @@ def _first_swings(t_end, omega0, max_swings):
 @kernel
 def _run_dense(k, run, n):
     """:func:`run_angle` with its segment log, the log enlarged fourfold until it fits (as
-    :func:`escfit.balance.records.with_rows`); returns the kernel's result and the log."""
+    :func:`escfit.balance.kernel_records.with_rows`); returns the kernel's result and the log."""
     out = np.empty(n, _HALF_SWING)
     rows = min(run.max_segments, 4 * n + 64)
     while True:

@@ -6,7 +6,7 @@ The counterpart of :mod:`escfit.balance.batch_dense` for scenes the exact solver
 (:func:`escfit.balance.dop853.run_dop853`) with the same options (``rtol``, ``atol`` and its
 default from each set's release angle, the segment and step budgets that grow with the half
 swings asked for, ``dense`` and ``t_end``), the half swings asked for grown as ``sample_state``
-grows them, the rows enlarged as :func:`~escfit.balance.records.with_rows` enlarges them --
+grows them, the rows enlarged as :func:`~escfit.balance.kernel_records.with_rows` enlarges them --
 then the same row evaluation (:func:`escfit.balance.solution._states_at`: a DOP853 step of
 the partial length from the stored step start).  Every set runs inside one compiled
 ``prange`` loop, so each set's samples are bit for bit those of the one-set path (the tests
@@ -28,7 +28,7 @@ from ..core.kernels import kernel
 from ..core.status import Status
 from .batch_dense import OMEGA, THETA, _first_swings, run_sampling
 from .dop853 import run_dop853
-from .records import HALF_SWING, ROWS_FULL, RUN
+from .kernel_records import HALF_SWING, ROWS_FULL, RUN
 from .solution import ROW_DOP853, _states_at
 from .solvers import capability
 from .steps import N_STAGES
@@ -73,7 +73,7 @@ def _tolerances(k, spec):
 @kernel
 def _run_dense(k, run, n):
     """:func:`run_dop853` with its dense rows, enlarged fourfold until they fit (as
-    :func:`escfit.balance.records.with_rows` for :func:`~escfit.balance.dop853.solve_dop853`);
+    :func:`escfit.balance.kernel_records.with_rows` for :func:`~escfit.balance.dop853.solve_dop853`);
     returns the kernel's result and the rows."""
     out = np.empty(n, _HALF_SWING)
     n_rows = 64 * min(n, 10_000) + 256

@@ -5,7 +5,7 @@ direction ``s`` is integrated in the swing frame ``x = s*theta`` (the balance ru
 ``x = -A`` towards ``+A``), split into segments of frozen regime ended by a window edge, the
 banking pins or the turning point ``v = 0``.  Inside a region with constants ``(w2, xc)``
 (:mod:`escfit.balance.regions`; ``w2*xc`` gathers Coulomb friction, the windows and the
-hairspring offset) the equation is that of :func:`escfit.balance.torque.acceleration`::
+hairspring offset) the equation is that of :func:`escfit.balance.acceleration.acceleration`::
 
     x'' = -C x' - w2 (x - xc) + smooth terms          spring
     x'' = -C x' - w2 (sin x - xc) + smooth terms      pendulum (w2 = omega0**2)
@@ -40,12 +40,12 @@ from scipy.integrate._ivp import dop853_coefficients as _coefficients
 from ..core.errors import SolverError
 from ..core.kernels import kernel
 from ..core.status import Status
-from .records import ROWS_FULL, columns, half_swings, run_options, with_rows
+from .kernel_records import ROWS_FULL, columns, half_swings, run_options, with_rows
 from .segment import creep_horizon
 from .solution import ROW_DOP853, RowSolution, write_row
 from .steps import N_STAGES, dop853_step
 from .system import System
-from .torque import acceleration, jerk
+from .acceleration import acceleration, jerk
 from .trajectory import Trajectory
 from .walker import EDGE, END, FAILED, REST, TURN, Segment, compile_walk
 

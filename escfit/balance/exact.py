@@ -26,7 +26,7 @@ sets in parallel (front end: :mod:`escfit.balance.batch`).  The functions of
 (:func:`escfit.core.kernels.kernel`) is keyed on that file and on this one, so an edit of
 either recompiles them.
 
-Every kernel takes the coefficient record of :mod:`escfit.balance.records` whole and returns a
+Every kernel takes the coefficient record of :mod:`escfit.balance.kernel_records` whole and returns a
 :class:`~escfit.balance.walker.Walk` record whose status is a :class:`~escfit.core.status.Status`
 code: ``OK``, ``STOPPED`` (friction holds the balance at
 rest -- static friction ``r_static`` at the start of a half swing -- or it creeps to rest without
@@ -44,7 +44,7 @@ from numba import prange
 
 from ..core.kernels import kernel
 from ..core.status import Status
-from .records import ROWS_FULL
+from .kernel_records import ROWS_FULL
 from .regions import applies
 from .segment import cross_time, propagate, turn_time
 from .solution import write_row

@@ -6,7 +6,7 @@ conventions stay inside this module.
 
 In the swing frame ``x = s*theta`` a region of the swing has constants ``(w2, xc)`` (see
 :mod:`escfit.balance.regions`) and the right-hand side is the shared
-:func:`escfit.balance.torque.acceleration` (``-C v - w2 (x - xc)`` for a spring, ``sin x`` for a
+:func:`escfit.balance.acceleration.acceleration` (``-C v - w2 (x - xc)`` for a spring, ``sin x`` for a
 pendulum, plus every smooth torque an effect defines): this module has no code of any effect.
 The segments' dense outputs make the run's dense solution (:class:`IvpSolution`).
 """
@@ -23,11 +23,11 @@ from scipy.special import ellipk
 from ..core.errors import SolverError
 from ..core.kernels import kernel
 from ..core.status import Status
-from .records import columns, half_swings, run_options
+from .kernel_records import columns, half_swings, run_options
 from .segment import creep_horizon
 from .solution import DenseSolution
 from .system import System
-from .torque import acceleration
+from .acceleration import acceleration
 from .trajectory import Trajectory
 from .walker import EDGE, FAILED, REST, TURN, Segment, compile_walk
 
@@ -41,7 +41,7 @@ GRAZE = 100.0
 
 @kernel
 def _acc(ks, w2, xc, x, v):
-    """:func:`escfit.balance.torque.acceleration` of record ``ks[0]`` (an array of one reaches a
+    """:func:`escfit.balance.acceleration.acceleration` of record ``ks[0]`` (an array of one reaches a
     compiled function fastest)."""
     return acceleration(x, v, w2, xc, ks[0])
 

@@ -9,7 +9,7 @@ is ``-w2 * (x - xc)``: ``w2`` the stiffness of the hairspring piece there (1/s^2
 ``-X``, an impulse window ``+X``) and the hairspring piece's offset.  Every solver walks the same
 regions (:func:`region_tables`, computed once per run from the coefficient record ``k``); the
 exact solver solves each in closed form, the integrating solvers add the smooth torques of
-:mod:`escfit.balance.torque`.
+:mod:`escfit.balance.acceleration`.
 """
 
 from __future__ import annotations

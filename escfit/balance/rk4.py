@@ -10,7 +10,7 @@ Two modes show what event handling is worth:
   at every stage and steps straight over switches; turning points are only interpolated for
   the output.  Its error is first order in ``h`` whenever a switch falls inside a step.
 
-Both modes integrate :func:`escfit.balance.torque.acceleration`, so they handle a spring, a
+Both modes integrate :func:`escfit.balance.acceleration.acceleration`, so they handle a spring, a
 pendulum and every smooth torque an effect defines, with no code of any effect here.  With
 ``dense=True`` the located mode keeps a row every 64 steps and at every event; the dense
 solution (:class:`escfit.balance.solution.RowSolution`) re-steps from the row, which reproduces
@@ -27,13 +27,13 @@ import numpy as np
 from ..core.errors import SolverError
 from ..core.kernels import kernel
 from ..core.status import Status
-from .records import ROWS_FULL, columns, half_swings, run_options, with_rows
+from .kernel_records import ROWS_FULL, columns, half_swings, run_options, with_rows
 from .regions import region_at, swing_edges
 from .segment import creep_horizon
 from .solution import ROW_RK4, RowSolution, write_row
 from .steps import rk4_step
 from .system import System
-from .torque import acceleration
+from .acceleration import acceleration
 from .trajectory import Trajectory
 from .walker import EDGE, END, FAILED, REST, TURN, Segment, Walk, compile_walk
 

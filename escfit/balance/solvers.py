@@ -33,7 +33,7 @@ from ..core.errors import SolverError
 from ..core.status import Status
 from .effects.base import NEEDS
 from .exact import run_one, run_phase_one
-from .records import COEFFICIENTS, columns, half_swings, run_options, with_rows
+from .kernel_records import COEFFICIENTS, columns, half_swings, run_options, with_rows
 from .solution import ROW_EXACT, RowSolution
 from .system import Structure, System
 from .trajectory import Trajectory

@@ -1,7 +1,7 @@
 """One step of the integrators, as pure functions of the state: DOP853 and classical RK4.
 
 A step of length ``h`` from the state ``(x, v)`` (swing frame, rad and rad/s) in a region with
-constants ``regime = (w2, xc, k)`` (see :mod:`escfit.balance.torque`) is a smooth map of ``h``:
+constants ``regime = (w2, xc, k)`` (see :mod:`escfit.balance.acceleration`) is a smooth map of ``h``:
 the solvers locate events by iterating on it, and the dense solutions of the integrating solvers
 (:mod:`escfit.balance.solution`) evaluate the motion between two stored states by a step of the
 partial length, which carries the integrator's own accuracy there.
@@ -13,7 +13,7 @@ import numpy as np
 from scipy.integrate._ivp import dop853_coefficients as _coefficients
 
 from ..core.kernels import kernel
-from .torque import acceleration
+from .acceleration import acceleration
 
 __all__ = ["dop853_step", "rk4_step", "N_STAGES", "stage_arrays"]
 

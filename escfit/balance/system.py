@@ -2,7 +2,7 @@
 
 :meth:`escfit.balance.scene.BalanceScene.system` builds a :class:`System` from parameter values
 (numbers, or arrays of one entry per set): the oscillator's slots, then each effect's
-:meth:`fill`, into :func:`escfit.balance.records.blank` records.  A :class:`System` is what
+:meth:`fill`, into :func:`escfit.balance.kernel_records.blank` records.  A :class:`System` is what
 every solver front end takes; its :attr:`needs` are checked against the solver's declared
 capabilities before any work (:func:`escfit.balance.solvers.check`), and :meth:`refusals`
 says, set by set, which parameter values no solver can run (non-finite numbers, values below a
@@ -21,7 +21,7 @@ import numpy as np
 
 from ..core.errors import SolverError
 from ..core.kernels import kernel
-from .records import COEFFICIENTS, SLOTS, blank
+from .kernel_records import COEFFICIENTS, SLOTS, blank
 
 __all__ = ["System", "Structure"]
 
@@ -116,7 +116,7 @@ class Structure:
         """A record holding what the structure fixes, as its raw 8-byte words (read-only).
 
         The defaults, the restoring torque's kind, whether an effect adds a smooth torque (the
-        integrators then add up :mod:`escfit.balance.torque`'s terms) and each effect's
+        integrators then add up :mod:`escfit.balance.acceleration`'s terms) and each effect's
         ``prepare``.  Parameter sets start from copies of it (a copy of the words is a memcpy; a
         structured copy goes field by field, ten times slower).
         """
@@ -141,7 +141,7 @@ class System:
     Attributes
     ----------
     k : ndarray
-        Records of :data:`escfit.balance.records.COEFFICIENTS`, shape ``(sets,)``.
+        Records of :data:`escfit.balance.kernel_records.COEFFICIENTS`, shape ``(sets,)``.
     structure : Structure
         The scene's effects, restoring torque and switching law.
     """

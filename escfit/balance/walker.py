@@ -18,7 +18,7 @@ over them, the way diffrax's ``diffeqsolve`` holds the only loop over steps:
   horizon, ends the motion (status ``stopped``);
 - **banking impact**: an edge crossing on the last edge (the banking angle) ends the half swing
   and starts the next one with ``restitution`` times the impact velocity;
-- **end of a half swing**: the per-half-swing record (:data:`escfit.balance.records.HALF_SWING`),
+- **end of a half swing**: the per-half-swing record (:data:`escfit.balance.kernel_records.HALF_SWING`),
   the damping drift (C grows after each full cycle), the direction flip and the end time;
 - **status**: ``ok``, ``stopped``, ``banked``, ``max_segments`` or the solver's own failure.
 
@@ -53,7 +53,7 @@ from ..core.kernels import kernel, module_sources
 from ..core.status import Status
 from .regions import region_tables
 from .segment import creeps_to_rest
-from .torque import acceleration
+from .acceleration import acceleration
 
 __all__ = ["Segment", "Walk", "EDGE", "TURN", "REST", "END", "FAILED", "compile_walk"]
 
@@ -134,11 +134,11 @@ def _walk(k, run, out, rows):
     Parameters
     ----------
     k : record
-        The coefficient record (:data:`escfit.balance.records.COEFFICIENTS`).
+        The coefficient record (:data:`escfit.balance.kernel_records.COEFFICIENTS`).
     run : record
-        :data:`escfit.balance.records.RUN`: ``n_swings``, ``max_segments``, ``t_end`` (s; the run
+        :data:`escfit.balance.kernel_records.RUN`: ``n_swings``, ``max_segments``, ``t_end`` (s; the run
         ends with the first half swing ending at or after it) and what the solver reads.
-    out : array of :data:`escfit.balance.records.HALF_SWING`
+    out : array of :data:`escfit.balance.kernel_records.HALF_SWING`
         Per-half-swing results, filled while the count is below its length.
     rows : array or list
         The dense solution's rows, the solver's to fill when ``run.dense``.

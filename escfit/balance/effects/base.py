@@ -7,7 +7,7 @@ scene is read.  Each effect module says, in one place, everything the solvers ne
 ``key``
     Its table name in the scene, ``[effects.<key>]``.
 ``SLOTS``
-    The fields it owns in the coefficient record (:mod:`escfit.balance.records`), with their
+    The fields it owns in the coefficient record (:mod:`escfit.balance.kernel_records`), with their
     defaults (the value that makes the effect absent), units, meanings and lower bounds; the
     record every kernel receives is assembled from the slots of every registered effect, so a
     new effect's numbers reach every solver, the batch path included, without being listed
@@ -27,7 +27,7 @@ scene is read.  Each effect module says, in one place, everything the solvers ne
 ``torque(x, v, k)`` (smooth effects only)
     A compiled function: its angular acceleration (rad/s^2) in the swing frame and the partial
     derivatives of that by the angle and by the angular velocity, which
-    :mod:`escfit.balance.torque` adds up for every integrating solver.
+    :mod:`escfit.balance.acceleration` adds up for every integrating solver.
 ``refusals(k)`` (optional)
     Relations between its parameters a parameter set must satisfy (vectorised).
 ``example(w0, a0)``

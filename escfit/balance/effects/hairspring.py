@@ -32,7 +32,7 @@ class Hairspring:
     angles: tuple[float, ...]
     key = "hairspring"
     needs = frozenset({"linear"})
-    SLOTS = ()  # it fills the oscillator's restoring-torque pieces (escfit.balance.records.OSCILLATOR_SLOTS)
+    SLOTS = ()  # it fills the oscillator's restoring-torque pieces (escfit.balance.kernel_records.OSCILLATOR_SLOTS)
 
     @classmethod
     def read(cls, table: Mapping, ctx: ReadContext) -> tuple["Hairspring", list[Param]]:

@@ -43,7 +43,7 @@ def acceleration(x, v, w2, xc, k):
     w2, xc : float
         The region's stiffness (1/s^2) and centre (rad).
     k : record
-        The coefficient record (:mod:`escfit.balance.records`).
+        The coefficient record (:mod:`escfit.balance.kernel_records`).
     """
     if k.pendulum:
         a = -k.c * v - w2 * (math.sin(x) - xc)

@@ -41,7 +41,7 @@ OSCILLATOR_SLOTS = (
     Slot("v0", 0.0, "v0", "rad/s", "angular velocity at the release (0: released at rest)"),
     Slot("omega0", 1.0, "omega0", "rad/s", "reference natural frequency (the rate's)"),
     Slot("pendulum", 0, "pendulum", "", "1: restoring acceleration omega0**2 * sin(theta) (gravity)", dtype="i8"),
-    Slot("smooth", 0, "smooth torques", "", "1: an effect adds a smooth torque (escfit.balance.torque)", dtype="i8"),
+    Slot("smooth", 0, "smooth torques", "", "1: an effect adds a smooth torque (escfit.balance.acceleration)", dtype="i8"),
     Slot("n_pieces", 1, "pieces", "", "pieces of the restoring torque", dtype="i8"),
     Slot("sp_bp", 0.0, "hairspring angles", "rad", "angles between the restoring torque's pieces (ascending)",
          size=MAX_PIECES - 1, count="n_pieces", extra=-1),
