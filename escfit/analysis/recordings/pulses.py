@@ -30,7 +30,7 @@ import numpy as np
 from ...core.errors import DataError
 from ...core.units import ureg
 from ...core.csvtable import read_table
-from .sniff import canonical_header, did_you_mean, refuse_unless_csv
+from .sniff import canonical_header, did_you_mean, refuse_unless_csv, release_from_meta
 from .unit_curve import UnitCurve
 
 __all__ = ["PulseTrain", "PulseAssignment", "read_pulses", "write_pulses", "assign_pulses", "pulses_to_unit_curve"]
@@ -178,15 +178,7 @@ def read_pulses(path: str | Path, *, notches: int | None = None) -> PulseTrain:
             raise DataError(f"pulse kind must be 'notch' or 'zero', got {k!r}", f"{where}:{line} [kind]")
     zero = np.array([k.lower() == "zero" for k in kinds])
     n = _notches_from_meta(t.meta, where, notches)
-    release = math.nan
-    if "release_s" in t.meta:
-        try:
-            release = float(t.meta["release_s"])
-        except ValueError:
-            raise DataError(f"release_s must be a number, got {t.meta['release_s']!r}",
-                            f"{where} [release_s]") from None
-        if not math.isfinite(release):
-            raise DataError(f"release_s must be finite, got {t.meta['release_s']!r}", f"{where} [release_s]")
+    release = release_from_meta(t.meta, where)
     return PulseTrain(time, zero, n, release, np.array(t.lines, dtype=np.int64), where, t.sha256, dict(t.meta))
 
 

@@ -9,13 +9,14 @@ Shared by the readers (:mod:`~escfit.analysis.recordings.timegrapher`,
 from __future__ import annotations
 
 import difflib
+import math
 from pathlib import Path
 from typing import Iterable
 
 from ...core.errors import DataError
 from ...core.textfile import refuse_binary
 
-__all__ = ["file_kind", "refuse_unless_csv", "match_header", "canonical_header", "did_you_mean",
+__all__ = ["file_kind", "refuse_unless_csv", "match_header", "canonical_header", "did_you_mean", "release_from_meta",
            "KNOWN_COLUMNS", "KNOWN_PREFIXES"]
 
 # Column names of the escfit CSV formats (unit curve, pulse train, timegrapher beats, time series)
@@ -125,3 +126,22 @@ def refuse_unless_csv(path: str | Path, what: str) -> None:
         refuse_binary(Path(path).read_bytes()[:512], str(path), f"the CSV text table of {what}")
     if kind == "empty":
         raise DataError("empty file (no header and no rows)", str(path))
+
+
+def release_from_meta(meta: dict, where: str) -> float:
+    """The ``# release_s:`` metadata line of an escfit CSV (s on the file's clock), ``nan`` when absent.
+
+    Raises
+    ------
+    DataError
+        When the value is not a finite number (naming the file and the key).
+    """
+    if "release_s" not in meta:
+        return math.nan
+    try:
+        release = float(meta["release_s"])
+    except ValueError:
+        raise DataError(f"release_s must be a number, got {meta['release_s']!r}", f"{where} [release_s]") from None
+    if not math.isfinite(release):
+        raise DataError(f"release_s must be a finite time, got {meta['release_s']!r}", f"{where} [release_s]")
+    return release

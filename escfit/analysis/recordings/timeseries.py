@@ -29,7 +29,7 @@ from ...core.units import ureg
 from ...core.csvtable import read_numbers, read_table
 from .rawsteps import notes_of, repaired_times, warnings_of
 from .series import TimeSeries
-from .sniff import canonical_header, did_you_mean, refuse_unless_csv
+from .sniff import canonical_header, did_you_mean, refuse_unless_csv, release_from_meta
 from .turning_points import TurningPoints, reduce_series, turning_points
 from .unit_curve import UnitCurve
 
@@ -72,13 +72,13 @@ def read_timeseries(path: str | Path) -> TimeSeries:
                 and np.isfinite(time[0]) and np.isfinite(time[-1]):
             got = _timed(time.copy(), theta * factor, dict(t.meta), lambda i: f"{where} row {i + 1}", where)
             if got is not None:
-                return TimeSeries(*got[:2], _release(t, where), where, t.sha256, got[2])
+                return TimeSeries(*got[:2], release_from_meta(t.meta, where), where, t.sha256, got[2])
         t = canonical_header(read_table(path))  # its messages name the line and the cell
     time = np.array(t.floats("time_s"))
     theta = np.array(t.floats(angle[0])) * factor
     time, theta, meta = _timed(time, theta, dict(t.meta), lambda i: f"{where}:{t.lines[i]} [time_s]", where,
                                refuse=True)
-    release = _release(t, where)
+    release = release_from_meta(t.meta, where)
     if time.size < 20:
         raise DataError(f"only {time.size} samples; a decay needs many samples per period", where)
     return TimeSeries(time, theta, release, where, t.sha256, meta)
@@ -98,20 +98,6 @@ def _timed(time: np.ndarray, theta: np.ndarray, meta: dict, where_of_row, where:
         if sentences:
             meta[key] = "; ".join(n.replace(";", ",") for n in sentences)
     return time, theta, meta
-
-
-def _release(t, where: str) -> float:
-    """The ``# release_s:`` metadata (s), ``nan`` when absent."""
-    release = math.nan
-    if "release_s" in t.meta:
-        try:
-            release = float(t.meta["release_s"])
-        except ValueError:
-            raise DataError(f"release_s must be a number, got {t.meta['release_s']!r}",
-                            f"{where} [release_s]") from None
-        if not math.isfinite(release):
-            raise DataError(f"release_s must be a finite time, got {t.meta['release_s']!r}", f"{where} [release_s]")
-    return release
 
 
 def write_timeseries(path: str | Path, series: TimeSeries, *, unit: str = "rad", decimals: int = 6,
