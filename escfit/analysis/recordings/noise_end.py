@@ -38,7 +38,7 @@ from ...core.errors import DataError
 from .extrema import local_amplitude
 from .series import quantity_words
 
-__all__ = ["SunkEnd", "resting_tail", "noise_tail", "window_fits", "sunk_end", "describe", "CUT_RATIO", "AGAIN_RATIO", "CUT_WARNING"]
+__all__ = ["SunkEnd", "resting_tail", "noise_tail", "window_fits", "sunk_end", "sunk_end_before", "describe", "CUT_RATIO", "AGAIN_RATIO", "CUT_WARNING"]
 
 MOVING_SIGMAS = 6.0  # a window's swing above this many of its noise scales is motion (the resting tail)
 CUT_RATIO = 3.0  # the swing has sunk where its amplitude is this many noise floors
@@ -67,7 +67,7 @@ class SunkEnd:
     amplitude : float
         The swing's amplitude at the end (the samples' unit).
     share : float
-        Share of the record's duration left out (0 to 1).
+        Share of the record's duration left out as noise (0 to 1).
     """
 
     time: float
@@ -189,10 +189,11 @@ def resting_tail(rec) -> tuple[int, float]:
     return i, float(np.median(rec.x[i:]))
 
 
-def noise_tail(rec) -> tuple[object, SunkEnd | None]:
-    """The record up to where its swing sank into the noise (:mod:`~escfit.analysis.recordings.noise_end`),
-    with the note (and warning) added, and that end; the record unchanged and ``None`` when it never sinks."""
-    end = sunk_end(rec.t, rec.x, rec.period)
+def noise_tail(rec, i_rest: int | None = None) -> tuple[object, SunkEnd | None]:
+    """The record up to where its swing sank into the noise before it rests (at sample ``i_rest``,
+    :func:`resting_tail`; ``None``: it never rests), with the note (and warning) added, and that
+    end; the record unchanged and ``None`` when the swing does not sink before it rests."""
+    end = sunk_end_before(rec.t, rec.x, rec.period, i_rest)
     if end is None:
         return rec, None
     note, warning = describe(end, lambda v: rec.show(v, 2))
@@ -200,3 +201,14 @@ def noise_tail(rec) -> tuple[object, SunkEnd | None]:
     if warning:
         rec.warnings.append(warning)
     return rec.head(end.index), end
+
+
+def sunk_end_before(t: np.ndarray, x: np.ndarray, period: float, i_rest: int | None = None) -> SunkEnd | None:
+    """:func:`sunk_end` of the samples before ``i_rest`` (the start of a rest; ``None``: all), its
+    ``share`` that of the whole record left out as noise before the rest (the rest is no noise)."""
+    n = t.size if i_rest is None else int(i_rest)
+    end = sunk_end(t[:n], x[:n], period)
+    if end is None:
+        return None
+    share = (float(t[n - 1]) - end.time) / (float(t[-1]) - float(t[0]))
+    return SunkEnd(end.time, end.index, end.floor, end.amplitude, max(share, 0.0))

@@ -38,7 +38,7 @@ import numpy as np
 from ...core.errors import DataError
 from .centre import Centre, centre_estimates, measure_centre
 from .extrema import alternating_extrema
-from .noise_end import describe, sunk_end
+from .noise_end import describe, sunk_end_before
 from .series import TimeSeries
 from .turning_points import TurningPoints, prepare, reduce_series, resting_tail
 from .window import window_of
@@ -98,9 +98,9 @@ def reduce_rate(series: TimeSeries, *, user_window=None) -> RateAnalysis:
     rec = prepare(t, v, None, 4, where, "angular_velocity")
     i_rest, rest = resting_tail(rec)
     sunk = None
-    if i_rest == t.size and (user_window is None or user_window.stop is None):
-        # no rest, but the rate may sink into its noise (a phone's gyroscope: a bias step later)
-        sunk = sunk_end(rec.t, rec.x, rec.period)
+    if user_window is None or user_window.stop is None:  # the user's stop wins
+        # the rate may sink into its noise before it rests, if ever (a phone's gyroscope: a bias step later)
+        sunk = sunk_end_before(rec.t, rec.x, rec.period, i_rest)
         i_rest = sunk.index if sunk is not None else i_rest
     moving = slice(0, i_rest)
     bias0 = rest if i_rest < t.size and sunk is None else _extrema_centre(rec, i_rest)

@@ -286,10 +286,11 @@ def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool,
                             f"{origin:.10g} s on the file's clock)")
     i_rest, rest_theta = resting_tail(rec)
     sunk = None
-    if i_rest == t.size and (user_window is None or user_window.stop is None):
-        rec, sunk = noise_tail(rec)
-        t, x = rec.t, rec.x
-        i_rest = t.size
+    if user_window is None or user_window.stop is None:  # the user's stop wins
+        rec, sunk = noise_tail(rec, i_rest)
+        if sunk is not None:  # sunk into the noise before any rest: motion ends there
+            t, x = rec.t, rec.x
+            i_rest, rest_theta = t.size, math.nan
     if i_rest < t.size:
         period, prominence = _working_period(t[:i_rest], x[:i_rest], min_cycles=1.5)
         if math.isfinite(period) and prominence > MIN_PROMINENCE:
