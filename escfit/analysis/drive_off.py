@@ -8,7 +8,7 @@ it, smaller, lose steadily, the first stretch cannot have been free: something (
 hand) made up its losses, and the free decay starts where that stopped.
 
 The change is found as a split of ``p``: for each candidate half swing ``m``, ``p`` over the
-first half swings (down to where the swing has fallen to :data:`SPAN_FALL` of its start) is
+first half swings (until :data:`MIN_AFTER` after the swing has fallen to :data:`SPAN_FALL` of its start) is
 fitted by least squares with a straight line before ``m`` and a parabola from ``m`` on (a
 decay's losses shrink as it fades: the parabola follows that curvature; the half swing in
 which the drive stops lies between the two and joins the one it fits better).  The ``m``
@@ -94,8 +94,8 @@ def drive_off(values: np.ndarray) -> DriveOff | None:
         return None
     start = float(np.median(p[:3]))
     fallen = np.flatnonzero(p < SPAN_FALL * start)
-    n = int(fallen[0]) if fallen.size else p.size
-    n = max(n, min(p.size, MIN_BEFORE + MIN_AFTER))  # a fast decay: the fewest half swings a hinge needs
+    # the change comes before the swing has fallen, and a fast decay needs a few half swings after it
+    n = min(int(fallen[0]) + MIN_AFTER, p.size) if fallen.size else p.size
     p = p[:n]
     candidates = range(MIN_BEFORE, n - MIN_AFTER + 1)
     if not candidates:
