@@ -121,12 +121,18 @@ def reduce_rate(series: TimeSeries, *, user_window=None) -> RateAnalysis:
         raise DataError(f"{getattr(exc, 'message', exc)} (the angle's turning points are the zeros of the "
                         "angular velocity, found on its running integral)", exc.where) from None
     stop = float(t[i_rest]) if i_rest < t.size else math.nan
+    floor = math.nan
     warnings = list(turns.warnings)
     if sunk is not None:
         said, warning = describe(sunk, lambda value: f"{value:.2g} rad/s", window_of(series).origin)
         warnings += [warning] if warning else []
+        floor = sunk.floor
+    elif math.isfinite(turns.noise_floor) and not math.isfinite(stop):
+        # the rate's swing stands above its noise to the end, but the swept angle's sinks into
+        # its own (the integral's random walk): motion ends there
+        stop, floor = float(turns.stop_time), float(turns.noise_floor)
     turns = replace(turns, stop_time=stop, rest_theta=math.nan, notes=list(turns.notes), warnings=warnings,
-                    noise_floor=sunk.floor if sunk is not None else math.nan)
+                    noise_floor=floor)
     centre = _bias(rec, turns.release_time, i_rest, bias0)
     at_ref = centre.offset  # measure_centre counts from the first extremum; the drift is carried to the reference
     notes = [f"angular velocity: the angle's turning points are the rate's zeros, found on its running integral (for "

@@ -137,9 +137,10 @@ class TurningPoints:
         The file's first sample on the series' clock, s: the zero of the times in ``notes``
         (and of ``[recording] start``, ``stop``, ``release``).
     noise_floor : float
-        The noise floor the swing sank into where the record was cut without coming to rest
-        (:mod:`~escfit.analysis.recordings.noise_end`; the samples' unit), ``nan`` otherwise:
-        ``stop_time`` is then that end of motion.
+        The noise floor the swing sank into where the record was cut before it came to rest
+        (:mod:`~escfit.analysis.recordings.noise_end`; the unit of the samples it was measured
+        on: for a rate, the rate's or its running integral's), ``nan`` otherwise: ``stop_time``
+        is then that end of motion.
     dropped : tuple of (float, float, str)
         Runs of samples left out as a tracking glitch (:mod:`escfit.analysis.glitches`): first
         and last time (s, the series' clock) and the note; :func:`drop_samples` leaves them out
