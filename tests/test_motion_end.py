@@ -32,7 +32,7 @@ SCENE = """model = "balance"
 [oscillator]
 omega0 = 6.283185307179586
 [effects.viscous]
-C = { value = 0.1, vary = true, min = 0, max = 1 }
+C = { value = 0.1, vary = true, min = 0, max = 2 }
 [observation]
 model = "amplitude"
 """
