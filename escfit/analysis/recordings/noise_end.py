@@ -204,11 +204,15 @@ def noise_tail(rec, i_rest: int | None = None) -> tuple[object, SunkEnd | None]:
 
 
 def sunk_end_before(t: np.ndarray, x: np.ndarray, period: float, i_rest: int | None = None) -> SunkEnd | None:
-    """:func:`sunk_end` of the samples before ``i_rest`` (the start of a rest; ``None``: all), its
-    ``share`` that of the whole record left out as noise before the rest (the rest is no noise)."""
+    """:func:`sunk_end` when it comes before the rest that starts at sample ``i_rest`` (``None``:
+    the record never rests), its ``share`` that of the record left out as noise before the rest.
+
+    The floor is measured over the whole record, the rest included: where a swing stops dead
+    (dry friction) the windows that span the stop leave a residual of the fit's own, not noise.
+    """
     n = t.size if i_rest is None else int(i_rest)
-    end = sunk_end(t[:n], x[:n], period)
-    if end is None:
+    end = sunk_end(t, x, period)
+    if end is None or end.index >= n:
         return None
     share = (float(t[n - 1]) - end.time) / (float(t[-1]) - float(t[0]))
     return SunkEnd(end.time, end.index, end.floor, end.amplitude, max(share, 0.0))
