@@ -25,10 +25,10 @@ neither level.  The gain ``G_j`` has two scales:
   carried through the two levels (medians of ``a`` and ``b`` swings: ``1.25 s_p sqrt(1/a + 1/b)``)
   and through the slope carried across the gap (a median of differences within one side);
 - the spread of ``G`` itself along the record (its median absolute deviation): a wobble gives
-  gains of both signs at every position, as large as its depth.  Where the swing is large the
-  smaller of that and the spread of ``G`` in units of its noise, times that noise: the gains of
-  a long faded tail scatter by their noise, not by a wobble, and must not hide a push made
-  well above it.
+  gains of both signs at every position, as large as its depth.  Taken as the smaller of that
+  and the spread of ``G`` in units of its own noise times that noise: the gains of a long faded
+  tail scatter by their noise, not by a wobble, and must not hide a push made where the swing
+  is large.
 
 A push is a gain above :data:`Z_PUSH` times the larger scale and above twice the record's
 resolution: it stands out of the noise and out of whatever else the swing does along the

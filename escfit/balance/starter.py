@@ -370,7 +370,7 @@ def window_found(series: TimeSeries, tp) -> dict:
     a period before the reference: a release from a hold; else ``None``), ``left_out`` (whether
     more than a period before the reference was not taken as free), ``stop`` (where motion
     stopped or faded, ``nan`` when the record ends in motion), ``sunk`` (whether that stop is where
-    the swing sank into a noise floor without coming to rest: the record after it is noise) and
+    the swing sank into a noise floor before it came to rest: the record after it is noise) and
     ``last_turn``.
     """
     t, x = np.asarray(series.time, float), np.asarray(series.theta, float)
