@@ -25,7 +25,10 @@ neither level.  The gain ``G_j`` has two scales:
   carried through the two levels (medians of ``a`` and ``b`` swings: ``1.25 s_p sqrt(1/a + 1/b)``)
   and through the slope carried across the gap (a median of differences within one side);
 - the spread of ``G`` itself along the record (its median absolute deviation): a wobble gives
-  gains of both signs at every position, as large as its depth.
+  gains of both signs at every position, as large as its depth.  Taken as the smaller of that
+  and the spread of ``G`` in units of its own noise times that noise: the gains of a long faded
+  tail scatter by their noise, not by a wobble, and must not hide a push made where the swing
+  is large.
 
 A push is a gain above :data:`Z_PUSH` times the larger scale and above twice the record's
 resolution: it stands out of the noise and out of whatever else the swing does along the
@@ -259,7 +262,11 @@ def find_events(times: np.ndarray, values: np.ndarray, *, resolution: float,
     gain, err = swing_gains(np.fmax(p, 0.5 * floor if floor > 0 else 1e-300), noise_ratio=math.sqrt(2.0), log=True)
     s_p = _robust_scale(np.diff(p, 2)) / math.sqrt(2.0)
     spread = _robust_scale(gain)
-    scale = np.fmax(err, spread if math.isfinite(spread) else 0.0)
+    # a wobble changes the swing by a share of itself at every amplitude, while the noise of a
+    # relative gain grows as the swing fades: measured against that noise, a long faded tail's
+    # scattered gains no longer set the wobble's scale where the swing is large
+    relative = _robust_scale(gain / err) * err
+    scale = np.fmax(err, np.fmin(spread, relative) if math.isfinite(spread) else 0.0)
     level = np.array([np.median(p[max(0, j - 1 - SIDE):max(1, j - 1)]) for j in range(p.size)])
     absolute = level * np.expm1(np.nan_to_num(gain))  # the gain in the record's unit
     pushes = np.isfinite(gain) & (gain > Z_PUSH * scale) & (absolute > floor)

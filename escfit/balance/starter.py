@@ -357,7 +357,7 @@ def _survey_samples(s: Survey, series: TimeSeries, restoring: str, turns=None) -
         rate = reduce_rate(series, user_window=series.window)
         tp = rate.turns
         s.counts_extra = {"rate zero": rate.offset, "rate zero se": rate.offset_stderr}
-        notes = rate.notes
+        notes = [f"warning: {w}" for w in tp.warnings if w not in rate.notes] + rate.notes
     else:
         tp = turns if turns is not None else reduce_series(series, strict=False, user_window=series.window)
         notes = [f"warning: {w}" for w in tp.warnings] + list(tp.notes)
@@ -391,7 +391,9 @@ def window_found(series: TimeSeries, tp) -> dict:
     reference instant), ``held`` (the held angle, rad, when the record is flat over the tenth of
     a period before the reference: a release from a hold; else ``None``), ``left_out`` (whether
     more than a period before the reference was not taken as free), ``stop`` (where motion
-    stopped or faded, ``nan`` when the record ends in motion) and ``last_turn``.
+    stopped or faded, ``nan`` when the record ends in motion), ``sunk`` (whether that stop is where
+    the swing sank into a noise floor before it came to rest: the record after it is noise) and
+    ``last_turn``.
     """
     t, x = np.asarray(series.time, float), np.asarray(series.theta, float)
     ref, period = float(tp.release_time), float(tp.period)
@@ -406,6 +408,7 @@ def window_found(series: TimeSeries, tp) -> dict:
     zero = float(getattr(tp, "origin", 0.0))  # the keys count from the file's first sample
     return {"first": float(t[0]) - zero, "last": float(t[-1]) - zero, "reference": ref - zero, "held": held,
             "left_out": bool(ref - t[0] > period), "stop": float(tp.stop_time) - zero, "period": period,
+            "sunk": bool(math.isfinite(float(getattr(tp, "noise_floor", math.nan)))),
             "last_turn": (float(tp.time[-1]) if len(tp.time) else ref) - zero}
 
 

@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...core.errors import DataError
+from ...analysis.drive_off import drive_off
 from ...analysis.segments import driven_start, find_events
 from .holds import HOLD_PERIODS, flat_start as _flat_start, held_release, turn_at_start as _turn_at_start
 
@@ -345,10 +346,16 @@ def find_start(rec, turns: list[Turn], end: int, *, at_start: bool = False) -> S
             r, why = i - 1, f"the oscillator is held at {rec.show(values[i - 1], 4)} before t = {times[i]:.4g} s"
             break
     driven = _driven_prefix(values[r:end], tol)
+    off = drive_off(values[r:_regular_end(times, r, end)]) if not driven else None
     if driven:
         why = (f"the swing keeps its amplitude until t = {times[r + driven]:.4g} s and then decays at that same "
                "amplitude (a drive switched off)")
         r += driven
+    elif off is not None:
+        r += off.half_swing
+        why = (f"until t = {times[r]:.4g} s the swing loses {rec.show(off.loss_before, 2)} per half swing (peak to "
+               f"peak), then {rec.show(off.loss_after, 2)} at a smaller amplitude, where a free swing loses less, not "
+               f"more ({off.score:.0f} standard errors): driven until then (a drive switched off)")
     elif r == first_ok:
         steady = driven_start(values[r:end])
         if steady:
@@ -373,6 +380,18 @@ def find_start(rec, turns: list[Turn], end: int, *, at_start: bool = False) -> S
     if r == first_ok and not (at_start and r == 0):
         _note_pull(rec, turns[r])
     return Start(float(times[r]), float(values[r]), r + 1, "turn")
+
+
+def _regular_end(times: np.ndarray, first: int, end: int) -> int:
+    """End (exclusive) of the turning points from ``first`` whose intervals stay regular: within
+    :data:`INTERVAL_RANGE` of their median (after a missed or spurious extremum, or a gap in the
+    samples, the swings measured between turning points are not the swing's)."""
+    d = np.diff(times[first:end])
+    if d.size < 3 or not np.all(np.isfinite(d)):
+        return end
+    ratio = d / float(np.median(d))
+    bad = np.flatnonzero((ratio < INTERVAL_RANGE[0]) | (ratio > INTERVAL_RANGE[1]))
+    return first + int(bad[0]) + 1 if bad.size else end
 
 
 def _last_push(rec, times: np.ndarray, values: np.ndarray, first_ok: int, end: int, tol: float) -> tuple[int, str]:

@@ -10,7 +10,7 @@ Method
 ------
 1. **The rate's own analysis** (:func:`~escfit.analysis.recordings.turning_points.prepare`): its
    period, smoothing, noise in rad/s, and the end of motion where the rate has sunk into that
-   noise for a period (:func:`~escfit.analysis.recordings.turning_points.resting_tail`); a first
+   noise for a period (:func:`~escfit.analysis.recordings.noise_end.resting_tail`); a first
    bias estimate is the rate at rest there (else the median of the moving part).
 2. **The angle's turning points** are the zeros of the rate less its bias.  They are found, with
    the record's hysteresis and the same motion finding as a recorded angle (a hold is a rate flat
@@ -38,8 +38,10 @@ import numpy as np
 from ...core.errors import DataError
 from .centre import Centre, centre_estimates, measure_centre
 from .extrema import alternating_extrema
+from .noise_end import describe, sunk_end_before
 from .series import TimeSeries
 from .turning_points import TurningPoints, prepare, reduce_series, resting_tail
+from .window import window_of
 
 __all__ = ["RateAnalysis", "reduce_rate"]
 
@@ -95,8 +97,13 @@ def reduce_rate(series: TimeSeries, *, user_window=None) -> RateAnalysis:
     v = np.asarray(series.theta, float)
     rec = prepare(t, v, None, 4, where, "angular_velocity")
     i_rest, rest = resting_tail(rec)
+    sunk = None
+    if user_window is None or user_window.stop is None:  # the user's stop wins
+        # the rate may sink into its noise before it rests, if ever (a phone's gyroscope: a bias step later)
+        sunk = sunk_end_before(rec.t, rec.x, rec.period, i_rest)
+        i_rest = sunk.index if sunk is not None else i_rest
     moving = slice(0, i_rest)
-    bias0 = rest if i_rest < t.size else _extrema_centre(rec, i_rest)
+    bias0 = rest if i_rest < t.size and sunk is None else _extrema_centre(rec, i_rest)
     # where the smoothed rate rests within its noise of the bias (a hold, the end), nothing moves:
     # counting only motion keeps a held oscillator's angle flat instead of a random walk of the noise
     at_rest = np.abs(rec.xs[moving] - bias0) <= rec.band
@@ -114,13 +121,26 @@ def reduce_rate(series: TimeSeries, *, user_window=None) -> RateAnalysis:
         raise DataError(f"{getattr(exc, 'message', exc)} (the angle's turning points are the zeros of the "
                         "angular velocity, found on its running integral)", exc.where) from None
     stop = float(t[i_rest]) if i_rest < t.size else math.nan
-    turns = replace(turns, stop_time=stop, rest_theta=math.nan, notes=list(turns.notes))
+    floor = math.nan
+    warnings = list(turns.warnings)
+    if sunk is not None:
+        said, warning = describe(sunk, lambda value: f"{value:.2g} rad/s", window_of(series).origin)
+        warnings += [warning] if warning else []
+        floor = sunk.floor
+    elif math.isfinite(turns.noise_floor) and not math.isfinite(stop):
+        # the rate's swing stands above its noise to the end, but the swept angle's sinks into
+        # its own (the integral's random walk): motion ends there
+        stop, floor = float(turns.stop_time), float(turns.noise_floor)
+    turns = replace(turns, stop_time=stop, rest_theta=math.nan, notes=list(turns.notes), warnings=warnings,
+                    noise_floor=floor)
     centre = _bias(rec, turns.release_time, i_rest, bias0)
     at_ref = centre.offset  # measure_centre counts from the first extremum; the drift is carried to the reference
     notes = [f"angular velocity: the angle's turning points are the rate's zeros, found on its running integral (for "
              f"this analysis only: the fit reads every rate sample); the rate's zero (the sensor's bias), measured "
              f"from its extrema: {at_ref:+.4g} +- {centre.offset_stderr:.2g} rad/s"]
-    if math.isfinite(stop):
+    if sunk is not None:
+        notes.append(said)
+    elif math.isfinite(stop):
         notes.append(f"motion stopped at t = {stop:.4g} s (the rate stays within its noise, "
                      f"{rec.sigma:.2g} rad/s, for a period and more)")
     notes += [n for n in rec.notes if n not in turns.notes]

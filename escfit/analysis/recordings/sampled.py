@@ -11,7 +11,7 @@ friction reverses), a plain parabola when that fails, or, for a coarse record of
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -49,6 +49,10 @@ class SampledRecord:
     def show(self, value: float, digits: int = 3, *, signed: bool = False) -> str:
         """A value of the record's quantity for a note (angles in degrees)."""
         return show_value(value, self.quantity, digits, signed=signed)
+
+    def head(self, n: int) -> "SampledRecord":
+        """The first ``n`` samples, with the same findings (the notes, warnings and steps are shared)."""
+        return replace(self, t=self.t[:n], x=self.x[:n], xs=self.xs[:n])
 
     def half_width(self) -> float:
         """Half width of a local vertex fit, s: ``window`` periods, at least 4.5 samples."""

@@ -16,7 +16,10 @@ Steps
 3. **Resting tail**: where the smoothed angle stays within that band of its final value for
    at least a period and the swing measured over whole periods
    (:func:`~escfit.analysis.recordings.extrema.local_amplitude`) has sunk into the noise,
-   motion has stopped; the rest is cut and reported (``stop_time``, ``rest_theta``).  With
+   motion has stopped; the rest is cut and reported (``stop_time``, ``rest_theta``).  A
+   record that never rests (a sensor's bias that steps or wanders) is cut where the swing has
+   sunk to a few times its noise floor (:mod:`~escfit.analysis.recordings.noise_end`:
+   ``stop_time`` and ``noise_floor``), unless the user set ``[recording] stop``.  With
    dry friction the balance stops at a turning point short of the centre, so when the last
    half swing runs into the rest that stop is the last turning point.
 4. **Reference** (``release_time``, ``release_theta``, the instant the model is released at
@@ -65,10 +68,11 @@ import numpy as np
 
 from ...core.errors import DataError
 from .centre import measure_centre
-from .extrema import (alternating_extrema, extrema_period, local_amplitude, power_near, resolution, second_mode, smooth,
+from .extrema import (alternating_extrema, extrema_period, power_near, resolution, second_mode, smooth,
                       smoothing_share, smoothing_window, spectral_period, vertex_at)
 from .motion import INTERVAL_RANGE, Turn, faded_end, growth_tolerance, levels_off, reference, steady_tail
 from .given_start import user_reference
+from .noise_end import noise_tail, resting_tail
 from .sampled import MIN_SAMPLES_PER_PERIOD, SampledRecord
 from .series import TimeSeries, quantity_words, show_value
 from .window import window_of
@@ -78,7 +82,6 @@ __all__ = ["TurningPoints", "reduce_series", "turning_points", "period_of", "MIN
 COARSE_SAMPLES_PER_PERIOD = 8  # from here to 16: sinusoid arcs through the few samples at each turn, with a note
 MIN_PROMINENCE = 50.0  # periodogram peak over median power; white noise alone gives ~log2(n)
 MIN_TURNS = 3  # turning points (the reference included) a decay needs: one whole period
-MOVING_SIGMAS = 6.0  # a window's swing above this many of its noise scales is motion
 # a second oscillation with this share of the main one's spectral power is another mode (real
 # decays in the shared corpus stay under 0.04; a struck rod's second mode holds 0.53)
 SECOND_MODE_SHARE = 0.2
@@ -133,6 +136,11 @@ class TurningPoints:
     origin : float
         The file's first sample on the series' clock, s: the zero of the times in ``notes``
         (and of ``[recording] start``, ``stop``, ``release``).
+    noise_floor : float
+        The noise floor the swing sank into where the record was cut before it came to rest
+        (:mod:`~escfit.analysis.recordings.noise_end`; the unit of the samples it was measured
+        on: for a rate, the rate's or its running integral's), ``nan`` otherwise: ``stop_time``
+        is then that end of motion.
     dropped : tuple of (float, float, str)
         Runs of samples left out as a tracking glitch (:mod:`escfit.analysis.glitches`): first
         and last time (s, the series' clock) and the note; :func:`drop_samples` leaves them out
@@ -160,6 +168,7 @@ class TurningPoints:
     steps: tuple = ()
     origin: float = 0.0
     dropped: tuple = ()
+    noise_floor: float = math.nan
 
     def after_first(self, t: float) -> float:
         """``t`` (s, the series' clock) as a time after the file's first sample, as notes show times."""
@@ -277,6 +286,12 @@ def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool,
         rec.notes.insert(0, f"times in these notes are counted from the record's first sample (t = 0 s there, "
                             f"{origin:.10g} s on the file's clock)")
     i_rest, rest_theta = resting_tail(rec)
+    sunk = None
+    if user_window is None or user_window.stop is None:  # the user's stop wins
+        rec, sunk = noise_tail(rec, i_rest)
+        if sunk is not None:  # sunk into the noise before any rest: motion ends there
+            t, x = rec.t, rec.x
+            i_rest, rest_theta = t.size, math.nan
     if i_rest < t.size:
         period, prominence = _working_period(t[:i_rest], x[:i_rest], min_cycles=1.5)
         if math.isfinite(period) and prominence > MIN_PROMINENCE:
@@ -307,6 +322,8 @@ def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool,
         times, values = times[:keep - 1], values[:keep - 1]
         # the turning points of the noise are gone; the motion still ended where the record rests
         stop_time = float(t[i_rest]) if i_rest < t.size else math.nan
+    if sunk is not None:
+        stop_time = sunk.time
     if all_t.size < MIN_TURNS:
         raise DataError(f"only {all_t.size} turning point(s) from the reference at t = {t_ref:.4g} s on stand above "
                         f"the noise ({rec.show(rec.band, 2)}); a decay needs at least {MIN_TURNS} (one whole "
@@ -321,7 +338,7 @@ def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool,
     amps = all_v - centre.offset - centre.rate * (all_t - t_ref)
     period, period_se = period_of(all_t[1:n_moving], amps[1:n_moving]) if n_moving > 3 \
         else period_of(all_t[:n_moving], amps[:n_moving])
-    if math.isfinite(stop_time):
+    if math.isfinite(stop_time) and sunk is None:
         level = centre.offset + centre.rate * (stop_time - t_ref)
         rec.notes.append(f"motion stopped at t = {stop_time:.4g} s (resting {rec.show(rest_theta - level, signed=True)} "
                          "from the centre)")
@@ -338,6 +355,7 @@ def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool,
                          rec.notes, period_stderr=period_se, offset_stderr=centre.offset_stderr,
                          offset_rate_stderr=centre.rate_stderr, offset_rate_measured=centre.measured_rate,
                          noise=rec.sigma, sustained_from=sustained + origin, origin=origin,
+                         noise_floor=sunk.floor if sunk is not None else math.nan,
                          warnings=rec.warnings, steps=tuple((at + origin, size, note) for at, size, note in rec.steps))
 
 
@@ -491,35 +509,6 @@ def _working_period(t: np.ndarray, x: np.ndarray, min_cycles: float = 2.0) -> tu
         if there >= 0.05 * here:
             period = check
     return period, prominence
-
-
-def resting_tail(rec: SampledRecord) -> tuple[int, float]:
-    """Index of the first sample at rest (``t.size`` when the record ends in motion) and the rest angle.
-
-    At rest means within the rest band of the final level for at least a period *and* no
-    swing left above the noise: a slow record's small swings hide in the band sample by
-    sample but stand out over a whole period (:func:`~escfit.analysis.recordings.extrema.local_amplitude`).
-    """
-    t, n = rec.t, rec.t.size
-    final = t >= t[-1] - rec.period
-    rest = float(np.median(rec.x[final]))
-    out = np.flatnonzero(np.abs(rec.xs - rest) > rec.band)
-    if not out.size:
-        raise DataError(f"no motion: the {quantity_words(rec.quantity)} stays within {rec.show(rec.band)} of "
-                        f"{rec.show(rest, 4)}", rec.where)
-    i = int(out[-1]) + 1
-    if i >= n or t[-1] - t[i] < rec.period:
-        return n, math.nan
-    starts, amp = local_amplitude(t[i:], rec.x[i:], rec.period)
-    per_window = max(rec.period / rec.dt, 8.0)
-    # an encoder without dither cannot show a swing under half a count, however many samples
-    floor = max(MOVING_SIGMAS * max(rec.sigma, 0.5 * rec.quantum) * math.sqrt(2.0 / per_window), 0.5 * rec.quantum)
-    moving = np.flatnonzero(amp > floor)
-    if moving.size:  # the swing goes on below the band: motion ends after the last window that shows it
-        i = int(np.searchsorted(t, starts[moving[-1]] + rec.period))
-        if i >= n or t[-1] - t[i] < rec.period:
-            return n, math.nan
-    return i, float(np.median(rec.x[i:]))
 
 
 def _final_turn(rec: SampledRecord, i_rest: int, rest: float, t_ref: float, theta_ref: float, times: list,
