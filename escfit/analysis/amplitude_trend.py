@@ -229,15 +229,14 @@ def sustained(times: np.ndarray, values: np.ndarray, *, show=lambda v: f"{v:.3g}
     rate, err = -slope, se * root
     periods = 0.5 * n
     if rate < Z_DECAY * err:
-        what = "grows" if rate < -Z_DECAY * err else "keeps its size"
+        what = "grows" if rate < -Z_DECAY * err else "keeps its amplitude within its noise"
         fall = -math.expm1(-rate * (mid[-1] - mid[0]))
         fall_se = math.exp(-rate * (mid[-1] - mid[0])) * err * (mid[-1] - mid[0])
         return SustainEvidence(0, float(t[0]), (
             f"over {periods:.0f} periods (t = {t[0]:.4g} to {t[-1]:.4g} s) the swing {what}: it falls by "
             f"{100 * fall:.2g} % +- {100 * fall_se:.2g} % (one standard error, from the scatter of all {n} swings "
             f"about their trend), less than {Z_DECAY:g} standard errors, where a free decay with any damping loses "
-            f"a measurable share: something keeps it going, or the record is too short or too noisy for its "
-            f"losses"))
+            "a measurable share (unless the record is too short or too noisy for its losses)"))
     splits = np.arange(MIN_SWINGS, n - MIN_SWINGS + 1)
     if not splits.size:
         return None
@@ -258,7 +257,8 @@ def sustained(times: np.ndarray, values: np.ndarray, *, show=lambda v: f"{v:.3g}
     split = int(splits[k])
     when = float(t[split])  # swing `split` runs from turning point `split` on
     return SustainEvidence(split, when, (
-        f"from t = {when:.4g} s the swing loses {_per_period(tail_rate[k], mid):.2g} +- "
+        f"from t = {when:.4g} s the swing keeps its amplitude where a free decay would go on losing: it loses "
+        f"{_per_period(tail_rate[k], mid):.2g} +- "
         f"{_per_period(tail_se[k], mid):.2g} % a period, where any free law (drag, viscous, Coulomb) continuing the "
         f"{_per_period(head_rate[k], mid):.2g} % a period at {show(math.exp(h_first[k]))} before it loses at least "
         f"{_per_period(least[k], mid):.2g} % at {show(math.exp(min(t_last[k], h_first[k])))} "

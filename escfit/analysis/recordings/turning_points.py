@@ -65,7 +65,7 @@ import numpy as np
 
 from ...core.errors import DataError
 from .centre import measure_centre
-from .extrema import (alternating_extrema, extrema_period, local_amplitude, power_near, resolution, second_mode, smooth,
+from .extrema import (alternating_extrema, extrema_period, local_amplitude, power_near, resolution, other_modes, smooth,
                       smoothing_share, smoothing_window, spectral_period, vertex_at)
 from ..amplitude_trend import sustained
 from .motion import INTERVAL_RANGE, Turn, faded_end, reference
@@ -333,8 +333,7 @@ def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool,
     kept = sustained(all_t[:n_moving], all_v[:n_moving], show=lambda v: rec.show(v, 3))
     held_from, why = (kept.time, kept.sentence) if kept is not None else (math.nan, "")
     if kept is not None:
-        rec.notes.append(f"from t = {held_from:.4g} s the swing no longer decays as a free oscillator's would (it "
-                         f"keeps its amplitude): something keeps it going ({why})")
+        rec.notes.append(f"the swing no longer decays as a free oscillator's would (it keeps its amplitude): {why}")
     swing = np.arange(1, len(times) + 1, dtype=np.int64)
     return TurningPoints(swing, np.array(times, dtype=float) + origin, np.array(values, dtype=float), float(period),
                          float(centre.offset), float(centre.rate), float(t_ref) + origin, float(theta_ref),
@@ -448,12 +447,7 @@ def prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, whe
     if not math.isfinite(period) or prominence < MIN_PROMINENCE:
         raise DataError(f"no oscillation found: the spectrum has no clear peak (peak {prominence:.3g} times the median "
                         f"power, a decay gives over {MIN_PROMINENCE:g}); is this a free decay?", where)
-    other, share = second_mode(t, x, period)
-    if share >= SECOND_MODE_SHARE:
-        raise DataError(f"besides the swing of period {period:.4g} s the record holds a second oscillation of period "
-                        f"{other:.4g} s with {100 * share:.0f} % of its power: two modes (a structure's, a rod's) or "
-                        "two coupled oscillators, not one oscillator's free decay; isolate one mode before fitting",
-                        where)
+    notes += _other_modes(t, x, period, where)
     spp = period / dt
     if spp < COARSE_SAMPLES_PER_PERIOD:
         raise DataError(f"the period of {period:.4g} s spans only {spp:.1f} samples; the turning-point fits need at "
@@ -477,6 +471,25 @@ def prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, whe
         window = 0.2 if resolution_ratio > 2e-4 or 0.125 * spp < 6 else 0.125
     shared = resolution_ratio > 2e-3
     return SampledRecord(t, x, xs, period, dt, band, step, window, degree, where, notes, shared, sigma, quantum, quantity)
+
+
+def _other_modes(t: np.ndarray, x: np.ndarray, period: float, where: str) -> list[str]:
+    """Refuse a record with a second oscillation of :data:`SECOND_MODE_SHARE` of the main one's
+    power or more (naming both); a weaker one that stands out of its neighbourhood of the
+    spectrum by :data:`MIN_PROMINENCE` is a note: the fit follows the main swing only."""
+    notes = []
+    for other, share, prominence in other_modes(t, x, period):
+        side = "faster" if other < period else "slower"
+        if share >= SECOND_MODE_SHARE:
+            raise DataError(f"besides the swing of period {period:.4g} s the record holds a second oscillation of period "
+                            f"{other:.4g} s ({side}) with {100 * share:.0f} % of its power: two modes (a structure's, "
+                            "a rod's) or two coupled oscillators, not one oscillator's free decay, and which one to fit "
+                            "is not determined; isolate one mode (a band-pass filter around it) before fitting", where)
+        if prominence >= MIN_PROMINENCE:
+            notes.append(f"a weak second oscillation of period {other:.4g} s ({side}, {100 * share:.2g} % of the main "
+                         f"swing's power) rides on the swing of period {period:.4g} s: the fit follows "
+                         "the main swing, the second one stays in the residuals")
+    return notes
 
 
 def _working_period(t: np.ndarray, x: np.ndarray, min_cycles: float = 2.0) -> tuple[float, float]:

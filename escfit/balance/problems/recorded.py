@@ -255,11 +255,11 @@ def _refuse_sustained(scene: BalanceScene, tp, source: str) -> None:
         return
     from ...core.errors import DataError
 
-    why = str(getattr(tp, "sustained_why", ""))
-    raise DataError(f"from t = {tp.after_first(when):.4g} s the swing keeps its amplitude where a free decay would go on losing"
-                    f"{f' ({why})' if why else ''}: something drives it (a motor, an escapement), and the scene has no "
-                    "drive, so it cannot be fitted as a free decay; cut the record before that with [recording] stop, "
-                    "or model the drive", source)
+    why = str(getattr(tp, "sustained_why", "")) or (f"from t = {tp.after_first(when):.4g} s the swing keeps its "
+                                                      "amplitude where a free decay would go on losing")
+    raise DataError(f"{why}: something drives it (a motor, an escapement), and the scene has no drive, so it cannot be "
+                    "fitted as a free decay; cut the record before that with [recording] stop, or model the drive",
+                    source)
 
 
 _DEGREE_WORDS = ("deg", "degree", "degrees", "°")
