@@ -476,10 +476,14 @@ def prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, whe
 def _other_modes(t: np.ndarray, x: np.ndarray, period: float, where: str) -> list[str]:
     """Refuse a record with a second oscillation of :data:`SECOND_MODE_SHARE` of the main one's
     power or more (naming both); a weaker one that stands out of its neighbourhood of the
-    spectrum by :data:`MIN_PROMINENCE` is a note: the fit follows the main swing only."""
+    spectrum by :data:`MIN_PROMINENCE` is a note: the fit follows the main swing only.  A slower
+    one must stand out that far to count at all: a hold, a step or a drift puts a smooth skirt of
+    power at low frequencies, with no peak of its own."""
     notes = []
     for other, share, prominence in other_modes(t, x, period):
         side = "faster" if other < period else "slower"
+        if side == "slower" and prominence < MIN_PROMINENCE:
+            continue  # the skirt of a hold's, a step's or a drift's low frequencies, not an oscillation
         if share >= SECOND_MODE_SHARE:
             raise DataError(f"besides the swing of period {period:.4g} s the record holds a second oscillation of period "
                             f"{other:.4g} s ({side}) with {100 * share:.0f} % of its power: two modes (a structure's, "
