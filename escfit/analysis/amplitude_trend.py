@@ -213,9 +213,9 @@ def sustained(times: np.ndarray, values: np.ndarray, *, show=lambda v: f"{v:.3g}
     Returns
     -------
     SustainEvidence or None
-        From the first turning point when the whole record shows no measured loss; from the
-        earliest split whose tail loses significantly less than any free law allows; else
-        ``None``.
+        From the first turning point when the whole record shows no measured loss; else from
+        the split whose tail falls short of the least any free law allows by the most standard
+        errors, when that is significant; else ``None``.
     """
     prep = _prepared(times, values)
     if prep is None:
@@ -253,7 +253,7 @@ def sustained(times: np.ndarray, values: np.ndarray, *, show=lambda v: f"{v:.3g}
     found = np.flatnonzero((least > Z_SUSTAIN * least_se) & (short > Z_SUSTAIN))
     if not found.size:
         return None
-    k = int(found[0])
+    k = int(found[np.argmax(short[found])])  # the split the evidence points to most: the knee
     split = int(splits[k])
     when = float(t[split])  # swing `split` runs from turning point `split` on
     return SustainEvidence(split, when, (
