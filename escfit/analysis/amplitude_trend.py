@@ -141,7 +141,8 @@ def _inflation(logp: np.ndarray, w: np.ndarray) -> float:
         return 1.0
     width = max(MIN_SWINGS, n // 20) | 1
     padded = np.pad(logp, width // 2, mode="reflect")
-    mean = np.convolve(padded, np.full(width, 1.0 / width), mode="valid")
+    run = np.concatenate([[0.0], np.cumsum(padded)])
+    mean = (run[width:] - run[:-width]) / width
     return _long_run_factor(logp - mean, w)
 
 
