@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 __all__ = ["periodogram", "spectral_period", "extrema_period", "power_near", "smooth", "smoothing_window", "smoothing_share", "resolution", "alternating_extrema", "kinked_vertex", "vertex_at",
-           "local_amplitude", "second_mode", "other_modes"]
+           "local_amplitude"]
 
 
 # the longest zero-padded transform of a periodogram (32 MB of input, as much of spectrum): a
@@ -325,60 +325,3 @@ def local_amplitude(t: np.ndarray, x: np.ndarray, period: float) -> tuple[np.nda
         coef, *_ = np.linalg.lstsq(basis, x[a:b], rcond=None)
         amp[k] = math.hypot(coef[2], coef[3])
     return starts, amp
-
-
-def second_mode(t: np.ndarray, x: np.ndarray, period: float, *, min_ratio: float = 0.5,
-                harmonic_tol: float = 0.04) -> tuple[float, float]:
-    """The strongest faster oscillation than the one at ``period``: its period (s) and its peak
-    power relative to the main peak's; ``(nan, 0)`` when there is none (:func:`other_modes`)."""
-    faster = [m for m in other_modes(t, x, period, min_ratio=min_ratio, harmonic_tol=harmonic_tol) if m[0] < period]
-    return (faster[0][0], faster[0][1]) if faster else (math.nan, 0.0)
-
-
-def other_modes(t: np.ndarray, x: np.ndarray, period: float, *, min_ratio: float = 0.5, harmonic_tol: float = 0.04,
-                min_cycles: float = 3.0) -> list[tuple[float, float, float]]:
-    """Oscillations besides the one at ``period``: the strongest faster one and the strongest
-    slower one, each as ``(period s, share, prominence)``.
-
-    Only frequencies beyond ``1/min_ratio`` times the main one (faster) or below ``min_ratio``
-    times it (slower) are searched: nearer ones belong to the main oscillation (a pendulum's
-    frequency sweeps that far as its swing decays; two close modes show as beats instead).
-    Whole multiples of the main frequency (the harmonics of an anharmonic swing, within
-    ``harmonic_tol``) are skipped, and a slower one must fit ``min_cycles`` times in the record.
-    The share is the larger of the peak's power over the main peak's and the power within 15 %
-    of its frequency over that within 15 % of the main one (the share of the motion: a faster
-    mode of the same Q decays faster, so its peak is lower than its share).
-    The prominence is the peak's power over the median power within 30 % of its frequency: the
-    noise floor under a faster one, and the skirt of a hold's, a step's or a drift's low
-    frequencies under a slower one, which a coherent oscillation stands far above.  Empty when
-    the main peak has no power.
-    """
-    dt = (t[-1] - t[0]) / (t.size - 1)
-    freq, power = periodogram(t, x, 4)
-    f0 = 1.0 / period
-    main = float(np.max(power[(freq > f0 * 0.9) & (freq < f0 * 1.1)], initial=0.0))
-    if main <= 0.0:
-        return []
-    ratio = freq / f0
-    not_harmonic = np.abs(ratio - np.round(ratio)) > harmonic_tol * np.maximum(np.round(ratio), 1.0)
-    sides = [(freq <= 0.45 / dt) & (ratio > 1.0 / min_ratio) & not_harmonic,
-             (ratio < min_ratio) & (freq * (t[-1] - t[0]) >= min_cycles)]
-    main_band = (freq > f0 * 0.85) & (freq < f0 * 1.15)
-    main_energy = float(np.sum(power[main_band]))
-    found = []
-    for side in sides:
-        if not side.any():
-            continue
-        p = np.where(side, power, 0.0)
-        peaks = np.flatnonzero((p[1:-1] >= p[:-2]) & (p[1:-1] >= p[2:]) & (p[1:-1] > 0)) + 1
-        if not peaks.size:
-            continue
-        k = int(peaks[np.argmax(p[peaks])])
-        near = power[(freq > 0.7 * freq[k]) & (freq < 1.3 * freq[k])]
-        floor = float(np.median(near)) if near.size else 0.0
-        band = (freq > 0.85 * freq[k]) & (freq < 1.15 * freq[k]) & ~main_band
-        energy = float(np.sum(power[band])) / main_energy if main_energy > 0 else 0.0
-        # a faster mode of the same Q decays faster: its peak is lower than its share of the motion
-        share = max(float(p[k] / main), energy)
-        found.append((1.0 / float(freq[k]), share, float(p[k] / floor) if floor > 0 else math.inf))
-    return found

@@ -65,11 +65,12 @@ import numpy as np
 
 from ...core.errors import DataError
 from .centre import measure_centre
-from .extrema import (alternating_extrema, extrema_period, local_amplitude, power_near, resolution, other_modes, smooth,
+from .extrema import (alternating_extrema, extrema_period, local_amplitude, power_near, resolution, smooth,
                       smoothing_share, smoothing_window, spectral_period, vertex_at)
 from ..amplitude_trend import sustained
 from .motion import INTERVAL_RANGE, Turn, faded_end, reference
 from .given_start import user_reference
+from .modes import MIN_PROMINENCE, check_other_modes
 from .sampled import MIN_SAMPLES_PER_PERIOD, SampledRecord
 from .series import TimeSeries, quantity_words, show_value
 from .window import window_of
@@ -77,12 +78,8 @@ from .window import window_of
 __all__ = ["TurningPoints", "reduce_series", "turning_points", "period_of", "MIN_SAMPLES_PER_PERIOD", "MIN_TURNS"]
 
 COARSE_SAMPLES_PER_PERIOD = 8  # from here to 16: sinusoid arcs through the few samples at each turn, with a note
-MIN_PROMINENCE = 50.0  # periodogram peak over median power; white noise alone gives ~log2(n)
 MIN_TURNS = 3  # turning points (the reference included) a decay needs: one whole period
 MOVING_SIGMAS = 6.0  # a window's swing above this many of its noise scales is motion
-# a second oscillation with this share of the main one's spectral power is another mode (real
-# decays in the shared corpus stay under 0.04; a struck rod's second mode holds 0.53)
-SECOND_MODE_SHARE = 0.2
 
 
 @dataclass(frozen=True)
@@ -447,7 +444,7 @@ def prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, whe
     if not math.isfinite(period) or prominence < MIN_PROMINENCE:
         raise DataError(f"no oscillation found: the spectrum has no clear peak (peak {prominence:.3g} times the median "
                         f"power, a decay gives over {MIN_PROMINENCE:g}); is this a free decay?", where)
-    notes += _other_modes(t, x, period, where)
+    notes += check_other_modes(t, x, period, where)
     spp = period / dt
     if spp < COARSE_SAMPLES_PER_PERIOD:
         raise DataError(f"the period of {period:.4g} s spans only {spp:.1f} samples; the turning-point fits need at "
@@ -471,29 +468,6 @@ def prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, whe
         window = 0.2 if resolution_ratio > 2e-4 or 0.125 * spp < 6 else 0.125
     shared = resolution_ratio > 2e-3
     return SampledRecord(t, x, xs, period, dt, band, step, window, degree, where, notes, shared, sigma, quantum, quantity)
-
-
-def _other_modes(t: np.ndarray, x: np.ndarray, period: float, where: str) -> list[str]:
-    """Refuse a record with a second oscillation of :data:`SECOND_MODE_SHARE` of the main one's
-    power or more (naming both); a weaker one that stands out of its neighbourhood of the
-    spectrum by :data:`MIN_PROMINENCE` is a note: the fit follows the main swing only.  A slower
-    one must stand out that far to count at all: a hold, a step or a drift puts a smooth skirt of
-    power at low frequencies, with no peak of its own."""
-    notes = []
-    for other, share, prominence in other_modes(t, x, period):
-        side = "faster" if other < period else "slower"
-        if side == "slower" and prominence < MIN_PROMINENCE:
-            continue  # the skirt of a hold's, a step's or a drift's low frequencies, not an oscillation
-        if share >= SECOND_MODE_SHARE:
-            raise DataError(f"besides the swing of period {period:.4g} s the record holds a second oscillation of period "
-                            f"{other:.4g} s ({side}) with {100 * share:.0f} % of its power: two modes (a structure's, "
-                            "a rod's) or two coupled oscillators, not one oscillator's free decay, and which one to fit "
-                            "is not determined; isolate one mode (a band-pass filter around it) before fitting", where)
-        if prominence >= MIN_PROMINENCE:
-            notes.append(f"a weak second oscillation of period {other:.4g} s ({side}, {100 * share:.2g} % of the main "
-                         f"swing's power) rides on the swing of period {period:.4g} s: the fit follows "
-                         "the main swing, the second one stays in the residuals")
-    return notes
 
 
 def _working_period(t: np.ndarray, x: np.ndarray, min_cycles: float = 2.0) -> tuple[float, float]:
