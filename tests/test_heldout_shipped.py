@@ -92,8 +92,8 @@ def test_a_record_ending_in_a_tracking_fault_names_the_stop_that_fits_it(tmp_pat
     within(load_fit(tmp_path / "r.h5"), Reference(1.8947, 0.02, 0.01167, 0.5719))
 
 
-@pytest.mark.xfail(strict=True, reason="refused: a 0.1 deg rise between neighbouring turning points of a decay of "
-                   "1 deg a period, read as 'the swing keeps its amplitude ... something drives it'")
+@pytest.mark.xfail(strict=True, reason="NOT DETERMINED: the waveform and turning-point fits of this 80 deg release "
+                   "disagree on omega0 by 0.5 % (before, refused as driven on a 0.1 deg rise between neighbours)")
 def test_a_slow_decay_of_175_periods_fits_inside_its_reference(tmp_path, monkeypatch):
     r, res = init_and_fit(LEF / "q2_data.csv", tmp_path, monkeypatch)
     assert r.exit_code == 0, r.output[-2000:]

@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 __all__ = ["periodogram", "spectral_period", "extrema_period", "power_near", "smooth", "smoothing_window", "smoothing_share", "resolution", "alternating_extrema", "kinked_vertex", "vertex_at",
-           "local_amplitude", "second_mode"]
+           "local_amplitude"]
 
 
 # the longest zero-padded transform of a periodogram (32 MB of input, as much of spectrum): a
@@ -325,33 +325,3 @@ def local_amplitude(t: np.ndarray, x: np.ndarray, period: float) -> tuple[np.nda
         coef, *_ = np.linalg.lstsq(basis, x[a:b], rcond=None)
         amp[k] = math.hypot(coef[2], coef[3])
     return starts, amp
-
-
-def second_mode(t: np.ndarray, x: np.ndarray, period: float, *, min_ratio: float = 0.5,
-                harmonic_tol: float = 0.04) -> tuple[float, float]:
-    """The strongest faster oscillation than the one at ``period``: its period (s) and its peak
-    power relative to the main peak's.
-
-    Only frequencies above ``1/min_ratio`` times the main one are searched: nearer ones belong
-    to the main oscillation (a pendulum's frequency sweeps that far as its swing decays; two
-    close modes show as beats instead), slower ones are where holds, steps and drifts put their
-    power.  Whole multiples of the main frequency (the harmonics of an anharmonic swing, within
-    ``harmonic_tol``) are skipped.  ``(nan, 0)`` when there is none.
-    """
-    dt = (t[-1] - t[0]) / (t.size - 1)
-    freq, power = periodogram(t, x, 4)
-    f0 = 1.0 / period
-    main = float(np.max(power[(freq > f0 * 0.9) & (freq < f0 * 1.1)], initial=0.0))
-    if main <= 0.0:
-        return math.nan, 0.0
-    ratio = freq / f0
-    other = (freq <= 0.45 / dt) & (ratio > 1.0 / min_ratio)
-    other &= np.abs(ratio - np.round(ratio)) > harmonic_tol * np.maximum(np.round(ratio), 1.0)
-    if not other.any():
-        return math.nan, 0.0
-    p = np.where(other, power, 0.0)
-    peaks = np.flatnonzero((p[1:-1] >= p[:-2]) & (p[1:-1] >= p[2:]) & (p[1:-1] > 0)) + 1
-    if not peaks.size:
-        return math.nan, 0.0
-    k = peaks[np.argmax(p[peaks])]
-    return 1.0 / float(freq[k]), float(p[k] / main)

@@ -12,7 +12,9 @@ it may end in a long stretch of noise once the swing has faded.  The free decay 
   (Coulomb friction loses the same at every amplitude, viscous damping in proportion to it,
   air drag in proportion to its square), so a stretch at the largest amplitudes that loses
   almost nothing while the smaller swings after it lose much was driven (a drive switched
-  off), and a swing that stops decaying well above the noise is kept going;
+  off); a swing that stops decaying is judged on trends over whole stretches with their
+  standard errors (:mod:`escfit.analysis.amplitude_trend`), never on neighbouring swings,
+  which a slow decay changes by less than their noise;
 - a hold (the angle flat for a tenth of a period or more) ends it backwards: the release
   from a hold is where the free motion starts.
 
@@ -39,7 +41,7 @@ from ...analysis.drive_off import drive_off
 from ...analysis.segments import driven_start, find_events
 from .holds import HOLD_PERIODS, flat_start as _flat_start, held_release, turn_at_start as _turn_at_start
 
-__all__ = ["Turn", "Start", "reference", "faded_end", "growth_tolerance", "growth_steps", "find_start", "levels_off",
+__all__ = ["Turn", "Start", "reference", "faded_end", "growth_tolerance", "growth_steps", "find_start",
            "envelope", "rises", "steady_tail",
            "INTERVAL_RANGE", "HOLD_PERIODS"]
 
@@ -163,18 +165,6 @@ def _local_half(times: np.ndarray, i: int, end: int, fallback: float) -> float:
     return float(d[mid]) if len(d) % 2 else 0.5 * (d[mid - 1] + d[mid])
 
 
-def _losses(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Amplitude and loss per half swing of blocks of :data:`SUSTAIN_BLOCK` half swings."""
-    amp = _amplitudes(values)
-    n = (amp.size - 1) // SUSTAIN_BLOCK
-    starts = np.arange(n) * SUSTAIN_BLOCK
-    if not n:
-        return np.zeros(0), np.zeros(0)
-    level = np.mean(np.lib.stride_tricks.sliding_window_view(amp, SUSTAIN_BLOCK + 1)[starts], axis=1)
-    loss = (amp[starts] - amp[starts + SUSTAIN_BLOCK]) / SUSTAIN_BLOCK
-    return level, loss
-
-
 def _driven_prefix(values: np.ndarray, tol: float) -> int:
     """Turning points at the start of a run that a drive kept going (0 when none).
 
@@ -197,27 +187,6 @@ def _driven_prefix(values: np.ndarray, tol: float) -> int:
     if after * 2 * SUSTAIN_BLOCK > 3 * tol and prefix_loss < 0.25 * after:
         return steady
     return 0
-
-
-def levels_off(times: np.ndarray, values: np.ndarray, tol: float) -> float:
-    """Instant (s) from which the swing stops decaying while a free decay could not, else ``nan``.
-
-    Losses per half swing (blocks of :data:`SUSTAIN_BLOCK`) must fall no faster than the
-    cube of the amplitude (air drag falls with its square, viscous damping with it, Coulomb
-    friction not at all): a last stretch of at least three blocks losing on average under a
-    quarter of that bound, when the bound adds up to well above the resolution ``tol`` over the
-    stretch, is sustained.
-    """
-    level, loss = _losses(values)
-    if level.size < 5:
-        return math.nan
-    first = float(np.max(loss[:2]))
-    for j in range(2, level.size - 2):
-        bound = first * (level[j] / level[0]) ** 3
-        tail = loss[j:]
-        if bound * SUSTAIN_BLOCK * tail.size > 3 * tol and np.mean(tail) < 0.25 * bound and tail.size >= 3:
-            return float(times[j * SUSTAIN_BLOCK])
-    return math.nan
 
 
 def envelope(rec) -> tuple[np.ndarray, np.ndarray]:

@@ -68,10 +68,12 @@ import numpy as np
 
 from ...core.errors import DataError
 from .centre import measure_centre
-from .extrema import (alternating_extrema, extrema_period, power_near, resolution, second_mode, smooth,
+from .extrema import (alternating_extrema, extrema_period, power_near, resolution, smooth,
                       smoothing_share, smoothing_window, spectral_period, vertex_at)
-from .motion import INTERVAL_RANGE, Turn, faded_end, growth_tolerance, levels_off, reference, steady_tail
+from ..amplitude_trend import sustained
+from .motion import INTERVAL_RANGE, Turn, faded_end, reference
 from .given_start import user_reference
+from .modes import MIN_PROMINENCE, check_other_modes
 from .noise_end import noise_tail, resting_tail
 from .sampled import MIN_SAMPLES_PER_PERIOD, SampledRecord
 from .series import TimeSeries, quantity_words, show_value
@@ -80,11 +82,7 @@ from .window import window_of
 __all__ = ["TurningPoints", "reduce_series", "turning_points", "period_of", "MIN_SAMPLES_PER_PERIOD", "MIN_TURNS"]
 
 COARSE_SAMPLES_PER_PERIOD = 8  # from here to 16: sinusoid arcs through the few samples at each turn, with a note
-MIN_PROMINENCE = 50.0  # periodogram peak over median power; white noise alone gives ~log2(n)
 MIN_TURNS = 3  # turning points (the reference included) a decay needs: one whole period
-# a second oscillation with this share of the main one's spectral power is another mode (real
-# decays in the shared corpus stay under 0.04; a struck rod's second mode holds 0.53)
-SECOND_MODE_SHARE = 0.2
 
 
 @dataclass(frozen=True)
@@ -126,7 +124,10 @@ class TurningPoints:
         Robust scale of the samples about a smoothing, rad (the reading noise).
     sustained_from : float
         Instant (s) from which the swing stops decaying while a free decay could not (a
-        drive or an escapement keeps it going); ``nan`` when it decays to the end.
+        drive or an escapement keeps it going); ``nan`` when it decays to the end
+        (:func:`escfit.analysis.amplitude_trend.sustained`).
+    sustained_why : str
+        The evidence for ``sustained_from`` with its numbers (empty when it is ``nan``).
     warnings : list of str
         What the user must know before trusting a fit (a large part of the record left out).
     steps : tuple of (float, float, str)
@@ -164,6 +165,7 @@ class TurningPoints:
     offset_rate_measured: float = 0.0
     noise: float = math.nan
     sustained_from: float = math.nan
+    sustained_why: str = ""
     warnings: list = field(default_factory=list)
     steps: tuple = ()
     origin: float = 0.0
@@ -342,19 +344,17 @@ def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool,
         level = centre.offset + centre.rate * (stop_time - t_ref)
         rec.notes.append(f"motion stopped at t = {stop_time:.4g} s (resting {rec.show(rest_theta - level, signed=True)} "
                          "from the centre)")
-    sustained = levels_off(all_t, all_v, growth_tolerance(rec, all_v))
-    if not math.isfinite(sustained):  # or settled after a larger transient: a drive's steady state
-        sustained = steady_tail(rec)[0]
-    if math.isfinite(sustained):
-        rec.notes.append(f"from t = {sustained:.4g} s the swing no longer decays as a free oscillator's would (it "
-                         "keeps its amplitude): something keeps it going")
+    kept = sustained(all_t[:n_moving], all_v[:n_moving], show=lambda v: rec.show(v, 3))
+    held_from, why = (kept.time, kept.sentence) if kept is not None else (math.nan, "")
+    if kept is not None:
+        rec.notes.append(f"the swing no longer decays as a free oscillator's would (it keeps its amplitude): {why}")
     swing = np.arange(1, len(times) + 1, dtype=np.int64)
     return TurningPoints(swing, np.array(times, dtype=float) + origin, np.array(values, dtype=float), float(period),
                          float(centre.offset), float(centre.rate), float(t_ref) + origin, float(theta_ref),
                          float(stop_time) + origin, float(rest_theta) if math.isfinite(stop_time) else math.nan,
                          rec.notes, period_stderr=period_se, offset_stderr=centre.offset_stderr,
                          offset_rate_stderr=centre.rate_stderr, offset_rate_measured=centre.measured_rate,
-                         noise=rec.sigma, sustained_from=sustained + origin, origin=origin,
+                         noise=rec.sigma, sustained_from=held_from + origin, sustained_why=why, origin=origin,
                          noise_floor=sunk.floor if sunk is not None else math.nan,
                          warnings=rec.warnings, steps=tuple((at + origin, size, note) for at, size, note in rec.steps))
 
@@ -462,12 +462,7 @@ def prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, whe
     if not math.isfinite(period) or prominence < MIN_PROMINENCE:
         raise DataError(f"no oscillation found: the spectrum has no clear peak (peak {prominence:.3g} times the median "
                         f"power, a decay gives over {MIN_PROMINENCE:g}); is this a free decay?", where)
-    other, share = second_mode(t, x, period)
-    if share >= SECOND_MODE_SHARE:
-        raise DataError(f"besides the swing of period {period:.4g} s the record holds a second oscillation of period "
-                        f"{other:.4g} s with {100 * share:.0f} % of its power: two modes (a structure's, a rod's) or "
-                        "two coupled oscillators, not one oscillator's free decay; isolate one mode before fitting",
-                        where)
+    notes += check_other_modes(t, x, period, where)
     spp = period / dt
     if spp < COARSE_SAMPLES_PER_PERIOD:
         raise DataError(f"the period of {period:.4g} s spans only {spp:.1f} samples; the turning-point fits need at "

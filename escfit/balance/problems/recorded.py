@@ -264,9 +264,16 @@ def _refuse_sustained(scene: BalanceScene, tp, source: str) -> None:
         return
     from ...core.errors import DataError
 
-    raise DataError(f"from t = {tp.after_first(when):.4g} s the swing keeps its amplitude where a free decay would go on losing: "
-                    "something drives it (a motor, an escapement), and the scene has no drive, so it cannot be fitted "
-                    "as a free decay; cut the record before that with [recording] stop, or model the drive", source)
+    why = str(getattr(tp, "sustained_why", "")) or (f"from t = {tp.after_first(when):.4g} s the swing keeps its "
+                                                      "amplitude where a free decay would go on losing")
+    if when <= float(getattr(tp, "release_time", -math.inf)):  # no loss measured over the whole record
+        raise DataError(f"{why}: something drives it (a motor, an escapement), or its losses are below what this "
+                        "record resolves; the scene has no drive, so it cannot be fitted as a free decay: record a "
+                        "longer stretch of the decay (or set [recording] start and stop around one), or model the "
+                        "drive", source)
+    raise DataError(f"{why}: something drives it (a motor, an escapement), and the scene has no drive, so it cannot be "
+                    "fitted as a free decay; cut the record before that with [recording] stop, or model the drive",
+                    source)
 
 
 _DEGREE_WORDS = ("deg", "degree", "degrees", "°")
