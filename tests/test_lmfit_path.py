@@ -114,6 +114,28 @@ def test_lmfit_nelder_reaches_the_string_pendulum_optimum():
     _same_optimum(PENDULUM, "lmfit:nelder")
 
 
+@pytest.mark.parametrize("start", [(0.0, 0.5, 0.0), (1.0, -1.0, 0.7), (-3.0, 0.4999999, 1e-9)])
+def test_lmfit_leastsq_finds_an_optimum_on_its_bounds(start):
+    """A linear least squares whose optimum lies on a lower and an upper bound, against scipy's
+    bounded linear solver.  lmfit's bounds transform is flat on a bound, where MINPACK alone
+    stays at a start on it (the first start) or crawls towards it (the others)."""
+    from scipy.optimize import lsq_linear
+
+    from escfit.inference.lmfit_path import lmfit_optimizer
+
+    rng = np.random.default_rng(3)
+    a = rng.normal(size=(60, 3))
+    b = a @ np.array([0.8, 1.5, -0.6]) + 0.1 * rng.normal(size=60)  # unbounded optimum outside the box
+    lower, upper = np.array([-10.0, -10.0, 0.0]), np.array([10.0, 0.5, 1.0])
+    exact = lsq_linear(a, b, bounds=(lower, upper), tol=1e-12)
+    assert exact.active_mask[1] == 1 and exact.active_mask[2] == -1  # the case meant: both bounds bind
+    best = lmfit_optimizer(None, "leastsq")(lambda x: a @ x - b, np.array(start), lower, upper, names=["u", "v", "w"])
+    np.testing.assert_allclose(best.x, exact.x, rtol=0, atol=1e-7)
+    assert best.x[1] == upper[1] and best.x[2] == lower[2]
+    assert best.chisqr == pytest.approx(float(np.sum((a @ exact.x - b) ** 2)), rel=1e-12)
+    assert best.success and "held on a bound" in best.message
+
+
 def test_method_names_are_lmfit_minimisers():
     """Every name escfit runs is one lmfit's Minimizer.minimize dispatches, and every lmfit
     minimiser is either run or refused with a reason."""

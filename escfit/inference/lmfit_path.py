@@ -31,7 +31,8 @@ from ..core.errors import FitError
 from ..likelihood.problem import Problem
 from .fdjac import batch_jacobian
 from .lmfit_params import import_lmfit, lmfit_key
-from .trf import Optimum, optimum
+from .lsq import bound_flags
+from .trf import DEFAULT_TOL, Optimum, optimum
 
 __all__ = ["LMFIT_PREFIX", "LMFIT_METHODS", "GLOBAL", "lmfit_method", "lmfit_optimizer", "check_method"]
 
@@ -160,8 +161,10 @@ def lmfit_optimizer(problem: Problem, method: str, *, seed: int = 0) -> Callable
         kws: dict = {}
         if method in ("leastsq", "least_squares"):
             kws["Dfun"] = lambda p: jacobian(vector(p))
+            # the trust region's stopping tolerances (lmfit's leastsq defaults: 1.5e-8, 1.5e-8, 0)
+            kws.update(ftol=DEFAULT_TOL, xtol=DEFAULT_TOL, gtol=DEFAULT_TOL)
             if method == "least_squares":
-                kws.update(ftol=1e-8, xtol=1e-8, gtol=1e-8, x_scale=1.0)
+                kws.update(x_scale=1.0)
                 if diff_step is not None:
                     kws["diff_step"] = diff_step
         elif method in GRADIENT:
@@ -174,12 +177,22 @@ def lmfit_optimizer(problem: Problem, method: str, *, seed: int = 0) -> Callable
             kws["seed"] = int(seed)
         max_nfev = 4000 * (k + 1) * (10 if method in GLOBAL else 1)
 
-        def minimise(x: np.ndarray, held: np.ndarray):
+        def minimise(x: np.ndarray, held: np.ndarray, watch: np.ndarray | None = None):
+            """lmfit's run from ``x`` with ``held`` fixed: ``(result, x)``, or ``(None, x)`` when an
+            accepted point (where MINPACK asks for the Jacobian) puts a ``watch`` parameter on a bound."""
             mini = lmfit.Minimizer(lambda p: fun(vector(p)), parameters(x, held), max_nfev=max_nfev)
             call = dict(kws)
             if method == "leastsq":  # lmfit takes the columns of the varied parameters only
-                call["Dfun"] = lambda p: jacobian(vector(p))[:, ~held]
-            out = mini.minimize(method=method, **call)
+                def dfun(p):
+                    at = vector(p)
+                    if watch is not None and np.any(bound_flags(at, lower, upper)[watch]):
+                        raise _ReachedBound(at)
+                    return jacobian(at)[:, ~held]
+                call["Dfun"] = dfun
+            try:
+                out = mini.minimize(method=method, **call)
+            except _ReachedBound as reached:
+                return None, np.clip(reached.x, lower, upper)
             return out, np.clip(vector(out.params), lower, upper)
 
         x = np.clip(np.asarray(x0, float), lower, upper)
@@ -201,8 +214,6 @@ def lmfit_optimizer(problem: Problem, method: str, *, seed: int = 0) -> Callable
 def _outward(x: np.ndarray, r: np.ndarray, jac: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
     """Parameters on a bound (:func:`~escfit.inference.lsq.bound_flags`) whose cost gradient
     ``J^T r`` points out of the range: the KKT point holds them there."""
-    from .lsq import bound_flags
-
     g = jac.T @ r
     with np.errstate(invalid="ignore", divide="ignore"):
         se = np.sqrt(np.diag(np.linalg.pinv(jac.T @ jac)))
@@ -221,11 +232,13 @@ def _leastsq_with_active_bounds(minimise, fun, jacobian, x: np.ndarray, lower: n
     it started, reporting success (measured on the string pendulum's coulomb.R = 0: 8
     evaluations, cost 2297.59 against 2264.52 at the optimum, 5 standard errors away).
     Approaching a bound from inside, the slope vanishes as the bound nears and the run
-    crawls (a thousand evaluations to reach R = 1e-8).
+    crawls (a thousand evaluations to bring R to 1e-8).
 
-    So a parameter on its bound with the cost falling outward is held on the bound (lmfit's
-    ``vary=False``) and the others are fitted; after each run the bound parameters are checked
-    again (one Jacobian) and the run repeated until the held set is the KKT point's.
+    So a run is stopped when a parameter reaches a bound (:func:`~escfit.inference.lsq.bound_flags`),
+    a parameter on its bound with the cost falling outward (the gradient ``J^T r``) is held there
+    (lmfit's ``vary=False``) and the others are fitted again, until a run ends with the held set
+    the KKT point's.  A parameter found on a bound with the cost rising outward is released and
+    no longer watched.
 
     Returns
     -------
@@ -233,23 +246,41 @@ def _leastsq_with_active_bounds(minimise, fun, jacobian, x: np.ndarray, lower: n
         lmfit's last result, the optimum, its residuals and Jacobian, evaluations, and which
         parameters are held.
     """
-    from .lsq import bound_flags
-
     k = x.size
-    held = np.zeros(k, bool)
+    held, released = np.zeros(k, bool), np.zeros(k, bool)
     nfev = 0
     if bound_flags(x, lower, upper).any():  # a start on a bound: decide from the gradient there
         r = np.asarray(fun(x), float)
         held = _outward(x, r, jacobian(x, r), lower, upper)
         nfev += 1
-    for _ in range(k + 1):
+    rounds = 2 * k + 2
+    for i in range(rounds):
         x = np.where(held & (np.abs(x - lower) <= np.abs(x - upper)), lower, np.where(held, upper, x))
-        out, x = minimise(x, held)
-        nfev += int(getattr(out, "nfev", 0)) + 1
+        out, x = minimise(x, held, ~held & ~released if i < rounds - 1 else None)
+        nfev += (int(out.nfev) if out is not None else 0) + 1
         r = np.asarray(fun(x), float)
         jac = jacobian(x, r)
         now = _outward(x, r, jac, lower, upper)
-        if np.array_equal(now, held):
+        freed = (bound_flags(x, lower, upper) != 0) & ~now & ~released
+        if freed.any():  # off the flat end of the transform along the bounded Gauss-Newton step
+            x[freed] = (x + _bounded_step(x, r, jac, lower, upper))[freed]
+            released |= freed
+        if out is not None and np.array_equal(now, held):
             break
         held = now
     return out, x, r, jac, nfev, held
+
+
+class _ReachedBound(Exception):
+    """Raised from the Jacobian callback to stop MINPACK at an accepted point on a bound."""
+
+    def __init__(self, x: np.ndarray):
+        super().__init__("a parameter reached a bound")
+        self.x = np.array(x, float)
+
+
+def _bounded_step(x: np.ndarray, r: np.ndarray, jac: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """The Gauss-Newton step of the linearised residuals inside the bounds."""
+    from scipy.optimize import lsq_linear
+
+    return lsq_linear(jac, -r, bounds=(np.minimum(lower - x, 0.0), np.maximum(upper - x, 0.0))).x
