@@ -9,7 +9,10 @@ has one).  Each start runs ``lmfit.Minimizer(...).minimize(method=NAME)`` over
 ``lmfit.Parameters`` built as :mod:`escfit.inference.lmfit_params` builds them.
 
 * ``leastsq`` (MINPACK's Levenberg-Marquardt) and ``least_squares`` (scipy's trust region) get
-  escfit's Jacobian (one batch call per Jacobian where the problem is vectorised);
+  escfit's Jacobian (one batch call per Jacobian where the problem is vectorised) and the trust
+  region's tolerances (``ftol = xtol = gtol = 1e-8``);
+* ``leastsq`` sees bounds through lmfit's transform, which is flat on a bound: a parameter the
+  optimum puts on its bound is held there (:func:`_leastsq_with_active_bounds`);
 * scalar minimisers with a gradient (``bfgs``, ``lbfgsb``, ``cg``, ``newton``, ``tnc``,
   ``slsqp``) get ``2 J^T r``; those without (``nelder``, ``powell``, ``cobyla``) use the cost alone;
 * global searches (:data:`GLOBAL`) run once over the bounded box instead of from each start;
@@ -234,11 +237,12 @@ def _leastsq_with_active_bounds(minimise, fun, jacobian, x: np.ndarray, lower: n
     Approaching a bound from inside, the slope vanishes as the bound nears and the run
     crawls (a thousand evaluations to bring R to 1e-8).
 
-    So a run is stopped when a parameter reaches a bound (:func:`~escfit.inference.lsq.bound_flags`),
-    a parameter on its bound with the cost falling outward (the gradient ``J^T r``) is held there
+    So a run is stopped at the first accepted point (where MINPACK asks for the Jacobian) that puts
+    a parameter on a bound (:func:`~escfit.inference.lsq.bound_flags`), a parameter on its bound
+    with the cost falling outward (the gradient ``J^T r``) is held there
     (lmfit's ``vary=False``) and the others are fitted again, until a run ends with the held set
-    the KKT point's.  A parameter found on a bound with the cost rising outward is released and
-    no longer watched.
+    the KKT point's.  A parameter found on a bound with the cost rising outward is released, moved
+    off the flat end along the bounded Gauss-Newton step, and no longer watched.
 
     Returns
     -------
