@@ -92,6 +92,44 @@ def test_conf_interval_brackets_the_delta_method_interval():
     assert abs(ci["geneva__mu"][0][1] - lo) < 0.1 * width and abs(ci["geneva__mu"][2][1] - hi) < 0.1 * width
 
 
+def test_conf_interval_with_a_parameter_on_its_bound():
+    """A linear least squares whose best fit has w on its bound 0: conf_interval through escfit's
+    Minimizer against the exact profile (scipy's bounded linear solver at each trial value, the
+    F test's 95 % rise found by root search).  On one side the profile keeps w on its bound,
+    where lmfit's bounds transform is flat and a plain MINPACK refit does not move."""
+    from scipy import stats
+    from scipy.optimize import brentq, lsq_linear
+
+    from escfit.inference.lmfit_bounds import bound_aware_minimizer
+
+    rng = np.random.default_rng(3)
+    a = rng.normal(size=(60, 3))
+    a[:, 2] += 0.8 * a[:, 0]  # w correlated with u, so that the profile of u moves w
+    b = a @ np.array([0.8, 1.5, -0.6]) + 0.1 * rng.normal(size=60)
+    lower, upper = np.array([-10.0, -10.0, 0.0]), np.array([10.0, 10.0, 1.0])
+    params = lmfit.Parameters()
+    for name, lo_, hi_ in zip("uvw", lower, upper):
+        params.add(name, value=0.0, min=lo_, max=hi_)
+    mini = bound_aware_minimizer(lmfit)(lambda p: a @ np.array([p["u"].value, p["v"].value, p["w"].value]) - b,
+                                        params)
+    best = mini.minimize(method="least_squares", ftol=1e-12, xtol=1e-12, gtol=1e-12)
+    exact = lsq_linear(a, b, bounds=(lower, upper), tol=1e-12)
+    assert exact.active_mask.tolist() == [0, 0, -1]
+    chi_best = float(np.sum((a @ exact.x - b) ** 2))
+    nfree = a.shape[0] - 3
+    level = stats.f.ppf(0.95, 1, nfree) * chi_best / nfree
+
+    def rise(u):
+        rest = lsq_linear(a[:, 1:], b - a[:, 0] * u, bounds=(lower[1:], upper[1:]), tol=1e-12)
+        return float(np.sum((a[:, 1:] @ rest.x - (b - a[:, 0] * u)) ** 2)) - chi_best - level
+
+    ends = [brentq(rise, exact.x[0] - 1.0, exact.x[0]), brentq(rise, exact.x[0], exact.x[0] + 1.0)]
+    ci = lmfit.conf_interval(mini, best, p_names=["u"], sigmas=[0.95])
+    width = ends[1] - ends[0]
+    assert ci["u"][0][1] == pytest.approx(ends[0], abs=1e-3 * width)
+    assert ci["u"][2][1] == pytest.approx(ends[1], abs=1e-3 * width)
+
+
 def test_the_lmfit_notebook_runs(tmp_path, monkeypatch):
     for module in ("jupytext", "nbclient", "ipykernel", "matplotlib"):
         pytest.importorskip(module)

@@ -61,8 +61,13 @@ def _agree_exactly(recipe: str, method: str) -> None:
     assert res.attrs["method"] == method
     assert list(lsq["parameter"].values) == list(ref["parameter"].values)
     value, se = lsq["value"].values, ref["stderr"].values
-    # relative agreement; an estimate on a bound (0) is compared at 1e-6 of its standard error
-    np.testing.assert_allclose(value, ref["value"].values, rtol=1e-6, atol=0)
+    # relative agreement; an estimate on a bound (both fits flag it there) is compared at 1e-6 of
+    # its standard error: there its value is the bound plus what a strictly feasible step leaves
+    # (coulomb.R = 3e-27 on the pendulum), no figure to compare relatively
+    np.testing.assert_array_equal(lsq["at_bound"].values, ref["at_bound"].values)
+    on = ref["at_bound"].values != 0
+    np.testing.assert_allclose(value[~on], ref["value"].values[~on], rtol=1e-6, atol=0)
+    assert np.all(np.abs(value[on] - ref["value"].values[on]) <= 1e-6 * se[on]), (value[on], ref["value"].values[on])
     np.testing.assert_allclose(lsq["stderr"].values, se, rtol=1e-4)
 
 
@@ -99,11 +104,7 @@ def test_lmfit_least_squares_agrees_on_the_string_pendulum():
     _agree_exactly(PENDULUM, "lmfit:least_squares")
 
 
-@pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="measured: on this record's ridge (7 parameters, coulomb.R on its bound 0, "
-                   "Gaussian priors on the offset) MINPACK's Levenberg-Marquardt stops 0.07 standard errors from the "
-                   "trust region's point in the white-noise stage, at a cost 0.004 apart; the AR(1) stage then "
-                   "starts from another rho and the two end several standard errors apart")
+@pytest.mark.slow  # coulomb.R ends on its bound 0, where lmfit's bounds transform is flat (held there)
 def test_lmfit_leastsq_agrees_on_the_string_pendulum():
     _agree_exactly(PENDULUM, "lmfit:leastsq")
 
@@ -111,6 +112,28 @@ def test_lmfit_leastsq_agrees_on_the_string_pendulum():
 @pytest.mark.slow
 def test_lmfit_nelder_reaches_the_string_pendulum_optimum():
     _same_optimum(PENDULUM, "lmfit:nelder")
+
+
+@pytest.mark.parametrize("start", [(0.0, 0.5, 0.0), (1.0, -1.0, 0.7), (-3.0, 0.4999999, 1e-9)])
+def test_lmfit_leastsq_finds_an_optimum_on_its_bounds(start):
+    """A linear least squares whose optimum lies on a lower and an upper bound, against scipy's
+    bounded linear solver.  lmfit's bounds transform is flat on a bound, where MINPACK alone
+    stays at a start on it (the first start) or crawls towards it (the others)."""
+    from scipy.optimize import lsq_linear
+
+    from escfit.inference.lmfit_path import lmfit_optimizer
+
+    rng = np.random.default_rng(3)
+    a = rng.normal(size=(60, 3))
+    b = a @ np.array([0.8, 1.5, -0.6]) + 0.1 * rng.normal(size=60)  # unbounded optimum outside the box
+    lower, upper = np.array([-10.0, -10.0, 0.0]), np.array([10.0, 0.5, 1.0])
+    exact = lsq_linear(a, b, bounds=(lower, upper), tol=1e-12)
+    assert exact.active_mask[1] == 1 and exact.active_mask[2] == -1  # the case meant: both bounds bind
+    best = lmfit_optimizer(None, "leastsq")(lambda x: a @ x - b, np.array(start), lower, upper, names=["u", "v", "w"])
+    np.testing.assert_allclose(best.x, exact.x, rtol=0, atol=1e-7)
+    assert best.x[1] == upper[1] and best.x[2] == lower[2]
+    assert best.chisqr == pytest.approx(float(np.sum((a @ exact.x - b) ** 2)), rel=1e-12)
+    assert best.success and "held on a bound" in best.message
 
 
 def test_method_names_are_lmfit_minimisers():

@@ -120,8 +120,12 @@ class LmfitProblem:
         return float(self.problem.log_prob(np.array([vals[n] for n in self.problem.names], float)))
 
     def minimizer(self, **kws) -> "lmfit.Minimizer":
-        """An ``lmfit.Minimizer`` of :meth:`residual` over :attr:`params` (``kws`` go to it)."""
-        return import_lmfit().Minimizer(self.residual, self.params, **kws)
+        """An ``lmfit.Minimizer`` of :meth:`residual` over :attr:`params` (``kws`` go to it),
+        whose ``leastsq`` (and so ``lmfit.conf_interval``'s refits) holds a parameter on a bound
+        the cost falls through (:mod:`escfit.inference.lmfit_bounds`)."""
+        from .lmfit_bounds import bound_aware_minimizer
+
+        return bound_aware_minimizer(import_lmfit())(self.residual, self.params, **kws)
 
 
 def lmfit_problem(problem: Problem, values: Mapping[str, float] | Any = None) -> LmfitProblem:
