@@ -96,6 +96,21 @@ def test_the_change_is_found_in_the_swings_alone():
     assert got.loss_before < 0.5 * got.loss_after
 
 
+@pytest.mark.parametrize("light", [0.999, 0.99])
+def test_a_free_decay_stopped_by_a_hand_is_not_a_drive(light):
+    """A long free decay (0.1 % or 1 % lost per half swing) that a hand stops within three half
+    swings at its end: the same two slopes as a drive switched off (little loss, then much at a
+    smaller amplitude), but the free decay is the stretch before, so no drive may be found."""
+    k = np.arange(110)
+    a = A0 * light ** k
+    a[-3:] = a[-4] * np.array([0.6, 0.25, 0.05])  # the hand
+    v = a * (-1.0) ** k + 1e-3 * np.random.default_rng(2).standard_normal(k.size)
+    assert drive_off(v) is None
+    # the same swings with the release ten half swings before the hand are long enough after it
+    steady = np.where(k < 60, A0, A0 * 0.96 ** np.maximum(k - 60, 0))
+    assert drive_off(steady * (-1.0) ** k) is not None
+
+
 def test_the_users_start_and_release_win_over_the_drive():
     series, off = driven_then_free(5.0, 40.0)
     from dataclasses import replace

@@ -19,7 +19,11 @@ whose split fits best is the change; it is a drive switched off when
   amplitude, where a free decay would lose less, not more), and
 - that difference of slopes stands :data:`Z_DRIVE` standard errors out of the scatter of the
   swings about the fit (reading noise, a drive's own unsteadiness and the decay's departure
-  from a parabola alike).
+  from a parabola alike), and
+- the record goes on for at least :data:`MIN_FREE` half swings after the change: a release
+  starts a free decay of several periods, while a swing that a hand or a brake stops at the end
+  of a long, slowly losing free decay collapses within a few (the same two slopes, but the free
+  decay is the stretch before the change, and taking it for a drive would fit the hand).
 
 A fixed tolerance on how steady the early swing must be (a share of the record's median swing)
 fails exactly where a drive is followed by a long decay: the median swing is then the decay's,
@@ -42,6 +46,7 @@ SPAN_FALL = 0.4  # the fit spans the half swings until the swing has fallen to t
 MAD = 1.4826  # median absolute deviation -> standard deviation of a normal sample
 MIN_BEFORE = 2  # half swings before the change at least (a slope; one or two: segments.driven_start)
 MIN_AFTER = 5  # half swings after the change at least (a parabola and its scatter)
+MIN_FREE = 10  # half swings of the record after the change at least: the free decay a release starts
 
 
 @dataclass(frozen=True)
@@ -120,6 +125,10 @@ def drive_off(values: np.ndarray) -> DriveOff | None:
     b1, b2 = float(coef[1]), float(coef[3])  # slopes before and just after the change (per half swing)
     var = s2 * float(cov[1, 1] + cov[3, 3] - 2.0 * cov[1, 3])
     score = (b1 - b2) / math.sqrt(var) if var > 0 else math.inf
-    if b2 < 0 and -b1 < LOSS_SHARE * -b2 and score > Z_DRIVE:
+    # a free decay follows a drive's switch-off for several periods; a swing that collapses within
+    # a few half swings after a long, slowly losing stretch was stopped (a hand, a brake) at the
+    # end of a free decay, which that stretch is
+    free = v.size - 1 - m
+    if b2 < 0 and -b1 < LOSS_SHARE * -b2 and score > Z_DRIVE and free >= MIN_FREE:
         return DriveOff(m, -b1, -b2, score)
     return None
