@@ -19,20 +19,21 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def quick_start_line() -> str:
+def readme_line(prefix: str) -> str:
+    """The one command line of the README's fenced ``bash`` blocks that starts with ``prefix``."""
     text = (ROOT / "README.md").read_text(encoding="utf-8")
     blocks = re.findall(r"^```bash\n(.*?)^```", text, re.S | re.M)
-    lines = [line for block in blocks for line in block.splitlines() if line.startswith("escfit examples")]
+    lines = [line for block in blocks for line in block.splitlines() if line.startswith(prefix)]
     assert len(lines) == 1, lines
     return lines[0]
+
+
+def quick_start_line() -> str:
+    return readme_line("escfit examples")
 
 
 def second_example_line() -> str:
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
-    blocks = re.findall(r"^```bash\n(.*?)^```", text, re.S | re.M)
-    lines = [line for block in blocks for line in block.splitlines() if line.startswith("cd ~/escfit-examples")]
-    assert len(lines) == 1, lines
-    return lines[0]
+    return readme_line("cd ~/escfit-examples")
 
 
 def test_quick_start_line_is_a_pendulum_outside_the_clone():
