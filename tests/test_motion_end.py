@@ -162,3 +162,21 @@ def test_init_writes_the_stop_for_a_gyroscope_sunk_into_its_noise(tmp_path):
     res = fit(tmp_path / here / "gyro.toml", str(data), n_starts=1)
     covers(res, "oscillator.omega0", w0)
     covers(res, "viscous.C", C)
+
+
+def test_a_swing_that_comes_back_after_sinking_has_not_ended():
+    """A decay that sinks into the noise and is struck again (an impact test's second hammer blow)
+    has not reached its end of motion; a noise tail with one step of its zero, or a drifting zero,
+    does not swing again."""
+    from escfit.analysis.recordings.noise_end import resumes
+
+    rng = np.random.default_rng(4)
+    t = np.arange(0.0, 40.0, 0.02)
+    decay = np.exp(-0.5 * t) * np.cos(2 * np.pi * t)
+    noise = 1e-3 * rng.standard_normal(t.size)
+    i = int(np.searchsorted(t, 12.0))
+    struck = decay + np.where(t > 20, np.exp(-0.5 * (t - 20)) * np.cos(2 * np.pi * (t - 20)), 0.0) + noise
+    assert resumes(t, struck, i, 1.0)
+    stepped = decay + noise + np.where(t > 25, 0.2, 0.0)  # a step of a fifth of the first swing
+    drifting = decay + noise + 0.01 * t  # an integrated bias
+    assert not resumes(t, stepped, i, 1.0) and not resumes(t, drifting, i, 1.0)

@@ -40,6 +40,7 @@ from .series import quantity_words
 
 __all__ = ["SunkEnd", "resting_tail", "noise_tail", "window_fits", "sunk_end", "sunk_end_before", "describe", "CUT_RATIO", "AGAIN_RATIO", "CUT_WARNING"]
 
+RESUME_SHARE = 0.3  # a tail that swings again by this share of the swing before it is motion, not noise
 MOVING_SIGMAS = 6.0  # a window's swing above this many of its noise scales is motion (the resting tail)
 CUT_RATIO = 3.0  # the swing has sunk where its amplitude is this many noise floors
 AGAIN_RATIO = 6.0  # twice that: a later window this far above the floor swings again
@@ -192,15 +193,37 @@ def resting_tail(rec) -> tuple[int, float]:
 def noise_tail(rec, i_rest: int | None = None) -> tuple[object, SunkEnd | None]:
     """The record up to where its swing sank into the noise before it rests (at sample ``i_rest``,
     :func:`resting_tail`; ``None``: it never rests), with the note (and warning) added, and that
-    end; the record unchanged and ``None`` when the swing does not sink before it rests."""
+    end; the record unchanged and ``None`` when the swing does not sink before it rests, or when
+    it swings again after it (:func:`resumes`): motion that resumes had not ended (beating
+    modes, repeated impacts), and the analysis that follows says what it is."""
     end = sunk_end_before(rec.t, rec.x, rec.period, i_rest)
-    if end is None:
+    if end is None or resumes(rec.t, rec.x, end.index, rec.period):
         return rec, None
     note, warning = describe(end, lambda v: rec.show(v, 2))
     rec.notes.append(note)
     if warning:
         rec.warnings.append(warning)
     return rec.head(end.index), end
+
+
+def resumes(t: np.ndarray, x: np.ndarray, index: int, period: float) -> bool:
+    """Whether the record swings again after sample ``index`` by :data:`RESUME_SHARE` of its swing
+    before it (half its peak-to-peak range there).  The record after is cut into one-period
+    stretches, each less its straight line (a drifting zero, an integrated bias); the second
+    largest half range counts, so that one step of the zero does not.  A noise tail stays far
+    below the swing; a beat or another impact comes back to its size, again and again."""
+    before, after, ta = np.asarray(x[:index], float), np.asarray(x[index:], float), np.asarray(t[index:], float)
+    if before.size < 2 or after.size < 8 or not (math.isfinite(period) and period > 0):
+        return False
+    swing = 0.5 * float(np.max(before) - np.min(before))
+    edges = np.searchsorted(ta, np.arange(ta[0], ta[-1], period))
+    ranges = []
+    for lo, hi in zip(edges, np.r_[edges[1:], ta.size]):
+        if hi - lo >= 4:
+            u, y = ta[lo:hi] - ta[lo], after[lo:hi]
+            r = y - np.polyval(np.polyfit(u, y, 1), u)
+            ranges.append(0.5 * float(np.max(r) - np.min(r)))
+    return len(ranges) >= 2 and sorted(ranges)[-2] > RESUME_SHARE * swing
 
 
 def sunk_end_before(t: np.ndarray, x: np.ndarray, period: float, i_rest: int | None = None) -> SunkEnd | None:
