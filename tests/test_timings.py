@@ -1,25 +1,40 @@
 """Phase clocks: nested phases are counted once, repeated phases add up."""
 
-import time
+import pytest
 
 from escfit.core import timings
 
 
-def test_nested_phase_is_charged_to_the_inner_one_only():
+class _Clocks:
+    """Hand-advanced wall and CPU clocks, so the bookkeeping is checked exactly."""
+
+    def __init__(self):
+        self.wall = 100.0
+        self.cpu = 7.0
+
+    def spend(self, wall, cpu):
+        self.wall += wall
+        self.cpu += cpu
+
+
+def test_nested_phase_is_charged_to_the_inner_one_only(monkeypatch):
+    clocks = _Clocks()
+    monkeypatch.setattr(timings.time, "perf_counter", lambda: clocks.wall)
+    monkeypatch.setattr(timings.time, "process_time", lambda: clocks.cpu)
     timings.reset()
     with timings.phase("outer"):
-        time.sleep(0.05)
+        clocks.spend(0.05, 0.01)
         with timings.phase("inner"):
-            time.sleep(0.1)
+            clocks.spend(0.1, 0.08)
+        clocks.spend(0.02, 0.02)
     with timings.phase("inner"):
-        time.sleep(0.05)
+        clocks.spend(0.05, 0.03)
     got = timings.phases()
     timings.reset()
     assert list(got) == ["outer", "inner"]
-    # sleeping costs wall time, not CPU: outer holds its own 0.05 s, inner its two sleeps
-    assert 0.045 < got["outer"][0] < 0.09
-    assert 0.145 < got["inner"][0] < 0.25
-    assert got["outer"][1] < 0.04 and got["inner"][1] < 0.04
+    # outer keeps only what it spent outside inner; inner adds its two stretches
+    assert got["outer"] == pytest.approx((0.07, 0.03), abs=1e-12)
+    assert got["inner"] == pytest.approx((0.15, 0.11), abs=1e-12)
 
 
 def test_process_clock_and_table():
