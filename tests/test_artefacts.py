@@ -29,10 +29,6 @@ PERIODS = 20
 
 # what today's analysis does with the classes it gets wrong (the lead removes a mark when its fix lands)
 FAILS_TODAY: dict[str, str] = {
-    "three_pushes": "fitted over the whole record, C and R marked not determined (partly determined, omega0 right): "
-                    "pushes that restore 10-25 % of the swing are not found; the block-loss rule that refused the "
-                    "record before ('keeps its amplitude') was replaced by a whole-record trend that no longer fires "
-                    "on it",
 }
 SLOW = {"long_jitter"}
 

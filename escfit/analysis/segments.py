@@ -45,7 +45,10 @@ from typing import Callable
 
 import numpy as np
 
-__all__ = ["SwingEvent", "swing_gains", "find_events", "driven_start", "SIDE", "Z_PUSH"]
+from .free_law import free_law_gains, law_pushes, robust_scale
+
+__all__ = ["SwingEvent", "swing_gains", "find_events", "driven_start", "amplitude_growth", "robust_scale", "SIDE",
+           "Z_PUSH"]
 
 SIDE = 6  # half swings on each side of a candidate (a median of 6 tolerates two that are out of line)
 MIN_SIDE = 3  # fewer on either side: no verdict there (a median of 3 tolerates one out of line)
@@ -83,11 +86,6 @@ class SwingEvent:
     size: float
     score: float
     evidence: str
-
-
-def _robust_scale(values: np.ndarray) -> float:
-    v = values[np.isfinite(values)]
-    return float(MAD * np.median(np.abs(v - np.median(v)))) if v.size else math.nan
 
 
 def _level(side: np.ndarray) -> tuple[float, float]:
@@ -135,7 +133,7 @@ def swing_gains(series: np.ndarray, side: int = SIDE, *, noise_ratio: float, log
     err = np.full(n, np.nan)
     if n < 2 * MIN_SIDE + 3:
         return gain, err
-    s_p = _robust_scale(np.diff(p, 2)) / noise_ratio
+    s_p = robust_scale(np.diff(p, 2)) / noise_ratio
     q = np.log(p) if log else p
     full_level, full_slope = _full_levels(q, side)
 
@@ -170,7 +168,7 @@ def _centres(values: np.ndarray) -> np.ndarray:
     return c
 
 
-def _growth(v: np.ndarray, k: int) -> float:
+def amplitude_growth(v: np.ndarray, k: int) -> float:
     """How much the amplitude grew over half swing ``k`` (from turning point ``k`` to ``k + 1``).
 
     Both amplitudes are taken about one centre, that of the three turning points after the
@@ -181,22 +179,26 @@ def _growth(v: np.ndarray, k: int) -> float:
     return abs(v[k + 1] - centre) - abs(v[k] - centre)
 
 
-def _pushed_half_swings(v: np.ndarray, run: np.ndarray, noise: float) -> int:
+def _pushed_half_swings(v: np.ndarray, run: np.ndarray, noise: float, beyond_law: np.ndarray | None = None) -> int:
     """The last half swing of the push found at the positions ``run``.
 
     Among those positions (from the first one's window before it on, to two after the last),
-    the half swings over which the amplitude grew
-    by over three times the noise of a growth (``noise``) and by over a quarter of the largest
-    growth there; the last of them, and after it those that still grew that much (a hand that
-    pushes over a whole swing).  Where none grew in amplitude, the swing grew only in size: a
-    hold let go (the half swing before the one whose size jumped the most).
+    the half swings over which the amplitude grew by over three times the noise of a growth
+    (``noise``) and by over a quarter of the largest growth there; the last of them, and after
+    it those that still grew that much or lost less than the free law by three times that
+    law's scatter (``beyond_law``: a hand that pushes over a whole swing, or only makes up the
+    loss).  Where none grew in amplitude, the swing grew only in size: a hold let go (the half
+    swing before the one whose size jumped the most).
     """
     lo, hi = max(int(run[0]) - SIDE - 1, 0), min(int(run[-1]) + 2, v.size - 4)
     if hi < lo:
         return int(run[0])
-    growth = np.array([_growth(v, k) for k in range(lo, hi + 1)])
+    growth = np.array([amplitude_growth(v, k) for k in range(lo, hi + 1)])
     enough = max(3.0 * noise, 0.25 * float(growth.max()))
     grew = np.flatnonzero(growth >= enough)
+    law_scale = robust_scale(beyond_law) if beyond_law is not None else math.nan
+    if not grew.size and math.isfinite(law_scale):  # a small push: seen against the free law only
+        grew = np.flatnonzero(beyond_law[lo:hi + 1] > 3.0 * law_scale)
     if not grew.size:
         # the swing grew in size but not in amplitude: a hold (tiny swings about a held angle)
         # let go at a turning point, the start of the half swing whose size jumped the most
@@ -204,7 +206,10 @@ def _pushed_half_swings(v: np.ndarray, run: np.ndarray, noise: float) -> int:
         jump = p[lo + 1:hi + 2] - p[lo:hi + 1]
         return lo + int(np.argmax(jump))
     last = lo + int(grew[-1])
-    while last + 1 <= v.size - 4 and _growth(v, last + 1) > 3.0 * noise:
+    # a hand still pushing: the amplitude grows, or the swing loses much less than its free law
+    # (beyond_law, escfit.analysis.free_law) says it should: a hand that only makes up the loss
+    while last + 1 <= v.size - 4 and (amplitude_growth(v, last + 1) > 3.0 * noise or (
+            math.isfinite(law_scale) and last + 1 < beyond_law.size and beyond_law[last + 1] > 3.0 * law_scale)):
         last += 1
     return last
 
@@ -232,7 +237,29 @@ def _clusters(flags: np.ndarray, merge: int = 1) -> list[np.ndarray]:
     return np.split(idx, breaks)
 
 
-def find_events(times: np.ndarray, values: np.ndarray, *, resolution: float,
+def _push_runs(level: np.ndarray, law: np.ndarray) -> list[np.ndarray]:
+    """The positions of each push, from the flags of the level test and of the free-law test.
+
+    The level test's windows are wide: its flags within ``SIDE + 3`` of each other are one
+    push.  The free law's flags of one push are contiguous, so where two or more runs of them
+    fall within one run of the level test, they split it (pushes close together); otherwise a
+    level run and the law runs that touch it are one push, and law runs away from any level run
+    are pushes of their own.  Level positions are kept only in a push they decide alone.
+    """
+    law_runs = _clusters(law, merge=1)
+    runs, used = [], set()
+    for lv in _clusters(level, merge=SIDE + 3):
+        touching = [i for i, r in enumerate(law_runs) if r[0] <= lv[-1] + 2 and r[-1] >= lv[0] - 2]
+        used.update(touching)
+        if len(touching) > 1:
+            runs += [law_runs[i] for i in touching]
+        else:
+            runs.append(np.union1d(lv, law_runs[touching[0]]) if touching else lv)
+    runs += [r for i, r in enumerate(law_runs) if i not in used]
+    return sorted(runs, key=lambda r: int(r[0]))
+
+
+def find_events(times: np.ndarray, values: np.ndarray, *, resolution: float, quantum: float = 0.0,
                 show: Callable[[float], str] = lambda v: f"{v:.3g}") -> list[SwingEvent]:
     """Pushes and offset steps among alternating turning points ``values`` at ``times`` (s).
 
@@ -242,6 +269,10 @@ def find_events(times: np.ndarray, values: np.ndarray, *, resolution: float,
         Turning points in order, maxima and minima alternating (rad for an angle).
     resolution
         Smallest change the record resolves (the extremum search's hysteresis), same unit.
+    quantum
+        The sensor's step, same unit (0: none known): a gain beyond the free law must exceed
+        three of them (the turning points are fitted on many samples, so their own noise,
+        measured from their scatter, is the test's scale, not the hysteresis).
     show
         Writes a value of the record's quantity for the evidence sentences.
 
@@ -260,33 +291,49 @@ def find_events(times: np.ndarray, values: np.ndarray, *, resolution: float,
     # p_k and p_(k+1) share a turning point: turning points of noise s give p a noise of
     # sqrt(2) s and second differences of p one of 2 s
     gain, err = swing_gains(np.fmax(p, 0.5 * floor if floor > 0 else 1e-300), noise_ratio=math.sqrt(2.0), log=True)
-    s_p = _robust_scale(np.diff(p, 2)) / math.sqrt(2.0)
-    spread = _robust_scale(gain)
+    s_p = robust_scale(np.diff(p, 2)) / math.sqrt(2.0)
+    spread = robust_scale(gain)
     # a wobble changes the swing by a share of itself at every amplitude, while the noise of a
     # relative gain grows as the swing fades: measured against that noise, a long faded tail's
     # scattered gains no longer set the wobble's scale where the swing is large
-    relative = _robust_scale(gain / err) * err
+    relative = robust_scale(gain / err) * err
     scale = np.fmax(err, np.fmin(spread, relative) if math.isfinite(spread) else 0.0)
     level = np.array([np.median(p[max(0, j - 1 - SIDE):max(1, j - 1)]) for j in range(p.size)])
     absolute = level * np.expm1(np.nan_to_num(gain))  # the gain in the record's unit
     pushes = np.isfinite(gain) & (gain > Z_PUSH * scale) & (absolute > floor)
-    for run in _clusters(pushes, merge=SIDE + 3):  # windows that overlap see one event
-        j = int(run[np.argmax(gain[run])])
+    # pushes a short record with several of them hides from the level test: energy gained
+    # beyond the record's own free law (escfit.analysis.free_law)
+    law, law_step, law_err, deepest = law_pushes(p, 3.0 * quantum)
+    beyond = free_law_gains(p) if np.isfinite(law_step).any() else None
+    for run in _push_runs(pushes, law):
         # turning points of noise s_p / sqrt(2) and centres of noise sqrt(6)/4 of it: a growth's
         # noise is about that of one peak-to-peak swing
-        k = _pushed_half_swings(v, run, s_p)
-        score = float(gain[j] / scale[j]) if scale[j] > 0 else math.inf
+        k = _pushed_half_swings(v, run, s_p, beyond)
+        level_run = run[pushes[run]]
+        if level_run.size:
+            j = int(level_run[np.argmax(gain[level_run])])
+            score = float(gain[j] / scale[j]) if scale[j] > 0 else math.inf
+            events.append(SwingEvent(
+                "push", k, float(t[k + 1]), float(absolute[j]), score,
+                f"the swing gains {100 * np.expm1(gain[j]):.0f} % ({show(absolute[j])} peak to peak) in the half "
+                f"swing ending at t = {t[k + 1]:.4g} s and keeps it: {score:.0f} times the larger of its reading "
+                f"noise ({100 * err[j]:.2g} %) and the rise and fall of the swing elsewhere in the record "
+                f"({100 * spread:.2g} %)"))
+            continue
+        j = int(run[np.argmax(law_step[run])])
+        score = float(law_step[j] / law_err[j]) if law_err[j] > 0 else math.inf
         events.append(SwingEvent(
-            "push", k, float(t[k + 1]), float(absolute[j]), score,
-            f"the swing gains {100 * np.expm1(gain[j]):.0f} % ({show(absolute[j])} peak to peak) in the half swing "
-            f"ending at t = {t[k + 1]:.4g} s and keeps it: {score:.0f} times the larger of its reading noise "
-            f"({100 * err[j]:.2g} %) and the rise and fall of the swing elsewhere in the record ({100 * spread:.2g} %)"))
+            "push", k, float(t[k + 1]), float(law_step[j]), score,
+            f"the swing gains {show(law_step[j])} peak to peak ({100 * law_step[j] / level[j]:.0f} %) beyond what "
+            f"the record's own free decay loses at that size, in the half swing ending at t = {t[k + 1]:.4g} s, and "
+            f"keeps it: {score:.0f} times its reading noise, and nowhere else does the swing fall short of that "
+            f"law by more than {show(deepest)}"))
     c = _centres(v)
     # c_k = (v_k + 2 v_(k+1) + v_(k+2)) / 4 and its second differences scatter alike (sqrt(6)/4 s)
     step, step_err = swing_gains(c, noise_ratio=1.0)
-    c_spread = _robust_scale(step)
+    c_spread = robust_scale(step)
     c_scale = np.fmax(step_err, c_spread if math.isfinite(c_spread) else 0.0)
-    moved = np.isfinite(step) & (np.abs(step) > Z_PUSH * c_scale) & (np.abs(step) > floor) & ~pushes
+    moved = np.isfinite(step) & (np.abs(step) > Z_PUSH * c_scale) & (np.abs(step) > floor) & ~(pushes | law)
     for run in _clusters(moved):
         j = int(run[np.argmax(np.abs(step[run]))])
         if any(abs(e.half_swing - j) <= 2 for e in events):
@@ -331,7 +378,7 @@ def driven_start(values: np.ndarray, *, most: int = 4, reference: int = 6) -> in
     loss = -np.diff(p)
     typical = float(np.median(loss[most + 1:most + 1 + reference]))
     # the second differences of p are differences of successive losses: sqrt(2) times their noise
-    s_l = _robust_scale(np.diff(p, 2)) / math.sqrt(2.0)
+    s_l = robust_scale(np.diff(p, 2)) / math.sqrt(2.0)
     m = 0
     while m < most and loss[m] < 0.75 * typical:
         m += 1

@@ -409,6 +409,7 @@ def window_found(series: TimeSeries, tp) -> dict:
     return {"first": float(t[0]) - zero, "last": float(t[-1]) - zero, "reference": ref - zero, "held": held,
             "left_out": bool(ref - t[0] > period), "stop": float(tp.stop_time) - zero, "period": period,
             "sunk": bool(math.isfinite(float(getattr(tp, "noise_floor", math.nan)))),
+            "pushed": bool(getattr(tp, "pushed_after", False)),
             "last_turn": (float(tp.time[-1]) if len(tp.time) else ref) - zero}
 
 

@@ -173,7 +173,11 @@ def _window_keys(s: Survey) -> tuple[list[str], list[str]]:
             commented.append(f"# start = {_seconds(w['first'])}    # the free decay starts at the record's first "
                              f"turning point ({ref:.6g} s): nothing before it was left out")
     if "stop" not in s.recording:
-        if math.isfinite(w["stop"]) and w.get("sunk"):
+        if math.isfinite(w["stop"]) and w.get("pushed"):
+            active.append(f"stop = {_seconds(w['stop'])}    # pushed again after this (the warning at the top of the "
+                          f"scene gives the evidence); the record runs on to {w['last']:.6g} s: set start and stop "
+                          "around another free stretch to fit that one")
+        elif math.isfinite(w["stop"]) and w.get("sunk"):
             active.append(f"stop = {_seconds(w['stop'])}    # the swing sank into the record's noise there (the notes at "
                           f"the top of the scene give the floor); the record runs on to {w['last']:.6g} s in noise, "
                           "not motion: set stop later to keep more")

@@ -38,7 +38,7 @@ import numpy as np
 
 from ...core.errors import DataError
 from ...analysis.drive_off import drive_off
-from ...analysis.segments import driven_start, find_events
+from ...analysis.segments import amplitude_growth, driven_start, find_events, robust_scale
 from .holds import HOLD_PERIODS, flat_start as _flat_start, held_release, turn_at_start as _turn_at_start
 
 __all__ = ["Turn", "Start", "reference", "faded_end", "growth_tolerance", "growth_steps", "find_start",
@@ -77,6 +77,7 @@ class Start:
     theta: float
     first: int
     kind: str  # "held", "turn", "start" (a turning point at the first sample)
+    end: int | None = None  # index after the last turning point of the free decay (None: to the end)
 
 
 def _amplitudes(values: np.ndarray) -> np.ndarray:
@@ -306,7 +307,9 @@ def find_start(rec, turns: list[Turn], end: int, *, at_start: bool = False) -> S
     times = np.array([turns[i].time if turns[i].time is not None else np.nan for i in range(end)])
     values = np.array([turns[i].value if turns[i].value is not None else np.nan for i in range(end)])
     tol = growth_tolerance(rec, values[first_ok:])
-    r, why = _last_push(rec, times, values, first_ok, end, tol)
+    r, why, cut = _free_stretch(rec, times, values, first_ok, end, tol)
+    if cut is not None:
+        end = cut
     # a hold within the run (a long interval after a flat turn) ends it backwards: the last one is the release
     for i in range(end - 1, r, -1):
         half = _local_half(times, i, end, 0.5 * rec.period)
@@ -339,16 +342,17 @@ def find_start(rec, turns: list[Turn], end: int, *, at_start: bool = False) -> S
     elif r > first_ok:
         rec.notes.append(f"the record before t = {times[r]:.4g} s is not a free decay ({why}); the free decay is "
                          "taken from there")
-        _warn_if_large_cut(rec, times, first_ok, r, end, why)
+        if cut is None:  # else the choice between pushes was warned of with what it leaves out
+            _warn_if_large_cut(rec, times, first_ok, r, end, why)
     amplitude = 0.5 * abs(values[r + 1] - values[r]) if r + 1 < end else math.inf
     held = held_release(rec, turns[r], amplitude)
     if held is not None and r + 1 < end \
             and _regular(times[r + 1] - held[0], _local_half(times, r + 1, end, 0.5 * rec.period)):
         rec.notes.append(f"held at {rec.show(held[1], 4)} until the release at t = {held[0]:.4g} s")
-        return Start(held[0], held[1], r + 1, "held")
+        return Start(held[0], held[1], r + 1, "held", cut)
     if r == first_ok and not (at_start and r == 0):
         _note_pull(rec, turns[r])
-    return Start(float(times[r]), float(values[r]), r + 1, "turn")
+    return Start(float(times[r]), float(values[r]), r + 1, "turn", cut)
 
 
 def _regular_end(times: np.ndarray, first: int, end: int) -> int:
@@ -363,16 +367,23 @@ def _regular_end(times: np.ndarray, first: int, end: int) -> int:
     return first + int(bad[0]) + 1 if bad.size else end
 
 
-def _last_push(rec, times: np.ndarray, values: np.ndarray, first_ok: int, end: int, tol: float) -> tuple[int, str]:
-    """The turning point after the last push among ``turns[first_ok:end]`` and why (``first_ok, ""``: none).
+def _free_stretch(rec, times: np.ndarray, values: np.ndarray, first_ok: int, end: int,
+                  tol: float) -> tuple[int, str, int | None]:
+    """The free decay among ``turns[first_ok:end]`` between pushes: its first turning point,
+    why the record before it is left out (``""``: nothing is), and the end (exclusive) of its
+    turning points when a push follows it (None: the record's end).
 
     Along the record a push is energy gained and kept, beyond the reading noise of the swings
     and beyond their rise and fall elsewhere (:func:`escfit.analysis.segments.find_events`); a
     wobble, an offset step or a glitch is none.  The first half swings have too few before them
     for that test: there a swing larger than the one before it by more than ``tol`` (a hand's
     start, a swing-up) is the evidence.  Offset steps found are kept on ``rec.steps``.
+
+    Pushes cut the record into free stretches; the one with the most half swings is fitted (the
+    last of equals: it follows every push), and the record after it is left out with a warning
+    naming the keys that choose another.
     """
-    events = find_events(times[first_ok:end], values[first_ok:end], resolution=rec.step,
+    events = find_events(times[first_ok:end], values[first_ok:end], resolution=rec.step, quantum=rec.quantum,
                          show=lambda v: rec.show(v, 2))
     for e in events:
         if e.kind == "offset step" and rec.find_steps:
@@ -381,14 +392,59 @@ def _last_push(rec, times: np.ndarray, values: np.ndarray, first_ok: int, end: i
             rec.steps.append((at, e.size, f"{e.evidence}: not a push; the samples from t = {at:.4g} s on are moved "
                                           f"back by {rec.show(e.size, 2, signed=True)} and the record is kept whole"))
     pushes = [e for e in events if e.kind == "push"]
-    if pushes:
-        last = pushes[-1]
-        return first_ok + last.half_swing + 1, last.evidence
-    early = growth_steps(values[first_ok:min(end, first_ok + EARLY_TURNS + 2)], tol)
-    if early.size:
-        r = first_ok + int(early[-1])
-        return r, f"the swing grows after the turning point at t = {times[r]:.4g} s (a push or pull)"
-    return first_ok, ""
+    if not pushes:
+        early = growth_steps(values[first_ok:min(end, first_ok + EARLY_TURNS + 2)], tol)
+        if early.size:
+            r = first_ok + int(early[-1])
+            return r, f"the swing grows after the turning point at t = {times[r]:.4g} s (a push or pull)", None
+        return first_ok, "", None
+    # stretch i runs from the turning point after push i - 1 to the last one before push i began
+    starts = [first_ok] + [first_ok + e.half_swing + 1 for e in pushes]
+    ends = [_push_began(values[:end], first_ok, first_ok + e.half_swing) for e in pushes] + [end]
+    # a stretch counts the half swings whose spacing stays regular (not the noise's extrema once faded)
+    sizes = [_regular_end(times, a, b) - a for a, b in zip(starts, ends)]
+    best = max(range(len(sizes)), key=lambda i: (sizes[i], i))
+    r = starts[best]
+    why = pushes[best - 1].evidence if best > 0 else ""
+    if best == len(pushes):
+        return r, why, None
+    cut = ends[best]
+    # the half swing after the last turning point kept is free too (the push began after it)
+    rec.cut_end = 0.5 * float(times[cut - 1] + times[cut])
+    span = times[end - 1] - times[first_ok]
+    share = 100.0 * (span - (rec.cut_end - times[r])) / span if span > 0 else 0.0
+    when = " and ".join(f"{e.time:.4g} s" for e in pushes) if len(pushes) <= 3 else \
+        f"{pushes[0].time:.4g} s to {pushes[-1].time:.4g} s"
+    others = ", ".join(f"{times[a]:.4g} to {times[b - 1]:.4g} s" for i, (a, b) in enumerate(zip(starts, ends))
+                       if i != best and b - a >= 2)
+    text = (f"the swing is pushed {_times(len(pushes))} (it grows again at t = {when}); the longest free "
+            f"decay between pushes, t = {times[r]:.4g} to {rec.cut_end:.4g} s ({sizes[best]} half swings), is "
+            f"fitted and {share:.0f} % of the record is left out. The push after it: {pushes[best].evidence}"
+            + (f". The other free stretches ({others}) can be fitted by setting [recording] start and stop (or "
+               "--start and --stop) around them" if others else ""))
+    (rec.warnings if share > 100 * CUT_WARNING else rec.notes).append(text)
+    return r, why, cut
+
+
+def _times(n: int) -> str:
+    return {1: "once", 2: "twice"}.get(n, f"{n} times")
+
+
+def _push_began(values: np.ndarray, first: int, k: int) -> int:
+    """End (exclusive) of the free turning points before the push whose last grown half swing is ``k``.
+
+    The push began in the earliest of the half swings up to ``k`` over which the amplitude grew
+    (beyond three times the noise of one peak-to-peak swing) without a break; the turning point
+    that half swing starts from is left to the push too, since a hand acts before the swing
+    shows the energy it gave.
+    """
+    v = np.asarray(values[first:], float)
+    p = np.abs(np.diff(v))
+    noise = 3.0 * robust_scale(np.diff(p, 2)) / math.sqrt(2.0) if p.size > 4 else 0.0
+    began = k - first
+    while began - 1 > 0 and began + 2 < v.size and amplitude_growth(v, began - 1) > noise:
+        began -= 1
+    return first + max(began, 1)
 
 
 def _jump_instant(rec, t0: float, t1: float, size: float) -> float:
@@ -500,7 +556,8 @@ def reference(rec, turns: list[Turn]) -> tuple[float, float, list[Turn]]:
             rec.notes.append(f"the record starts at a turning point ({rec.show(found.theta, 4)} on the "
                              "sensor's scale)")
     # an extremum next to the start that no local fit could place (time None) is no turning point
-    return found.time, found.theta, [u for u in turns[found.first:end] if u.time is not None]
+    last = end if found.end is None else found.end
+    return found.time, found.theta, [u for u in turns[found.first:last] if u.time is not None]
 
 
 def _check_decay(times: np.ndarray, values: np.ndarray, rec) -> None:

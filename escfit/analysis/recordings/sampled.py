@@ -45,6 +45,7 @@ class SampledRecord:
     warnings: list = field(default_factory=list)  # what the user must know (a large part left out)
     steps: list = field(default_factory=list)  # offset steps found: (first sample moved, s; jump; note)
     find_steps: bool = True  # look for offset steps (not in a record they were already taken out of)
+    cut_end: float = float("nan")  # the free decay chosen ends here, s: a push after it (nan: none)
 
     def show(self, value: float, digits: int = 3, *, signed: bool = False) -> str:
         """A value of the record's quantity for a note (angles in degrees)."""

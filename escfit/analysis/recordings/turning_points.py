@@ -146,6 +146,10 @@ class TurningPoints:
         Runs of samples left out as a tracking glitch (:mod:`escfit.analysis.glitches`): first
         and last time (s, the series' clock) and the note; :func:`drop_samples` leaves them out
         of the series too.
+    pushed_after : bool
+        ``stop_time`` ends the free decay chosen before a push (the record goes on, pushed
+        again): :func:`escfit.analysis.recordings.motion.find_start` chose the longest free
+        stretch between pushes.
     """
 
     swing: np.ndarray
@@ -171,6 +175,7 @@ class TurningPoints:
     origin: float = 0.0
     dropped: tuple = ()
     noise_floor: float = math.nan
+    pushed_after: bool = False
 
     def after_first(self, t: float) -> float:
         """``t`` (s, the series' clock) as a time after the file's first sample, as notes show times."""
@@ -314,7 +319,10 @@ def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool,
     times = [u.time for u in turns]
     values = [u.value for u in turns]
     stop_time = math.nan
-    if i_rest < t.size:
+    cut = math.isfinite(rec.cut_end)  # a push after the free decay chosen: it ends at its last turning point
+    if cut:
+        stop_time, rest_theta = rec.cut_end, math.nan
+    elif i_rest < t.size:
         stop_time = _final_turn(rec, i_rest, rest_theta, t_ref, theta_ref, times, values)
     all_t = np.r_[t_ref, times]
     all_v = np.r_[theta_ref, values]
@@ -323,8 +331,8 @@ def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool,
         all_t, all_v = all_t[:keep], all_v[:keep]
         times, values = times[:keep - 1], values[:keep - 1]
         # the turning points of the noise are gone; the motion still ended where the record rests
-        stop_time = float(t[i_rest]) if i_rest < t.size else math.nan
-    if sunk is not None:
+        stop_time = float(t[i_rest]) if i_rest < t.size and not cut else stop_time
+    if sunk is not None and not cut:
         stop_time = sunk.time
     if all_t.size < MIN_TURNS:
         raise DataError(f"only {all_t.size} turning point(s) from the reference at t = {t_ref:.4g} s on stand above "
@@ -340,7 +348,7 @@ def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool,
     amps = all_v - centre.offset - centre.rate * (all_t - t_ref)
     period, period_se = period_of(all_t[1:n_moving], amps[1:n_moving]) if n_moving > 3 \
         else period_of(all_t[:n_moving], amps[:n_moving])
-    if math.isfinite(stop_time) and sunk is None:
+    if math.isfinite(stop_time) and sunk is None and not cut:
         level = centre.offset + centre.rate * (stop_time - t_ref)
         rec.notes.append(f"motion stopped at t = {stop_time:.4g} s (resting {rec.show(rest_theta - level, signed=True)} "
                          "from the centre)")
@@ -351,12 +359,13 @@ def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool,
     swing = np.arange(1, len(times) + 1, dtype=np.int64)
     return TurningPoints(swing, np.array(times, dtype=float) + origin, np.array(values, dtype=float), float(period),
                          float(centre.offset), float(centre.rate), float(t_ref) + origin, float(theta_ref),
-                         float(stop_time) + origin, float(rest_theta) if math.isfinite(stop_time) else math.nan,
+                         float(stop_time) + origin, float(rest_theta) if math.isfinite(stop_time) and not cut else math.nan,
                          rec.notes, period_stderr=period_se, offset_stderr=centre.offset_stderr,
                          offset_rate_stderr=centre.rate_stderr, offset_rate_measured=centre.measured_rate,
                          noise=rec.sigma, sustained_from=held_from + origin, sustained_why=why, origin=origin,
                          noise_floor=sunk.floor if sunk is not None else math.nan,
-                         warnings=rec.warnings, steps=tuple((at + origin, size, note) for at, size, note in rec.steps))
+                         warnings=rec.warnings, steps=tuple((at + origin, size, note) for at, size, note in rec.steps),
+                         pushed_after=cut)
 
 
 def remove_steps(time: np.ndarray, values: np.ndarray, steps) -> np.ndarray:
