@@ -32,7 +32,7 @@ from typing import Any, Iterable, Mapping, Sequence
 
 from .errors import ResultsError
 
-__all__ = ["Array", "Layout", "read_layout", "check_backed", "check_dimensions", "expect_arrays", "expect_shape",
+__all__ = ["Array", "Layout", "read_layout", "check_file", "check_backed", "check_dimensions", "expect_arrays", "expect_shape",
            "expect_dims", "MAX_RATIO", "UNBACKED_SLACK"]
 
 # A compressed array may declare at most this many times the bytes it occupies (deflate reaches
@@ -128,6 +128,25 @@ def read_layout(path: str | Path, error: str = "damaged or unreadable file") -> 
         first = (str(exc).splitlines() or [type(exc).__name__])[0]
         raise ResultsError(f"{error} ({first[:160]})", where) from None
     return Layout(where, size, arrays, attrs, frozenset(groups))
+
+
+def check_file(path: str | Path, what: str) -> Layout:
+    """Read ``path``'s layout and refuse it before any array is read: not HDF5, unreadable,
+    arrays that declare more than the file holds, or axes that disagree with their dimensions.
+
+    Parameters
+    ----------
+    what
+        What the file should be ("results file", "fleet summary", ...), for the messages.
+    """
+    import h5py
+
+    if not h5py.is_hdf5(path):
+        raise ResultsError(f"not an HDF5 file: give a {what} written by escfit", str(path))
+    layout = read_layout(path, f"damaged or unreadable {what}")
+    check_backed(layout)
+    check_dimensions(layout)
+    return layout
 
 
 def _attr(attrs, key: str) -> Any:

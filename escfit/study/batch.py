@@ -217,9 +217,12 @@ def _load_for_summary(path: Path) -> FitResult | None:
     might hand back a cached handle of a file that has since been replaced."""
     import h5py
 
+    from ..results import check_results_file
+
     if not path.is_file() or not h5py.is_hdf5(path):
         return None
     try:
+        check_results_file(path)  # the layout, from its metadata: a damaged file is not read
         with h5py.File(path, "r") as f:
             present = [g for g in SUMMARY_GROUPS if g in f]
         parts = {}
@@ -411,10 +414,13 @@ def _finished_units(tasks: Sequence[UnitTask], out: Path, scene_text: str, metho
 def _foreign_units_of_summary(out: Path, ours: set[str], scene_text: str, method: str) -> list[str]:
     """Units outside this batch that the folder's summary lists as finished by a batch of another
     scene or method, and whose results files are still in the folder."""
+    from ..core.h5layout import check_file
+
     path = out / SUMMARY_FILE
     if not path.is_file():
         return []
     try:
+        check_file(path, "fleet summary")
         with xr.open_dataset(path, engine="h5netcdf") as ds:
             if ds.attrs.get("schema_version") != SUMMARY_SCHEMA:
                 return []
@@ -514,9 +520,11 @@ def load_summary(path: str | Path) -> xr.Dataset:
         p = p / SUMMARY_FILE
     if not p.is_file():
         raise ResultsError("fleet summary not found", str(p))
-    ds = xr.open_dataset(p, engine="h5netcdf").load()
-    if ds.attrs.get("schema_version") != SUMMARY_SCHEMA:
+    from ..core.h5layout import check_file
+
+    if check_file(p, "fleet summary").attrs.get("schema_version") != SUMMARY_SCHEMA:
         raise ResultsError(f"not a fleet summary of schema {SUMMARY_SCHEMA!r}", str(p))
+    ds = xr.open_dataset(p, engine="h5netcdf").load()
     return ds
 
 

@@ -203,9 +203,12 @@ def decay_residuals(results: str | Path, *, units: Sequence[str] | None = None) 
         Dimensions (unit, curve, reading); variables ``observed``, ``fitted``, ``residual``
         (rad), ``swing`` and ``load``.  Curves with fewer readings are padded with NaN.
     """
+    from ..results import check_results_file
+
     files = unit_files(results, units)
     rows = []
     for u, path in files.items():
+        check_results_file(path)  # the layout, from its metadata, before any group is read
         obs = _open_group(path, "observed_data")
         root = _open_group(path, None)
         try:

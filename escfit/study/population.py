@@ -168,9 +168,12 @@ class _PosteriorOnly:
     def read(cls, path: str | Path) -> "_PosteriorOnly":
         from ..results import SCHEMA_VERSION
 
+        from ..results import check_results_file
+
         p = Path(path)
         if not p.is_file():
             raise ResultsError("results file not found", str(p))
+        check_results_file(p)  # the layout, from its metadata, before any array is read
         attrs: dict = {}
         try:
             with xr.open_dataset(p, engine="h5netcdf") as root:
@@ -429,11 +432,13 @@ def fit_population(draws: UnitDraws, *, walkers: int = 32, steps: int = 2000, bu
 
 def load_population(path: str | Path) -> xr.Dataset:
     """Read a population result written by :meth:`PopulationResult.write`."""
+    from ..core.h5layout import check_file
+
     p = Path(path)
     if not p.is_file():
         raise ResultsError("population file not found", str(p))
-    ds = xr.open_dataset(p, engine="h5netcdf").load()
-    if ds.attrs.get("schema_version") != POPULATION_SCHEMA:
+    if check_file(p, "population file").attrs.get("schema_version") != POPULATION_SCHEMA:
         raise ResultsError(f"not a population file of schema {POPULATION_SCHEMA!r}", str(p))
+    ds = xr.open_dataset(p, engine="h5netcdf").load()
     ds.attrs["summary"] = json.loads(ds.attrs["summary"])
     return ds
