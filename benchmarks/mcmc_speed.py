@@ -7,7 +7,7 @@ and tail ESS >= 400, longer than 50 autocorrelation times):
   three loads, notch counts, phase convention), 32 walkers, seed 3;
 * ``waveform120``: a synthetic 120-swing free decay (omega0 = 2 pi rad/s, C = 0.02 1/s,
   R = 0.01 rad/s^2, released at 0.5 rad) written by escfit's own recorder
-  (:func:`escfit.balance.synthetic.recorders.record`, 50 Hz, white noise 0.01 rad, seed 5), fitted
+  (:func:`escfit.balance.synthetic.instruments.record`, 50 Hz, white noise 0.01 rad, seed 5), fitted
   as a waveform (8 free parameters: omega0, theta0, C, R, sigma, offset, its drift, the release
   instant), 32 walkers, seed 1;
 * with ``--recipes``: the real-data emcee recipes ``fits/real/pohl_amplitudes.toml`` and

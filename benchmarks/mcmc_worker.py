@@ -45,7 +45,7 @@ def _case(case: str, work: Path):
         base = ROOT / "fits"
         return base / doc["scene"], base / doc["data"], int(doc["walkers"]), int(doc["seed"]), 20000
     if case == "waveform120":
-        from escfit.balance.synthetic.recorders import record
+        from escfit.balance.synthetic.instruments import record
         from escfit.core.scene import load_scene
 
         rec = work / "waveform120.csv"

@@ -18,7 +18,7 @@ import pytest
 from click.testing import CliRunner
 
 from escfit import load_scene
-from escfit.balance.synthetic.recorders import record
+from escfit.balance.synthetic.instruments import record
 from escfit.cli.main import cli
 from escfit.core.errors import ResultsError
 from escfit.inference import fit

@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 from escfit import load_scene
-from escfit.balance.synthetic.recorders import record
+from escfit.balance.synthetic.instruments import record
 from escfit.inference import fit
 from escfit.inference.compare import compare_fits
 

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import escfit
-from escfit.balance.synthetic.recorders import record
+from escfit.balance.synthetic.instruments import record
 from escfit.balance.synthetic.unit_curves import record_unit_curve
 from escfit.core.errors import FitError, SceneError
 

@@ -37,7 +37,7 @@ def _truth_scene(tmp_path, *, restoring="pendulum", omega0=4.0, theta0="30 deg",
 def _decay_file(tmp_path, scene, *, name="decay.csv", rate=25.0, sigma_deg=0.2, offset_deg=0.5, t0=2.3,
                 columns="deg", seed=1) -> Path:
     """A user's own file: time and angle in a table (optionally a third, unrelated column, no header)."""
-    from escfit.balance.synthetic.recorders import record_timeseries
+    from escfit.balance.synthetic.instruments import record_timeseries
 
     ts = record_timeseries(scene, rate_hz=rate, sigma=math.radians(sigma_deg), offset=math.radians(offset_deg),
                            seed=seed)

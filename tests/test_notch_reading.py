@@ -20,7 +20,7 @@ from escfit import SceneError
 from escfit.balance.observation import NotchObservation, observation_from_table
 from escfit.balance.observation.notches import notch_count
 from escfit.analysis.recordings import read_unit_curve
-from escfit.balance.synthetic.recorders import record
+from escfit.balance.synthetic.instruments import record
 from escfit.balance.synthetic.unit_curves import record_unit_curve
 from escfit.inference.fit import fit
 from escfit.balance.observation.notch_convention import notch_reading_report

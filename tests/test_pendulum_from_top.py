@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import escfit
-from escfit.balance.synthetic.recorders import record_timeseries
+from escfit.balance.synthetic.instruments import record_timeseries
 from escfit.core.errors import DataError
 from escfit.inference import fit
 

@@ -55,7 +55,7 @@ def _ts_rows(n=40, bad=None) -> str:
 
 def _pulse_mismatch(tmp):
     from escfit.balance.problems.pulses import PulseFitProblem
-    from escfit.balance.synthetic.recorders import record_pulses
+    from escfit.balance.synthetic.instruments import record_pulses
 
     scene = escfit.load_scene(DATASETS / "recordings" / "pulses_scene.toml")
     train = record_pulses(scene, swings=4, seed=0)
@@ -66,7 +66,7 @@ def _pulse_mismatch(tmp):
 
 def _tg_mismatch(tmp):
     from escfit.balance.problems.timegrapher import TimegrapherFitProblem
-    from escfit.balance.synthetic.recorders import record_timegrapher
+    from escfit.balance.synthetic.instruments import record_timegrapher
 
     scene = escfit.load_scene(DATASETS / "recordings" / "timegrapher_scene.toml")
     rec = record_timegrapher(scene, swings=30, seed=0)

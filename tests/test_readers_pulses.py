@@ -17,7 +17,7 @@ from escfit.balance import solve
 from escfit.balance.problems.curves import FitProblem
 from escfit.inference import least_squares, run_emcee
 from escfit.balance.problems.pulses import PulseFitProblem
-from escfit.balance.synthetic.recorders import record_pulses, swing_directions
+from escfit.balance.synthetic.instruments import record_pulses, swing_directions
 from escfit.analysis.recordings.pulses import assign_pulses, pulses_to_unit_curve, read_pulses, write_pulses
 
 from .conftest import DATASETS
@@ -66,7 +66,7 @@ def test_round_trip_keeps_times_kinds_and_metadata(scene, tmp_path):
     assert back.notches == 60 and back.release_s == 0.125
     header = next(i for i, line in enumerate(path.read_text().splitlines(), 1) if line.startswith("time_s"))
     assert back.lines[0] == header + 1
-    assert back.meta["seed"] == "4" and back.meta["generated_by"] == "escfit.balance.synthetic.recorders.record_pulses"
+    assert back.meta["seed"] == "4" and back.meta["generated_by"] == "escfit.balance.synthetic.instruments.record_pulses"
     assert back.sha256 and back.source == str(path)
 
 

@@ -13,7 +13,7 @@ from escfit.balance import solve
 from escfit.inference import least_squares, run_emcee
 from escfit.balance.problems.timegrapher import TimegrapherFitProblem
 from escfit.balance.observation.timegrapher import TimegrapherObservation, beat_events, window_readings
-from escfit.balance.synthetic.recorders import record_timegrapher
+from escfit.balance.synthetic.instruments import record_timegrapher
 from escfit.analysis.recordings.detect import detect_format, read_recording, read_timegrapher
 from escfit.analysis.recordings.timegrapher import (beat_swings, read_tg_json, read_timegrapher_csv, write_tg_json,
                                                    write_timegrapher_csv)

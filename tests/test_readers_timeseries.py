@@ -11,7 +11,7 @@ import escfit
 from escfit.balance import solve
 from escfit.balance.problems.curves import FitProblem
 from escfit.inference import least_squares
-from escfit.balance.synthetic.recorders import record_timeseries
+from escfit.balance.synthetic.instruments import record_timeseries
 from escfit.analysis.recordings.detect import detect_format, read_recording
 from escfit.analysis.recordings.timeseries import (TimeSeries, read_timeseries, timeseries_to_unit_curve, turning_points,
                                           write_timeseries)
@@ -115,7 +115,7 @@ def test_example_file_fits(scene):
 ])
 def test_record_writes_every_format_detectably(scene, tmp_path, recorder, options, kind):
     """The one entry point a command line needs: write, detect, read back, with provenance."""
-    from escfit.balance.synthetic.recorders import record
+    from escfit.balance.synthetic.instruments import record
 
     suffix = ".json" if options.get("fmt") == "json" else ".csv"
     path = record(scene, recorder, tmp_path / f"rec{suffix}", noise=None, seed=5, **options)

@@ -55,7 +55,7 @@ def test_half_swing_loss_is_the_simulators(make_scene):
 @pytest.fixture(scope="module")
 def decay_fit(tmp_path_factory):
     """Least squares of a synthetic spring decay with a sensor centred at +0.5 deg drifting at -0.02 deg/s."""
-    from escfit.balance.synthetic.recorders import record_timeseries
+    from escfit.balance.synthetic.instruments import record_timeseries
     from escfit.core.scene import load_scene
     from escfit.inference import fit
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from escfit.balance import solve
 from escfit.inference import fit
-from escfit.balance.synthetic.recorders import record_timegrapher
+from escfit.balance.synthetic.instruments import record_timegrapher
 from escfit.core.scene import load_scene
 
 SCENE = "datasets/recordings/timegrapher_scene.toml"

@@ -45,7 +45,7 @@ FIT_SCENE = ('model = "balance"\n[oscillator]\nomega0 = { value = 6.2, vary = tr
 
 def _truth():
     """The true trajectory's samples (no glitch) and turning times (s) of the simulated decay."""
-    from escfit.balance.synthetic.recorders import record_timeseries
+    from escfit.balance.synthetic.instruments import record_timeseries
 
     scene = escfit.load_scene("truth.toml", text=(
         f'model = "balance"\n[oscillator]\nomega0 = {OMEGA0!r}\ntheta0 = 0.5\n[run]\nswings = 200\n'

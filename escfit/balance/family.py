@@ -38,7 +38,7 @@ def make_problem(scene, data, *, solver: str | None = None, solver_options: dict
         :class:`~escfit.analysis.recordings.pulses.PulseTrain` (photo-cell passage times), a
         :class:`~escfit.analysis.recordings.timegrapher.TimegrapherRecording`, a
         :class:`~escfit.analysis.recordings.timeseries.TimeSeries` (a sampled angle: turning points or
-        the whole waveform are fitted, see :mod:`escfit.balance.problems.recorded`), or the path of a
+        the whole waveform are fitted, see :mod:`escfit.balance.problems.from_series`), or the path of a
         file holding one of them, including raw tables and MATLAB files.
     solver, solver_options
         Forward solver (default: the scene's, see :func:`escfit.balance.default_solver`);
@@ -63,7 +63,7 @@ def make_problem(scene, data, *, solver: str | None = None, solver_options: dict
     from ..analysis.recordings.timegrapher import TimegrapherRecording
     from ..analysis.recordings.timeseries import TimeSeries
     from .problems.curves import FitProblem
-    from .problems.recorded import problem_from_series
+    from .problems.from_series import problem_from_series
     from ..analysis.recordings import UnitCurve
     from ..analysis.recordings.rawsteps import warnings_of
 
@@ -219,8 +219,8 @@ class BalanceFamily(FamilyBase):
                 f"{ds['half_period'].values[-1]:.10g} s, rate {ds['rate'].values[-1]:.4f} s/day"]
 
     def record(self, scene, recorder: str, path, **options) -> None:
-        """A synthetic recording (:func:`escfit.balance.synthetic.recorders.record`)."""
-        from .synthetic.recorders import record
+        """A synthetic recording (:func:`escfit.balance.synthetic.instruments.record`)."""
+        from .synthetic.instruments import record
 
         record(scene, recorder, path, **options)
 

@@ -98,7 +98,7 @@ def turning_point_refit(problem, lsq, refit, *, seed: int = 0):
     turning-point problem or, when the record's turning points cannot be fitted so, the reason (str).
     """
     from ...core.errors import EscfitError
-    from .recorded import problem_from_series
+    from .from_series import problem_from_series
 
     scene = problem.given_scene
     obs = {k: v for k, v in dict(scene.extra.get("observation", {})).items() if k in ("offset", "offset_rate")}
@@ -142,7 +142,7 @@ def check_agreement(problem, lsq, refit: Callable, *, seed: int = 0) -> Agreemen
     Parameters
     ----------
     problem
-        A fit problem of a sampled record (:func:`escfit.balance.problems.recorded.problem_from_series`
+        A fit problem of a sampled record (:func:`escfit.balance.problems.from_series.problem_from_series`
         keeps its ``turning_points`` and ``given_scene``); ``None`` is returned for any other.
     lsq
         Its least-squares result (:class:`~escfit.inference.lsq.LeastSquaresResult`).
