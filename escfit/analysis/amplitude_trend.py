@@ -279,7 +279,9 @@ def sustained(times: np.ndarray, values: np.ndarray, *, show=lambda v: f"{v:.3g}
     # from the head's largest fitted swing down to the tail's smallest
     scale = np.exp(2.0 * (np.minimum(t_last, h_first) - h_first))
     least, least_se = head_rate * scale, head_se * scale
-    short = (least - tail_rate) / np.hypot(least_se, tail_se)
+    spread = np.hypot(least_se, tail_se)
+    # a record without noise (a simulation) has no scale to judge by: no evidence either way
+    short = np.divide(least - tail_rate, spread, out=np.zeros_like(spread), where=spread > 0)
     found = np.flatnonzero((least > Z_SUSTAIN * least_se) & (short > Z_SUSTAIN))
     if not found.size:
         return None
