@@ -565,7 +565,7 @@ def decay_estimates(amplitudes: np.ndarray, omega0: float, times: np.ndarray | N
     r_all = omega0 ** 2 * (a[0] - a[-1]) / (2.0 * n)
     c0, r0 = 0.5 * c_all, 0.5 * r_all
     if n >= 3:
-        slope, intercept = np.polyfit(a[:-1], a[1:], 1)
+        slope, intercept = _half_swing_map(a)
         if 0.0 < slope < 1.0:
             wd = math.sqrt(max(omega0 ** 2 - (c_all / 2) ** 2, 0.25 * omega0 ** 2))
             c0 = -2.0 * wd * math.log(slope) / math.pi
@@ -574,6 +574,31 @@ def decay_estimates(amplitudes: np.ndarray, omega0: float, times: np.ndarray | N
     c0 = min(max(c0, 0.05 * c_all), c_all)
     r0 = min(max(r0, 0.05 * r_all), r_all)
     return {"C": c0, "C_max": BOUND_FACTOR * c_all, "R": r0, "R_max": BOUND_FACTOR * r_all, "decays": True}
+
+
+def _half_swing_map(a: np.ndarray) -> tuple[float, float]:
+    """``(q, i)`` of the map ``a_(k+1) = q a_k + i`` that the amplitudes ``a`` follow best.
+
+    A linear oscillator with viscous damping and Coulomb friction obeys that map exactly, so its
+    amplitudes are ``a_k = A q^k + B`` with ``i = B (1 - q)``: fitted to the amplitudes
+    themselves (for each ``q`` the best ``A`` and ``B`` by linear least squares, ``q`` by a
+    bounded search), not by regressing each amplitude on the one before, where the reading noise
+    of both sides biases the slope and so the split between C and R.
+    """
+    from scipy.optimize import minimize_scalar
+
+    k = np.arange(a.size, dtype=float)
+
+    def misfit(q: float) -> tuple[float, np.ndarray]:
+        design = np.stack([q ** k, np.ones_like(k)], axis=1)
+        coef, *_ = np.linalg.lstsq(design, a, rcond=None)
+        r = a - design @ coef
+        return float(r @ r), coef
+
+    best = minimize_scalar(lambda q: misfit(q)[0], bounds=(1e-3, 1.0 - 1e-9), method="bounded",
+                           options={"xatol": 1e-10})
+    q = float(best.x)
+    return q, float(misfit(q)[1][1]) * (1.0 - q)
 
 
 def _excess_lag1(x: np.ndarray, period_samples: float) -> float:

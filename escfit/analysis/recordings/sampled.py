@@ -130,27 +130,12 @@ class SampledRecord:
         if min(centre - t[0], t[-1] - centre) < 0.4 * self.period / 3.0:
             return None  # the arc would reach past the record's edge: the caller places such a turn
         sel = np.abs(t - centre) <= self.period / 3.0
-        n = int(np.count_nonzero(sel))
-        if n < 5:
+        arc = self.fit_arc(sel, centre)
+        if arc is None:
             return None
-        w = 2.0 * math.pi / self.period
-        ts = t[sel] - centre
-        cols = [np.ones_like(ts), np.cos(w * ts), np.sin(w * ts)]
-        if n >= 9:
-            cols += [np.cos(3.0 * w * ts), np.sin(3.0 * w * ts)]
-        if n >= 11:
-            cols += [ts * np.cos(w * ts), ts * np.sin(w * ts)]
-        coef = np.zeros(7)
-        coef[:len(cols)] = np.linalg.lstsq(np.stack(cols, axis=1), x[sel], rcond=None)[0]
-        arc = _Arc(w, *coef)
-        p, q = coef[1], coef[2]
-        t0 = math.atan2(q, p) / w if is_max else math.atan2(-q, -p) / w
-        for _ in range(8):
-            _, slope, curvature = arc.at(t0)
-            if curvature == 0.0:
-                break
-            t0 -= slope / curvature
+        t0 = arc.vertex(is_max)
         got = (centre + t0, arc.at(t0)[0])
+        p, q, w = arc.p, arc.q, arc.w
         # the vertex lies beyond the nearest sample by at most what the arc rises over one interval
         amp = math.hypot(p, q)
         sign = 1.0 if is_max else -1.0
@@ -158,6 +143,23 @@ class SampledRecord:
         near = abs(t0) <= 0.15 * self.period + 0.5 * (t[last] - t[first])
         ok = near and math.isfinite(got[1]) and -self.step <= beyond <= amp * (1.0 - math.cos(w * self.dt)) + self.step
         return got if ok else None
+
+    def fit_arc(self, sel: np.ndarray, centre: float) -> "_Arc | None":
+        """The arc of :meth:`_arc` through the samples ``sel``, its time counted from ``centre``
+        (s); None with fewer than 5 samples."""
+        n = int(np.count_nonzero(sel))
+        if n < 5:
+            return None
+        w = 2.0 * math.pi / self.period
+        ts = self.t[sel] - centre
+        cols = [np.ones_like(ts), np.cos(w * ts), np.sin(w * ts)]
+        if n >= 9:
+            cols += [np.cos(3.0 * w * ts), np.sin(3.0 * w * ts)]
+        if n >= 11:
+            cols += [ts * np.cos(w * ts), ts * np.sin(w * ts)]
+        coef = np.zeros(7)
+        coef[:len(cols)] = np.linalg.lstsq(np.stack(cols, axis=1), self.x[sel], rcond=None)[0]
+        return _Arc(w, *coef)
 
     def _plausible(self, first: int, last: int, is_max: bool, tc: float, value: float) -> bool:
         """Whether a vertex lies near the smoothed extremum, in time and in value."""
@@ -198,6 +200,18 @@ class _Arc:
     q3: float
     pd: float
     qd: float
+
+    def vertex(self, is_max: bool, guess: float | None = None) -> float:
+        """Time (s from the centre) where the slope vanishes: Newton's steps from ``guess``
+        (default: the fundamental's own maximum or minimum)."""
+        u = guess if guess is not None else (
+            math.atan2(self.q, self.p) / self.w if is_max else math.atan2(-self.q, -self.p) / self.w)
+        for _ in range(8):
+            _, slope, curvature = self.at(u)
+            if curvature == 0.0 or not math.isfinite(curvature):
+                break
+            u -= slope / curvature
+        return u
 
     def at(self, u: float) -> tuple[float, float, float]:
         """Value, slope and curvature at ``u`` (s from the arc's centre)."""
