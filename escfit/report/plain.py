@@ -15,10 +15,12 @@ from __future__ import annotations
 
 from ..core.errors import SceneError
 from ..core.family import get_family
-from ..core.plainwords import coefficient_sentences
+from ..core.plainwords import coefficient_sentences, sig
 from .quantities import parameter_draws
 
-__all__ = ["plain_summary"]
+__all__ = ["plain_summary", "window_sentences", "MOST"]
+
+MOST = 0.75  # a fit over less than this share of the record says where its numbers come from
 
 
 def plain_summary(res) -> list[str]:
@@ -43,5 +45,24 @@ def plain_summary(res) -> list[str]:
         return coefficient_sentences(draws)
     plain = getattr(family, "plain", None)
     if plain is None:
-        return coefficient_sentences(draws)
-    return plain(draws, res.attrs, res.group("observed_data"))
+        return coefficient_sentences(draws) + window_sentences(res.attrs)
+    return plain(draws, res.attrs, res.group("observed_data")) + window_sentences(res.attrs)
+
+
+def window_sentences(attrs) -> list[str]:
+    """Where in the record the numbers come from, when the fit used less than :data:`MOST` of it.
+
+    From the results' ``record_first_s``, ``record_last_s`` (the file's first and last sample)
+    and ``fit_first_s``, ``fit_last_s`` (the first and last instant fitted), on the file's clock;
+    the sentence counts time from the first sample, as the notes do.
+    """
+    try:
+        first, last, a, b = (float(attrs[k]) for k in ("record_first_s", "record_last_s", "fit_first_s", "fit_last_s"))
+    except (KeyError, TypeError, ValueError):
+        return []
+    span = last - first
+    if not (span > 0 and b > a) or (b - a) >= MOST * span:
+        return []
+    return [f"These numbers come from the part of the record from t = {sig(a - first, 3)} to {sig(b - first, 3)} s "
+            f"({100 * (b - a) / span:.0f} % of its {sig(span, 3)} s); the rest was left out, and the notes and warnings "
+            "below say why."]

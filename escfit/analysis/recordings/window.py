@@ -98,6 +98,8 @@ class RecordWindow:
         Where the model is released: the free decay starts there.
     notes : tuple of str
         How the keys were read (the clock rule's choices).
+    end : float or None
+        The file's last sample on this clock (the samples after ``stop`` are gone; None: not known).
     """
 
     origin: float = 0.0
@@ -105,6 +107,7 @@ class RecordWindow:
     stop: float | None = None
     release: float | None = None
     notes: tuple = ()
+    end: float | None = None
 
     @property
     def given(self) -> bool:
@@ -115,7 +118,7 @@ class RecordWindow:
         """The same window on a clock ``dt`` seconds later (every instant plus ``dt``)."""
         move = lambda v: None if v is None else v + dt  # noqa: E731
         return replace(self, origin=self.origin + dt, start=move(self.start), stop=move(self.stop),
-                       release=move(self.release))
+                       release=move(self.release), end=move(self.end))
 
     def after_first(self, t: float) -> float:
         """``t`` as a time after the first sample, s."""
@@ -162,6 +165,7 @@ def resolve_window(spec, time: np.ndarray, where: str) -> tuple[RecordWindow, li
     if not time.size:
         return RecordWindow(), notes
     first, lo, hi = float(time[0]), float(np.min(time)), float(np.max(time))
+    last = float(time[-1])
     got = {}
     for key in WINDOW_KEYS:
         value = getattr(spec, key, None)
@@ -174,7 +178,7 @@ def resolve_window(spec, time: np.ndarray, where: str) -> tuple[RecordWindow, li
     if release is not None and ((start is not None and release < start) or (stop is not None and release > stop)):
         raise DataError(f"[recording] release = {spec.release.shown()} lies outside the window start..stop",
                         f"{where} [recording].release")
-    return RecordWindow(first, start, stop, release, tuple(notes)), notes
+    return RecordWindow(first, start, stop, release, tuple(notes), last), notes
 
 
 def window_of(series) -> RecordWindow:
@@ -183,4 +187,4 @@ def window_of(series) -> RecordWindow:
     if window is not None:
         return window
     t = np.asarray(series.time, float)
-    return RecordWindow(origin=float(t[0]) if t.size else 0.0)
+    return RecordWindow(origin=float(t[0]) if t.size else 0.0, end=float(t[-1]) if t.size else None)

@@ -89,6 +89,9 @@ class BalanceProblem(ProblemBase):
         if "offset_rad" in meta:  # turning points read about an estimated centre: the fit's offset corrects it
             out.update(centre_removed_rad=float(meta["offset_rad"]),
                        centre_rate_removed_rad_per_s=float(meta.get("offset_rate_rad_per_s", 0.0)))
+        window = getattr(self, "record_window", None)
+        if window is not None:  # the record's first and last sample, the first and last instant fitted
+            out.update(zip(("record_first_s", "record_last_s", "fit_first_s", "fit_last_s"), map(float, window)))
         if getattr(self.data, "kind", "") == "notches":  # how the counts read: the report draws their intervals
             out.update(notch_deg=math.degrees(float(self.data.notch)),
                        notch_reading=getattr(getattr(self, "observation", None), "reading", "counted"))

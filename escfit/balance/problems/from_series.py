@@ -36,6 +36,7 @@ from ...core.params import ParamSet
 from ...analysis.recordings import UnitCurve
 from ...analysis.recordings.rawseries import notes_of
 from .amplitude_rows import amplitude_readings_curve
+from ...analysis.recordings.window import window_of
 from .curves import FitProblem
 from .nuisance import centre_priors
 from .period import check_scene_omega0, hold_omega0, measured_period, start_omega0
@@ -129,7 +130,7 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
         problem.notes = notes + [_count_note(tp)] + problem.notes
         problem.measured_period = mp
         problem.data_warnings = list(getattr(problem, "data_warnings", [])) + list(tp.warnings) + unit_warnings
-        return _record_kept(problem, given, tp)
+        return _record_kept(problem, given, tp, series)
     held = hold_omega0(scene, mp)
     curve = turning_point_curve(series, tp)
     notes.append(_count_note(tp))
@@ -140,15 +141,25 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
     problem.measured_period = mp
     problem.held = ("oscillator.omega0",) if held else ()
     problem.data_warnings = list(getattr(problem, "data_warnings", [])) + list(tp.warnings) + unit_warnings
-    return _record_kept(problem, given, tp)
+    return _record_kept(problem, given, tp, series)
 
 
-def _record_kept(problem, scene: BalanceScene, tp=None):
+def _record_kept(problem, scene: BalanceScene, tp=None, series=None):
     """Keep what the agreement check (:mod:`escfit.analysis.agreement`) holds the fit against: the
     record's turning points (``tp``, when not already kept) and the scene as given, from which a
-    turning-point fit of the same record is built."""
+    turning-point fit of the same record is built; and, with ``series``, the stretch of the record
+    the fit uses against the whole record (``record_window``: first and last sample of the file,
+    first and last instant fitted, s on the series' clock), for the plain summary."""
     if tp is not None:
         problem.turning_points = tp
+        if series is not None and len(series.time):
+            window = window_of(series)
+            first = window.origin
+            last = window.end if window.end is not None else float(series.time[-1])
+            stop = float(tp.stop_time)
+            end = stop if math.isfinite(stop) else (
+                float(series.time[-1]) if hasattr(problem, "sample_time") else float(np.max(tp.time, initial=tp.release_time)))
+            problem.record_window = (float(first), float(last), float(tp.release_time), end)
     problem.given_scene = scene
     return problem
 
