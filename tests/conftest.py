@@ -95,6 +95,7 @@ def pytest_configure(config):
 # tests/test_layout.py checks that every key names a test that exists.
 LONG = {
     # whole fits through the command line or the API
+    "test_long_waveform.py::test_a_five_thousand_period_decay_is_fitted_in_blocks",
     "test_cli_recordings.py::test_record_fit_summary_round_trip[timegrapher-t.json-timegrapher_scene.toml-None]",
     "test_cli_recordings.py::test_record_fit_summary_round_trip[timegrapher-t.csv-timegrapher_scene.toml-None]",
     "test_family_conformance.py::test_parse_simulate_read[verge]",

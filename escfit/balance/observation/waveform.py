@@ -44,7 +44,7 @@ names it).  ``quantum`` (a step of the readings' unit) and ``thin``
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Mapping
 
 import numpy as np
@@ -98,6 +98,9 @@ class WaveformObservation:
     params: tuple[Param, ...]
     noise: str = "white"
     quantity: str = "angle"
+    #: per sample read, whether it starts a new AR(1) chain (a block of a thinned long record,
+    #: :mod:`escfit.balance.problems.thinning`); None: the first sample only
+    fresh: np.ndarray | None = field(default=None, compare=False, repr=False)
     kind = "waveform"
     KEYS = {"model", "sigma", "offset", "offset_rate", "t_release", "quantum", "thin", "noise", "rho", "gain"}
     MAX_SAMPLES = 4000
@@ -195,6 +198,9 @@ class WaveformObservation:
         scale[0] = sigma
         e = r.copy()
         e[1:] -= rho * r[:-1]
+        if self.fresh is not None:  # each block of a thinned record starts its own chain
+            e[self.fresh] = r[self.fresh]
+            scale[self.fresh] = sigma
         return e / scale, scale
 
     def residuals(self, theta: np.ndarray, t: np.ndarray, y: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
@@ -212,7 +218,8 @@ class WaveformObservation:
             rho = values["observation.rho"]
             s = math.sqrt(1.0 - rho * rho)
             for i in range(1, e.size):
-                e[i] = rho * e[i - 1] + s * e[i]
+                if self.fresh is None or not self.fresh[i]:
+                    e[i] = rho * e[i - 1] + s * e[i]
         y = self.expected(theta, t, values) + values["observation.sigma"] * e
         return np.round(y / self.quantum) * self.quantum if self.quantum > 0.0 else y
 

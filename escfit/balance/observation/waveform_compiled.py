@@ -27,7 +27,7 @@ from .compiled import log_interval_mass
 __all__ = ["SAMPLE", "WAVE_SET", "WHITE", "AR1", "QUANTISED", "waveform_loglike_sets"]
 
 #: one sample: the reading ``y`` (the readings' unit) and ``dt = t - t_ref`` (s)
-SAMPLE = np.dtype([("y", "f8"), ("dt", "f8")])
+SAMPLE = np.dtype([("y", "f8"), ("dt", "f8"), ("fresh", "u1")])
 #: one parameter set: observation.sigma, offset, offset_rate, gain (1 without one), rho (0 for white noise)
 WAVE_SET = np.dtype([("sigma", "f8"), ("offset", "f8"), ("rate", "f8"), ("gain", "f8"), ("rho", "f8")])
 #: noise models: independent Gaussian, first-order autoregression, whole steps of ``quantum``
@@ -73,7 +73,7 @@ def waveform_loglike_sets(model, samples, sets, noise, out):
             previous = 0.0
             for j in range(n):
                 r = samples[j].y - (gain * model[s, j] - offset - rate * samples[j].dt)
-                if j == 0:
+                if j == 0 or samples[j].fresh:  # a chain's first sample: its marginal scale
                     z = r / sigma
                     total += -0.5 * z * z - log_first
                 else:

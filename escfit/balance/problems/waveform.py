@@ -25,6 +25,7 @@ import numpy as np
 
 from .. import BalanceScene
 from ...core.errors import EscfitError, FitError
+from .thinning import thin_samples
 from ..observation.waveform import READINGS, WaveformObservation
 from ...core.params import ParamSet
 from .curves import FAIL_RESIDUAL, Curve, _column
@@ -104,16 +105,17 @@ class WaveformProblem(RecordingProblem):
         self.observation = WaveformObservation.from_table(
             table, where, t_release=t_ref, period=period, offset=-float(centre.offset),
             offset_rate=-float(getattr(centre, "offset_rate", 0.0)), sigma=sigma0, quantity=self.quantity)
-        thin = self.observation.thin or max(1, math.ceil(idx.size / WaveformObservation.MAX_SAMPLES))
-        idx = idx[::thin]
-        self.thin = thin
+        kept = thin_samples(series.time, idx, period, WaveformObservation.MAX_SAMPLES, self.observation.thin)
+        idx = kept.index
+        if kept.fresh is not None:
+            self.observation = replace(self.observation, fresh=kept.fresh)
         self.period = period
         self.sample_time = series.time[idx]
         self.notes = release_from_record(self.scene.params, float(reference.release_theta) - float(reference.offset),
                                          series.source, scene.restoring, "m" if scene.linear else "rad")
         self._setup_params()
-        if thin > 1:
-            self.notes.append(f"waveform: one sample in {thin} used ({idx.size} of {np.count_nonzero(keep)})")
+        if kept.note:
+            self.notes.append(f"waveform: {kept.note}")
         self.curves = [Curve("waveform", math.nan, np.arange(idx.size), series.theta[idx], self.sample_time)]
         # the exact or dop853 dense solution is sampled for a whole ensemble in one call (log_prob_many)
         self.tolerance_basis = ""
@@ -265,6 +267,8 @@ class WaveformProblem(RecordingProblem):
             e[:, 1:] -= rho[:, None] * r[:, :-1]
             e[:, 0] /= sigma
             e[:, 1:] /= scale[:, None]
+            if obs.fresh is not None:  # each block of a thinned record starts its own chain
+                e[:, obs.fresh] = r[:, obs.fresh] / sigma[:, None]
             return e
         spread = np.array([math.sqrt(s**2 + obs.quantum**2 / 12.0)
                            for s in np.broadcast_to(sigma, (model.shape[0],))])
@@ -279,6 +283,8 @@ class WaveformProblem(RecordingProblem):
             rec = np.empty(self.sample_time.size, SAMPLE)
             rec["y"] = self.curves[0].y
             rec["dt"] = self.sample_time - self.observation.t_ref
+            fresh = self.observation.fresh
+            rec["fresh"] = fresh if fresh is not None else np.arange(rec.size) == 0
             self.__dict__["_samples_cache"] = rec
         return rec
 
