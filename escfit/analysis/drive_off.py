@@ -129,6 +129,25 @@ def drive_off(values: np.ndarray) -> DriveOff | None:
     # a few half swings after a long, slowly losing stretch was stopped (a hand, a brake) at the
     # end of a free decay, which that stretch is
     free = v.size - 1 - m
-    if b2 < 0 and -b1 < LOSS_SHARE * -b2 and score > Z_DRIVE and free >= MIN_FREE:
+    if b2 < 0 and -b1 < LOSS_SHARE * -b2 and score > Z_DRIVE and free >= MIN_FREE \
+            and _not_a_wobble(np.abs(np.diff(v)), m, b1 - b2):
         return DriveOff(m, -b1, -b2, score)
     return None
+
+
+def _not_a_wobble(p: np.ndarray, m: int, change: float) -> bool:
+    """Whether the change of loss at ``m`` stands out of the changes between consecutive
+    stretches of the same length along the rest of the record (a slow wobble of the swing makes
+    its loss rise and fall all along; a drive switched off changes it once): relative to the
+    swing, over :func:`escfit.analysis.segments.stands_out`.  True when the record is too short
+    to say."""
+    from .segments import stands_out
+
+    length = max(m, MIN_AFTER)
+    k = np.arange(length, dtype=float)
+    later = []
+    for j in range(m, p.size - 2 * length + 1, length):
+        a, b = p[j:j + length], p[j + length:j + 2 * length]
+        later.append((np.polyfit(k, a, 1)[0] - np.polyfit(k, b, 1)[0]) / float(np.mean(np.r_[a, b])))
+    early = change / float(np.mean(p[:m + length]))
+    return stands_out(early, np.array(later), least=3) is not False

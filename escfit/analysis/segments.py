@@ -47,7 +47,7 @@ import numpy as np
 
 from .free_law import free_law_gains, law_pushes, robust_scale
 
-__all__ = ["SwingEvent", "swing_gains", "find_events", "driven_start", "amplitude_growth", "robust_scale", "SIDE",
+__all__ = ["SwingEvent", "swing_gains", "find_events", "driven_start", "amplitude_growth", "robust_scale", "stands_out", "SIDE",
            "Z_PUSH"]
 
 SIDE = 6  # half swings on each side of a candidate (a median of 6 tolerates two that are out of line)
@@ -214,6 +214,33 @@ def _pushed_half_swings(v: np.ndarray, run: np.ndarray, noise: float, beyond_law
     return last
 
 
+def _one_sided(v: np.ndarray, j: int, gain: float, s_p: float, near: int = 3) -> bool:
+    """Whether the swing's gain across half swing ``j`` came on one side of the centre only.
+
+    A push adds swing on both sides: the maxima after it step up and the minima step down, by
+    about half the gain each.  So the sum of the two sides' steps (twice the step of the centre)
+    stays near zero for a push, and is the whole gain when only one side changed: a tracker that
+    read a few maxima (or minima) short and then right again.  Each side's step is fitted to
+    its ``near`` turning points before half swing ``j`` and ``near`` from two after it, with a
+    straight line for the decay (``a + b i + step [i > j]``); one-sided when the sum exceeds
+    half the gain and three times its noise (``s_p``: the noise of a peak-to-peak swing).
+    """
+    total, var = 0.0, 0.0
+    for side in (0, 1):
+        before = [i for i in range(max(0, j - 2 * near + 1), j + 1) if i % 2 == side]
+        after = [i for i in range(j + 2, min(j + 2 + 2 * near, v.size)) if i % 2 == side]
+        if len(before) < 2 or len(after) < 2:
+            return False
+        idx = np.array(before + after, float)
+        design = np.stack([np.ones_like(idx), idx - j, (idx > j).astype(float)], axis=1)
+        coef, *_ = np.linalg.lstsq(design, v[np.array(before + after)], rcond=None)
+        total += float(coef[2])
+        var += float(np.linalg.pinv(design.T @ design)[2, 2])
+    # turning points scatter by s_p / sqrt(2) (a peak-to-peak swing shares two of them)
+    noise = (s_p / math.sqrt(2.0)) * math.sqrt(var) if math.isfinite(s_p) else 0.0
+    return abs(total) > max(0.5 * gain, 3.0 * noise)
+
+
 def _spans_jump(v: np.ndarray, p: np.ndarray, k: int, jump: float) -> bool:
     """Whether half swing ``k`` alone carries the jump: longer (or shorter) than its neighbours'
     mean by the jump, as a move of the centre within it makes it, within a third of the jump.
@@ -312,6 +339,8 @@ def find_events(times: np.ndarray, values: np.ndarray, *, resolution: float, qua
         level_run = run[pushes[run]]
         if level_run.size:
             j = int(level_run[np.argmax(gain[level_run])])
+            if _one_sided(v, k, float(absolute[j]), s_p):
+                continue  # a tracker that read one side short, then right again: not a push
             score = float(gain[j] / scale[j]) if scale[j] > 0 else math.inf
             events.append(SwingEvent(
                 "push", k, float(t[k + 1]), float(absolute[j]), score,
@@ -321,6 +350,8 @@ def find_events(times: np.ndarray, values: np.ndarray, *, resolution: float, qua
                 f"({100 * spread:.2g} %)"))
             continue
         j = int(run[np.argmax(law_step[run])])
+        if _one_sided(v, k, float(law_step[j]), s_p):
+            continue  # a tracker that read one side short, then right again: not a push
         score = float(law_step[j] / law_err[j]) if law_err[j] > 0 else math.inf
         events.append(SwingEvent(
             "push", k, float(t[k + 1]), float(law_step[j]), score,
@@ -382,6 +413,33 @@ def driven_start(values: np.ndarray, *, most: int = 4, reference: int = 6) -> in
     m = 0
     while m < most and loss[m] < 0.75 * typical:
         m += 1
-    if m == 0 or typical - float(np.mean(loss[:m])) < 4.0 * MEDIAN_SE * s_l * math.sqrt(1.0 / m + 1.0 / reference):
+    if m == 0:
+        return 0
+    deficit = typical - float(np.mean(loss[:m]))
+    if deficit < 4.0 * MEDIAN_SE * s_l * math.sqrt(1.0 / m + 1.0 / reference):
+        return 0
+    # a slow wobble of the swing makes its losses run short and long by turns all along the
+    # record: the start's shortfall must stand out of the same shortfall measured everywhere else
+    later = [float(np.median(loss[j + most + 1:j + most + 1 + reference])) - float(np.mean(loss[j:j + m]))
+             for j in range(1, loss.size - most - reference)]
+    size = [float(np.mean(p[j:j + m + reference])) for j in range(1, loss.size - most - reference)]
+    if stands_out(deficit / float(np.mean(p[:m + reference])), np.array(later) / np.array(size)) is False:
         return 0
     return m
+
+
+def stands_out(change: float, elsewhere: np.ndarray, *, factor: float = 2.0, least: int = 5) -> bool | None:
+    """Whether ``change`` at a record's start exceeds ``factor`` times the 90th percentile of
+    the same change measured along the rest of the record (``elsewhere``, same scale and sign:
+    a decay whose loss shrinks as it fades gives changes of the other sign, which do not count).
+
+    A drive switched off or a hand's guided start changes the record once; a slow wobble of
+    the swing changes it by as much, both ways, all along (over the wobbling decays of the
+    artefact suite the start's change was at most 1.3 times that percentile, after a real drive
+    3.8 times or more).  None when fewer than ``least`` measures elsewhere can say.
+    """
+    e = np.asarray(elsewhere, float)
+    e = e[np.isfinite(e)]
+    if e.size < least:
+        return None
+    return bool(change > factor * max(float(np.quantile(e, 0.9)), 0.0))
