@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["DriveOff", "drive_off", "Z_DRIVE", "LOSS_SHARE", "SPAN_FALL"]
+__all__ = ["DriveOff", "drive_off", "not_a_wobble", "Z_DRIVE", "LOSS_SHARE", "SPAN_FALL"]
 
 Z_DRIVE = 5.0  # evidence the change needs, in standard errors of the difference of slopes
 LOSS_SHARE = 0.5  # an early stretch losing under this share of the free loss after it was driven
@@ -47,6 +47,7 @@ MAD = 1.4826  # median absolute deviation -> standard deviation of a normal samp
 MIN_BEFORE = 2  # half swings before the change at least (a slope; one or two: segments.driven_start)
 MIN_AFTER = 5  # half swings after the change at least (a parabola and its scatter)
 MIN_FREE = 10  # half swings of the record after the change at least: the free decay a release starts
+WOBBLE_WINDOW = 12  # half swings, at most, of the stretches whose changes of loss a drive's must stand out of
 
 
 @dataclass(frozen=True)
@@ -130,24 +131,34 @@ def drive_off(values: np.ndarray) -> DriveOff | None:
     # end of a free decay, which that stretch is
     free = v.size - 1 - m
     if b2 < 0 and -b1 < LOSS_SHARE * -b2 and score > Z_DRIVE and free >= MIN_FREE \
-            and _not_a_wobble(np.abs(np.diff(v)), m, b1 - b2):
+            and not_a_wobble(np.abs(np.diff(v)), m, b1 - b2):
         return DriveOff(m, -b1, -b2, score)
     return None
 
 
-def _not_a_wobble(p: np.ndarray, m: int, change: float) -> bool:
+def not_a_wobble(p: np.ndarray, m: int, change: float) -> bool:
     """Whether the change of loss at ``m`` stands out of the changes between consecutive
     stretches of the same length along the rest of the record (a slow wobble of the swing makes
     its loss rise and fall all along; a drive switched off changes it once): relative to the
     swing, over :func:`escfit.analysis.segments.stands_out`.  True when the record is too short
-    to say."""
+    to say.
+
+    The stretches are :data:`MIN_AFTER` to :data:`WOBBLE_WINDOW` half swings long; after a long
+    prefix (a wobble's slow half cycle can keep the swing for tens of half swings) the change at
+    ``m`` is measured again over that length, so that the record after it holds enough of them.
+    """
     from .segments import stands_out
 
-    length = max(m, MIN_AFTER)
+    length = max(MIN_AFTER, min(m, WOBBLE_WINDOW))
     k = np.arange(length, dtype=float)
-    later = []
-    for j in range(m, p.size - 2 * length + 1, length):
-        a, b = p[j:j + length], p[j + length:j + 2 * length]
-        later.append((np.polyfit(k, a, 1)[0] - np.polyfit(k, b, 1)[0]) / float(np.mean(np.r_[a, b])))
-    early = change / float(np.mean(p[:m + length]))
+
+    def change_at(j: int) -> float:
+        a, b = p[j - length:j], p[j:j + length]
+        return (np.polyfit(k, a, 1)[0] - np.polyfit(k, b, 1)[0]) / float(np.mean(np.r_[a, b]))
+
+    if length < m and m + length <= p.size:
+        early = change_at(m)
+    else:
+        early = change / float(np.mean(p[:m + length]))
+    later = [change_at(j) for j in range(m + 2 * length, p.size - length + 1, length)]
     return stands_out(early, np.array(later), least=3) is not False

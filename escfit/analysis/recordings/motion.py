@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...core.errors import DataError
-from ...analysis.drive_off import drive_off
+from ...analysis.drive_off import drive_off, not_a_wobble
 from ...analysis.segments import amplitude_growth, driven_start, find_events, robust_scale
 from .holds import HOLD_PERIODS, flat_start as _flat_start, held_release, turn_at_start as _turn_at_start
 
@@ -185,7 +185,8 @@ def _driven_prefix(values: np.ndarray, tol: float) -> int:
         return 0
     prefix_loss = (pp[0] - pp[steady - 1]) / max(steady - 1, 1)
     after = (pp[steady - 1] - pp[steady - 1 + 2 * SUSTAIN_BLOCK]) / (2 * SUSTAIN_BLOCK)
-    if after * 2 * SUSTAIN_BLOCK > 3 * tol and prefix_loss < 0.25 * after:
+    if after * 2 * SUSTAIN_BLOCK > 3 * tol and prefix_loss < 0.25 * after \
+            and not_a_wobble(pp, steady, after - prefix_loss):  # a slow wobble keeps a size for a while too
         return steady
     return 0
 
