@@ -290,6 +290,27 @@ def test_tracker_track_held_before_the_release(tmp_path, hanging_first):
         assert row["lo95"] <= value <= row["hi95"], (name, value, row["lo95"], row["hi95"])
 
 
+def test_tracker_export_with_trailing_tabs_and_untracked_frames(tmp_path):
+    """Tracker writes some exports with a tab at the end of the name and header lines
+    (``<TAB>mass A<TAB><TAB>``, ``t<TAB>x<TAB>y<TAB>``) and a frame the track was not marked in as
+    its time and empty cells (``4.367<TAB><TAB>``): read, those frames left out with a note,
+    the angle about the arc's centre that of the pendulum drawn (a sinusoid, exactly)."""
+    t = np.arange(0.0, 12.0, 1 / 30)
+    angle = 0.3 * np.cos(2 * math.pi * t / 1.2)
+    x, y = -150.0 + 400.0 * np.sin(angle), -650.0 + 400.0 * (1 - np.cos(angle))
+    lines = ["\tmass A\t\t", "t\tx\ty\t"]
+    gaps = {131, 202, 203}
+    lines += [f"{a:.3f}\t\t" if i in gaps else f"{a:.3f}\t{b:.3f}\t{d:.3f}" for i, (a, b, d) in enumerate(zip(t, x, y))]
+    series = read_with_spec(write(tmp_path, "track.txt", "\n".join(lines) + "\n"), RecordingSpec())
+    assert series.time.size == t.size - len(gaps)
+    from escfit.analysis.recordings.rawsteps import notes_of
+
+    assert any("3 frame(s) without a position" in n for n in notes_of(series.meta)), series.meta
+    keep = np.array([i not in gaps for i in range(t.size)])
+    got = series.theta - np.median(series.theta) + np.median(angle[keep])
+    assert np.max(np.abs(np.abs(got) - np.abs(angle[keep]))) < 0.01
+
+
 # -- escfit's own text formats through the shared tokenizer ------------------------------------------------------
 @pytest.mark.parametrize("end", ["\r\n", "\r", "\r\r\n"])
 def test_escfit_formats_read_any_line_end_and_name_the_editors_line(tmp_path, end):

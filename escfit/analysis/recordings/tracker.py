@@ -180,6 +180,26 @@ def sniff_tracker_table(text: str) -> bool:
     return False
 
 
+def _tracked_rows(body: list, where: str, notes: list) -> list:
+    """The header and rows of an export without Tracker's trailing tabs and its untracked frames.
+
+    Tracker ends each line with its delimiter (``t<TAB>x<TAB>y<TAB>``) in some exports, and
+    writes a frame where the track has no position as its time followed by empty cells
+    (``4.369<TAB><TAB>``).  The trailing delimiter is dropped from every line, and a row that then
+    holds its time alone is left out with a note.
+    """
+    out = [(n, line.rstrip(" \t,;")) for n, line in body]
+    if not out:
+        return out
+    split = lambda line: re.split(r"\t|,|;|\s+", line.strip())  # noqa: E731
+    width = len(split(out[0][1]))
+    rows = [(n, line) for n, line in out[1:] if not (width >= 2 and len(split(line)) == 1)]
+    dropped = len(out) - 1 - len(rows)
+    if dropped:
+        notes.append(f"{dropped} frame(s) without a position (the track was not marked there) left out")
+    return [out[0]] + rows
+
+
 def read_tracker_table(path: str | Path, spec: RecordingSpec | None = None) -> TimeSeries:
     """Read a Tracker data-table export (see the module docstring)."""
     spec = spec or RecordingSpec()
@@ -191,6 +211,7 @@ def read_tracker_table(path: str | Path, spec: RecordingSpec | None = None) -> T
     first, second = body[0][1].strip(), body[1][1].strip().lower() if len(body) > 1 else ""
     if len(body) > 2 and re.match(r"t[\s,;]", second) and not re.match(r"t[\s,;]", first.lower()):
         track, body = first.split("\t")[0].strip(), body[1:]
+    body = _tracked_rows(body, where, notes)
     cols = table_columns(body, where, notes)
     if cols.names is None:
         raise DataError("no header (t x y) above the track's rows", where)
