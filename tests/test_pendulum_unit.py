@@ -57,3 +57,27 @@ def test_small_swings_in_degrees_are_never_taken_for_radians():
 def test_too_few_periods_say_nothing():
     t, x = _record(0.4, duration=12.0)
     assert unit_from_period(t, x) is None
+
+
+def test_a_record_unlike_a_pendulum_fitted_as_one_leaves_omega0_undetermined(tmp_path, monkeypatch):
+    """A linear oscillator swinging 0.5 rad, written in degrees and fitted as a gravity pendulum:
+    its period keeps still where a pendulum's would shorten by 1.5 % as it decays, so the
+    small-swing omega0 (the period shortened by that law at the amplitudes read) is marked not
+    determined, with the warning naming the keys."""
+    from click.testing import CliRunner
+
+    from escfit.cli.main import cli
+    from escfit.results import load_fit
+
+    t, x = _record(0.5, linear=True)
+    monkeypatch.chdir(tmp_path)
+    np.savetxt("spring.csv", np.c_[t, np.degrees(x)], delimiter=",", header="time (s),angle (deg)", comments="",
+               fmt="%.5f")
+    runner = CliRunner()
+    assert runner.invoke(cli, ["init", "spring.csv", "--pendulum"]).exit_code == 0
+    r = runner.invoke(cli, ["fit", "spring.csv", "--scene", "spring.toml", "--out", "f.h5"])
+    assert r.exit_code == 0, r.output
+    res = load_fit("f.h5")
+    assert "oscillator.omega0" in res.undetermined
+    assert any(w.startswith("omega0 is not determined: the period does not change with the amplitude") and
+               "angle_unit" in w for w in res.warnings), res.warnings

@@ -177,4 +177,17 @@ def check_agreement(problem, lsq, refit: Callable, *, seed: int = 0) -> Agreemen
     periods = span / float(tp.period) if math.isfinite(span) else float(tp.swing.size) / 2.0
     model = ModelFacts(waveform, getattr(problem, "reading_units", "rad"),
                        frozenset(n.split(".")[0] for n in problem.scene.params.params), problem.scene.restoring)
-    return judge(phase, amplitude, parameters, model, periods=periods, comments=comments)
+    return _pendulum_law(problem, judge(phase, amplitude, parameters, model, periods=periods, comments=comments))
+
+
+def _pendulum_law(problem, agreement: Agreement) -> Agreement:
+    """A record whose periods do not change with the amplitude as a gravity pendulum's do leaves
+    the small-swing omega0 undetermined: it is the measured period shortened by that law, at the
+    amplitudes as read, which the record contradicts (the angles' scale or the restoring law is
+    not the scene's; the warning says which keys).  The period itself and the losses stand."""
+    from .from_series import UNLIKE_PENDULUM
+
+    said = [w for w in getattr(problem, "data_warnings", []) if w.startswith(UNLIKE_PENDULUM)]
+    if not said or "oscillator.omega0" in agreement.undetermined:
+        return agreement
+    return replace(agreement, undetermined=("oscillator.omega0",) + tuple(agreement.undetermined))

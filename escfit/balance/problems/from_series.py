@@ -314,6 +314,12 @@ def _unit_from_period(scene: BalanceScene, series, tp) -> tuple[list[str], list[
     if evidence.verdict == "as read":
         return [evidence.sentence()], []
     if evidence.verdict == "unlike a pendulum":
-        return [], [evidence.sentence() + ": the angles' scale ([recording] angle_unit, scale) or the restoring "
-                    "law (a pendulum, --pendulum, or a spring) is not what the scene says"]
+        return [], [UNLIKE_PENDULUM + evidence.sentence() + ": the angles' scale ([recording] angle_unit, scale) or "
+                    "the restoring law (a pendulum, --pendulum, or a spring) is not what the scene says"]
     return [], []
+
+
+#: the start of the warning that the periods contradict a gravity pendulum's amplitude law: the
+#: small-swing omega0 rests on that law, so the fit leaves it undetermined
+UNLIKE_PENDULUM = "omega0 is not determined: "
+
