@@ -236,3 +236,19 @@ def test_a_light_gates_pass_times_are_refused_as_event_times(tmp_path):
     assert result.exit_code == 2 and scene is None
     assert "only rises over all 420 samples and never turns" in result.output
     assert "a list of event times" in result.output and result.output.count("\n") == 1
+
+
+def test_a_bob_s_height_beside_its_horizontal_position_is_no_rival(tmp_path):
+    """A track of a pendulum's bob, x = L sin(theta) and y = -L cos(theta), read to 1 mm: the
+    height swings at twice the frequency and keeps the square of the horizontal swing's amplitude
+    (an 8 deg swing falling to 3.5 deg); it is the same motion, not a second decay, so the
+    horizontal column is chosen (the rule for an energy needs a clean floor, which 1 mm of noise
+    on a height range of 8 mm does not give)."""
+    t = np.arange(0.0, 87.0, 1 / 60)
+    theta = math.radians(8.0) * np.exp(-math.log(8.0 / 3.5) * t / 87.0) * np.cos(2 * math.pi * 0.656 * t)
+    rng = np.random.default_rng(3)
+    x = 0.6 * np.sin(theta) + 1e-3 * rng.standard_normal(t.size)
+    y = -0.6 * np.cos(theta) + 1e-3 * rng.standard_normal(t.size)
+    choice = choose_channel(t, {"column 2": x, "column 3": y})  # a headerless export: no axis names to go by
+    assert choice.chosen == "column 2", (choice.scores, choice.why)
+    assert "the height beside the horizontal swing of column 2" in choice.why["column 3"]

@@ -46,6 +46,7 @@ FULL_FALL = 0.5  # a swing losing half its amplitude over the record counts full
 AXIS_DOMINANCE = 3.0  # an axis of one sensor oscillating this many times more than the others is the motion's
 SAME_FREQUENCY = 0.005  # columns whose frequencies agree this closely (relative) ...
 SAME_FALL = 0.1  # ... and whose amplitudes fall by shares this close hold one motion
+SQUARE_FALL = 0.1  # a column keeping (1 - fall)^2 of a neighbour's amplitude, within this, is its square
 
 
 @dataclass(frozen=True)
@@ -133,13 +134,25 @@ def decay_score(time: np.ndarray, values: np.ndarray, *, name: str = "", unit: s
     return float(score), _words(shape, score), shape
 
 
-def _double_of_a_neighbour(label: str, shapes: dict[str, SwingShape], values: dict[str, np.ndarray]) -> bool:
-    """A one-sided column (troughs at its minimum) oscillating at twice another candidate's frequency."""
+def _double_of_a_neighbour(label: str, shapes: dict[str, SwingShape], values: dict[str, np.ndarray]) -> str:
+    """Why a column is the square of another candidate's swing ("" when it is not): at twice
+    its frequency, and one-sided (troughs at its minimum: an energy) or with its amplitude
+    falling as the square of the other's (what is left is ``(1 - fall)^2``: a bob's height,
+    ``L (1 - cos theta)``, beside its horizontal position)."""
     me = shapes[label]
-    if not math.isfinite(me.frequency) or me.trough_floor > ENERGY_FLOOR:
-        return False
-    return any(other != label and math.isfinite(s.frequency) and abs(me.frequency / s.frequency - 2.0) < 0.05
-               and s.explained > 0.5 for other, s in shapes.items())
+    if not math.isfinite(me.frequency):
+        return ""
+    for other, s in shapes.items():
+        if other == label or not math.isfinite(s.frequency) or abs(me.frequency / s.frequency - 2.0) >= 0.05 \
+                or s.explained <= 0.5:
+            continue
+        if me.trough_floor <= ENERGY_FLOOR:
+            return "an energy (never below its minimum, at twice a neighbour's frequency)"
+        if math.isfinite(me.fall) and math.isfinite(s.fall) and s.fall >= 0.2 \
+                and abs((1.0 - me.fall) - (1.0 - s.fall) ** 2) <= SQUARE_FALL:
+            return (f"the height beside the horizontal swing of {_shown(other)} (at twice its frequency, its "
+                    "amplitude falling as the square of that one's)")
+    return ""
 
 
 def _one_motion(best: str, rivals: list[str], shapes: dict[str, SwingShape]) -> list[str] | None:
@@ -230,8 +243,9 @@ def choose_channel(time: np.ndarray | dict[str, np.ndarray], columns: dict[str, 
         ok = np.isfinite(v) & np.isfinite(t)
         scores[label], why[label], shapes[label] = decay_score(t[ok], v[ok], name=label, unit=units.get(label))
     for label in columns:
-        if scores[label] > 0 and _double_of_a_neighbour(label, shapes, columns):
-            scores[label], why[label] = 0.0, "an energy (never below its minimum, at twice a neighbour's frequency)"
+        square = _double_of_a_neighbour(label, shapes, columns) if scores[label] > 0 else ""
+        if square:
+            scores[label], why[label] = 0.0, square
     order = sorted(scores, key=lambda c: -scores[c])
     best = order[0] if order else None
     second = scores[order[1]] if len(order) > 1 else 0.0
