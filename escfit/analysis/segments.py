@@ -218,27 +218,31 @@ def _one_sided(v: np.ndarray, j: int, gain: float, s_p: float, near: int = 3) ->
     """Whether the swing's gain across half swing ``j`` came on one side of the centre only.
 
     A push adds swing on both sides: the maxima after it step up and the minima step down, by
-    about half the gain each.  So the sum of the two sides' steps (twice the step of the centre)
-    stays near zero for a push, and is the whole gain when only one side changed: a tracker that
-    read a few maxima (or minima) short and then right again.  Each side's step is fitted to
-    its ``near`` turning points before half swing ``j`` and ``near`` from two after it, with a
-    straight line for the decay (``a + b i + step [i > j]``); one-sided when the sum exceeds
-    half the gain and three times its noise (``s_p``: the noise of a peak-to-peak swing).
+    about half the gain each.  A tracker that read a few maxima (or minima) short and then right
+    again moves one side only: that side steps by the whole gain, the other not at all.  Each
+    side's step is fitted to its ``near`` turning points before half swing ``j`` (the last one
+    the swing grew in; the turning point it starts from is left out, a push of two half swings
+    moved it part way) and ``near`` from its end on, with a straight line for the decay
+    (``a + b i + step [i > j]``).  One-sided:
+    one side's step within a quarter of the gain (and three times its noise) of zero while the
+    other carries over half of it.  (A centre that jumps as well, a wrap or a moved origin, moves
+    both sides: that is not this.)  ``s_p`` is the noise of a peak-to-peak swing.
     """
-    total, var = 0.0, 0.0
+    steps, noise = [], []
     for side in (0, 1):
-        before = [i for i in range(max(0, j - 2 * near + 1), j + 1) if i % 2 == side]
-        after = [i for i in range(j + 2, min(j + 2 + 2 * near, v.size)) if i % 2 == side]
-        if len(before) < 2 or len(after) < 2:
+        before = [i for i in range(max(0, j - 2 * near), j) if i % 2 == side]
+        after = [i for i in range(j + 1, min(j + 1 + 2 * near, v.size)) if i % 2 == side]
+        if not before or len(after) < 2:  # at the record's start one turning point before will do
             return False
         idx = np.array(before + after, float)
         design = np.stack([np.ones_like(idx), idx - j, (idx > j).astype(float)], axis=1)
         coef, *_ = np.linalg.lstsq(design, v[np.array(before + after)], rcond=None)
-        total += float(coef[2])
-        var += float(np.linalg.pinv(design.T @ design)[2, 2])
-    # turning points scatter by s_p / sqrt(2) (a peak-to-peak swing shares two of them)
-    noise = (s_p / math.sqrt(2.0)) * math.sqrt(var) if math.isfinite(s_p) else 0.0
-    return abs(total) > max(0.5 * gain, 3.0 * noise)
+        steps.append(abs(float(coef[2])))
+        # turning points scatter by s_p / sqrt(2) (a peak-to-peak swing shares two of them)
+        var = float(np.linalg.pinv(design.T @ design)[2, 2])
+        noise.append((s_p / math.sqrt(2.0)) * math.sqrt(var) if math.isfinite(s_p) else 0.0)
+    still, moved = (0, 1) if steps[0] <= steps[1] else (1, 0)
+    return steps[still] <= max(0.25 * gain, 3.0 * noise[still]) and steps[moved] > 0.5 * gain
 
 
 def _spans_jump(v: np.ndarray, p: np.ndarray, k: int, jump: float) -> bool:

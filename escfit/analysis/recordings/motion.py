@@ -50,6 +50,8 @@ BEAT_EPISODES = 3  # the swing growing again this many times is not one decay (b
 SUSTAIN_BLOCK = 4  # half swings per block of the loss-law checks
 EARLY_TURNS = 4  # half swings at the start judged by plain growth: too few before them for the step test
 CUT_WARNING = 0.25  # leaving out more than this share of the record is a warning, not a note
+FADED = 0.1  # a swing under this share of the record's largest has faded into the noise
+CLEARLY_SHORTER = 0.8  # a free stretch under this share of the longest one between pushes is not fitted
 
 
 @dataclass(frozen=True)
@@ -380,9 +382,9 @@ def _free_stretch(rec, times: np.ndarray, values: np.ndarray, first_ok: int, end
     for that test: there a swing larger than the one before it by more than ``tol`` (a hand's
     start, a swing-up) is the evidence.  Offset steps found are kept on ``rec.steps``.
 
-    Pushes cut the record into free stretches; the one with the most half swings is fitted (the
-    last of equals: it follows every push), and the record after it is left out with a warning
-    naming the keys that choose another.
+    Pushes cut the record into free stretches; the last is fitted unless an earlier one holds
+    clearly more half swings above the noise (:data:`CLEARLY_SHORTER`), and then the record after
+    that one is left out with a warning naming the keys that choose another.
     """
     events = find_events(times[first_ok:end], values[first_ok:end], resolution=rec.step, quantum=rec.quantum,
                          show=lambda v: rec.show(v, 2))
@@ -402,9 +404,13 @@ def _free_stretch(rec, times: np.ndarray, values: np.ndarray, first_ok: int, end
     # stretch i runs from the turning point after push i - 1 to the last one before push i began
     starts = [first_ok] + [first_ok + e.half_swing + 1 for e in pushes]
     ends = [_push_began(values[:end], first_ok, first_ok + e.half_swing) for e in pushes] + [end]
-    # a stretch counts the half swings whose spacing stays regular (not the noise's extrema once faded)
-    sizes = [_regular_end(times, a, b) - a for a, b in zip(starts, ends)]
-    best = max(range(len(sizes)), key=lambda i: (sizes[i], i))
+    # a stretch counts the half swings that have not faded into the noise (the noise's extrema
+    # after a swing sank, before a new push, carry no decay): over a tenth of the largest swing
+    swing = np.abs(np.diff(values[:end]))
+    big = float(np.nanmax(swing[first_ok:])) if swing[first_ok:].size else 0.0
+    sizes = [int(np.count_nonzero(swing[a:max(a, b - 1)] > FADED * big)) for a, b in zip(starts, ends)]
+    # the last stretch unless an earlier one is clearly longer (it follows every push)
+    best = max(i for i in range(len(sizes)) if sizes[i] >= CLEARLY_SHORTER * max(sizes))
     r = starts[best]
     why = pushes[best - 1].evidence if best > 0 else ""
     if best == len(pushes):
