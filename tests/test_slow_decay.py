@@ -161,6 +161,15 @@ def test_a_weak_second_mode_is_named_and_the_main_swing_fitted(tmp_path, ratio, 
     assert abs(c / (w0 / 400.0) - 1) < 0.02, (c, w0 / 400.0)
     other = f"{1.0 / ratio:.4g} s"
     assert any("second oscillation of period " + other in n for n in problem.notes), problem.notes
+    # kept with the results, and said in the plain summary
+    from escfit.report.plain import mode_sentences
+
+    kept = problem.provenance()
+    assert kept["second_mode_period_s"] == pytest.approx(1.0 / ratio, rel=0.02)
+    assert 0.0 < kept["second_mode_share"] < 0.2
+    said = mode_sentences(kept)
+    found = re.match(r"The record also holds a weaker second oscillation, of period ([0-9.]+) s", said[0])
+    assert found and float(found.group(1)) == pytest.approx(1.0 / ratio, rel=0.02), said
 
 
 @pytest.mark.parametrize("ratio", [2.7, 0.3])

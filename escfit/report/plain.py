@@ -18,7 +18,7 @@ from ..core.family import get_family
 from ..core.plainwords import coefficient_sentences, sig
 from .quantities import parameter_draws
 
-__all__ = ["plain_summary", "window_sentences", "MOST"]
+__all__ = ["plain_summary", "window_sentences", "mode_sentences", "MOST"]
 
 MOST = 0.75  # a fit over less than this share of the record says where its numbers come from
 
@@ -45,8 +45,24 @@ def plain_summary(res) -> list[str]:
         return coefficient_sentences(draws)
     plain = getattr(family, "plain", None)
     if plain is None:
-        return coefficient_sentences(draws) + window_sentences(res.attrs)
-    return plain(draws, res.attrs, res.group("observed_data")) + window_sentences(res.attrs)
+        return coefficient_sentences(draws) + window_sentences(res.attrs) + mode_sentences(res.attrs)
+    return plain(draws, res.attrs, res.group("observed_data")) + window_sentences(res.attrs) + mode_sentences(res.attrs)
+
+
+def mode_sentences(attrs) -> list[str]:
+    """A weak second oscillation the record holds beside the swing, which the fit leaves out.
+
+    From the results' ``second_mode_period_s`` and ``second_mode_share`` (the share of the
+    swing's spectral power): a structure or a second pendulum that rings along, so that a
+    teacher knows the numbers above are the main swing's alone.
+    """
+    try:
+        period, share = float(attrs["second_mode_period_s"]), float(attrs["second_mode_share"])
+    except (KeyError, TypeError, ValueError):
+        return []
+    return [f"The record also holds a weaker second oscillation, of period {sig(period, 3)} s ({sig(100 * share, 2)} % "
+            "of the main swing's power); the numbers above are the main swing's, and the second stays in the "
+            "residuals."]
 
 
 def window_sentences(attrs) -> list[str]:

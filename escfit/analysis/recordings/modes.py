@@ -73,13 +73,15 @@ def other_modes(t: np.ndarray, x: np.ndarray, period: float, *, min_ratio: float
     return found
 
 
-def check_other_modes(t: np.ndarray, x: np.ndarray, period: float, where: str) -> list[str]:
+def check_other_modes(t: np.ndarray, x: np.ndarray, period: float, where: str) -> tuple[list[str], list[tuple]]:
     """Refuse a record with a second oscillation of :data:`SECOND_MODE_SHARE` of the main one's
     power or more (naming both); a weaker one that stands out of its neighbourhood of the
     spectrum by :data:`MIN_PROMINENCE` is a note: the fit follows the main swing only.  A slower
     one must stand out that far to count at all: a hold, a step or a drift puts a smooth skirt of
-    power at low frequencies, with no peak of its own."""
-    notes = []
+    power at low frequencies, with no peak of its own.
+
+    Returns the notes and the weak oscillations noted, ``(period s, share of the power)`` each."""
+    notes, weak = [], []
     for other, share, prominence in other_modes(t, x, period):
         side = "faster" if other < period else "slower"
         if side == "slower" and prominence < MIN_PROMINENCE:
@@ -93,4 +95,5 @@ def check_other_modes(t: np.ndarray, x: np.ndarray, period: float, where: str) -
             notes.append(f"a weak second oscillation of period {other:.4g} s ({side}, {100 * share:.2g} % of the main "
                          f"swing's power) rides on the swing of period {period:.4g} s: the fit follows "
                          "the main swing, the second one stays in the residuals")
-    return notes
+            weak.append((float(other), float(share)))
+    return notes, weak

@@ -150,6 +150,9 @@ class TurningPoints:
         ``stop_time`` ends the free decay chosen before a push (the record goes on, pushed
         again): :func:`escfit.analysis.recordings.motion.find_start` chose the longest free
         stretch between pushes.
+    other_modes : tuple of (float, float)
+        Weak oscillations besides the swing, ``(period s, share of the swing's power)``
+        (:func:`escfit.analysis.recordings.modes.check_other_modes`); the fit follows the swing.
     """
 
     swing: np.ndarray
@@ -176,6 +179,7 @@ class TurningPoints:
     dropped: tuple = ()
     noise_floor: float = math.nan
     pushed_after: bool = False
+    other_modes: tuple = ()
 
     def after_first(self, t: float) -> float:
         """``t`` (s, the series' clock) as a time after the file's first sample, as notes show times."""
@@ -365,7 +369,7 @@ def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool,
                          noise=rec.sigma, sustained_from=held_from + origin, sustained_why=why, origin=origin,
                          noise_floor=sunk.floor if sunk is not None else math.nan,
                          warnings=rec.warnings, steps=tuple((at + origin, size, note) for at, size, note in rec.steps),
-                         pushed_after=cut)
+                         pushed_after=cut, other_modes=rec.other_modes)
 
 
 def remove_steps(time: np.ndarray, values: np.ndarray, steps) -> np.ndarray:
@@ -471,7 +475,8 @@ def prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, whe
     if not math.isfinite(period) or prominence < MIN_PROMINENCE:
         raise DataError(f"no oscillation found: the spectrum has no clear peak (peak {prominence:.3g} times the median "
                         f"power, a decay gives over {MIN_PROMINENCE:g}); is this a free decay?", where)
-    notes += check_other_modes(t, x, period, where)
+    mode_notes, weak_modes = check_other_modes(t, x, period, where)
+    notes += mode_notes
     spp = period / dt
     if spp < COARSE_SAMPLES_PER_PERIOD:
         raise DataError(f"the period of {period:.4g} s spans only {spp:.1f} samples; the turning-point fits need at "
@@ -494,7 +499,8 @@ def prepare(t: np.ndarray, x: np.ndarray, window: float | None, degree: int, whe
     if window is None:
         window = 0.2 if resolution_ratio > 2e-4 or 0.125 * spp < 6 else 0.125
     shared = resolution_ratio > 2e-3
-    return SampledRecord(t, x, xs, period, dt, band, step, window, degree, where, notes, shared, sigma, quantum, quantity)
+    return SampledRecord(t, x, xs, period, dt, band, step, window, degree, where, notes, shared, sigma, quantum, quantity,
+                         other_modes=tuple(weak_modes))
 
 
 def _working_period(t: np.ndarray, x: np.ndarray, min_cycles: float = 2.0) -> tuple[float, float]:

@@ -92,6 +92,10 @@ class BalanceProblem(ProblemBase):
         window = getattr(self, "record_window", None)
         if window is not None:  # the record's first and last sample, the first and last instant fitted
             out.update(zip(("record_first_s", "record_last_s", "fit_first_s", "fit_last_s"), map(float, window)))
+        modes = getattr(self, "other_modes", ())
+        if modes:  # the strongest weak oscillation beside the swing, which the fit leaves in the residuals
+            period, share = max(modes, key=lambda m: m[1])
+            out.update(second_mode_period_s=float(period), second_mode_share=float(share))
         if getattr(self.data, "kind", "") == "notches":  # how the counts read: the report draws their intervals
             out.update(notch_deg=math.degrees(float(self.data.notch)),
                        notch_reading=getattr(getattr(self, "observation", None), "reading", "counted"))

@@ -152,6 +152,7 @@ def _record_kept(problem, scene: BalanceScene, tp=None, series=None):
     first and last instant fitted, s on the series' clock), for the plain summary."""
     if tp is not None:
         problem.turning_points = tp
+        problem.other_modes = tuple(getattr(tp, "other_modes", ()))
         if series is not None and len(series.time):
             window = window_of(series)
             first = window.origin
