@@ -341,28 +341,22 @@ def find_events(times: np.ndarray, values: np.ndarray, *, resolution: float, qua
         # noise is about that of one peak-to-peak swing
         k = _pushed_half_swings(v, run, s_p, beyond)
         level_run = run[pushes[run]]
-        if level_run.size:
+        if level_run.size:  # the level test's evidence where it has some, else the free law's
             j = int(level_run[np.argmax(gain[level_run])])
-            if _one_sided(v, k, float(absolute[j]), s_p):
-                continue  # a tracker that read one side short, then right again: not a push
-            score = float(gain[j] / scale[j]) if scale[j] > 0 else math.inf
-            events.append(SwingEvent(
-                "push", k, float(t[k + 1]), float(absolute[j]), score,
-                f"the swing gains {100 * np.expm1(gain[j]):.0f} % ({show(absolute[j])} peak to peak) in the half "
-                f"swing ending at t = {t[k + 1]:.4g} s and keeps it: {score:.0f} times the larger of its reading "
-                f"noise ({100 * err[j]:.2g} %) and the rise and fall of the swing elsewhere in the record "
-                f"({100 * spread:.2g} %)"))
-            continue
-        j = int(run[np.argmax(law_step[run])])
-        if _one_sided(v, k, float(law_step[j]), s_p):
-            continue  # a tracker that read one side short, then right again: not a push
-        score = float(law_step[j] / law_err[j]) if law_err[j] > 0 else math.inf
-        events.append(SwingEvent(
-            "push", k, float(t[k + 1]), float(law_step[j]), score,
-            f"the swing gains {show(law_step[j])} peak to peak ({100 * law_step[j] / level[j]:.0f} %) beyond what "
-            f"the record's own free decay loses at that size, in the half swing ending at t = {t[k + 1]:.4g} s, and "
-            f"keeps it: {score:.0f} times its reading noise, and nowhere else does the swing fall short of that "
-            f"law by more than {show(deepest)}"))
+            size, score = float(absolute[j]), float(gain[j] / scale[j]) if scale[j] > 0 else math.inf
+            said = (f"the swing gains {100 * np.expm1(gain[j]):.0f} % ({show(size)} peak to peak) in the half swing "
+                    f"ending at t = {t[k + 1]:.4g} s and keeps it: {score:.0f} times the larger of its reading noise "
+                    f"({100 * err[j]:.2g} %) and the rise and fall of the swing elsewhere in the record "
+                    f"({100 * spread:.2g} %)")
+        else:
+            j = int(run[np.argmax(law_step[run])])
+            size, score = float(law_step[j]), float(law_step[j] / law_err[j]) if law_err[j] > 0 else math.inf
+            said = (f"the swing gains {show(size)} peak to peak ({100 * size / level[j]:.0f} %) beyond what the "
+                    f"record's own free decay loses at that size, in the half swing ending at t = {t[k + 1]:.4g} s, "
+                    f"and keeps it: {score:.0f} times its reading noise, and nowhere else does the swing fall short "
+                    f"of that law by more than {show(deepest)}")
+        if not _one_sided(v, k, size, s_p):  # else a tracker that read one side short, then right again
+            events.append(SwingEvent("push", k, float(t[k + 1]), size, score, said))
     c = _centres(v)
     # c_k = (v_k + 2 v_(k+1) + v_(k+2)) / 4 and its second differences scatter alike (sqrt(6)/4 s)
     step, step_err = swing_gains(c, noise_ratio=1.0)
