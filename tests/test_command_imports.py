@@ -23,7 +23,7 @@ import escfit.inference.fit
 module = sys.modules["escfit.inference.fit"]
 inner, seen = module.least_squares, {}
 WATCH = ("scipy.signal", "scipy.stats", "pandas", "xarray", "h5py", "emcee", "arviz", "matplotlib", "lmfit",
-         "distributed")
+         "distributed", "dask")
 
 def hooked(*a, **k):
     seen.setdefault("before_fit", [m for m in WATCH if m in sys.modules])
@@ -58,8 +58,8 @@ def test_least_squares_fit_imports_no_signal_stats_or_pandas_before_the_fit(tmp_
     # nothing heavy is needed to read the recipe, the scene and the record and to start the fit
     assert seen["before_fit"] == [], seen
     # the whole command never needs the signal-processing or statistics packages, a sampler, plots,
-    # or dask's cluster scheduler (which xarray's own writer would ask for)
-    never = {"scipy.signal", "scipy.stats", "emcee", "arviz", "matplotlib", "distributed"}
+    # or dask (which pint and xarray would import, and xarray's own writer its cluster scheduler)
+    never = {"scipy.signal", "scipy.stats", "emcee", "arviz", "matplotlib", "distributed", "dask"}
     assert not never & set(seen["at_end"]), seen
     assert out.is_file()
 
@@ -98,3 +98,31 @@ def test_the_command_exits_with_its_status_and_keeps_a_profilers_output(tmp_path
     r = subprocess.run([sys.executable, "-m", "escfit", "--version"], capture_output=True, text=True, env=_env(),
                        timeout=300)
     assert r.returncode == 0 and r.stdout.startswith("escfit")
+
+
+# A command run inside a process (a notebook's or a test's CliRunner) leaves dask importable.
+IN_PROCESS = r"""
+import importlib.util, sys
+from click.testing import CliRunner
+from escfit.cli.main import cli
+result = CliRunner().invoke(cli, ["summary", "missing.h5"])
+assert result.exit_code == 2, result.output
+assert "dask" not in sys.modules and importlib.util.find_spec("dask") is not None
+import dask, escfit.core.units
+print("OK", dask.__name__)
+"""
+
+
+def test_a_command_in_process_leaves_dask_importable(tmp_path):
+    r = subprocess.run([sys.executable, "-c", IN_PROCESS], capture_output=True, text=True, env=_env(), cwd=tmp_path,
+                       timeout=300)
+    assert r.returncode == 0 and "OK dask" in r.stdout, r.stderr[-3000:]
+
+
+def test_units_import_pint_without_dask_and_leave_it_importable(tmp_path):
+    code = ("import sys, importlib.util; import escfit.core.units as u; assert 'dask' not in sys.modules; "
+            "assert importlib.util.find_spec('dask') is not None; import dask; "
+            "print('OK', round(u.to_canonical('90 deg', 'angle', 'x'), 6))")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=_env(), cwd=tmp_path,
+                       timeout=300)
+    assert r.returncode == 0 and "OK 1.570796" in r.stdout, r.stderr[-3000:]

@@ -59,13 +59,19 @@ def _bounded_normal(rng: np.random.Generator, value: np.ndarray, cov: np.ndarray
     the ridge.  Where fewer than one draw in :data:`MIN_INSIDE` lies inside (a normal
     approximation far out of its bounds), the draws are clipped as a last resort.
     """
-    z = rng.multivariate_normal(np.zeros(value.size), cov, size=N_DRAWS * MIN_INSIDE, method="eigh",
-                                check_valid="ignore")
-    draws = value + z
-    inside = np.all((draws >= lo) & (draws <= hi), axis=1)
-    if inside.sum() >= N_DRAWS:
-        return draws[inside][:N_DRAWS]
-    return np.clip(draws[:N_DRAWS], lo, hi)
+    kept, first, drawn = [], None, 0
+    block = 2 * N_DRAWS
+    while drawn < N_DRAWS * MIN_INSIDE:
+        size = min(block, N_DRAWS * MIN_INSIDE - drawn)
+        draws = value + rng.multivariate_normal(np.zeros(value.size), cov, size=size, method="eigh",
+                                                check_valid="ignore")
+        first = draws if first is None else first
+        kept.append(draws[np.all((draws >= lo) & (draws <= hi), axis=1)])
+        drawn += size
+        if sum(map(len, kept)) >= N_DRAWS:
+            return np.concatenate(kept)[:N_DRAWS]
+        block *= 4  # few inside: draw more at once
+    return np.clip(first[:N_DRAWS], lo, hi)
 
 
 def derived_rows(res) -> tuple[list[str], list[list[str]], str]:
