@@ -31,6 +31,8 @@ def hooked(*a, **k):
 
 module.least_squares = hooked
 from escfit.cli.main import cli
+from escfit.core.unused import leave_out, unused_by
+leave_out(unused_by(sys.argv[1:]))  # as the console entry point does
 try:
     cli.main(sys.argv[1:], prog_name="escfit")
 except SystemExit as exc:
@@ -100,29 +102,30 @@ def test_the_command_exits_with_its_status_and_keeps_a_profilers_output(tmp_path
     assert r.returncode == 0 and r.stdout.startswith("escfit")
 
 
-# A command run inside a process (a notebook's or a test's CliRunner) leaves dask importable.
+# A command run inside a process (a notebook's or a test's CliRunner) leaves dask alone: only
+# the console entry point, whose process ends with the command, marks it as not installed.
 IN_PROCESS = r"""
-import importlib.util, sys
+import importlib.util, subprocess, sys
 from click.testing import CliRunner
 from escfit.cli.main import cli
 result = CliRunner().invoke(cli, ["summary", "missing.h5"])
 assert result.exit_code == 2, result.output
-assert "dask" not in sys.modules and importlib.util.find_spec("dask") is not None
+assert sys.modules.get("dask", 0) is not None and importlib.util.find_spec("dask") is not None
 import dask, escfit.core.units
 print("OK", dask.__name__)
 """
 
 
-def test_a_command_in_process_leaves_dask_importable(tmp_path):
+def test_a_command_in_process_leaves_dask_alone(tmp_path):
     r = subprocess.run([sys.executable, "-c", IN_PROCESS], capture_output=True, text=True, env=_env(), cwd=tmp_path,
                        timeout=300)
     assert r.returncode == 0 and "OK dask" in r.stdout, r.stderr[-3000:]
 
 
-def test_units_import_pint_without_dask_and_leave_it_importable(tmp_path):
-    code = ("import sys, importlib.util; import escfit.core.units as u; assert 'dask' not in sys.modules; "
-            "assert importlib.util.find_spec('dask') is not None; import dask; "
-            "print('OK', round(u.to_canonical('90 deg', 'angle', 'x'), 6))")
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=_env(), cwd=tmp_path,
-                       timeout=300)
-    assert r.returncode == 0 and "OK 1.570796" in r.stdout, r.stderr[-3000:]
+def test_the_commands_that_leave_dask_out():
+    from escfit.core.unused import unused_by
+
+    assert unused_by(["fit", "x.csv"]) == ("dask",)
+    assert unused_by(["--debug", "report", "x.h5"]) == ("dask",)
+    assert unused_by(["fit-many", "a.csv"]) == ()  # runs its fits on dask
+    assert unused_by(["--version"]) == ()

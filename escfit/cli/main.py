@@ -32,7 +32,7 @@ from ..core.version import __version__
 from ..core.errors import EscfitError
 from .options import STEPS_MAX, WALKERS_MAX, FiniteFloat, MethodType, StepsType
 from ..core.interrupts import interrupting_signals
-from ..core.unused import WITHOUT, leave_out
+from ..core.unused import leave_out, unused_by
 
 __all__ = ["main", "cli"]
 
@@ -168,17 +168,13 @@ class _Group(click.Group):
 @click.group(cls=_Group, context_settings=CONTEXT_SETTINGS)
 @click.version_option(__version__, prog_name="escfit")
 @click.option("--debug", is_flag=True, help="Print the traceback of an internal error; show third-party warnings.")
-@click.pass_context
-def cli(ctx, debug) -> None:
+def cli(debug) -> None:
     """Identify the physical parameters of mechanical timekeeping oscillators.
 
     New here?  `escfit init DATA` writes a starter scene that fits a recording of your own;
     `escfit examples DIR` copies example recordings, scenes and fit recipes into DIR and
     prints what to run next.
     """
-    marked = leave_out(WITHOUT.get(ctx.invoked_subcommand or "", ()))
-    # undone when the command ends, for a process that runs more than one (tests, a notebook's CliRunner)
-    ctx.call_on_close(lambda: [sys.modules.pop(name, None) for name in marked if sys.modules.get(name, 0) is None])
 
 
 @cli.command()
@@ -591,6 +587,7 @@ def main() -> None:
     """Console-script entry point (the process ends as :func:`escfit.cli.exit.run_and_exit` says)."""
     from .exit import run_and_exit
 
+    leave_out(unused_by(sys.argv[1:]))  # this process runs one command and ends with it
     quiet_third_party_warnings()
     run_and_exit(cli, prog_name="escfit")
 

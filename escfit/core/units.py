@@ -16,34 +16,11 @@ import math
 import os
 import re
 from functools import lru_cache
-import sys
 from typing import Any
 
+import pint
+
 from .errors import UnitError
-
-
-def _import_pint():
-    """pint, imported without its optional dask support unless dask is already loaded.
-
-    pint imports ``dask.base`` at its own import whenever dask is installed (to let quantities
-    wrap dask arrays), about 0.15 CPU s of every command; escfit never puts dask arrays in
-    quantities.  While pint is imported, ``dask`` is marked unimportable (a ``None`` entry in
-    ``sys.modules``, which :func:`importlib.util.find_spec` reads as "not installed"); the mark
-    is removed at once, so a later ``import dask`` (the study's cluster) works as usual.
-    """
-    if "dask" in sys.modules or "pint" in sys.modules:
-        import pint
-        return pint
-    sys.modules["dask"] = None  # type: ignore[assignment]
-    try:
-        import pint
-    finally:
-        if sys.modules.get("dask", 0) is None:
-            del sys.modules["dask"]
-    return pint
-
-
-pint = _import_pint()
 
 __all__ = ["ureg", "COUNT_WORDS", "UnsafeUnitText", "to_canonical", "CANONICAL", "safe_unit_text", "quantity",
            "MAX_UNIT_TEXT", "BARE_ANGLE_LIMIT", "check_bare_angle", "angular_frequency", "angular_frequency_factor",
