@@ -42,9 +42,11 @@ def driven_then_free(driven: float, q: float, *, duration: float = 40.0, unstead
     return TimeSeries(t, y, source="driven.csv"), off
 
 
-@pytest.mark.parametrize("driven, q", [(5.0, 40.0), (5.0, 6.0), (2.0, 40.0), (0.5, 40.0)])
+@pytest.mark.parametrize("driven, q", [(5.0, 40.0), (5.0, 6.0), (2.0, 40.0), (0.5, 40.0), (0.5, 6.0), (1.0, 6.0)])
 def test_the_free_decay_starts_where_the_drive_stopped(driven, q):
-    """Driven for 5 s (then a 40-period decay, or a fast one), 2 s and half a period."""
+    """Driven for 5 s (then a 40-period decay, or a fast one), 2 s, a period and half a period
+    (one steady half swing before a decay that loses a quarter of the swing in each: fitted as
+    free from the first turning point, C came out 14 % low)."""
     series, off = driven_then_free(driven, q, duration=40.0 if q > 10 else 15.0)
     tp = reduce_series(series)
     assert abs(tp.release_time - off) <= PERIOD + 0.05, (tp.release_time, off, tp.notes)

@@ -115,6 +115,40 @@ def test_a_drive_switched_off_after_a_swing_or_two_is_found(steady):
     assert driven_start(kept) == steady  # from turning point steady + 1: one half swing late
 
 
+@pytest.mark.parametrize("law", [(0.3, 0.0, 0.0), (0.12, 0.0, 0.0), (0.1, 0.005, 0.1)])
+@pytest.mark.parametrize("steady", [1, 2])
+def test_a_drive_before_a_fast_decay_is_found(law, steady):
+    """A swing held for one or two half swings, then a decay losing 10-30 % of it per half swing
+    (viscous, or with friction and air drag): the free losses just after the drive are far
+    larger than those of the same decay further on, so the drive is measured against the
+    losses right after it, carried up to its amplitude, not against later, smaller ones."""
+    from escfit.analysis.segments import driven_start
+
+    from .test_drive_off import loss_law_turns
+
+    for seed in range(10):
+        a = np.abs(loss_law_turns(60, *law, 2e-3, seed) - 0.01)
+        kept = np.r_[np.full(steady, a[0]), a] * (-1.0) ** np.arange(steady + a.size) + 0.01
+        assert driven_start(kept) == steady, (law, steady, seed)
+
+
+@pytest.mark.parametrize("law", [(0.02, 0.0, 0.0), (0.0, 0.004, 0.0), (0.0, 0.0, 0.08), (0.3, 0.0, 0.0),
+                                 (0.12, 0.0, 0.0), (0.2, 0.01, 0.0), (0.0, 0.03, 0.0), (0.0, 0.0, 0.4),
+                                 (0.25, 0.0, 0.3), (0.005, 0.002, 0.05)])
+def test_a_free_decay_of_any_loss_law_never_starts_driven(law):
+    """Viscous, Coulomb and air-drag decays and mixtures, slow and fast (up to 30 % lost per
+    half swing), 14 to 80 half swings, reading noise from 1e-4 to 2e-2 of a 0.5 swing: the line
+    carried up to the first swings never expects more than the free law loses there."""
+    from escfit.analysis.segments import driven_start
+
+    from .test_drive_off import loss_law_turns
+
+    for n in (14, 30, 80):
+        for noise in (1e-4, 1e-3, 5e-3, 2e-2):
+            for seed in range(5):
+                assert driven_start(loss_law_turns(n, *law, noise, seed)) == 0, (law, n, noise, seed)
+
+
 @pytest.mark.parametrize("seed", range(20))
 def test_a_free_start_is_never_taken_for_a_driven_one(seed):
     from escfit.analysis.segments import driven_start

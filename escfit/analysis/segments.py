@@ -55,6 +55,7 @@ MIN_SIDE = 3  # fewer on either side: no verdict there (a median of 3 tolerates 
 Z_PUSH = 5.0  # evidence a push needs: gain over the larger of its two scales
 MAD = 1.4826  # median absolute deviation -> standard deviation of a normal sample
 MEDIAN_SE = math.sqrt(math.pi / 2.0)  # standard error of a median over that of a mean, normal samples
+WOBBLE_FLOOR = 0.1  # a start's shortfall is held against stretches whose swing is this share of the start's at least
 
 
 @dataclass(frozen=True)
@@ -385,15 +386,22 @@ def find_events(times: np.ndarray, values: np.ndarray, *, resolution: float, qua
 def driven_start(values: np.ndarray, *, most: int = 4, reference: int = 6) -> int:
     """Half swings at the start of ``values`` (alternating turning points) that a drive kept up.
 
-    A free swing loses at every half swing, and at nearly the same amplitude it loses nearly the
-    same amount.  The losses ``l_k = p_k - p_(k+1)`` of the first half swings (at most ``most``)
-    are compared with the median loss ``L`` of the ``reference`` half swings after them: leading
-    losses under three quarters of ``L`` were made up by a drive (or a hand) that was then
-    switched off (the half swing in which it stops loses about ``L / 2``, so the start found is
-    the turning point after the drive's last one: one half swing late at most).  Decided only
-    where the mean of those leading losses falls short of ``L`` by four standard errors (the
-    losses' noise from the second differences of ``p``), so that no free start is taken for a
-    driven one by chance.
+    A free swing loses at every half swing, and never less at a larger amplitude than at a
+    smaller one: Coulomb friction takes the same at every amplitude, viscous damping in
+    proportion to it, air drag in proportion to its square.  The losses ``l_k = p_k - p_(k+1)``
+    of the first half swings (at most ``most``) are compared with the loss the free swing just
+    after them takes at their own amplitude: a straight line of loss against peak-to-peak
+    swing through the ``reference`` half swings after a candidate prefix of ``m`` (the half
+    swing after the prefix, in which the drive stops, left out), carried up to the prefix's
+    swings.  For a loss law of those three kinds that line lies below the law above the
+    swings it was fitted on, so the expectation errs low, never high.  Leading losses under
+    three quarters of it were made up by a drive (or a hand) that was then switched off; the
+    start found is the turning point after the drive's last half swing (the half swing in which
+    it stops loses about half the free loss, so one half swing late at most).  Decided only
+    where the leading losses fall short of the line by four standard errors (the losses' noise
+    from the second differences of ``p``, and the line's own uncertainty where it is carried),
+    so that no free start is taken for a driven one by chance.  A fast decay is measured as
+    well as a slow one: its losses shrink along the record, and the line follows them.
 
     Returns
     -------
@@ -402,28 +410,49 @@ def driven_start(values: np.ndarray, *, most: int = 4, reference: int = 6) -> in
     """
     v = np.asarray(values, float)
     p = np.abs(np.diff(v))
-    if p.size < most + reference + 2:
+    if p.size < most + reference + 2 or not np.all(np.isfinite(p)):
         return 0
     loss = -np.diff(p)
-    typical = float(np.median(loss[most + 1:most + 1 + reference]))
     # the second differences of p are differences of successive losses: sqrt(2) times their noise
     s_l = robust_scale(np.diff(p, 2)) / math.sqrt(2.0)
-    m = 0
-    while m < most and loss[m] < 0.75 * typical:
-        m += 1
-    if m == 0:
+    found, evidence = 0, None
+    for m in range(1, most + 1):
+        expected, spread = _free_loss_line(p[m + 1:m + 1 + reference], loss[m + 1:m + 1 + reference], p[:m])
+        if not loss[m - 1] < 0.75 * expected[m - 1]:
+            break
+        deficit = float(np.mean(expected - loss[:m]))
+        se = s_l * math.sqrt(1.0 / m + float(np.mean(spread)))
+        found, evidence = m, (deficit, se)
+    if not found or evidence[0] < 4.0 * evidence[1]:
         return 0
-    deficit = typical - float(np.mean(loss[:m]))
-    if deficit < 4.0 * MEDIAN_SE * s_l * math.sqrt(1.0 / m + 1.0 / reference):
-        return 0
+    m, deficit = found, evidence[0]
     # a slow wobble of the swing makes its losses run short and long by turns all along the
     # record: the start's shortfall must stand out of the same shortfall measured everywhere else
+    # the swing still stands out (where it has faded to noise, the shortfall over the swing is noise
+    # over almost nothing)
+    start = float(np.mean(p[:m + reference]))
+    windows = [j for j in range(1, loss.size - most - reference)
+               if np.mean(p[j:j + m + reference]) >= WOBBLE_FLOOR * start]
     later = [float(np.median(loss[j + most + 1:j + most + 1 + reference])) - float(np.mean(loss[j:j + m]))
-             for j in range(1, loss.size - most - reference)]
-    size = [float(np.mean(p[j:j + m + reference])) for j in range(1, loss.size - most - reference)]
-    if stands_out(deficit / float(np.mean(p[:m + reference])), np.array(later) / np.array(size)) is False:
+             for j in windows]
+    size = [float(np.mean(p[j:j + m + reference])) for j in windows]
+    if stands_out(deficit / start, np.array(later) / np.array(size)) is False:
         return 0
     return m
+
+
+def _free_loss_line(swing: np.ndarray, loss: np.ndarray, at: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The loss per half swing a line through ``(swing, loss)`` gives at the swings ``at``, and
+    the variance of each, in units of one loss's noise variance (least squares; a flat line at
+    the mean where the swings hardly differ)."""
+    centre = float(np.mean(swing))
+    sxx = float(np.sum((swing - centre) ** 2))
+    mean = float(np.mean(loss))
+    if sxx <= 1e-12 * max(centre * centre, 1e-300) * swing.size:
+        return np.full(at.size, mean), np.full(at.size, 1.0 / swing.size)
+    slope = float(np.sum((swing - centre) * (loss - mean))) / sxx
+    d = at - centre
+    return mean + slope * d, 1.0 / swing.size + d * d / sxx
 
 
 def stands_out(change: float, elsewhere: np.ndarray, *, factor: float = 2.0, least: int = 5) -> bool | None:
