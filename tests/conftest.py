@@ -96,6 +96,8 @@ def pytest_configure(config):
 LONG = {
     # whole fits through the command line or the API
     "test_long_waveform.py::test_a_five_thousand_period_decay_is_fitted_in_blocks",
+    "test_kernel_store.py::test_the_examples_first_runs_compile_nothing[fits/real/encoder_pendulum_jensen.toml]",
+    "test_kernel_store.py::test_the_examples_first_runs_compile_nothing[fits/monday_unit3.toml]",
     "test_cli_recordings.py::test_record_fit_summary_round_trip[timegrapher-t.json-timegrapher_scene.toml-None]",
     "test_cli_recordings.py::test_record_fit_summary_round_trip[timegrapher-t.csv-timegrapher_scene.toml-None]",
     "test_family_conformance.py::test_parse_simulate_read[verge]",

@@ -51,7 +51,7 @@ from typing import Any, Callable, Iterable
 import numba
 from numba.core import caching
 
-__all__ = ["kernel", "kernel_sources", "module_sources", "notice_compilation", "notice_uncached"]
+__all__ = ["kernel", "kernel_sources", "module_sources", "notice_compilation", "notice_uncached", "compiled_kernels"]
 
 # py_func -> (files hashed, fingerprint); read by the cache implementation when numba builds it
 _SOURCES: "weakref.WeakKeyDictionary[Callable, tuple[tuple[Path, ...], str]]" = weakref.WeakKeyDictionary()
@@ -274,8 +274,14 @@ class _KernelCache(caching.FunctionCache):
     _impl_class = _KernelCacheImpl
 
     def load_overload(self, sig, target_context):
-        """numba's cache lookup; a miss means numba compiles next, which is announced."""
+        """numba's cache lookup, then the kernels shipped with escfit
+        (:mod:`escfit.core.kernel_store`); a miss of both means numba compiles next, which is
+        announced."""
         data = super().load_overload(sig, target_context)
+        if data is None:
+            from . import kernel_store
+
+            data = kernel_store.load(self, _SOURCES[self._py_func][1], sig, target_context)
         if data is None:
             notice_compilation(self._py_func)
         return data
@@ -366,9 +372,20 @@ def kernel(func: Callable | None = None, /, *, sources=(), cache: bool = True, *
             disp._cache = _KernelCache(fn)
         except RuntimeError:  # numba found no folder it can write its cache in (a read-only install)
             disp._cache = _Uncached(fn)
+        _KERNELS.append(disp)
         return disp
 
     return wrap(func) if func is not None else wrap
+
+
+# every cached kernel made by :func:`kernel` in this process (kernels live as long as their modules)
+_KERNELS: list = []
+
+
+def compiled_kernels() -> list:
+    """``(dispatcher, fingerprint)`` of each cached kernel of this process (made by :func:`kernel`)
+    that holds compiled code."""
+    return [(d, _SOURCES[d.py_func][1]) for d in _KERNELS if d.overloads and isinstance(d._cache, _KernelCache)]
 
 
 def module_sources(path: Path, module: str) -> tuple[Path, ...]:
