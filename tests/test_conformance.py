@@ -200,3 +200,59 @@ def test_every_smooth_torque_is_added_up():
         total = np.sum([f(x, v, k) for f in smooth_torques()], axis=0)
         assert all(f(x, v, k)[0] != 0.0 for f in smooth_torques())  # each example's torque acts here
         np.testing.assert_allclose(acceleration_module.smooth_terms(x, v, k), total, rtol=1e-15, atol=0.0)
+
+
+# -- each dissipative effect's part of the decrement ---------------------------------------
+
+LOSSES = [key for key, cls in EFFECTS.items() if getattr(cls, "LOSS", None) is not None]
+
+
+def test_every_effect_declares_its_coordinates_and_a_random_instance():
+    """What the scene reader (a mass on a spring takes only the effects whose ``coordinates`` hold
+    ``"linear"``) and the random-scene comparison (``benchmarks/random_scenes.py``) ask of an effect."""
+    from escfit.balance.synthetic.random_scenes import ALL_EFFECTS, Scale
+
+    rng = np.random.default_rng(0)
+    for key, cls in EFFECTS.items():
+        assert cls.coordinates <= {"angle", "linear"} and "angle" in cls.coordinates, key
+        assert key in ALL_EFFECTS, f"{key} is not drawn by the random-scene comparison"
+        text = cls.random(rng, Scale(W0, A0))
+        assert f"effects.{key}]" in text, (key, text)
+
+
+def test_every_effect_says_whether_it_takes_a_part_of_the_decrement():
+    """An effect either declares its loss (``LOSS`` and ``decrement``) or is one that dissipates
+    nothing of its own or has no single coefficient (springs, pins, windows, the drift of C)."""
+    from escfit.balance.decrement import LAWS
+
+    for key, cls in EFFECTS.items():
+        loss = getattr(cls, "LOSS", None)
+        if loss is None:
+            assert not hasattr(cls, "decrement"), key
+            continue
+        assert callable(getattr(cls, "decrement", None)), f"{key} declares LOSS but no decrement(value, swing)"
+        assert loss.parameter.startswith(f"{key}.") and key in LAWS and "angle" in cls.coordinates
+    colours = [EFFECTS[k].LOSS.colour for k in LOSSES]
+    symbols = [EFFECTS[k].LOSS.symbol for k in LOSSES]
+    assert len(set(colours)) == len(colours) and len(set(symbols)) == len(symbols)
+
+
+@pytest.mark.parametrize("effect", LOSSES)
+@pytest.mark.parametrize("restoring", ["spring", "pendulum"])
+def test_the_declared_part_is_what_a_half_swing_loses(effect, restoring):
+    """The effect alone, at a tenth of its example's coefficient, on a spring and on a pendulum
+    released at 1 rad: the amplitude the compiled DOP853 integration loses over each of the first
+    half swings against ``law_parts`` at that half swing's mean amplitude (first order in the
+    damping: within 2 % of the loss)."""
+    from escfit.balance.decrement import law_parts
+
+    loss = EFFECTS[effect].LOSS
+    tables = {effect: example_tables(effect)[effect]}
+    osc = f"omega0 = {W0!r}\ntheta0 = {A0!r}\n" + ('restoring = "pendulum"\n' if restoring == "pendulum" else "")
+    scene = load({"oscillator": osc, **tables})
+    value = 0.1 * scene.params[loss.parameter].value
+    tr = solve_system(scene.build({loss.parameter: value}), 4, "dop853", rtol=1e-12)
+    amp = np.abs(tr.theta_turn)
+    for a, b in zip(amp[:-1], amp[1:]):
+        part = law_parts(np.array([0.5 * (a + b)]), omega0=W0, restoring=restoring, **{loss.symbol: value})[effect]
+        assert abs((a - b) - part[0]) <= 0.02 * (a - b), (effect, restoring, a - b, part[0])

@@ -64,14 +64,23 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Decrements", "Window", "from_readings", "from_turns", "law_parts", "binned", "LAWS"]
+__all__ = ["Decrements", "Window", "Swing", "from_readings", "from_turns", "law_parts", "losses", "binned", "LAWS"]
 
-#: the parts drawn, in order: key -> (name, shape)
-LAWS = {"coulomb": ("Coulomb (dry) friction", "constant"),
-        "viscous": ("viscous damping", "proportional to A"),
-        "drag": ("quadratic air drag", "proportional to A^2"),
-        "escapement": ("escapement (impulse minus unlocking)", "falls like 1/A"),
-        "constant": ("Coulomb friction + escapement", "constant")}
+#: parts that belong to no single dissipative effect: key -> (name, shape)
+OTHER_PARTS = {"escapement": ("escapement (impulse minus unlocking)", "falls like 1/A"),
+               "constant": ("Coulomb friction + escapement", "constant")}
+
+
+def losses() -> dict:
+    """The registered effects that take a part of the decrement (they declare ``LOSS``), in the
+    registry's order: key -> effect class."""
+    from .effects import EFFECTS
+
+    return {key: cls for key, cls in EFFECTS.items() if getattr(cls, "LOSS", None) is not None}
+
+
+#: the parts drawn, in order: key -> (name, shape); every dissipative effect's, then the others
+LAWS = {**{key: (cls.LOSS.name, cls.LOSS.shape) for key, cls in losses().items()}, **OTHER_PARTS}
 
 
 @dataclass(frozen=True)
@@ -158,8 +167,66 @@ def from_turns(theta) -> Decrements:
                       np.arange(span.size - 1, dtype=np.int64))
 
 
-def law_parts(amplitude, *, omega0: float, C: float = 0.0, R: float = 0.0, D: float = 0.0, k3: float = 0.0,
-              windows: tuple[Window, ...] = (), restoring: str = "spring", switching: str = "angle") -> dict:
+@dataclass(frozen=True)
+class Swing:
+    """The undamped half swings of the given amplitudes, over which each loss does its work.
+
+    A loss whose torque per inertia does work ``W`` along the swing takes ``W / gain`` off it
+    (first order in the damping; see the module docstring).
+
+    Attributes
+    ----------
+    amplitude
+        Amplitudes ``A`` (rad, or m on a linear oscillator).
+    omega0
+        Natural frequency (rad/s).
+    gain
+        ``dE/dA``, the energy per inertia's slope at ``A``.
+    speed, speed2
+        ``int |theta'| dtheta`` and ``int theta'**2 dtheta`` over the half swing (the works of
+        torques ``theta'**0 sgn(theta')`` ... per unit coefficient: viscous, drag).
+    linear_spring
+        Whether the restoring torque is ``omega0**2 theta`` (no pendulum, no stiffening): viscous
+        damping then has its exact form (:meth:`viscous`).
+    """
+
+    amplitude: np.ndarray
+    omega0: float
+    gain: np.ndarray
+    speed: np.ndarray
+    speed2: np.ndarray
+    linear_spring: bool
+
+    @property
+    def path(self) -> np.ndarray:
+        """``int dtheta = 2 A``: the work of a constant torque (Coulomb friction) per unit."""
+        return 2.0 * self.amplitude
+
+    def viscous(self, C: float) -> np.ndarray:
+        """Viscous damping's part: exact on a linear spring (:func:`_viscous_spring`), else ``C speed / gain``."""
+        if self.linear_spring:
+            return _viscous_spring(self.amplitude, C, self.omega0)
+        return C * self.speed / self.gain
+
+
+def _swing(a: np.ndarray, omega0: float, k3: float, restoring: str) -> Swing:
+    w2 = omega0 * omega0
+    if k3:
+        gain = w2 * ((np.sin(a) if restoring == "pendulum" else a) + k3 * a**3)
+        swing_v, swing_v2 = _stiffened_swing(a, omega0, k3, restoring)
+        return Swing(a, omega0, gain, swing_v, swing_v2, False)
+    if restoring == "pendulum":
+        from scipy.special import ellipe, ellipk
+
+        m = np.sin(a / 2) ** 2
+        swing_v = 8.0 * omega0 * (ellipe(m) - (1.0 - m) * ellipk(m))  # int |theta'| dtheta over a half swing
+        swing_v2 = 4.0 * w2 * (np.sin(a) - a * np.cos(a))  # int theta'^2 dtheta
+        return Swing(a, omega0, w2 * np.sin(a), swing_v, swing_v2, False)
+    return Swing(a, omega0, w2 * a, math.pi / 2 * omega0 * a * a, 4.0 / 3.0 * w2 * a**3, True)
+
+
+def law_parts(amplitude, *, omega0: float, k3: float = 0.0, windows: tuple[Window, ...] = (),
+              restoring: str = "spring", switching: str = "angle", **coefficients: float) -> dict:
     """Each law's decrement per half swing at ``amplitude`` (rad), first order in the damping.
 
     Parameters
@@ -168,8 +235,6 @@ def law_parts(amplitude, *, omega0: float, C: float = 0.0, R: float = 0.0, D: fl
         Amplitudes (rad, > 0).
     omega0
         Natural frequency (rad/s).
-    C, R, D
-        Viscous (1/s), Coulomb (rad/s^2) and quadratic-drag (1/rad) coefficients per inertia.
     k3
         Cubic stiffening of the restoring torque (1/rad^2, ``[effects.stiffening]``): no part of
         its own, it changes the others (see the module docstring).
@@ -180,6 +245,10 @@ def law_parts(amplitude, *, omega0: float, C: float = 0.0, R: float = 0.0, D: fl
     switching
         ``"angle"`` or ``"phase"`` (Monday's convention: Coulomb friction and the windows then
         give one constant, returned as ``"constant"``).
+    **coefficients
+        Each dissipative effect's coefficient by its symbol (:func:`losses`: ``C`` viscous, 1/s;
+        ``R`` Coulomb, rad/s^2; ``D`` quadratic drag, 1/rad; any effect registered with a
+        ``LOSS``); absent ones are zero.
 
     Returns
     -------
@@ -187,43 +256,30 @@ def law_parts(amplitude, *, omega0: float, C: float = 0.0, R: float = 0.0, D: fl
         Law key (see :data:`LAWS`) -> decrement array (rad per half swing), only for the laws
         with a non-zero coefficient.
     """
+    parts = losses()
+    unknown = sorted(set(coefficients) - {cls.LOSS.symbol for cls in parts.values()})
+    if unknown:
+        raise TypeError(f"law_parts: no dissipative effect has the symbol(s) {unknown}")
     a = np.asarray(amplitude, float)
-    w2 = omega0 * omega0
     if restoring not in ("spring", "pendulum"):
         raise ValueError(f"restoring must be 'spring' or 'pendulum', got {restoring!r}")
-    if k3:
-        if switching == "phase":
-            raise ValueError("a stiffening spring has no phase-convention decrement (its half period varies)")
-        gain = w2 * ((np.sin(a) if restoring == "pendulum" else a) + k3 * a**3)
-        swing_v, swing_v2 = _stiffened_swing(a, omega0, k3, restoring)
-        viscous = C * swing_v / gain
-    elif restoring == "pendulum":
-        from scipy.special import ellipe, ellipk
-
-        m = np.sin(a / 2) ** 2
-        gain = w2 * np.sin(a)  # dE/dA
-        swing_v = 8.0 * omega0 * (ellipe(m) - (1.0 - m) * ellipk(m))  # int |theta'| dtheta over a half swing
-        swing_v2 = 4.0 * w2 * (np.sin(a) - a * np.cos(a))  # int theta'^2 dtheta
-        viscous = C * swing_v / gain
-    else:
-        gain = w2 * a
-        swing_v2 = 4.0 / 3.0 * w2 * a**3
-        viscous = _viscous_spring(a, C, omega0)
+    if k3 and switching == "phase":
+        raise ValueError("a stiffening spring has no phase-convention decrement (its half period varies)")
+    swing = _swing(a, omega0, k3, restoring)
     out = {}
-    if C:
-        out["viscous"] = viscous
-    if D:
-        out["drag"] = D * swing_v2 / gain
+    for key, cls in parts.items():
+        value = coefficients.get(cls.LOSS.symbol, 0.0)
+        if value and not (switching == "phase" and cls.LOSS.phase_constant):
+            out[key] = cls.decrement(value, swing)
     if switching == "phase":
+        R = coefficients.get("R", 0.0)
         if R or windows:
-            out["constant"] = np.full(a.shape, _phase_constant(omega0, C, R, windows))
+            out["constant"] = np.full(a.shape, _phase_constant(omega0, coefficients.get("C", 0.0), R, windows))
         return _ordered(out)
-    if R:
-        out["coulomb"] = R * 2.0 * a / gain
     if windows:
         work = sum(w.sign * w.x * w.share * np.clip(np.minimum(w.hi, a) - np.maximum(w.lo, -a), 0.0, None)
                    for w in windows)
-        out["escapement"] = -work / gain
+        out["escapement"] = -work / swing.gain
     return _ordered(out)
 
 

@@ -17,12 +17,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.display import RAD_TO_DEG, curve_label, load_unit
-from .decrement import LAWS, Decrements, Window, binned, from_readings, from_turns, law_parts
+from .decrement import LAWS, Decrements, Window, binned, from_readings, from_turns, law_parts, losses
 
 __all__ = ["DecrementPanel", "decrement_panels", "decrement_figure"]
 
 #: effects whose part the decomposition knows (others leave the parts out, said in the caption)
-KNOWN_EFFECTS = {"viscous", "coulomb", "drag", "escapement", "stiffening"}
+KNOWN_EFFECTS = {*losses(), "escapement", "stiffening"}
 MAX_PANELS = 4
 WINDOW_PERIODS = 0.2  # samples within +-this many periods of a turning point locate it
 
@@ -192,19 +192,18 @@ def _add_parts(panel: DecrementPanel, scene, vals: dict, measured: Decrements, m
     esc = scene.effect("escapement")
     windows = tuple(Window(w.sign, vals[w.name], w.lo, w.hi, 1.0 if w.swings == "both" else 0.5)
                     for w in esc.windows) if esc is not None else ()
-    coeff = {"omega0": omega0, "C": vals.get("viscous.C", 0.0), "R": vals.get("coulomb.R", 0.0),
-             "D": vals.get("drag.D", 0.0), "k3": vals.get("stiffening.k3", 0.0)}
+    symbols = {cls.LOSS.symbol: vals.get(cls.LOSS.parameter, 0.0) for cls in losses().values()}
+    coeff = {"omega0": omega0, **symbols, "k3": vals.get("stiffening.k3", 0.0)}
     amps = np.concatenate([measured.amplitude, model.amplitude])
     top = 1.08 * float(np.max(amps))
     bottom = 0.85 * float(np.min(amps)) if windows else 0.0
     grid = np.linspace(max(bottom, 1e-3 * top), top, 200)
-    parts = law_parts(grid, omega0=omega0, C=coeff["C"], R=coeff["R"], D=coeff["D"], k3=coeff["k3"], windows=windows,
-                      restoring=scene.restoring, switching=scene.switching)
+    parts = law_parts(grid, omega0=omega0, k3=coeff["k3"], windows=windows, restoring=scene.restoring,
+                      switching=scene.switching, **symbols)
     if coeff["k3"]:  # how far the linear spring's forms would be off at the largest amplitude: said in the caption
         top_a = np.array([float(np.max(amps))])
-        stiff = law_parts(top_a, omega0=omega0, C=coeff["C"], R=coeff["R"], D=coeff["D"], k3=coeff["k3"],
-                          restoring=scene.restoring)
-        plain = law_parts(top_a, omega0=omega0, C=coeff["C"], R=coeff["R"], D=coeff["D"], restoring=scene.restoring)
+        stiff = law_parts(top_a, omega0=omega0, k3=coeff["k3"], restoring=scene.restoring, **symbols)
+        plain = law_parts(top_a, omega0=omega0, restoring=scene.restoring, **symbols)
         coeff["stiffening_effect"] = {key: float(stiff[key][0] / plain[key][0] - 1.0) for key in stiff
                                       if plain.get(key) is not None and plain[key][0]}
         coeff["stiffening_at"] = float(top_a[0])
@@ -218,7 +217,7 @@ def _add_parts(panel: DecrementPanel, scene, vals: dict, measured: Decrements, m
 
 
 # -- drawing -----------------------------------------------------------------------------------
-COLOURS = {"coulomb": "#d62728", "viscous": "#1f77b4", "drag": "#2ca02c", "escapement": "#9467bd",
+COLOURS = {**{key: cls.LOSS.colour for key, cls in losses().items()}, "escapement": "#9467bd",
            "constant": "#8c564b"}
 
 
@@ -305,15 +304,10 @@ def _label(key: str, p: DecrementPanel | None) -> str:
     c = p.coefficients if p is not None else {}
     pend = c.get("restoring") == "pendulum"
     value = _values_text(p, key)[0] + ": " if p is not None else ""
-    shapes = {"coulomb": "2R/omega0^2" + (" at small A" if pend else ", constant"),
-              "viscous": "about pi C A/(2 omega0), proportional to A",
-              "drag": "4 D A^2/3, proportional to A^2",
-              "escapement": "-(work per swing)/(omega0^2 A), a gain ~ 1/A",
-              "constant": "constant; the phase convention fixes only this sum"}
-    if c.get("k3"):  # the stiffening spring's own forms (escfit.balance.decrement)
-        shapes.update({"coulomb": "2R/(omega0^2 (1 + k3 A^2)) on the stiffening spring",
-                       "viscous": "C int|theta'|dtheta/(dE/dA), about pi C A/(2 omega0) at small A",
-                       "drag": "D (4A^2/3 + 4k3 A^4/5)/(1 + k3 A^2)" + (" at small A" if pend else "")})
+    # each loss's own form, on the stiffening spring where there is one (escfit.balance.decrement)
+    shapes = {key: cls.LOSS.legend(stiff=bool(c.get("k3")), pendulum=pend) for key, cls in losses().items()}
+    shapes.update({"escapement": "-(work per swing)/(omega0^2 A), a gain ~ 1/A",
+                   "constant": "constant; the phase convention fixes only this sum"})
     return f"{value}{shapes[key]}" if p is not None else f"{LAWS[key][0]}: {shapes[key]}"
 
 
@@ -321,9 +315,8 @@ def _values_text(p: DecrementPanel, only: str | None = None) -> list[str]:
     """``name = value`` of each part's coefficient (display units), one line each."""
     c, (k, unit) = p.coefficients, _units(p)
     linear = c.get("linear", False)
-    text = {"coulomb": f"Coulomb, R = {c.get('R', 0):.3g} {'m/s^2' if linear else 'rad/s^2'}",
-            "viscous": f"viscous, C = {c.get('C', 0):.3g} 1/s",
-            "drag": f"drag, D = {c.get('D', 0):.3g} {'1/m' if linear else '1/rad'}", "escapement": "escapement"}
+    text = {key: cls.LOSS.value_text(c.get(cls.LOSS.symbol, 0.0), linear=linear) for key, cls in losses().items()}
+    text["escapement"] = "escapement"
     if "constant" in p.parts:
         text["constant"] = f"Coulomb + escapement, {float(p.parts['constant'][1][-1]) * k:.3g} {unit}"
     keys = [only] if only else list(p.parts)

@@ -215,7 +215,9 @@ def _read_restoring(osc: Mapping, doc: Mapping, switching: str, where: str) -> s
     return restoring
 
 
-LINEAR_EFFECTS = ("viscous", "coulomb", "drag")  # what acts on a mass on a spring (the others act on a balance's angle)
+def _linear_effects() -> tuple[str, ...]:
+    """The effects that act on a mass on a spring (``coordinates`` holds ``"linear"``); the others act on an angle."""
+    return tuple(key for key, cls in EFFECTS.items() if "linear" in getattr(cls, "coordinates", ()))
 
 
 def _read_coordinate(osc: Mapping, doc: Mapping, restoring: str, switching: str, where: str) -> str:
@@ -237,10 +239,10 @@ def _read_coordinate(osc: Mapping, doc: Mapping, restoring: str, switching: str,
         raise SceneError("a linear oscillator (coordinate = 'linear') is a mass on a spring: restoring = 'spring' "
                          "and switching = 'angle'", f"{where}.coordinate")
     effects = doc.get("effects", {})
-    other = sorted(set(effects) - set(LINEAR_EFFECTS)) if isinstance(effects, Mapping) else []
+    other = sorted(set(effects) - set(_linear_effects())) if isinstance(effects, Mapping) else []
     if other:
         raise SceneError(f"effect(s) {other} act on a balance's angle; a linear oscillator takes "
-                         f"{', '.join(LINEAR_EFFECTS)}", f"{where}.coordinate")
+                         f"{', '.join(_linear_effects())}", f"{where}.coordinate")
     return coordinate
 
 

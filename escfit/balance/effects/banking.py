@@ -17,7 +17,7 @@ from ...core.errors import SceneError
 from ...core.params import Param, read_param
 from ...core.scene import check_keys
 from ...core.units import BARE_ANGLE_LIMIT, to_canonical
-from .base import ReadContext, Slot
+from .base import ReadContext, Slot, toml_number
 
 __all__ = ["Banking"]
 
@@ -28,6 +28,7 @@ class Banking:
 
     angle: float
     key = "banking"
+    coordinates = frozenset({"angle"})
     needs = frozenset({"impacts"})
     SLOTS = (
         Slot("bank", math.inf, "banking angle", "rad", "banking angle (inf: no pins)", finite=False),
@@ -46,6 +47,13 @@ class Banking:
         e = read_param(table.get("restitution", 0.0), name="banking.e", kind="dimensionless", lower=0.0, upper=1.0,
                        meaning="coefficient of restitution at the banking pins", where=f"{where}.restitution")
         return cls(angle), [e]
+
+    @staticmethod
+    def random(rng, s) -> str:
+        """Pins at 1 to 1.4 times the release amplitude, restitution 0 (dead), 0.3, 0.7 or 1 (elastic)."""
+        angle = s.a0 * rng.uniform(1.0, 1.4)
+        return (f"[effects.banking]\nangle = {toml_number(angle)}\n"
+                f"restitution = {toml_number(rng.choice([0.0, 0.3, 0.7, 1.0]))}\n")
 
     @staticmethod
     def example(w0: float, a0: float) -> dict[str, str]:

@@ -30,6 +30,19 @@ scene is read.  Each effect module says, in one place, everything the solvers ne
     :mod:`escfit.balance.acceleration` adds up for every integrating solver.
 ``refusals(k)`` (optional)
     Relations between its parameters a parameter set must satisfy (vectorised).
+``coordinates``
+    The coordinates it acts on: ``"angle"`` (a balance or a pendulum) and, for the losses a
+    mass on a spring has too, ``"linear"``; a linear oscillator's scene refuses the others.
+``LOSS`` and ``decrement(value, swing)`` (dissipative effects only)
+    What it takes off each half swing, in words, symbol and colour (:class:`Loss`), and its
+    part of the decrement per half swing at the swing's amplitudes, from the work its torque
+    does along the undamped swing (:class:`escfit.balance.decrement.Swing`):
+    :func:`escfit.balance.decrement.law_parts`, the decrement figure and its legend take every
+    effect that has them, and nothing else.
+``random(rng, scale)``
+    A random instance for the solver comparison (:mod:`escfit.balance.synthetic.random_scenes`):
+    its TOML tables drawn with ``rng`` on the scene's scales (``scale.w0`` rad/s, ``scale.a0``
+    rad, ``scale.unit = w0**2 a0`` rad/s^2), covering the range where solvers could disagree.
 ``example(w0, a0)``
     A typical instance, as the TOML tables of a balance scene of natural frequency ``w0``
     (rad/s) released at ``a0`` (rad): ``{table key: table body}``, with any other effect it
@@ -53,7 +66,8 @@ import numpy as np
 
 from ...core.errors import SceneError
 
-__all__ = ["ReadContext", "Slot", "NEEDS", "per_inertia", "read_either", "OMEGA0_RANGE", "squared"]
+__all__ = ["ReadContext", "Slot", "Loss", "NEEDS", "per_inertia", "read_either", "OMEGA0_RANGE", "squared",
+           "toml_number"]
 
 #: omega0 (rad/s) the solvers handle: a period between about 6 nanoseconds and 200 years.
 #: Outside, the solvers' arithmetic (omega0**2, half periods) would overflow or divide by zero.
@@ -74,6 +88,11 @@ NEEDS = {
     "drift": "coefficients changed between cycles (damping drift)",
     "phase_switching": "Monday's phase convention (torques switched at phases of each half cycle)",
 }
+
+
+def toml_number(x) -> str:
+    """``x`` as a TOML number that reads back as the same float."""
+    return repr(float(x))
 
 
 def squared(x):
@@ -125,6 +144,54 @@ class Slot:
     extra: int = 0
     dtype: str = "f8"
     finite: bool = True
+
+
+@dataclass(frozen=True)
+class Loss:
+    """What a dissipative effect takes off each half swing, as the decrement figure shows it.
+
+    Attributes
+    ----------
+    parameter
+        Its coefficient's parameter name (``"viscous.C"``).
+    symbol
+        The coefficient's symbol in formulas, and its keyword in
+        :func:`~escfit.balance.decrement.law_parts` (``"C"``).
+    name
+        What it is (``"viscous damping"``).
+    short
+        Its name before the coefficient's value in a legend (``"viscous"``).
+    shape
+        How its part of the decrement depends on the amplitude ``A`` (``"proportional to A"``).
+    colour
+        Its colour in figures.
+    units
+        The coefficient's unit for an angle (per inertia) and for a displacement (per mass).
+    forms
+        Its part's formula in a legend on a linear spring and on a pendulum, then on each with
+        a stiffening spring (``[effects.stiffening]``).
+    phase_constant
+        Whether its part is a constant that Monday's phase convention cannot tell from the
+        escapement's (Coulomb friction: the two are drawn as one constant there).
+    """
+
+    parameter: str
+    symbol: str
+    name: str
+    short: str
+    shape: str
+    colour: str
+    units: tuple[str, str]
+    forms: tuple[str, str, str, str]
+    phase_constant: bool = False
+
+    def legend(self, *, stiff: bool, pendulum: bool) -> str:
+        """The part's formula for a legend."""
+        return self.forms[2 * stiff + pendulum]
+
+    def value_text(self, value: float, *, linear: bool) -> str:
+        """``short, symbol = value unit`` for a legend."""
+        return f"{self.short}, {self.symbol} = {value:.3g} {self.units[1] if linear else self.units[0]}"
 
 
 @dataclass(frozen=True)

@@ -13,6 +13,7 @@ with status ``stopped``.  Every solver applies the rule at the start of each hal
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Mapping
 
@@ -20,7 +21,7 @@ import numpy as np
 
 from ...core.params import Param
 from ...core.scene import check_keys
-from .base import SIZE_MAX, ReadContext, Slot, read_either
+from .base import SIZE_MAX, Loss, ReadContext, Slot, read_either, toml_number
 
 __all__ = ["Coulomb"]
 
@@ -37,6 +38,10 @@ class Coulomb:
 
     static: bool = False
     key = "coulomb"
+    coordinates = frozenset({"angle", "linear"})
+    LOSS = Loss("coulomb.R", "R", "Coulomb (dry) friction", "Coulomb", "constant", "#d62728", ("rad/s^2", "m/s^2"),
+                ("2R/omega0^2, constant", "2R/omega0^2 at small A")
+                + ("2R/(omega0^2 (1 + k3 A^2)) on the stiffening spring",) * 2, phase_constant=True)
     SLOTS = (
         Slot("r", 0.0, "R", "rad/s**2", "Coulomb (sliding) friction torque per inertia", lower=0.0),
         Slot("r_static", 0.0, "R_static", "rad/s**2",
@@ -46,6 +51,11 @@ class Coulomb:
     @property
     def needs(self) -> frozenset[str]:
         return frozenset({"linear", "stop_rule"} if self.static else {"linear"})
+
+    @staticmethod
+    def decrement(value, swing):
+        """``R int dtheta / (dE/dA) = 2 R A / (dE/dA)`` (rad per half swing): ``2R/omega0**2`` on a linear spring."""
+        return value * swing.path / swing.gain
 
     @classmethod
     def read(cls, table: Mapping, ctx: ReadContext) -> tuple["Coulomb", list[Param]]:
@@ -74,6 +84,13 @@ class Coulomb:
             raise SceneError(f"static friction R_static = {q.value:g} rad/s^2 is below the sliding friction "
                              f"R = {p.value:g} rad/s^2; it must be at least R", f"{where}.R_static")
         return cls(static=True), [p, q]
+
+    @staticmethod
+    def random(rng, s) -> str:
+        """Sliding friction R; in a third of the scenes static friction R_static up to 3 R above it."""
+        r = s.unit * 10.0 ** rng.uniform(-4, math.log10(0.3))
+        static = f"R_static = {toml_number(r * rng.uniform(1.0, 3.0))}\n" if rng.uniform() < 1.0 / 3.0 else ""
+        return f"[effects.coulomb]\nR = {toml_number(r)}\n{static}"
 
     @staticmethod
     def example(w0: float, a0: float) -> dict[str, str]:

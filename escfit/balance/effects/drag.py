@@ -23,7 +23,7 @@ from ...core.errors import SceneError
 from ...core.kernels import kernel
 from ...core.params import Param, read_param
 from ...core.scene import check_keys
-from .base import SIZE_MAX, ReadContext, Slot
+from .base import SIZE_MAX, Loss, ReadContext, Slot, toml_number
 
 __all__ = ["Drag", "torque"]
 
@@ -34,7 +34,16 @@ class Drag:
 
     key = "drag"
     needs = frozenset({"smooth"})
+    coordinates = frozenset({"angle", "linear"})
     SLOTS = (Slot("drag", 0.0, "D", "1/rad", "quadratic air drag per inertia: torque -D |theta'| theta'", lower=0.0),)
+    LOSS = Loss("drag.D", "D", "quadratic air drag", "drag", "proportional to A^2", "#2ca02c", ("1/rad", "1/m"),
+                ("4 D A^2/3, proportional to A^2",) * 2
+                + ("D (4A^2/3 + 4k3 A^4/5)/(1 + k3 A^2)", "D (4A^2/3 + 4k3 A^4/5)/(1 + k3 A^2) at small A"))
+
+    @staticmethod
+    def decrement(value, swing):
+        """``D int theta'**2 dtheta / (dE/dA)`` (rad per half swing): ``4 D A**2 / 3`` on a linear spring."""
+        return value * swing.speed2 / swing.gain
 
     @classmethod
     def read(cls, table: Mapping, ctx: ReadContext) -> tuple["Drag", list[Param]]:
@@ -52,6 +61,11 @@ class Drag:
                        meaning="quadratic air drag per inertia D (1/rad): torque -D |theta'| theta'",
                        where=f"{where}.D")
         return cls(), [p]
+
+    @staticmethod
+    def random(rng, s) -> str:
+        """Quadratic drag taking up to about 13 % of the amplitude off a half swing (``4 D A / 3``)."""
+        return f"[effects.drag]\nD = {toml_number(rng.uniform(0.0, 0.1) / s.a0)}\n"
 
     @staticmethod
     def example(w0: float, a0: float) -> dict[str, str]:

@@ -24,7 +24,7 @@ from ...core.errors import SceneError
 from ...core.params import Param, read_param
 from ...core.scene import check_keys
 from ...core.units import BARE_ANGLE_LIMIT, to_canonical
-from .base import ReadContext, Slot, read_either
+from .base import ReadContext, Slot, read_either, toml_number
 
 __all__ = ["Window", "Escapement", "MAX_WINDOWS"]
 
@@ -59,6 +59,7 @@ class Escapement:
 
     windows: tuple[Window, ...]
     key = "escapement"
+    coordinates = frozenset({"angle"})
     needs = frozenset({"windows"})
     SLOTS = (
         Slot("n_windows", 0, "windows", "", "number of escapement windows", dtype="i8"),
@@ -72,6 +73,20 @@ class Escapement:
         Slot("w_dir", 0, "window swings", "", "swings a window acts on: 0 both, +1 positive, -1 negative",
              size=MAX_WINDOWS, count="n_windows", dtype="i8"),
     )
+
+    @staticmethod
+    def random(rng, s) -> str:
+        """A lever escapement's unlocking and impulse windows, both sides of the swing frame."""
+        def window(lo: float, hi: float, kind: str, x: float) -> str:
+            return (f'[[effects.escapement]]\nkind = "{kind}"\nfrom = {toml_number(lo)}\nto = {toml_number(hi)}\n'
+                    f'X = {toml_number(x)}\nswings = "both"\n')
+
+        lift = s.a0 * rng.uniform(0.05, 0.4)
+        unlock = lift * rng.uniform(1.2, 2.0)
+        out = window(-lift, lift, "impulse", s.unit * rng.uniform(0.2, 8.0))
+        if rng.uniform() < 0.7:
+            out += window(-unlock, -lift, "unlock", s.unit * rng.uniform(0.0, 0.5))
+        return out
 
     @staticmethod
     def example(w0: float, a0: float) -> dict[str, str]:

@@ -17,7 +17,7 @@ from ...core.errors import SceneError
 from ...core.params import Param, read_param
 from ...core.scene import check_keys
 from ...core.units import BARE_ANGLE_LIMIT, to_canonical
-from .base import OMEGA0_RANGE, ReadContext, squared
+from .base import OMEGA0_RANGE, ReadContext, squared, toml_number
 
 __all__ = ["Hairspring", "MAX_PIECES"]
 
@@ -31,6 +31,7 @@ class Hairspring:
 
     angles: tuple[float, ...]
     key = "hairspring"
+    coordinates = frozenset({"angle"})
     needs = frozenset({"linear"})
     SLOTS = ()  # it fills the oscillator's restoring-torque pieces (escfit.balance.kernel_records.OSCILLATOR_SLOTS)
 
@@ -55,6 +56,14 @@ class Hairspring:
             for i, w in enumerate(omegas, 1)
         ]
         return cls(ang), params
+
+    @staticmethod
+    def random(rng, s) -> str:
+        """A piecewise-linear spring of three pieces, the central one of frequency ``s.w0``."""
+        b1, b2 = s.a0 * rng.uniform(-1.2, -0.1), s.a0 * rng.uniform(0.1, 1.2)
+        w = [s.w0 * rng.uniform(0.7, 1.4), s.w0, s.w0 * rng.uniform(0.7, 1.4)]
+        return (f"[effects.hairspring]\nangles = [{toml_number(b1)}, {toml_number(b2)}]\n"
+                f"omega0 = [{', '.join(map(toml_number, w))}]\n")
 
     @staticmethod
     def example(w0: float, a0: float) -> dict[str, str]:

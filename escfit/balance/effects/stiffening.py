@@ -27,7 +27,7 @@ from ...core.errors import SceneError
 from ...core.kernels import kernel
 from ...core.params import Param, read_param
 from ...core.scene import check_keys
-from .base import SIZE_MAX, ReadContext, Slot
+from .base import SIZE_MAX, ReadContext, Slot, toml_number
 
 __all__ = ["Stiffening", "torque"]
 
@@ -37,6 +37,7 @@ class Stiffening:
     """Cubic stiffening of the restoring torque; parameter ``stiffening.k3`` (1/rad^2, >= 0)."""
 
     key = "stiffening"
+    coordinates = frozenset({"angle"})
     needs = frozenset({"smooth"})
     SLOTS = (Slot("k3_w2", 0.0, "omega0**2 * k3", "1/(s**2*rad**2)",
                   "cubic stiffness per inertia: restoring acceleration omega0**2*k3*theta**3", lower=0.0),)
@@ -53,6 +54,11 @@ class Stiffening:
                        meaning="cubic stiffening (1/rad^2): restoring torque omega0**2*(theta + k3*theta**3)",
                        where=f"{where}.k3")
         return cls(), [p]
+
+    @staticmethod
+    def random(rng, s) -> str:
+        """A cubic stiffening up to doubling the spring's pull at the release angle."""
+        return f"[effects.stiffening]\nk3 = {toml_number(rng.uniform(0.0, 1.0) / (s.a0 * s.a0))}\n"
 
     @staticmethod
     def example(w0: float, a0: float) -> dict[str, str]:

@@ -16,7 +16,7 @@ import numpy as np
 from ...core.errors import SceneError
 from ...core.params import Param
 from ...core.scene import check_keys
-from .base import ReadContext, Slot
+from .base import ReadContext, Slot, toml_number
 
 __all__ = ["ViscousDrift", "MAX_BANDS"]
 
@@ -31,6 +31,7 @@ class ViscousDrift:
     thresholds: tuple[float, ...]
     rates: tuple[float, ...]
     key = "viscous_drift"
+    coordinates = frozenset({"angle"})
     needs = frozenset({"drift"})
     SLOTS = (
         Slot("n_bands", 0, "drift thresholds", "", "number of envelope thresholds", dtype="i8"),
@@ -55,6 +56,13 @@ class ViscousDrift:
         if any(r <= -1 for r in rates):
             raise SceneError(f"rates must exceed -1 (fractional change per cycle), got {rates!r}", f"{where}.rates")
         return cls(tuple(map(float, th)), tuple(map(float, rates))), []
+
+    @staticmethod
+    def random(rng, s) -> str:
+        """Damping that grows by up to 5 % a cycle as the envelope decays."""
+        r1, r2 = rng.uniform(0.0, 0.05), rng.uniform(0.0, 0.05)
+        return (f"[effects.viscous_drift]\nthresholds = [0.5, 0.1]\n"
+                f"rates = [{toml_number(r1)}, {toml_number(r2)}, 0.0]\n")
 
     @staticmethod
     def example(w0: float, a0: float) -> dict[str, str]:
