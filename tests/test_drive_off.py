@@ -122,3 +122,20 @@ def test_the_users_start_and_release_win_over_the_drive():
         tp = reduce_series(given, user_window=given.window)
         assert tp.release_time == pytest.approx(0.0, abs=0.05), tp.notes
         assert not any("not a free decay" in n for n in tp.notes), tp.notes
+
+
+def test_a_resonance_built_up_held_then_released():
+    """The record of a driven torsion pendulum: the swing builds from rest to its steady size over
+    about 25 periods, is held there for 40 more, then the drive is switched off and it decays.
+    Fitted from the start, the build-up made the whole record look sustained and it was refused;
+    the free decay starts where the drive stopped, within a period."""
+    t = np.arange(0.0, 110.0, 1.0 / RATE)
+    off = 70.0
+    build = A0 * (1.0 - np.exp(-t / 8.0)) * np.cos(W0 * (t - off))
+    free, _, _ = viscous(t, A0 * (1.0 - math.exp(-off / 8.0)), PERIOD, 40.0, release=off)
+    y = np.where(t < off, build, free) + SIGMA * np.random.default_rng(0).standard_normal(t.size)
+    series = TimeSeries(t, y, source="torsione.csv")
+    tp = reduce_series(series)
+    assert abs(tp.release_time - off) <= PERIOD + 0.05, (tp.release_time, tp.notes)
+    res = fit_problem(make_problem(load_scene("fit.toml", text=SCENE), series), n_starts=1)
+    covers(res, "viscous.C", W0 / 40.0)

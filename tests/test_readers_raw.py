@@ -150,6 +150,30 @@ def test_semicolon_with_decimal_comma(tmp_path):
     assert "decimal comma" in ts.meta["source_format"]
 
 
+def test_tabs_with_three_decimals_after_a_comma(tmp_path):
+    """A logger's export: a comma-separated title line, then tab-separated rows whose numbers
+    carry a decimal comma and three decimals ("0,020"): as a grouped number "0,020" would be
+    twenty (a thousands mark after a leading 0 groups nothing), which read every time and angle
+    a thousand times too large."""
+    t = np.arange(600) * 0.02
+    a = 0.25 * np.exp(-0.05 * t) * np.cos(2 * math.pi * t / 1.03)
+    rows = "\n".join(f"{x:.3f}\t0.000\t{y:.3f}".replace(".", ",") for x, y in zip(t, a))
+    p = write(tmp_path, "torsione.csv", "--- Pendolo di torsione ---\nTempo,Forzante,Pendolo\n" + rows + "\n")
+    ts = read_raw_series(p, RecordingSpec.from_options(angle_column="Pendolo", angle_unit="rad"))
+    np.testing.assert_allclose(ts.time, t, atol=1e-12)
+    np.testing.assert_allclose(ts.theta, np.round(a, 3), atol=1e-12)
+    assert "decimal comma" in ts.meta["source_format"]
+
+
+def test_grouped_thousands_with_a_decimal_point_still_read():
+    from escfit.core.tabletext import parse_number
+
+    assert parse_number("12,345") == 12345.0 and parse_number("1,234.5") == 1234.5
+    assert parse_number("-1 234 567.25") == -1234567.25
+    assert parse_number("0,020") is None and parse_number("-0,001") is None  # a decimal comma's, not a grouping
+    assert parse_number("0,020", decimal_comma=True) == 0.02
+
+
 def test_one_column_with_sample_rate(tmp_path):
     t, a = decay(rate=500.0)
     p = write(tmp_path, "one.txt", "\n".join(map(fmt, a)) + "\n")

@@ -155,3 +155,38 @@ def test_a_free_start_is_never_taken_for_a_driven_one(seed):
 
     t, v = turns(seed=seed, ratio=0.97, noise=1e-3)
     assert driven_start(v) == 0
+
+
+@pytest.mark.parametrize("law", [(0.02, 0.0, 0.0), (0.0, 0.004, 0.0), (0.0, 0.0, 0.08), (0.3, 0.0, 0.0),
+                                 (0.005, 0.002, 0.05)])
+def test_a_free_decay_is_never_swung_up(law):
+    """Free decays of any loss law, reading noise up to 2e-2 of a 0.5 swing: the swing is never
+    larger than at the start, so no growth is found; nor with a 3 % wobble or a one-turn glitch."""
+    from escfit.analysis.segments import swung_up
+
+    from .test_drive_off import loss_law_turns
+
+    for n in (20, 80):
+        for noise in (1e-4, 5e-3, 2e-2):
+            for seed in range(5):
+                v = loss_law_turns(n, *law, noise, seed)
+                assert swung_up(v) == 0, (law, n, noise, seed)
+                glitch = v.copy()
+                glitch[n // 2] *= 3.0  # a tracking slip: one turning point three times too far out
+                assert swung_up(glitch) == 0, (law, n, noise, seed)
+    t, v = turns(ratio=0.995, wobble=0.03, seed=3)
+    assert swung_up(v) == 0
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_a_swing_built_up_by_a_drive_starts_free_at_its_peak(seed):
+    """A resonance building from a twentieth of its final swing over 30 half swings, held for 40,
+    then free: the decay may start no earlier than the largest swing."""
+    from escfit.analysis.segments import swung_up
+
+    k = np.arange(150)
+    grow = 0.5 * (1.0 - 0.95 * np.exp(-k / 8.0))
+    a = np.where(k < 70, grow, grow[69] * 0.97 ** np.maximum(k - 69, 0))
+    v = a * (-1.0) ** k + 2e-3 * np.random.default_rng(seed).standard_normal(k.size)
+    peak = swung_up(v)
+    assert 25 <= peak <= 70, peak

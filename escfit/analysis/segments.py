@@ -455,6 +455,33 @@ def _free_loss_line(swing: np.ndarray, loss: np.ndarray, at: np.ndarray) -> tupl
     return mean + slope * d, 1.0 / swing.size + d * d / sxx
 
 
+def swung_up(values: np.ndarray, *, share: float = 0.5, span: int = 5) -> int:
+    """The turning point where a swing that grew over many half swings peaks (0: it did not grow).
+
+    A free oscillator only loses energy: its swing is never larger than at its start.  A record
+    whose swing grows from under ``share`` of its largest (a drive or a hand swinging it up, a
+    resonance building) was driven until it peaked, and its free decay cannot start before that.
+    The swings are medians of ``span`` consecutive peak-to-peak swings, so that a glitch, a
+    tracking slip or a few noisy turns neither make a peak nor hide one; growth within the noise
+    or a wobble of a few per cent never reaches a factor ``1/share``.
+
+    Returns
+    -------
+    int
+        Index into ``values`` of the first turning point of the largest median swing (where the
+        decay may begin), or 0.
+    """
+    p = np.abs(np.diff(np.asarray(values, float)))
+    if p.size < 3 * span or not np.all(np.isfinite(p)):
+        return 0
+    smooth = np.array([np.median(p[i:i + span]) for i in range(p.size - span + 1)])
+    peak = int(np.argmax(smooth))
+    if peak < span or smooth[0] >= share * smooth[peak]:
+        return 0
+    # the largest single swing within the peak's window: its first turning point
+    return peak + int(np.argmax(p[peak:peak + span]))
+
+
 def stands_out(change: float, elsewhere: np.ndarray, *, factor: float = 2.0, least: int = 5) -> bool | None:
     """Whether ``change`` at a record's start exceeds ``factor`` times the 90th percentile of
     the same change measured along the rest of the record (``elsewhere``, same scale and sign:

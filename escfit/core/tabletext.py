@@ -145,7 +145,8 @@ def parse_number(cell: str, decimal_comma: bool = False) -> float | None:
             c = re.sub(r"[.' \u00a0\u202f]", "", c)
         c = c.replace(",", ".") if c.count(",") == 1 else c
     elif "," in c or "'" in c or " " in c or "\u00a0" in c or "\u202f" in c:
-        if not _GROUP_POINT.fullmatch(c):
+        # a grouping mark after a leading 0 groups nothing ("0,020" is 0.020 with a decimal comma)
+        if not _GROUP_POINT.fullmatch(c) or c.lstrip("+-").startswith("0"):
             return None
         c = re.sub(r"[,' \u00a0\u202f]", "", c)
     if not _PLAIN.fullmatch(c):

@@ -38,7 +38,7 @@ import numpy as np
 
 from ...core.errors import DataError
 from ...analysis.drive_off import drive_off, not_a_wobble
-from ...analysis.segments import amplitude_growth, driven_start, find_events, robust_scale
+from ...analysis.segments import amplitude_growth, driven_start, find_events, robust_scale, swung_up
 from .holds import HOLD_PERIODS, flat_start as _flat_start, held_release, turn_at_start as _turn_at_start
 
 __all__ = ["Turn", "Start", "reference", "faded_end", "growth_tolerance", "growth_steps", "find_start",
@@ -313,6 +313,12 @@ def find_start(rec, turns: list[Turn], end: int, *, at_start: bool = False) -> S
     r, why, cut = _free_stretch(rec, times, values, first_ok, end, tol)
     if cut is not None:
         end = cut
+    grown = swung_up(values[r:end])
+    if grown:
+        why = (f"the swing grows from {rec.show(abs(values[r + 1] - values[r]) / 2, 2)} to "
+               f"{rec.show(abs(values[r + grown + 1] - values[r + grown]) / 2, 2)} until t = {times[r + grown]:.4g} s, "
+               "which a free swing never does: driven (or swung up) until then")
+        r += grown
     # a hold within the run (a long interval after a flat turn) ends it backwards: the last one is the release
     for i in range(end - 1, r, -1):
         half = _local_half(times, i, end, 0.5 * rec.period)
@@ -327,7 +333,7 @@ def find_start(rec, turns: list[Turn], end: int, *, at_start: bool = False) -> S
                "amplitude (a drive switched off)")
         r += driven
     elif off is not None:
-        r += off.half_swing
+        r += off.half_swing + 1  # the split may fall one half swing early (the half swing the drive stopped in): one later is free
         why = (f"until t = {times[r]:.4g} s the swing loses {rec.show(off.loss_before, 2)} per half swing (peak to "
                f"peak), then {rec.show(off.loss_after, 2)} at a smaller amplitude, where a free swing loses less, not "
                f"more ({off.score:.0f} standard errors): driven until then (a drive switched off)")

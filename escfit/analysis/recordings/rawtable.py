@@ -116,6 +116,8 @@ def _header_names(line: str, lay: _Layout) -> list[str] | None:
         filled = [n for n in names if n.strip()]
         if len(filled) == 1 and len(filled[0].split()) == lay.ncols:  # a header spaced above tab-separated data
             names = filled[0].split()
+        elif len(filled) == 1 and len(filled[0].split(",")) == lay.ncols:  # comma-separated above tab-separated
+            names = filled[0].split(",")
     else:  # whitespace: keep "Time ( s )" and "t [s]" together, else try runs of 2+ spaces or tabs
         names = []
         for tok in line.split():
