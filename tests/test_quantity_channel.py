@@ -119,6 +119,22 @@ def test_an_energy_column_beside_the_angle_is_passed_over(tmp_path):
     np.testing.assert_allclose(series.theta, theta, atol=1e-8)
 
 
+def test_a_pendulum_bobs_position_starts_omega0_at_its_period(tmp_path):
+    """A pendulum recorded by its bob's horizontal position (a tracker's x, here 180 units of
+    swing) and named as a pendulum: the record is a displacement, fitted as a linear oscillator,
+    so omega0 starts at 2 pi / period.  The pendulum's period law with the swing read as an angle
+    (180 "rad") wrote omega0 3.3 times too large, which the fit then refused."""
+    t, theta, _ = _decay()
+    data = _write(tmp_path / "bob.csv", ["t (s)", "x (m)"], [t, 600.0 * theta])
+    runner = CliRunner()
+    with runner.isolated_filesystem(temp_dir=tmp_path) as here:
+        result = runner.invoke(cli, ["init", str(data), "--pendulum"], catch_exceptions=False)
+        assert result.exit_code == 0, result.output
+        doc = tomllib.loads((Path(here) / "bob.toml").read_text())
+    assert doc["oscillator"].get("coordinate") == "linear"
+    assert doc["oscillator"]["omega0"]["value"] == pytest.approx(OMEGA0, rel=0.01)
+
+
 def test_millimetres_are_a_displacement_and_accelerations_are_never_degrees(tmp_path):
     t, theta, _ = _decay()
     x_mm = 40.0 * theta

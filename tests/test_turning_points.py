@@ -339,3 +339,49 @@ def test_a_coarse_record_is_read_with_a_note(rate):
     for time, value in zip(tp.time, tp.theta):
         k = int(np.argmin(np.abs(tt - time)))
         assert abs(time - tt[k]) < 0.02 * period and abs(value - tv[k]) < 0.02
+
+
+
+def test_a_ripple_at_a_turning_point_is_not_two_more_turning_points():
+    """A decaying swing, 100 samples a period, with one frame 6 % of the swing low just after
+    the peak at 5 s (a tracker wavering): the hysteresis of a small step lets through a
+    maximum, a dip and a maximum within a tenth of a period.  The dip and the lesser peak go;
+    every other extremum is the clean signal's."""
+    from escfit.analysis.recordings.extrema import alternating_extrema, without_wiggles
+
+    t = np.arange(0.0, 20.0, 1.0 / 100.0)
+    clean = np.exp(-0.1 * t) * np.cos(2 * math.pi * t)
+    peak = int(np.argmin(np.abs(t - 5.0)))
+    rippled = clean.copy()
+    rippled[peak + 2] -= 0.06 * clean[peak]  # one frame low, the next back on the curve
+    cands = alternating_extrema(rippled, 0.01, 0)
+    reference = alternating_extrema(clean, 0.01, 0)
+    assert len(cands) == len(reference) + 2  # the ripple's two extra extrema
+    kept, dropped = without_wiggles(cands, t, rippled, 1.0)
+    assert [c[0] for c in kept] == [c[0] for c in reference] and len(dropped) == 1
+    assert without_wiggles(reference, t, clean, 1.0) == (reference, [])  # a clean swing is left alone
+
+
+def test_a_spurious_pair_within_a_swing_that_goes_on_is_not_its_fading():
+    """Turning points of a fast decay (a fifth lost per half swing) with one spurious pair of
+    extrema at half swing 5, a twentieth of a half period apart and two hundredths of the swing
+    apart: the intervals break there, but the turning points around it stand far above the
+    noise, so the decay is not cut there as faded (it kept 6 of 42 turning points)."""
+    from types import SimpleNamespace
+
+    from escfit.analysis.recordings.motion import faded_end
+
+    k = np.arange(40)
+    times = 0.5 * k
+    values = 0.2 * 0.8 ** k * (-1.0) ** k
+    a = values[5]
+    times = np.r_[times[:6], times[5] + 0.025, times[5] + 0.05, times[6:] + 0.05]
+    values = np.r_[values[:6], a * 0.98, a, values[6:]]
+    rec = SimpleNamespace(band=1e-5, notes=[], show=lambda v, *a, **k: f"{v:.3g}")
+    assert faded_end(rec, times, values) == times.size, rec.notes
+    # where the swing has really faded, the noise's extrema are cut as before
+    noisy = values.copy()
+    noisy[30:] = 1e-4 * (-1.0) ** np.arange(noisy.size - 30)
+    noisy_times = times.copy()
+    noisy_times[31] = noisy_times[30] + 0.02
+    assert faded_end(rec, noisy_times, noisy) <= 31

@@ -375,7 +375,9 @@ def _survey_samples(s: Survey, series: TimeSeries, restoring: str, turns=None) -
     s.counts = {"samples": int(t.size), "duration": float(t[-1] - t[0]), "turning points": int(len(tp.theta)),
                 "rate": float((t.size - 1) / (t[-1] - t[0])) if t.size > 1 and t[-1] > t[0] else math.nan,
                 "centre": float(tp.offset), "centre rate": float(tp.offset_rate),
-                "omega0": implied_omega0(restoring, measured_period(tp, series.source))}
+                # a displacement is fitted as a linear oscillator (the scene written has no pendulum law)
+                "omega0": implied_omega0("spring" if series.quantity == "displacement" else restoring,
+                                         measured_period(tp, series.source))}
     s.counts.update(s.counts_extra)
     s.notes = notes
     s.format_words = series.meta.get("source_format", "escfit time series (time_s, theta)")

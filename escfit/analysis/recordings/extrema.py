@@ -172,6 +172,33 @@ def resolution(x: np.ndarray, smoothed: np.ndarray) -> tuple[float, float]:
     return sigma, quantum
 
 
+def without_wiggles(cands: list[tuple[int, int, bool]], t: np.ndarray, xs: np.ndarray,
+                    period: float) -> tuple[list[tuple[int, int, bool]], list[float]]:
+    """``cands`` (:func:`alternating_extrema`) without the wiggles of the noise at a turning point.
+
+    Turning points of a swing are half a period apart, so three extrema within a quarter period
+    (a maximum, a dip, a maximum again: a glitch or a ripple at the top that the hysteresis let
+    through) cannot all be the swing's: the dip and the lesser of the two peaks go, the greater
+    stays.  Returns the candidates kept and the times of the dips dropped.
+    """
+    if not math.isfinite(period) or period <= 0:
+        return cands, []
+    out, dropped = list(cands), []
+    k = 0
+    while k + 2 < len(out):
+        a, b, c = out[k], out[k + 1], out[k + 2]
+        centre = lambda e: 0.5 * (t[e[0]] + t[e[1]])  # noqa: E731
+        if centre(c) - centre(a) < 0.25 * period:
+            sign = 1.0 if a[2] else -1.0
+            keep = a if sign * xs[a[0]] >= sign * xs[c[0]] else c
+            dropped.append(float(centre(b)))
+            out[k:k + 3] = [keep]
+            k = max(k - 1, 0)
+        else:
+            k += 1
+    return out, dropped
+
+
 def alternating_extrema(xs: np.ndarray, threshold: float, start: int = 0, stop: int | None = None,
                         seek: int = 0) -> list[tuple[int, int, bool]]:
     """Alternating maxima and minima of ``xs[start:stop]`` with hysteresis.

@@ -120,8 +120,11 @@ def faded_end(rec, times: np.ndarray, values: np.ndarray) -> int:
     after = np.append(np.maximum.accumulate(amp[::-1])[::-1][1:], 0.0)  # largest after each
     for i in bad:
         # faded: small against what came before and nothing large after (a hand's jitter while the
-        # oscillator is held before its release is small too, but the swing follows it)
-        if amp[i] <= max(0.1 * big, 3.0 * rec.band) and amp[i] < 0.5 * before[i] \
+        # oscillator is held before its release is small too, but the swing follows it); small
+        # around it too, not only itself (a spurious pair of extrema within a swing that goes on
+        # is as small, but the turning points beside it are not)
+        around = float(np.median(np.delete(amp[max(0, i - 3):i + 4], min(i, 3))))
+        if max(amp[i], around) <= max(0.1 * big, 3.0 * rec.band) and amp[i] < 0.5 * before[i] \
                 and max(after[i], 0.0) < 0.5 * before[i]:
             rec.notes.append(f"turning points from t = {times[i + 1]:.4g} s on left out: the swing had faded to "
                              f"{rec.show(amp[i], 2)} and their spacing is irregular (noise, not motion)")

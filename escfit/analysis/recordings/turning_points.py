@@ -314,7 +314,7 @@ def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool,
         t_ref, theta_ref, cands = _given_release(rec, series.release_s - origin)
         turns = _refine_all(rec, cands, t_end)
     else:
-        cands = alternating_extrema(rec.xs, rec.step, 0)
+        cands = _no_wiggles(rec, alternating_extrema(rec.xs, rec.step, 0))
         turns = _refine_all(rec, cands, t_end)
         if given:  # the user's start or release wins over the search for the free decay
             t_ref, theta_ref, turns = user_reference(rec, turns, user_window.shifted(-origin))
@@ -401,6 +401,17 @@ def period_of(times: np.ndarray, amplitudes: np.ndarray) -> tuple[float, float]:
     s2 = float(w @ resid**2) / (times.size - 2)
     cov = np.linalg.inv(normal) * s2
     return 2.0 * float(coef[0]), 2.0 * math.sqrt(max(float(cov[0, 0]), 0.0))
+
+
+def _no_wiggles(rec: "SampledRecord", cands: list) -> list:
+    """The candidate extrema without the noise's wiggles at a turning point (noted)."""
+    from .extrema import without_wiggles
+
+    kept, dropped = without_wiggles(cands, rec.t, rec.xs, rec.period)
+    if dropped:
+        rec.notes.append(f"{len(dropped)} dip(s) of the noise at a turning point (three extrema within a quarter "
+                         f"period), the first at t = {dropped[0]:.4g} s: the greater extremum kept")
+    return kept
 
 
 def _refine_all(rec: "SampledRecord", cands: list, t_end: float) -> list[Turn]:
