@@ -19,6 +19,8 @@ RECIPE = ROOT / "fits" / "real" / "string_pendulum_lab1.toml"
 # first call (the fit phase) and at the end.
 DRIVER = r"""
 import json, sys
+from escfit.core.unused import leave_out, unused_by
+leave_out(unused_by(sys.argv[1:]))  # as the console entry point does, before anything is imported
 import escfit.inference.fit
 module = sys.modules["escfit.inference.fit"]
 inner, seen = module.least_squares, {}
@@ -26,18 +28,16 @@ WATCH = ("scipy.signal", "scipy.stats", "pandas", "xarray", "h5py", "emcee", "ar
          "distributed", "dask")
 
 def hooked(*a, **k):
-    seen.setdefault("before_fit", [m for m in WATCH if m in sys.modules])
+    seen.setdefault("before_fit", [m for m in WATCH if sys.modules.get(m) is not None])
     return inner(*a, **k)
 
 module.least_squares = hooked
 from escfit.cli.main import cli
-from escfit.core.unused import leave_out, unused_by
-leave_out(unused_by(sys.argv[1:]))  # as the console entry point does
 try:
     cli.main(sys.argv[1:], prog_name="escfit")
 except SystemExit as exc:
     seen["exit"] = exc.code
-seen["at_end"] = [m for m in WATCH if m in sys.modules]
+seen["at_end"] = [m for m in WATCH if sys.modules.get(m) is not None]
 print("SEEN " + json.dumps(seen))
 """
 

@@ -391,8 +391,8 @@ def window_found(series: TimeSeries, tp) -> dict:
     """Where the analysis took the free decay, in s after the file's first sample.
 
     Keys: ``first`` and ``last`` (the record's first and last sample), ``reference`` (the
-    reference instant), ``held`` (the held angle, rad, when the record is flat over the tenth of
-    a period before the reference: a release from a hold; else ``None``), ``left_out`` (whether
+    reference instant), ``held`` (the held angle, rad, when the record is flat over the quarter
+    of a period before the reference: a release from a hold; else ``None``), ``left_out`` (whether
     more than a period before the reference was not taken as free), ``stop`` (where motion
     stopped or faded, ``nan`` when the record ends in motion), ``sunk`` (whether that stop is where
     the swing sank into a noise floor before it came to rest: the record after it is noise) and
@@ -400,16 +400,20 @@ def window_found(series: TimeSeries, tp) -> dict:
     """
     t, x = np.asarray(series.time, float), np.asarray(series.theta, float)
     ref, period = float(tp.release_time), float(tp.period)
-    before = (t >= ref - 0.1 * period) & (t <= ref)
+    # a quarter period: over it a swinging oscillator moves by its whole amplitude, a held one not at
+    # all (over a tenth of a period a noisy swing, moving a fifth of its amplitude, looked held)
+    before = (t >= ref - 0.25 * period) & (t <= ref)
     amplitude = float(np.max(np.abs(np.asarray(tp.theta, float) - tp.offset), initial=0.0))
     band = max(4.0 * float(tp.noise) if math.isfinite(tp.noise) else 0.0, 1e-3 * amplitude)
     held = None
-    if np.count_nonzero(before) >= 3 and t[0] <= ref - 0.1 * period:
+    if np.count_nonzero(before) >= 3 and t[0] <= ref - 0.25 * period:
         level = float(np.median(x[before]))
         if np.all(np.abs(x[before] - level) <= band):
             held = float(tp.release_theta)
     zero = float(getattr(tp, "origin", 0.0))  # the keys count from the file's first sample
+    drive = float(series.meta.get("drive_stop_s", "nan") or "nan") - zero  # a drive recorded beside it stopped
     return {"first": float(t[0]) - zero, "last": float(t[-1]) - zero, "reference": ref - zero, "held": held,
+            "drive_stop": drive, "drive_column": series.meta.get("drive_column", ""),
             "left_out": bool(ref - t[0] > period), "stop": float(tp.stop_time) - zero, "period": period,
             "sunk": bool(math.isfinite(float(getattr(tp, "noise_floor", math.nan)))),
             "pushed": bool(getattr(tp, "pushed_after", False)),

@@ -178,8 +178,10 @@ def without_wiggles(cands: list[tuple[int, int, bool]], t: np.ndarray, xs: np.nd
 
     Turning points of a swing are half a period apart, so three extrema within a quarter period
     (a maximum, a dip, a maximum again: a glitch or a ripple at the top that the hysteresis let
-    through) cannot all be the swing's: the dip and the lesser of the two peaks go, the greater
-    stays.  Returns the candidates kept and the times of the dips dropped.
+    through) cannot all be the swing's, when the dip is shallow: under a quarter of the swings
+    around it (a swing that starts or changes its shape there has deep ones, and they are kept).
+    The dip and the lesser of the two peaks go, the greater stays.  Returns the candidates kept
+    and the times of the dips dropped.
     """
     if not math.isfinite(period) or period <= 0:
         return cands, []
@@ -188,7 +190,10 @@ def without_wiggles(cands: list[tuple[int, int, bool]], t: np.ndarray, xs: np.nd
     while k + 2 < len(out):
         a, b, c = out[k], out[k + 1], out[k + 2]
         centre = lambda e: 0.5 * (t[e[0]] + t[e[1]])  # noqa: E731
-        if centre(c) - centre(a) < 0.25 * period:
+        level = [float(xs[e[0]]) for e in out[max(0, k - 3):k + 6]]
+        swing = float(np.median(np.abs(np.diff(level)))) if len(level) > 1 else 0.0
+        depth = min(abs(float(xs[a[0]] - xs[b[0]])), abs(float(xs[c[0]] - xs[b[0]])))
+        if centre(c) - centre(a) < 0.25 * period and depth < 0.25 * swing:
             sign = 1.0 if a[2] else -1.0
             keep = a if sign * xs[a[0]] >= sign * xs[c[0]] else c
             dropped.append(float(centre(b)))
@@ -197,6 +202,16 @@ def without_wiggles(cands: list[tuple[int, int, bool]], t: np.ndarray, xs: np.nd
         else:
             k += 1
     return out, dropped
+
+
+def drop_wiggles(notes: list[str], cands: list[tuple[int, int, bool]], t: np.ndarray, xs: np.ndarray,
+                 period: float) -> list[tuple[int, int, bool]]:
+    """:func:`without_wiggles`, with a note of the dips dropped appended to ``notes``."""
+    kept, dropped = without_wiggles(cands, t, xs, period)
+    if dropped:
+        notes.append(f"{len(dropped)} dip(s) of the noise at a turning point (three extrema within a quarter "
+                     f"period), the first at t = {dropped[0]:.4g} s: the greater extremum kept")
+    return kept
 
 
 def alternating_extrema(xs: np.ndarray, threshold: float, start: int = 0, stop: int | None = None,

@@ -577,13 +577,19 @@ def reference(rec, turns: list[Turn]) -> tuple[float, float, list[Turn]]:
 
 
 def _check_decay(times: np.ndarray, values: np.ndarray, rec) -> None:
-    """Refuse a swing that grows steadily (most peak-to-peak swings larger than the one before): not a free decay."""
+    """Refuse a swing that grows steadily (most peak-to-peak swings larger than the one before): not a free decay.
+
+    Grows: the last third of the swings a fifth larger than the first third, most of them larger
+    than the one before; or a tenth larger with three in four larger than the one before (a
+    decay's noise makes successive swings larger and smaller by turns, not three times in four).
+    """
     size = np.abs(np.diff(values))
     if size.size < 4:
         return
     m = max(1, size.size // 3)
     first, last = float(np.mean(size[:m])), float(np.mean(size[-m:]))
-    if last > 1.2 * first and np.mean(np.diff(size) > 0) > 0.6:
+    growing = float(np.mean(np.diff(size) > 0))
+    if (last > 1.2 * first and growing > 0.6) or (last > 1.1 * first and growing >= 0.75):
         raise DataError(f"the swing grows from {rec.show(first, 4)} to {rec.show(last, 4)} "
                         f"(peak to peak) between t = {times[0]:.4g} s and {times[-1]:.4g} s: a driven or sustained "
                         "oscillation (a drive, an escapement, a sound), not a free decay", rec.where)

@@ -68,7 +68,8 @@ import numpy as np
 
 from ...core.errors import DataError
 from .centre import measure_centre
-from .extrema import (alternating_extrema, extrema_period, power_near, resolution, smooth,
+from ..drive_column import drive_window
+from .extrema import (alternating_extrema, drop_wiggles, extrema_period, power_near, resolution, smooth,
                       smoothing_share, smoothing_window, spectral_period, vertex_at)
 from ..amplitude_trend import sustained
 from .motion import INTERVAL_RANGE, Turn, faded_end, reference
@@ -314,10 +315,13 @@ def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool,
         t_ref, theta_ref, cands = _given_release(rec, series.release_s - origin)
         turns = _refine_all(rec, cands, t_end)
     else:
-        cands = _no_wiggles(rec, alternating_extrema(rec.xs, rec.step, 0))
+        cands = drop_wiggles(rec.notes, alternating_extrema(rec.xs, rec.step, 0), rec.t, rec.xs, rec.period)
         turns = _refine_all(rec, cands, t_end)
+        drive = None if given else drive_window(series.meta, origin)
         if given:  # the user's start or release wins over the search for the free decay
             t_ref, theta_ref, turns = user_reference(rec, turns, user_window.shifted(-origin))
+        elif drive is not None:  # the oscillator is free only once its recorded drive stopped
+            t_ref, theta_ref, turns = user_reference(rec, turns, drive[0], by=drive[1])
         else:
             t_ref, theta_ref, turns = reference(rec, turns)
     times = [u.time for u in turns]
@@ -401,17 +405,6 @@ def period_of(times: np.ndarray, amplitudes: np.ndarray) -> tuple[float, float]:
     s2 = float(w @ resid**2) / (times.size - 2)
     cov = np.linalg.inv(normal) * s2
     return 2.0 * float(coef[0]), 2.0 * math.sqrt(max(float(cov[0, 0]), 0.0))
-
-
-def _no_wiggles(rec: "SampledRecord", cands: list) -> list:
-    """The candidate extrema without the noise's wiggles at a turning point (noted)."""
-    from .extrema import without_wiggles
-
-    kept, dropped = without_wiggles(cands, rec.t, rec.xs, rec.period)
-    if dropped:
-        rec.notes.append(f"{len(dropped)} dip(s) of the noise at a turning point (three extrema within a quarter "
-                         f"period), the first at t = {dropped[0]:.4g} s: the greater extremum kept")
-    return kept
 
 
 def _refine_all(rec: "SampledRecord", cands: list, t_end: float) -> list[Turn]:
