@@ -360,6 +360,20 @@ def test_a_ripple_at_a_turning_point_is_not_two_more_turning_points():
     kept, dropped = without_wiggles(cands, t, rippled, 1.0)
     assert [c[0] for c in kept] == [c[0] for c in reference] and len(dropped) == 1
     assert without_wiggles(reference, t, clean, 1.0) == (reference, [])  # a clean swing is left alone
+    deep = clean.copy()
+    deep[peak + 2] -= 0.5 * clean[peak]  # half the swing: a shoulder of the waveform (a sound), not noise
+    cands = alternating_extrema(deep, 0.01, 0)
+    assert without_wiggles(cands, t, deep, 1.0) == (cands, [])
+
+
+def test_a_swing_that_grows_steadily_is_refused():
+    """A sound's pressure (or a driven swing) growing by 5 % a period, every half swing larger than
+    the one before: not a free decay, refused as sustained (the last third of the swings is 15 %
+    larger than the first, under the fifth the rule asked before)."""
+    t = np.arange(0.0, 5.0, 1.0 / 200.0)
+    y = 0.6 * (1.0 + 0.05 * t) * np.cos(2 * math.pi * t)
+    with pytest.raises(DataError, match="a driven or sustained oscillation"):
+        reduce_series(series(t, y + 1e-4 * np.random.default_rng(0).standard_normal(t.size)))
 
 
 def test_a_spurious_pair_within_a_swing_that_goes_on_is_not_its_fading():

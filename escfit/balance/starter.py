@@ -411,9 +411,7 @@ def window_found(series: TimeSeries, tp) -> dict:
         if np.all(np.abs(x[before] - level) <= band):
             held = float(tp.release_theta)
     zero = float(getattr(tp, "origin", 0.0))  # the keys count from the file's first sample
-    drive = float(series.meta.get("drive_stop_s", "nan") or "nan") - zero  # a drive recorded beside it stopped
     return {"first": float(t[0]) - zero, "last": float(t[-1]) - zero, "reference": ref - zero, "held": held,
-            "drive_stop": drive, "drive_column": series.meta.get("drive_column", ""),
             "left_out": bool(ref - t[0] > period), "stop": float(tp.stop_time) - zero, "period": period,
             "sunk": bool(math.isfinite(float(getattr(tp, "noise_floor", math.nan)))),
             "pushed": bool(getattr(tp, "pushed_after", False)),

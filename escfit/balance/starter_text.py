@@ -156,10 +156,7 @@ def _window_keys(s: Survey) -> tuple[list[str], list[str]]:
     ref, period = w["reference"], w["period"]
     user = any(k in s.recording for k in ("start", "release"))
     if not user:
-        if math.isfinite(w.get("drive_stop", math.nan)):
-            active.append(f"start = {_seconds(w['drive_stop'])}    # the drive recorded in {w['drive_column']} stops "
-                          "swinging here: the oscillator is free only after it (set start earlier to keep more)")
-        elif w["held"] is not None:
+        if w["held"] is not None:
             line = (f"release = {_seconds(ref)}    # the analysis found the oscillator held at "
                     f"{math.degrees(w['held']):.4g} deg until {ref:.6g} s: the model is released there")
             if w["left_out"]:

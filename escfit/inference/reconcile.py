@@ -154,31 +154,6 @@ def _waveform_hint(problem) -> str:
     return ", or fit every sample ([observation] model = \"waveform\")"
 
 
-#: how the model is started: where these end on a bound, the optimum is held by the range, not the record
-RELEASE = ("oscillator.theta0", "observation.t_release")
-
-
-def _release_on_bound(lsq: LeastSquaresResult, structural: list[str]):
-    """NOT_DETERMINED when the release angle or instant ends on its bound and losses are fitted with it.
-
-    The release's range comes from the record's reference turning point (or the scene); an
-    optimum on its edge means the record wants a release the range excludes (a turning point
-    read off by a noisy record, a release at another instant), and the losses are then fitted to
-    make up for it: neither what the swing loses nor how is what the record says.
-    """
-    on = [n for n, b in zip(lsq.names, getattr(lsq, "at_bound", ())) if b and n in RELEASE]
-    losses = [n for n in structural if n not in RELEASE and n != "oscillator.omega0"]
-    if not on or not losses:
-        return None
-    from ..core.names import scene_key
-
-    first = on[0]
-    return NOT_DETERMINED, structural, (
-        f"the parameters are NOT determined: {first} ends on its bound {float(lsq.values[first]):.5g}, so the fit "
-        "holds the release where its range stops, not where the record puts it, and the losses make up for it; "
-        f"widen its range ({scene_key(first)}) and fit again")
-
-
 def verdict(problem, lsq: LeastSquaresResult, unresolved: list[Implied], *,
             posterior: bool = False, agreement=None) -> tuple[str, list[str], str]:
     """What the fit determines.
@@ -217,9 +192,6 @@ def verdict(problem, lsq: LeastSquaresResult, unresolved: list[Implied], *,
             f"{_start_edit(c.name, c.implied, lsq)}{_waveform_hint(problem)}")
     if agreement is not None and not agreement.agrees:
         return NOT_DETERMINED, structural, agreement.statement()
-    held = _release_on_bound(lsq, structural)
-    if held is not None:
-        return held
     split = tuple(getattr(agreement, "undetermined", ()) or ())
     if split:
         names = ", ".join(split)

@@ -552,31 +552,4 @@ def series_from_columns(cols: Columns, spec: RecordingSpec | None, *, sha256: st
     series = build_series(time, signal, spec, source=cols.where, sha256=sha256, meta=meta, notes=cols.notes,
                           where_of_row=row_where, release_s=release_s, label=cols.label(a_col), unit_from=unit_from)
     series.quantity = spec.quantity
-    _note_drive(series, cols, [j for j in range(cols.ncols) if j not in (t_col, a_col)], time, keep, signal)
     return series
-
-
-def _note_drive(series: TimeSeries, cols: Columns, others: list[int], time: np.ndarray, keep: np.ndarray,
-                signal: np.ndarray) -> None:
-    """Keep on ``series.meta`` where a drive recorded in another column stopped
-    (:func:`escfit.analysis.drive_column.drive_stop`): ``drive_column`` and ``drive_stop_s``."""
-    numeric = {}
-    for j in others:
-        if cols.kind(j) != "number":
-            continue
-        try:
-            values = _floats(cols, j)
-        except DataError:
-            continue
-        if values.size == keep.size:
-            numeric[cols.named(j)] = values[keep]
-    if not numeric or time.size < 20:
-        return
-    from ..drive_column import drive_stop
-    from .extrema import spectral_period
-
-    period, _ = spectral_period(time, signal)
-    found = drive_stop(time, numeric, period)
-    if found is not None:
-        series.meta["drive_column"] = found.column
-        series.meta["drive_stop_s"] = repr(found.time)

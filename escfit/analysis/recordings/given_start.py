@@ -35,7 +35,7 @@ __all__ = ["user_reference", "NEAR_PERIODS"]
 NEAR_PERIODS = 0.1  # a release instant this close to a turning point (in periods) means that turning point
 
 
-def user_reference(rec, turns: list[Turn], window, *, by: str = "[recording] start") -> tuple[float, float, list[Turn]]:
+def user_reference(rec, turns: list[Turn], window) -> tuple[float, float, list[Turn]]:
     """Reference instant (s), angle (rad) and the refined turning points after it, as the user set them.
 
     Parameters
@@ -46,9 +46,6 @@ def user_reference(rec, turns: list[Turn], window, *, by: str = "[recording] sta
         Its refined extrema, in order (``time`` ``None`` where no local fit fits).
     window
         The user's window on the record's clock (``release`` or ``start`` set).
-    by
-        What set the start, for the note (the user's key; or a drive recorded beside the
-        oscillator that stopped there, :mod:`escfit.analysis.drive_column`).
 
     Raises
     ------
@@ -62,10 +59,10 @@ def user_reference(rec, turns: list[Turn], window, *, by: str = "[recording] sta
     start = float(window.start)
     after = [u for u in done if u.time >= start - START_TURN_PERIODS * rec.period]
     if not after:
-        raise DataError(f"no turning point at or after {by} (t = {start:.4g} s)",
+        raise DataError(f"no turning point at or after [recording] start (t = {start:.4g} s)",
                         rec.where)
     ref = after[0]
-    rec.notes.append(f"window set by {by}: the free decay is taken from the first turning point at or "
+    rec.notes.append(f"window set by [recording] start: the free decay is taken from the first turning point at or "
                      f"after it, at t = {ref.time:.4g} s ({rec.show(ref.value, 4)} on the sensor's scale); no push, "
                      "hold or drive before it was looked for")
     return float(ref.time), float(ref.value), after[1:]

@@ -68,7 +68,6 @@ import numpy as np
 
 from ...core.errors import DataError
 from .centre import measure_centre
-from ..drive_column import drive_window
 from .extrema import (alternating_extrema, drop_wiggles, extrema_period, power_near, resolution, smooth,
                       smoothing_share, smoothing_window, spectral_period, vertex_at)
 from ..amplitude_trend import sustained
@@ -317,11 +316,8 @@ def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool,
     else:
         cands = drop_wiggles(rec.notes, alternating_extrema(rec.xs, rec.step, 0), rec.t, rec.xs, rec.period)
         turns = _refine_all(rec, cands, t_end)
-        drive = None if given else drive_window(series.meta, origin)
         if given:  # the user's start or release wins over the search for the free decay
             t_ref, theta_ref, turns = user_reference(rec, turns, user_window.shifted(-origin))
-        elif drive is not None:  # the oscillator is free only once its recorded drive stopped
-            t_ref, theta_ref, turns = user_reference(rec, turns, drive[0], by=drive[1])
         else:
             t_ref, theta_ref, turns = reference(rec, turns)
     times = [u.time for u in turns]
