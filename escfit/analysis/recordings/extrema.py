@@ -185,18 +185,21 @@ def without_wiggles(cands: list[tuple[int, int, bool]], t: np.ndarray, xs: np.nd
     """
     if not math.isfinite(period) or period <= 0:
         return cands, []
+
+    def centre(e: tuple[int, int, bool]) -> float:
+        return 0.5 * float(t[e[0]] + t[e[1]])
+
     out, dropped = list(cands), []
     k = 0
     while k + 2 < len(out):
         a, b, c = out[k], out[k + 1], out[k + 2]
-        centre = lambda e: 0.5 * (t[e[0]] + t[e[1]])  # noqa: E731
         level = [float(xs[e[0]]) for e in out[max(0, k - 3):k + 6]]
         swing = float(np.median(np.abs(np.diff(level)))) if len(level) > 1 else 0.0
         depth = min(abs(float(xs[a[0]] - xs[b[0]])), abs(float(xs[c[0]] - xs[b[0]])))
         if centre(c) - centre(a) < 0.25 * period and depth < 0.25 * swing:
             sign = 1.0 if a[2] else -1.0
             keep = a if sign * xs[a[0]] >= sign * xs[c[0]] else c
-            dropped.append(float(centre(b)))
+            dropped.append(centre(b))
             out[k:k + 3] = [keep]
             k = max(k - 1, 0)
         else:

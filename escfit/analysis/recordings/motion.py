@@ -336,7 +336,7 @@ def find_start(rec, turns: list[Turn], end: int, *, at_start: bool = False) -> S
                "amplitude (a drive switched off)")
         r += driven
     elif off is not None:
-        r += off.half_swing + 1  # the split may fall one half swing early (the half swing the drive stopped in): one later is free
+        r += off.half_swing + 1  # the split may fall in the half swing the drive stopped in: the next is free
         why = (f"until t = {times[r]:.4g} s the swing loses {rec.show(off.loss_before, 2)} per half swing (peak to "
                f"peak), then {rec.show(off.loss_after, 2)} at a smaller amplitude, where a free swing loses less, not "
                f"more ({off.score:.0f} standard errors): driven until then (a drive switched off)")
