@@ -69,3 +69,36 @@ def test_the_analysis_leaves_a_glitch_out_and_counts_the_swings_right():
     found = np.r_[tp.release_time, tp.time][:60]  # the swings well above the noise (none spurious, none lost)
     k = np.argmin(np.abs(found[:, None] - tt[None, :]), axis=1)
     assert np.all(np.abs(found - tt[k]) < 0.05 * PERIOD) and np.all(np.diff(k) == 1)
+
+
+
+def test_samples_off_the_arc_at_the_records_edge_are_no_glitch():
+    """Two samples off the arc at the record's very start: a glitch comes back to an arc followed
+    on both sides of it, and here one side is missing, so they may as well be a release from a
+    hold or the record starting as the oscillator was let go (on a salt-water pendulum's video
+    four such frames were left out as a glitch, and the release with them).  The same two
+    samples inside the record are a glitch."""
+    t = np.arange(0.0, 20.0, 1.0 / RATE)
+    x = 0.3 * np.exp(-0.05 * t) * np.cos(2 * math.pi * (t + 0.3)) + 1e-3 * np.random.default_rng(1).standard_normal(t.size)
+    edge = x.copy()
+    edge[:2] += 0.1
+    assert glitches(t, edge) == []
+    inside = x.copy()
+    inside[300:302] += 0.1
+    found = glitches(t, inside)
+    assert [(g.first, g.last) for g in found] == [(300, 301)] and found[0].size == pytest.approx(0.1, abs=0.01)
+
+
+@pytest.mark.parametrize("hold", [0.1, 0.25])
+def test_a_release_at_the_records_start_is_no_glitch(hold):
+    """Held for a few frames at the start of the record, then released: the flat samples leave
+    the arc fitted after them, but a glitch comes back to an arc followed on both sides, and here
+    one side is missing.  They were left out as a glitch, and the release with them (a salt-water
+    pendulum's record then started half a period late)."""
+    t = np.arange(0.0, 20.0, 1.0 / RATE)
+    y, tt, tv = decay(t, 0.3, c=0.2, r=0.0, release=hold)
+    x = y + 1e-3 * np.random.default_rng(7).standard_normal(t.size)
+    assert glitches(t, x) == []
+    tp = reduce_series(TimeSeries(t, x, source="video.csv"))
+    assert not any("tracking glitch" in n for n in tp.notes), tp.notes
+    assert abs(tp.release_time - hold) < 0.5 / RATE + 0.05, (tp.release_time, tp.notes)

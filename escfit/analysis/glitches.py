@@ -29,6 +29,7 @@ Z_OFF = 8.0  # a sample this many robust scatters off the arc is off it
 Z_CANDIDATE = 8.0  # a second difference this many noise scales from the smooth motion's is looked at
 FLOOR = 0.01  # ... and by more than this share of the swing
 MAD = 1.4826
+MIN_SIDE = 3  # samples on the arc at least before a glitch and after it
 
 
 @dataclass(frozen=True)
@@ -67,6 +68,11 @@ def _judge(t: np.ndarray, x: np.ndarray, i: int, period: float) -> Glitch | None
     run = idx[bad & near]
     first, last = int(run.min()), int(run.max())
     if last - first + 1 > LONGEST or bad[(idx >= first - 1) & (idx <= last + 1) & ~near].any():
+        return None
+    # a glitch leaves the arc and comes back to it: the arc is followed on both sides of it (at
+    # the record's first or last samples one side is missing, and a release from a hold or the
+    # record's start bends away from the arc fitted after it without any glitch)
+    if np.count_nonzero(fit_idx < first) < MIN_SIDE or np.count_nonzero(fit_idx > last) < MIN_SIDE:
         return None
     inside = (idx >= first) & (idx <= last)
     k = int(np.argmax(np.abs(off[inside])))
