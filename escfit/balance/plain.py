@@ -13,7 +13,9 @@ The swing loses ``2 (sum of the three) / A`` of its amplitude each period; each 
 of the sum says where the loss goes, and ``Q = pi / (that fraction)`` (``omega0 / C`` for
 viscous damping alone).  The amplitude halves in ``ln 2 / -ln(1 - fraction)`` periods.  A
 minute holds ``60 omega0 / pi`` half swings; the amplitude lost in it is given when it is less
-than the amplitude (a balance's figure).
+than the amplitude (a balance's figure).  Where the first-order loss of a half swing exceeds
+:data:`STRONG` of the amplitude these figures do not hold (a strong air drag gave "113 % per
+period"), and the sentence says so instead of giving them.
 
 Escapement-driven balance: the impulse windows give ``X * w`` per half swing (rad^2/s^2 per
 unit inertia, ``w`` the part of the window inside ``[-A, A]``), friction takes ``2 R A`` and
@@ -39,6 +41,9 @@ from .derived import inertia_of
 __all__ = ["plain_sentences", "viscous_loss"]
 
 HALF_SWINGS_PER_MINUTE = 60.0 / math.pi  # times omega0
+#: a first-order loss per half swing above this share of the amplitude is beyond the small-damping
+#: rule (a quadratic drag's 4 D A^2 / 3 then overstates the loss of a half swing by a third or more)
+STRONG = 0.2
 
 
 def viscous_loss(amp, w0, c):
@@ -95,6 +100,12 @@ def plain_sentences(draws: Mapping[str, Any], attrs: Mapping[str, Any], observed
         v, f, a = viscous_loss(amp, w0, c), 2 * r / w0 ** 2, 4 * d * amp ** 2 / 3
         total = v + f + a
         per_period = 200 * total / amp  # % of the amplitude each period
+        if np.median(total / amp) > STRONG:  # beyond the small-damping rule the figures below come from
+            out.append(f"The swing{_load_words(name)} loses so much in each half swing (about "
+                       f"{sig(100 * float(np.median(total / amp)), 2)} % of {sig(float(np.median(amp)) * k, 3)} {unit} "
+                       "by the small-damping rule these sentences use, which holds for a few per cent) that no loss "
+                       "per period or halving time is given here: the table gives the fitted values.")
+            continue
         out.append(f"The swing{_load_words(name)} loses {interval_words(per_period, '%')} of its amplitude each "
                    f"period, starting from {sig(float(np.median(amp)) * k, 3)} {unit}.")
         shares = [(share, words) for share, words in (
