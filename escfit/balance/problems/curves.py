@@ -43,17 +43,37 @@ def _column(x, n: int) -> np.ndarray:
     return np.array(np.broadcast_to(np.asarray(x, float), (n,)))
 
 
-def _at_recorded_swings(curve: "Curve", theta0: float, theta_turn: np.ndarray) -> np.ndarray:
+def _at_recorded_swings(curve: "Curve", theta0: float, theta_turn: np.ndarray, rest: float = 0.0) -> np.ndarray:
     """Signed angle ending each recorded half swing (swing 0: the release angle).
 
-    Swings after the balance stopped read 0: it stays at rest where it stopped.
+    Swings after the balance stopped read its rest angle ``rest`` (rad): it stays where it
+    stopped, inside friction's dead band, not at the centre.
     """
     turns = np.concatenate([[theta0], theta_turn])
     k = curve.swing
     inside = k <= theta_turn.size
-    theta = np.zeros(k.size)
+    theta = np.full(k.size, float(rest))
     theta[inside] = turns[k[inside]]
     return theta
+
+
+def rest_angle(code, final_theta):
+    """Signed rest angle (rad) of runs that ended: where a stopped run rests, 0 for any other end.
+
+    A run stopped by friction rests where its last half swing left it (``final``'s angle);
+    reading 0 there instead would make the readings jump when a change of the parameters adds
+    or removes the last half swing before the stop, and the least-squares cost with them.
+    """
+    code = np.asarray(code)
+    theta = np.where(code == int(Status.STOPPED), np.asarray(final_theta, float), 0.0)
+    return np.where(np.isfinite(theta), theta, 0.0)
+
+
+def read_through_rest(turns: np.ndarray, n_done: np.ndarray, rest: np.ndarray) -> np.ndarray:
+    """``turns`` (sets, 1 + swings) with every swing after a set's last read as its rest angle,
+    so that all swings are read (the observation kernels read a swing past ``n_done`` as 0)."""
+    after = np.arange(turns.shape[1])[None, :] > np.asarray(n_done)[:, None]
+    return np.where(after, np.asarray(rest, float)[:, None], turns)
 
 
 @dataclass(frozen=True)
@@ -173,18 +193,19 @@ class FitProblem(FreeParameters, BalanceProblem):
         out = [_at_recorded_swings(curve, *self._solve_curve(vals, curve)) for curve in self.curves]
         return [self._nominal(t, c) for t, c in zip(out, self.curves)]
 
-    def _solve_curve(self, vals: Mapping[str, float], curve: Curve) -> tuple[float, np.ndarray]:
-        """Release angle and signed turning points (rad) of one curve's run, to its last recorded swing."""
+    def _solve_curve(self, vals: Mapping[str, float], curve: Curve) -> tuple[float, np.ndarray, float]:
+        """Release angle, signed turning points and rest angle (rad; see :func:`rest_angle`) of one
+        curve's run, to its last recorded swing."""
         sys = self.scene.system(self.load_rule.apply(vals, curve.load))
         n = int(curve.swing.max())
         if n <= 0:
-            return sys.theta0, np.zeros(0)
+            return sys.theta0, np.zeros(0), 0.0
         from ..solvers import solve_system
 
         tr = solve_system(sys, n, self.solver, **self.solver_options)
         if tr.status == "max_segments":
             raise FitError("solver ran out of segments")
-        return sys.theta0, tr.theta_turn
+        return sys.theta0, tr.theta_turn, float(rest_angle(tr.code, tr.final[1]))
 
     def _nominal(self, theta: np.ndarray, curve: Curve) -> np.ndarray:
         side = self.sides(curve)
@@ -212,10 +233,11 @@ class FitProblem(FreeParameters, BalanceProblem):
             n = max(int(c.swing.max()) for c in self.curves)
             turns = np.full((len(self.curves), 1, 1 + n), np.nan)
             n_done = np.zeros((len(self.curves), 1), np.int64)
-            for i, (theta0, theta_turn) in enumerate(runs):
+            for i, (theta0, theta_turn, rest) in enumerate(runs):
                 turns[i, 0, 0] = theta0
                 turns[i, 0, 1:1 + theta_turn.size] = theta_turn
-                n_done[i, 0] = theta_turn.size
+                turns[i, 0, 1 + theta_turn.size:] = rest
+                n_done[i, 0] = n
             ll = float(self._loglike_compiled(turns, n_done, vals, 1)[0])
         else:
             ll = sum(self.observation.loglike(p, c.y, vals, self.sides(c), c.time) for p, c in zip(pred, self.curves))
@@ -352,8 +374,10 @@ class FitProblem(FreeParameters, BalanceProblem):
         Returns
         -------
         turns : ndarray, shape (curves, sets, 1 + swings)
-            Release angle then the signed turning points (NaN after a set's last one).
+            Release angle then the signed turning points; after a stopped set's last one, its
+            rest angle (:func:`read_through_rest`).
         n_done : ndarray, shape (curves, sets)
+            The swings to read of each set: all of them (a stopped set's rest included).
         failed : ndarray of bool, shape (curves, sets)
             Refused by the batch or out of segments (to be evaluated one at a time).
         """
@@ -383,7 +407,8 @@ class FitProblem(FreeParameters, BalanceProblem):
         if n > 0:
             batch = solve_batch(stack, n, throw=False, max_segments=self.solver_options.get("max_segments"))
             turns[:, 1:] = batch.theta_turn
-            n_done, failed = batch.n_done, _UNFINISHED[batch.code]
+            turns = read_through_rest(turns, batch.n_done, rest_angle(batch.code, batch.final[:, 1]))
+            n_done, failed = np.full_like(batch.n_done, n), _UNFINISHED[batch.code]
             if self.solver_options.get("max_segments") is None:
                 # the one-set default budget grows with the swings asked for (64 n + 1000): a set that
                 # used more segments than the shortest curve's budget goes the one-at-a-time way,
