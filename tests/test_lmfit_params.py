@@ -146,3 +146,25 @@ def test_the_lmfit_notebook_runs(tmp_path, monkeypatch):
               if o.get("output_type") == "error"]
     assert not errors
     assert (tmp_path / "lmfit_profile.png").stat().st_size > 10_000
+
+
+def test_a_held_bound_does_not_leak_into_the_next_fit():
+    """After a leastsq that held w on its bound, the Minimizer's own Parameters still vary w (as
+    plain lmfit leaves them), so the next fit from them moves w: checked against the exact
+    unbounded optimum of a linear problem whose second fit widens w's range."""
+    from escfit.inference.lmfit_bounds import bound_aware_minimizer
+
+    rng = np.random.default_rng(5)
+    a = rng.normal(size=(40, 2))
+    b = a @ np.array([1.0, -0.5]) + 0.05 * rng.normal(size=40)
+    params = lmfit.Parameters()
+    params.add("u", value=0.0, min=-10, max=10)
+    params.add("w", value=0.0, min=0.0, max=1.0)  # the optimum wants w < 0: held on 0
+    mini = bound_aware_minimizer(lmfit)(lambda p: a @ np.array([p["u"].value, p["w"].value]) - b, params)
+    first = mini.minimize(method="leastsq")
+    assert first.params["w"].value == 0.0 and first.params["w"].vary
+    assert mini.params["w"].vary
+    mini.params["w"].set(min=-10.0)
+    second = mini.minimize(method="least_squares")
+    exact = np.linalg.lstsq(a, b, rcond=None)[0]
+    assert np.allclose([second.params["u"].value, second.params["w"].value], exact, atol=1e-6)

@@ -62,7 +62,8 @@ def bound_aware_minimizer(lmfit):
         through (see :mod:`escfit.inference.lmfit_bounds`); other methods are lmfit's."""
 
         def leastsq(self, params=None, max_nfev=None, **kws):
-            params = copy.deepcopy(self.params if params is None else params)
+            given = self.params if params is None else params  # what lmfit's leastsq leaves in self.params
+            params = copy.deepcopy(given)
             free = [n for n, p in params.items() if p.vary and p.expr is None]
             held = _falls_outward(self, params, free)
             out = None
@@ -84,6 +85,7 @@ def bound_aware_minimizer(lmfit):
                 out.params[name].set(vary=True)
             out.nvarys += len(held)
             out.nfree -= len(held)
+            self.params = given  # not the last run's copy, whose held parameters do not vary
             return out
 
     return BoundAwareMinimizer

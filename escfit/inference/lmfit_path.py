@@ -211,6 +211,7 @@ def lmfit_optimizer(problem: Problem, method: str, *, seed: int = 0) -> Callable
         return optimum(x, r, jac, scale_covar=scale_covar, success=bool(getattr(out, "success", True)),
                        message=message, nfev=nfev)
 
+    run.global_search = method in GLOBAL  # no refits from nearby starts (neighbours.py): it searched the box
     return run
 
 

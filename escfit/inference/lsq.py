@@ -43,6 +43,7 @@ import numpy as np
 from ..core.errors import EscfitError, FitError
 from ..likelihood.problem import FAIL_RESIDUAL, Problem, gaussian_prior_residuals
 from .fdjac import batch_jacobian
+from .neighbours import LEVEL_95, MAX_READINGS, nearby_optima, nearby_warning
 from .noise_scale import settle_scale
 from .starts import multistart_points
 from .trf import minimize, single_blas_thread
@@ -243,11 +244,22 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
                 best, scale, n, lo, hi, dof=lambda b: _data_dof(b, priors, n, len(names) - pinned), evaluate=residual,
                 polish=lambda x: optimizer(residual, x, lo, hi, scale_covar=False, names=names, **options))
             free_dof = _data_dof(best, priors, n, len(names) - pinned)
+        scaled = profile_noise and not iterate_scale
+        cov, undetermined = _covariance(best, len(names), float(best.redchi) if scaled else 1.0)
+        checked = n <= MAX_READINGS and not undetermined.any() and not getattr(optimizer, "global_search", False)
+        nearby = nearby_optima(lambda x: optimizer(residual, x, lo, hi, scale_covar=scaled, names=names, **options),
+                               best, cov, lo, hi) if checked else []
+    level = LEVEL_95 * (float(best.redchi) if scaled else 1.0)
+    cov_warnings = [w for f in nearby[:1] if (w := nearby_warning(f, names, level))]
+    if nearby and nearby[0].rise < -1e-9 * best.chisqr:  # a lower optimum the multistart missed
+        best = nearby[0].optimum
+        free_dof = _data_dof(best, priors, n, len(names) - pinned)
+        cov, undetermined = _covariance(best, len(names), float(best.redchi) if scaled else 1.0)
+        cov_warnings = [f"a refit from the first optimum's interval end found a lower one ({-nearby[0].rise:.3g} "
+                        "less in cost), which is the result: the multistart missed it, so others may exist; "
+                        "--method emcee explores the whole posterior"]
     value = best.x.copy()
-    covar_scale = float(best.redchi) if (profile_noise and not iterate_scale) else 1.0
-    cov, undetermined = _covariance(best, len(names), covar_scale)
     stderr, corr = _errors_and_correlations(cov)
-    cov_warnings = []
     if undetermined.any():
         which = [nm for nm, u in zip(names, undetermined) if u]
         cov_warnings.append(f"the least-squares curvature is singular: the readings do not fix {which} locally "

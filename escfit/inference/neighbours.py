@@ -1,0 +1,112 @@
+"""Other least-squares optima near the best one, found by refits from the intervals' ends.
+
+The stored intervals come from the cost's curvature at the best fit (the delta method).  Where
+the cost has a second local minimum a few standard errors away that is nearly as low, a
+parameter's 95 % range reaches it and those intervals miss it.  One real case: a Pohl wheel
+read at every turning point comes to rest within the record; above the best C the model's last
+small swings pass the scale's displaced zero, where an amplitude reading folds, and a second
+optimum 2.5 standard errors up in C and 3.2 in the offset costs only 0.1 more in chi-square
+(``notebooks/04_lmfit.py``).  The ranked multistart, whose starts are spread over the whole
+prior range, did not find it; refits from 2.5 standard errors fell back to the best fit, from
+3 reached it.
+
+:func:`nearby_optima` refits from the best fit moved along each parameter's profile direction
+(its covariance column, the way the other parameters follow it to first order) to
+:data:`REACH` standard errors on either side, and reports an end that is another optimum
+(more than :data:`APART` standard errors from the best in some parameter) whose cost is
+within the 95 % level of one parameter's profile.  An end with a lower cost is a better
+optimum the multistart missed; the caller adopts it.  It costs ``2 k`` refits (``k`` free
+parameters), so it runs only for fits of up to :data:`MAX_READINGS` readings; a sampler
+(``--method emcee``) explores the whole posterior in any case.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Nearby", "nearby_optima", "nearby_warning", "REACH", "APART", "MAX_READINGS", "LEVEL_95"]
+
+#: how far along a profile direction the refits start, in standard errors
+REACH = 3.0
+#: how far from the best fit an end must lie to be another optimum, in standard errors
+APART = 1.5
+#: the largest fit (readings) checked; each check costs 2 k refits
+MAX_READINGS = 1000
+#: chi-square quantile of one degree of freedom at 95 % (the profile interval's rise)
+LEVEL_95 = 3.841458820694124
+
+
+@dataclass(frozen=True)
+class Nearby:
+    """An optimum found by a refit from the best fit's interval end.
+
+    Attributes
+    ----------
+    x : ndarray
+        Its parameters (the fit's units).
+    rise : float
+        Its cost above the best fit's (negative: a better optimum), in the fit's cost units.
+    apart : ndarray
+        ``|x - best| / stderr`` of every parameter.
+    optimum : object
+        The optimiser's result there (an :class:`~escfit.inference.trf.Optimum`).
+    """
+
+    x: np.ndarray
+    rise: float
+    apart: np.ndarray
+    optimum: object
+
+
+def nearby_optima(refit, best, cov: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> list[Nearby]:
+    """Optima reached by refits from ``best.x`` moved along each profile direction.
+
+    Parameters
+    ----------
+    refit
+        ``refit(x0) -> Optimum``: the fit's own least squares from ``x0`` (same residual, bounds
+        and options).
+    best
+        The best fit's :class:`~escfit.inference.trf.Optimum`.
+    cov
+        Its covariance (the fit's units; NaN where undetermined: no check then).
+    lo, hi
+        The bounds.
+
+    Returns
+    -------
+    list of Nearby
+        Distinct ends more than :data:`APART` standard errors from the best, lowest cost first.
+    """
+    se = np.sqrt(np.diag(cov)) if cov.size else np.zeros(0)
+    if not (se.size and np.all(np.isfinite(cov)) and np.all(se > 0)):
+        return []
+    found: list[Nearby] = []
+    for i in range(se.size):
+        step = REACH * cov[:, i] / se[i]  # the other parameters as they follow parameter i
+        for sign in (-1.0, 1.0):
+            start = np.clip(best.x + sign * step, lo, hi)
+            try:
+                end = refit(start)
+            except (ValueError, FloatingPointError):
+                continue
+            apart = np.abs(end.x - best.x) / se
+            if apart.max() <= APART or any(np.max(np.abs(end.x - f.x) / se) <= APART for f in found):
+                continue
+            found.append(Nearby(end.x.copy(), float(end.chisqr - best.chisqr), apart, end))
+    return sorted(found, key=lambda f: f.rise)
+
+
+def nearby_warning(nearby: Nearby, names: list[str], level: float) -> str | None:
+    """The warning for another optimum within ``level`` (the cost's 95 % rise), else ``None``."""
+    if not nearby.rise <= level:
+        return None
+    moved = [j for j in range(len(names)) if nearby.apart[j] > APART]
+    where = ", ".join(f"{names[j]} = {nearby.x[j]:.4g}" for j in moved)
+    away = " and ".join(f"{nearby.apart[j]:.1f}" for j in moved)
+    return (f"least squares found a second optimum nearly as good as the best: {where} ({away} standard errors "
+            f"from the best fit), its chi-square only {nearby.rise:.3g} higher where a 95 % interval allows "
+            f"{level:.3g}; the intervals describe the best optimum's neighbourhood and miss the other; the "
+            "posterior (--method emcee) covers both")
