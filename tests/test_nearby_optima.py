@@ -40,7 +40,7 @@ def test_a_second_well_within_the_95_level_is_reported(lift, warned):
     best = minimize(fun, np.array([-0.05, 0.0]), lo, hi)
     assert abs(best.x[0]) < 1e-6
     cov = np.linalg.inv(best.jac.T @ best.jac)
-    found = nearby_optima(lambda x: minimize(fun, x, lo, hi), best, cov, lo, hi)
+    found = nearby_optima(lambda x: minimize(fun, x, lo, hi), lambda x: float(fun(x) @ fun(x)), best, cov, lo, hi)
     assert len(found) == 1
     other = scipy_least_squares(fun, [d, 0.3], xtol=1e-14, ftol=1e-14, gtol=1e-14)  # the second well, independently
     assert found[0].x == pytest.approx([d, 0.3], abs=1e-6) and other.x == pytest.approx([d, 0.3], abs=1e-6)
@@ -56,14 +56,15 @@ def test_one_well_has_no_neighbour():
     lo, hi = np.array([-10.0, -10.0]), np.array([10.0, 10.0])
     best = minimize(fun, np.array([0.5, 1.0]), lo, hi)
     cov = np.linalg.inv(best.jac.T @ best.jac)
-    assert nearby_optima(lambda x: minimize(fun, x, lo, hi), best, cov, lo, hi) == []
+    assert nearby_optima(lambda x: minimize(fun, x, lo, hi), lambda x: float(fun(x) @ fun(x)), best, cov, lo, hi) == []
 
 
 def test_the_pohl_wheels_second_optimum():
     recipe = ROOT / "fits" / "real" / "pohl_amplitudes.toml"
     doc = tomllib.loads(recipe.read_text())
     problem = make_problem(str((recipe.parent / doc["scene"]).resolve()), str((recipe.parent / doc["data"]).resolve()))
-    res = least_squares(problem, n_starts=8, seed=1)
+    res = least_squares(problem, n_starts=8, seed=1, nearby=True)
+    assert not [w for w in least_squares(problem, n_starts=8, seed=1).warnings if "second optimum" in w]
     said = [w for w in res.warnings if "second optimum" in w]
     assert len(said) == 1, res.warnings
     # the place the warning names, refitted by scipy from there with escfit's residual: it stays
@@ -86,3 +87,20 @@ def test_the_pohl_wheels_second_optimum():
     assert there.x[i_c] == pytest.approx(c2, rel=2e-3) and there.x[i_r] == pytest.approx(r2, rel=2e-3)
     rise = 2 * (there.cost - here.cost)  # in units of the profiled noise: the 95 % level is about 3.84 * F/chi2
     assert 0 < rise < LEVEL_95
+
+
+def test_a_better_optimum_nearby_is_adopted():
+    """Started in the upper well (x = d, cost 0.5), the look finds the lower one (x = 0, cost 0)
+    and returns it with a warning."""
+    from escfit.inference.neighbours import look_nearby
+
+    k, d = 10.0, 0.6
+    fun = _two_wells(k, d, 0.5)
+    lo, hi = np.array([-5.0, -5.0]), np.array([5.0, 5.0])
+    upper = minimize(fun, np.array([0.62, 0.0]), lo, hi)
+    assert upper.x[0] == pytest.approx(d, abs=1e-6)
+    cov = np.linalg.inv(upper.jac.T @ upper.jac)
+    best, said = look_nearby(lambda x: minimize(fun, x, lo, hi), lambda x: float(fun(x) @ fun(x)), upper, cov,
+                             (lo, hi), 1.0, ["x", "y"])
+    assert best.x == pytest.approx([0.0, 0.3], abs=1e-6) and best.chisqr < 1e-12
+    assert len(said) == 1 and "lower one (0.5 less" in said[0]

@@ -196,7 +196,7 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
             n_starts, n_refine = 1, 1
     with phase("least squares"):
         lsq = least_squares(problem, n_starts=n_starts, n_refine=n_refine, seed=seed, priors_count=method == "emcee",
-                            optimizer=optimizer)
+                            optimizer=optimizer, nearby=method != "emcee")
         lsq, fixes, unresolved = reconcile(problem, lsq, seed=seed, priors_count=method == "emcee", optimizer=optimizer)
         lsq, more = with_held_uncertainty(problem, lsq)
     fixes += more

@@ -43,7 +43,7 @@ import numpy as np
 from ..core.errors import EscfitError, FitError
 from ..likelihood.problem import FAIL_RESIDUAL, Problem, gaussian_prior_residuals
 from .fdjac import batch_jacobian
-from .neighbours import LEVEL_95, MAX_READINGS, nearby_optima, nearby_warning
+from .neighbours import MAX_READINGS, look_nearby
 from .noise_scale import settle_scale
 from .starts import multistart_points
 from .trf import minimize, single_blas_thread
@@ -135,8 +135,8 @@ class LeastSquaresResult:
 
 def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None = None, seed: int = 0,
                   fixed: dict[str, float] | None = None, start: dict[str, float] | None = None,
-                  priors_count: bool = False, optimizer=minimize, scale_start: float | None = None
-                  ) -> LeastSquaresResult:
+                  priors_count: bool = False, optimizer=minimize, scale_start: float | None = None,
+                  nearby: bool = False) -> LeastSquaresResult:
     """Minimise the standardised residuals over the structural free parameters.
 
     Parameters
@@ -171,6 +171,9 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
         Where the profiled noise scale starts when Gaussian priors make it a fixed point, relative
         to the scene's ``observation.sigma`` (default 1): a second noise stage starts at the first
         one's scale, so that settling it hardly moves the optimum.
+    nearby
+        Look for another optimum near the best (:mod:`escfit.inference.neighbours`): a fit's
+        final stage.
 
     Raises
     ------
@@ -191,7 +194,7 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
     refuse_underdetermined(problem, names, pinned_by_priors if priors_count else 0)
     if "observation.rho" in problem.names and "observation.rho" not in fixed:
         return _two_stage_ar1(problem, n_starts=n_starts, n_refine=n_refine, seed=seed, fixed=fixed, start=start,
-                              optimizer=optimizer)
+                              optimizer=optimizer, nearby=nearby)
     idx = [problem.names.index(n) for n in names]
     priors = [problem.priors[i] for i in idx]
     lo, hi = (np.asarray(b, float)[idx] for b in problem.bounds)
@@ -246,18 +249,13 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
             free_dof = _data_dof(best, priors, n, len(names) - pinned)
         scaled = profile_noise and not iterate_scale
         cov, undetermined = _covariance(best, len(names), float(best.redchi) if scaled else 1.0)
-        checked = n <= MAX_READINGS and not undetermined.any() and not getattr(optimizer, "global_search", False)
-        nearby = nearby_optima(lambda x: optimizer(residual, x, lo, hi, scale_covar=scaled, names=names, **options),
-                               best, cov, lo, hi) if checked else []
-    level = LEVEL_95 * (float(best.redchi) if scaled else 1.0)
-    cov_warnings = [w for f in nearby[:1] if (w := nearby_warning(f, names, level))]
-    if nearby and nearby[0].rise < -1e-9 * best.chisqr:  # a lower optimum the multistart missed
-        best = nearby[0].optimum
-        free_dof = _data_dof(best, priors, n, len(names) - pinned)
-        cov, undetermined = _covariance(best, len(names), float(best.redchi) if scaled else 1.0)
-        cov_warnings = [f"a refit from the first optimum's interval end found a lower one ({-nearby[0].rise:.3g} "
-                        "less in cost), which is the result: the multistart missed it, so others may exist; "
-                        "--method emcee explores the whole posterior"]
+        cov_warnings = []
+        if nearby and n <= MAX_READINGS and not undetermined.any() and not getattr(optimizer, "global_search", 0):
+            best, cov_warnings = look_nearby(
+                lambda x: optimizer(residual, x, lo, hi, scale_covar=scaled, names=names, **options),
+                lambda x: float(np.sum(residual(x) ** 2)), best, cov, (lo, hi), float(best.redchi) if scaled else 1.0, names)
+            cov, undetermined = _covariance(best, len(names), float(best.redchi) if scaled else 1.0)
+            free_dof = _data_dof(best, priors, n, len(names) - pinned)
     value = best.x.copy()
     stderr, corr = _errors_and_correlations(cov)
     if undetermined.any():
@@ -568,7 +566,7 @@ def _data_dof(best, priors, n: int, unpinned: int) -> float:
     return float(max(n - (p - tr_prior), 1.0))
 
 
-def _two_stage_ar1(problem, *, n_starts, n_refine, seed, fixed, start, optimizer) -> LeastSquaresResult:
+def _two_stage_ar1(problem, *, n_starts, n_refine, seed, fixed, start, optimizer, nearby) -> LeastSquaresResult:
     """Correlated noise: fit with white noise, estimate rho from the residuals, refit."""
     first = least_squares(problem, n_starts=n_starts, n_refine=n_refine, seed=seed,
                           fixed={**(fixed or {}), "observation.rho": 0.0}, start=start, optimizer=optimizer)
@@ -579,7 +577,7 @@ def _two_stage_ar1(problem, *, n_starts, n_refine, seed, fixed, start, optimizer
     rho = float(np.clip((r[1:] @ r[:-1]) / (r @ r), max(lo, -0.99), min(hi, 0.99)))
     return least_squares(problem, n_starts=1, seed=seed, fixed={**(fixed or {}), "observation.rho": rho},
                          start={n: first.values[n] for n in first.names}, optimizer=optimizer,
-                         scale_start=profiled_scale(problem, first))
+                         scale_start=profiled_scale(problem, first), nearby=nearby)
 
 
 def profiled_scale(problem: Problem, lsq: LeastSquaresResult) -> float | None:

@@ -5,19 +5,21 @@ the cost has a second local minimum a few standard errors away that is nearly as
 parameter's 95 % range reaches it and those intervals miss it.  One real case: a Pohl wheel
 read at every turning point comes to rest within the record; above the best C the model's last
 small swings pass the scale's displaced zero, where an amplitude reading folds, and a second
-optimum 2.5 standard errors up in C and 3.2 in the offset costs only 0.1 more in chi-square
+optimum 2.5 standard errors up in C and 3.2 down in R costs only 0.1 more in chi-square
 (``notebooks/04_lmfit.py``).  The ranked multistart, whose starts are spread over the whole
-prior range, did not find it; refits from 2.5 standard errors fell back to the best fit, from
-3 reached it.
+prior range, did not find it; refits from 2.5 standard errors out fell back to the best fit,
+from 3 they reached it.
 
-:func:`nearby_optima` refits from the best fit moved along each parameter's profile direction
-(its covariance column, the way the other parameters follow it to first order) to
-:data:`REACH` standard errors on either side, and reports an end that is another optimum
-(more than :data:`APART` standard errors from the best in some parameter) whose cost is
-within the 95 % level of one parameter's profile.  An end with a lower cost is a better
-optimum the multistart missed; the caller adopts it.  It costs ``2 k`` refits (``k`` free
-parameters), so it runs only for fits of up to :data:`MAX_READINGS` readings; a sampler
-(``--method emcee``) explores the whole posterior in any case.
+:func:`nearby_optima` looks at the cost along each parameter's profile direction (its
+covariance column: the way the other parameters follow it to first order) at 2, 3 and 4
+standard errors on either side, one model run each.  Where the cost rose by less than half of
+what the curvature at the best fit predicts, a refit starts from there; an end more than
+:data:`APART` standard errors from the best in some parameter is another optimum, reported when
+its cost is within the 95 % level of one parameter's profile.  An end with a lower cost is a
+better optimum the multistart missed; the caller adopts it.  The scan costs ``6 k`` model runs
+(``k`` free parameters) and a refit only where the cost dips; it runs for the final stage of a
+least-squares fit of up to :data:`MAX_READINGS` readings.  A sampler (``--method emcee``)
+explores the whole posterior in any case.
 """
 
 from __future__ import annotations
@@ -26,13 +28,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Nearby", "nearby_optima", "nearby_warning", "REACH", "APART", "MAX_READINGS", "LEVEL_95"]
+__all__ = ["Nearby", "look_nearby", "nearby_optima", "nearby_warning", "SCAN", "DIP", "APART", "MAX_READINGS", "LEVEL_95"]
 
-#: how far along a profile direction the refits start, in standard errors
-REACH = 3.0
+#: where along a profile direction the cost is looked at, in standard errors
+SCAN = (2.0, 3.0, 4.0)
+#: a refit starts where the cost rose by less than this fraction of the curvature's prediction
+DIP = 0.5
 #: how far from the best fit an end must lie to be another optimum, in standard errors
 APART = 1.5
-#: the largest fit (readings) checked; each check costs 2 k refits
+#: the largest fit (readings) checked
 MAX_READINGS = 1000
 #: chi-square quantile of one degree of freedom at 95 % (the profile interval's rise)
 LEVEL_95 = 3.841458820694124
@@ -60,20 +64,30 @@ class Nearby:
     optimum: object
 
 
-def nearby_optima(refit, best, cov: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> list[Nearby]:
+def nearby_optima(refit, cost, best, cov: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                  scale: float = 1.0) -> list[Nearby]:
     """Optima reached by refits from ``best.x`` moved along each profile direction.
+
+    Along parameter ``i``'s profile direction the cost rises by ``s**2 * scale`` at ``s``
+    standard errors where the model is linear.  The cost is looked at :data:`SCAN` standard
+    errors out on either side (one model run each); a refit starts only where the cost rose by
+    less than :data:`DIP` of that (another well, or a flat floor), from the point that rose least.
 
     Parameters
     ----------
     refit
         ``refit(x0) -> Optimum``: the fit's own least squares from ``x0`` (same residual, bounds
         and options).
+    cost
+        ``cost(x) -> float``: the fit's cost (sum of squared residuals) at ``x``.
     best
         The best fit's :class:`~escfit.inference.trf.Optimum`.
     cov
         Its covariance (the fit's units; NaN where undetermined: no check then).
     lo, hi
         The bounds.
+    scale
+        The covariance's scale (the reduced chi-square when the noise scale is profiled, else 1).
 
     Returns
     -------
@@ -85,11 +99,14 @@ def nearby_optima(refit, best, cov: np.ndarray, lo: np.ndarray, hi: np.ndarray) 
         return []
     found: list[Nearby] = []
     for i in range(se.size):
-        step = REACH * cov[:, i] / se[i]  # the other parameters as they follow parameter i
+        step = cov[:, i] / se[i]  # one standard error of parameter i, the others following it
         for sign in (-1.0, 1.0):
-            start = np.clip(best.x + sign * step, lo, hi)
+            ratio, start = min(((cost(x) - best.chisqr) / (s * s * scale), tuple(x)) for s in SCAN
+                               for x in [np.clip(best.x + sign * s * step, lo, hi)])
+            if not ratio < DIP:
+                continue
             try:
-                end = refit(start)
+                end = refit(np.array(start))
             except (ValueError, FloatingPointError):
                 continue
             apart = np.abs(end.x - best.x) / se
@@ -110,3 +127,19 @@ def nearby_warning(nearby: Nearby, names: list[str], level: float) -> str | None
             f"from the best fit), its chi-square only {nearby.rise:.3g} higher where a 95 % interval allows "
             f"{level:.3g}; the intervals describe the best optimum's neighbourhood and miss the other; the "
             "posterior (--method emcee) covers both")
+
+
+def look_nearby(refit, cost, best, cov: np.ndarray, bounds, scale: float, names: list[str]):
+    """The best fit after looking for another optimum near it, and the warnings that says.
+
+    Returns ``(best, warnings)``: ``best`` unchanged with a warning naming another optimum
+    within the 95 % level (``LEVEL_95 * scale``), or a better optimum the multistart missed,
+    adopted, with a warning; see :func:`nearby_optima` for the arguments.
+    """
+    found = nearby_optima(refit, cost, best, cov, *bounds, scale)
+    if found and found[0].rise < -1e-9 * best.chisqr:
+        return found[0].optimum, [
+            f"a refit from the first optimum's interval end found a lower one ({-found[0].rise:.3g} less in "
+            "chi-square), which is the result: the multistart missed it, so others may exist; --method emcee "
+            "explores the whole posterior"]
+    return best, [w for f in found[:1] if (w := nearby_warning(f, names, LEVEL_95 * scale))]
