@@ -156,8 +156,10 @@ def test_a_hand_stopped_end_is_not_determined_and_the_stop_it_names_gives_the_tr
 
 def test_a_trade_between_two_losses_leaves_them_undetermined_and_a_common_shift_does_not():
     from escfit.analysis.agreement import ModelFacts, ParameterDifference, judge
+    from escfit.balance.decrement import loss_symbols
 
-    facts = ModelFacts(waveform=True, effects=frozenset({"viscous", "coulomb"}), restoring="pendulum")
+    facts = ModelFacts(waveform=True, effects=frozenset({"viscous", "coulomb"}), restoring="pendulum",
+                       losses=loss_symbols({"viscous", "coulomb"}))
     omega = ParameterDifference("oscillator.omega0", 4.0, 1e-4, 4.0001, 1e-4)  # agrees
     trade = [omega, ParameterDifference("viscous.C", 0.011, 0.001, 0.020, 0.001),  # 45 %, 6 sigma, up ...
              ParameterDifference("coulomb.R", 0.010, 0.001, 0.004, 0.001)]  # ... and down: one loss for the other

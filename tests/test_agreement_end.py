@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from escfit.analysis.agreement import END_TURNS, ModelFacts, TurnDifferences, judge, smooth_trend, turn_scatter
+from escfit.balance.decrement import loss_symbols
 
 SCATTER = 0.01  # the differences' white scatter (readings' unit)
 HALF = 0.5  # s between turning points
@@ -30,7 +31,8 @@ def differences(n: int, *, seed: int, tail=(), smooth: float = 0.0, what: str = 
                            size=size)
 
 
-FACTS = ModelFacts(waveform=True, effects=frozenset({"viscous", "coulomb"}), restoring="pendulum")
+FACTS = ModelFacts(waveform=True, effects=frozenset({"viscous", "coulomb"}), restoring="pendulum",
+                   losses=loss_symbols({"viscous", "coulomb"}))
 
 
 def test_no_end_is_found_in_scatter_or_a_smooth_misfit():

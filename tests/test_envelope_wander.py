@@ -18,13 +18,15 @@ from scipy.optimize import least_squares
 
 from escfit.analysis.agreement import (ModelFacts, TurnDifferences, envelope_wander, judge, smooth_trend,
                                        turn_scatter)
+from escfit.balance.decrement import loss_symbols
 
 OMEGA = 5.36  # rad/s
 C, R = 0.022, 0.020  # 1/s, rad/s^2: about half the loss each at 0.22 rad
 A0 = 0.22  # rad
 TURNS = 40  # 20 periods
 NOISE = 2e-4  # rad, one turning point's reading
-FACTS = ModelFacts(waveform=False, effects=frozenset({"oscillator", "viscous", "coulomb"}), restoring="pendulum")
+FACTS = ModelFacts(waveform=False, effects=frozenset({"oscillator", "viscous", "coulomb"}), restoring="pendulum",
+                   losses=loss_symbols({"oscillator", "viscous", "coulomb"}))
 
 
 def amplitudes(a0: float, c: float, r: float) -> np.ndarray:
@@ -87,6 +89,7 @@ def test_every_fit_a_wobble_moves_far_is_flagged():
 def test_without_friction_in_the_model_nothing_is_marked():
     record = wobbly(0)
     model, _, _ = fitted(record)
-    facts = ModelFacts(waveform=False, effects=frozenset({"oscillator", "viscous"}), restoring="pendulum")
+    facts = ModelFacts(waveform=False, effects=frozenset({"oscillator", "viscous"}), restoring="pendulum",
+                   losses=loss_symbols({"oscillator", "viscous"}))
     got = judge(None, differences(record, model), [], facts, periods=TURNS / 2, comments=[])
     assert not got.undetermined

@@ -68,14 +68,12 @@ PARAMETER_SIGMAS = 3.0  # waveform and turning-point estimates further apart tha
 GROSS_SHARE = 0.3  # a model's amplitudes this far from the record's (a share of them) describe another motion
 MIN_DRIFT_TURNS = 20  # below this the scatter is too uncertain for a drift to decide the status (a warning then)
 MIN_TURNS = 8  # fewer turning points measure no scatter and no drift
-COMPARED = ("oscillator.omega0", "viscous.C", "coulomb.R", "drag.D")  # what both fits estimate
 MATERIAL = {"oscillator.omega0": 0.005, "damping": 0.10}  # differences that change what a user concludes
 PHASE_GROSS = math.pi / 2  # rad: a model a quarter period out of phase describes another motion
 WANDER_TURNS = 6  # turning points averaged (three of each side) to see an envelope's slow wander
 WANDER_NOISE = 3.0  # a wander counts when its averages spread this many times what reading noise gives
 WANDER_SHARE = 0.2  # ... and it reaches this share of what separates a viscous from a friction decay (a fit
 # absorbs what it can of a wander, so what is left understates how far it moved the split)
-SPLIT = ("viscous.C", "coulomb.R", "drag.D")  # the losses a wandering envelope leaves unsplit (those fitted)
 
 
 def _materiality() -> str:
@@ -360,9 +358,8 @@ class EnvelopeWander:
         spread = math.hypot(self.wander, self.noise)
         return spread > WANDER_NOISE * self.noise and self.wander >= WANDER_SHARE * self.separation
 
-    def clause(self, unit: str, names: tuple = SPLIT[:2]) -> str:
-        """The caution, for the loss parameters ``names``."""
-        short = [_short(n) for n in names]
+    def clause(self, unit: str, short: tuple) -> str:
+        """The caution, for the loss parameters of symbols ``short`` (``("C", "R")``)."""
         which = ", ".join(short[:-1]) + " and " + short[-1]
         return (f"{which} are not determined by this record: its envelope wanders by {_shown(self.wander, unit)} "
                 f"(root mean square, over {WANDER_TURNS} turning points) about the fitted decay, "
@@ -400,12 +397,19 @@ def envelope_wander(amplitude: TurnDifferences) -> EnvelopeWander | None:
 @dataclass(frozen=True)
 class ModelFacts:
     """What the decision needs of the fitted model: whether it fitted every sample, the readings'
-    unit, its effects (``"drag"``, ``"coulomb"`` ...) and its restoring law."""
+    unit, its effects (``"drag"``, ``"coulomb"`` ...), its restoring law, and the coefficients
+    of its dissipative effects with their symbols (``(("viscous.C", "C"), ("coulomb.R", "R"))``,
+    the model family's registry's order): the losses a wandering envelope leaves unsplit."""
 
     waveform: bool
     unit: str = "rad"
     effects: frozenset = frozenset()
     restoring: str = "spring"
+    losses: tuple = ()
+
+    def short(self, name: str) -> str:
+        """A parameter's symbol in sentences (``"C"``, ``"omega0"``), else its name."""
+        return "omega0" if name == "oscillator.omega0" else dict(self.losses).get(name, name)
 
 
 def judge(phase: TurnDifferences | None, amplitude: TurnDifferences | None, parameters: list[ParameterDifference],
@@ -451,24 +455,24 @@ def judge(phase: TurnDifferences | None, amplitude: TurnDifferences | None, para
     bad = [p for p in parameters if p.sigmas > PARAMETER_SIGMAS]
     wander = envelope_wander(amplitude) if amplitude is not None and not findings else None
     unsplit = wander is not None and wander.splits and {"viscous", "coulomb"} <= model.effects
-    losses = tuple(n for n in SPLIT if n.split(".")[0] in model.effects)
+    losses = tuple(n for n, _ in model.losses)
     traded = [p for p in bad if p.material and p.name in losses] if unsplit else []
     if unsplit:  # the split of the losses is the wander's: their differences decide nothing, the rest does
         bad = [p for p in bad if p.name not in losses]
-    said = ", ".join(f"{_short(p.name)} by {p.sigmas:.2g} standard errors ({p.waveform:.4g} against "
+    said = ", ".join(f"{model.short(p.name)} by {p.sigmas:.2g} standard errors ({p.waveform:.4g} against "
                      f"{p.turning_points:.4g}, {100 * p.relative:.2g} %)" for p in bad)
     material = [p for p in bad if p.material]
     split = _split_only(material) and not findings
     undetermined: tuple = ()
     if unsplit:
         undetermined = losses
-        trade = ", ".join(f"{_short(p.name)} {p.waveform:.4g} against {p.turning_points:.4g}" for p in traded)
-        cautions.insert(0, wander.clause(model.unit, losses) + (
+        trade = ", ".join(f"{model.short(p.name)} {p.waveform:.4g} against {p.turning_points:.4g}" for p in traded)
+        cautions.insert(0, wander.clause(model.unit, tuple(model.short(n) for n in losses)) + (
             f"; the waveform and turning-point fits trade one loss for the other too ({trade})"
             if _split_only(traded) else ""))
     if split:  # one loss traded for another: the split is not determined, the rest stands
         undetermined = tuple(p.name for p in material)
-        cautions.insert(0, f"{' and '.join(_short(n) for n in undetermined)} are not determined by this record: the "
+        cautions.insert(0, f"{' and '.join(model.short(n) for n in undetermined)} are not determined by this record: the "
                            f"waveform and turning-point fits trade one loss for the other ({said}); their sum, the "
                            "swing's loss, and the other parameters agree; a longer record, one at larger "
                            "amplitude, or fixing one of them separates them")
@@ -492,8 +496,6 @@ def _split_only(material: list[ParameterDifference]) -> bool:
     return signs == {1.0, -1.0}
 
 
-def _short(name: str) -> str:
-    return {"oscillator.omega0": "omega0", "viscous.C": "C", "coulomb.R": "R", "drag.D": "D"}.get(name, name)
 
 
 def _shown(x: float, unit: str) -> str:

@@ -64,7 +64,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Decrements", "Window", "Swing", "from_readings", "from_turns", "law_parts", "losses", "binned", "LAWS"]
+__all__ = ["Decrements", "Window", "Swing", "swing_of", "from_readings", "from_turns", "law_parts", "losses",
+           "loss_symbols", "binned", "LAWS"]
 
 #: parts that belong to no single dissipative effect: key -> (name, shape)
 OTHER_PARTS = {"escapement": ("escapement (impulse minus unlocking)", "falls like 1/A"),
@@ -77,6 +78,12 @@ def losses() -> dict:
     from .effects import EFFECTS
 
     return {key: cls for key, cls in EFFECTS.items() if getattr(cls, "LOSS", None) is not None}
+
+
+def loss_symbols(effects) -> tuple[tuple[str, str], ...]:
+    """``(parameter, symbol)`` of the dissipative effects among ``effects`` (keys such as
+    ``"viscous"``), in the registry's order: ``(("viscous.C", "C"), ("coulomb.R", "R"))``."""
+    return tuple((cls.LOSS.parameter, cls.LOSS.symbol) for key, cls in losses().items() if key in effects)
 
 
 #: the parts drawn, in order: key -> (name, shape); every dissipative effect's, then the others
@@ -209,9 +216,21 @@ class Swing:
         return C * self.speed / self.gain
 
 
-def _swing(a: np.ndarray, omega0: float, k3: float, restoring: str) -> Swing:
+def swing_of(amplitude, omega0, *, k3=0.0, restoring: str = "spring") -> Swing:
+    """The undamped half swings of amplitudes ``amplitude`` (rad, or m), for the losses' parts.
+
+    ``omega0`` (rad/s) and ``k3`` (1/rad^2, ``[effects.stiffening]``) may be numbers or arrays
+    of ``amplitude``'s shape (one value per posterior draw); ``restoring`` is ``"spring"`` or
+    ``"pendulum"``.  Each dissipative effect's ``decrement(value, swing)`` then gives its part.
+    """
+    a = np.asarray(amplitude, float)
+    return _swing(a, np.asarray(omega0, float) if np.ndim(omega0) else float(omega0),
+                  np.asarray(k3, float) if np.ndim(k3) else float(k3), restoring)
+
+
+def _swing(a: np.ndarray, omega0, k3, restoring: str) -> Swing:
     w2 = omega0 * omega0
-    if k3:
+    if np.any(k3):
         gain = w2 * ((np.sin(a) if restoring == "pendulum" else a) + k3 * a**3)
         swing_v, swing_v2 = _stiffened_swing(a, omega0, k3, restoring)
         return Swing(a, omega0, gain, swing_v, swing_v2, False)
@@ -300,13 +319,14 @@ def _stiffened_swing(a: np.ndarray, omega0: float, k3: float, restoring: str) ->
     phi = 0.5 * math.pi * _NODES
     wts = 0.5 * math.pi * _WEIGHTS
     amp = a[..., None]
+    w2n, k3n = np.asarray(w2, float)[..., None], np.asarray(k3, float)[..., None]  # per draw, or numbers
     th = amp * np.sin(phi)
     if restoring == "pendulum":
         u, w = 0.5 * (amp + th), 0.5 * (amp - th)
         base = 0.5 * np.sinc(u / math.pi) * np.sinc(w / math.pi)
     else:
         base = 0.5
-    q = w2 * (base + 0.25 * k3 * (amp**2 + th**2))
+    q = w2n * (base + 0.25 * k3n * (amp**2 + th**2))
     cos2 = np.cos(phi) ** 2
     swing_v = a**2 * np.sum(wts * np.sqrt(2.0 * q) * cos2, axis=-1)
     if restoring == "pendulum":  # closed form: 4 w2 (sin A - A cos A) + 4 w2 k3 A**5 / 5
@@ -316,7 +336,7 @@ def _stiffened_swing(a: np.ndarray, omega0: float, k3: float, restoring: str) ->
     return swing_v, swing_v2
 
 
-def _viscous_spring(a: np.ndarray, C: float, omega0: float) -> np.ndarray:
+def _viscous_spring(a: np.ndarray, C, omega0) -> np.ndarray:
     """Viscous part on a linear spring at the mean amplitude of the half swing, exactly.
 
     A half swing multiplies the amplitude about the (friction-shifted) centre by ``l =
@@ -324,10 +344,11 @@ def _viscous_spring(a: np.ndarray, C: float, omega0: float) -> np.ndarray:
     + l) A = 2 tanh(pi C/(4 omega1)) A`` plus Coulomb friction's ``2R/omega0**2``: the two add
     exactly.  To first order this is ``pi C A/(2 omega0)``.
     """
-    h = 0.5 * C
-    if h >= omega0:
-        return np.full(a.shape, np.nan)  # not a swing: no decrement per half swing
-    return 2.0 * np.tanh(math.pi * C / (4.0 * math.sqrt(omega0**2 - h * h))) * a
+    h = 0.5 * np.asarray(C, float)
+    w1sq = np.asarray(omega0, float) ** 2 - h * h
+    with np.errstate(divide="ignore", invalid="ignore"):
+        part = 2.0 * np.tanh(math.pi * C / (4.0 * np.sqrt(np.maximum(w1sq, 0.0)))) * a
+    return np.where(w1sq > 0.0, part, np.nan)  # beyond critical damping: not a swing, no decrement
 
 
 def _phase_constant(omega0: float, C: float, R: float, windows) -> float:

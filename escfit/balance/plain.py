@@ -1,21 +1,28 @@
 """A balance wheel's or pendulum's fit in plain sentences (:meth:`BalanceFamily.plain`).
 
 Free decay (a pendulum, a Pohl wheel, a balance without escapement), at the release amplitude
-``A`` (per unit inertia; small damping, each loss over one half swing):
+``A``: each dissipative effect of the fit (the effects that declare a ``LOSS``) takes its part
+of the amplitude over one half swing, ``effect.decrement(value, swing)`` on the undamped half
+swing of the scene's restoring law (:func:`escfit.balance.decrement.swing_of`: a pendulum's
+elliptic integrals, a stiffening spring's quadrature), first order in the damping; on a linear
+spring these are
 
 =====================================  ===================================
-viscous damping C                      ``A (1 - exp(-pi C / (2 omega_d)))``, ``omega_d = sqrt(omega0**2 - C**2/4)``
+viscous damping C                      ``2 tanh(pi C / (4 omega_d)) A``, ``omega_d = sqrt(omega0**2 - C**2/4)``
 Coulomb (pivot) friction R             ``2 R / omega0**2``
 quadratic air drag D                   ``4 D A**2 / 3``
 =====================================  ===================================
 
-The swing loses ``2 (sum of the three) / A`` of its amplitude each period; each term's share
-of the sum says where the loss goes, and ``Q = pi / (that fraction)`` (``omega0 / C`` for
-viscous damping alone).  The amplitude halves in ``ln 2 / -ln(1 - fraction)`` periods.  A
-minute holds ``60 omega0 / pi`` half swings; the amplitude lost in it is given when it is less
-than the amplitude (a balance's figure).  Where the first-order loss of a half swing exceeds
-:data:`STRONG` of the amplitude these figures do not hold (a strong air drag gave "113 % per
-period"), and the sentence says so instead of giving them.
+and on a pendulum friction's part is ``2 R A / (omega0**2 sin A)`` (7 % more than the spring's
+at 37 deg).  Each effect is named as its ``LOSS`` says in plain words ("friction in the
+pivot (R)").  The swing loses ``2 (sum of the parts) / A`` of its amplitude each period; each
+part's share of the sum says where the loss goes, and ``Q = pi / (that fraction)``
+(``omega0 / C`` for viscous damping alone).  The amplitude halves in
+``ln 2 / -ln(1 - fraction)`` periods.  A minute holds ``60 omega0 / pi`` half swings; the
+amplitude lost in it is given when it is less than the amplitude (a balance's figure).  Where
+the first-order loss of a half swing exceeds :data:`STRONG` of the amplitude these figures do
+not hold (a strong air drag gave "113 % per period"), and the sentence says so instead of
+giving them.
 
 Escapement-driven balance: the impulse windows give ``X * w`` per half swing (rad^2/s^2 per
 unit inertia, ``w`` the part of the window inside ``[-A, A]``), friction takes ``2 R A`` and
@@ -36,20 +43,15 @@ import numpy as np
 
 from ..core.display import RAD_TO_DEG
 from ..core.plainwords import interval_words, join_words, quantiles, share_words, sig
+from .decrement import losses, swing_of
 from .derived import inertia_of
 
-__all__ = ["plain_sentences", "viscous_loss"]
+__all__ = ["plain_sentences"]
 
 HALF_SWINGS_PER_MINUTE = 60.0 / math.pi  # times omega0
 #: a first-order loss per half swing above this share of the amplitude is beyond the small-damping
 #: rule (a quadratic drag's 4 D A^2 / 3 then overstates the loss of a half swing by a third or more)
 STRONG = 0.2
-
-
-def viscous_loss(amp, w0, c):
-    """Amplitude viscous damping takes from one half swing of amplitude ``amp`` (module docstring)."""
-    wd = np.sqrt(np.maximum(w0 ** 2 - c ** 2 / 4, 1e-300))
-    return amp * (1 - np.exp(-math.pi * c / (2 * wd)))
 
 
 def _scene(attrs: Mapping[str, Any]) -> dict:
@@ -88,43 +90,64 @@ def plain_sentences(draws: Mapping[str, Any], attrs: Mapping[str, Any], observed
     w0 = np.asarray(draws["oscillator.omega0"], float)
     zero = np.zeros_like(w0)
     c = np.asarray(draws.get("viscous.C", zero), float)
-    d = np.asarray(draws.get("drag.D", zero), float)
     rs = {n: np.asarray(v, float) for n, v in draws.items() if n == "coulomb.R" or n.startswith("coulomb.R[")}
     if any(n.startswith("escapement[") for n in draws):
         return _escapement(attrs, draws, scene, observed, w0, c, rs, k, unit)
     if "oscillator.theta0" not in draws:
         return []
     amp = np.abs(np.asarray(draws["oscillator.theta0"], float))
+    swing = swing_of(amp, w0, k3=draws.get("stiffening.k3", 0.0),
+                     restoring=scene.get("oscillator", {}).get("restoring", "spring"))
+    undetermined = _undetermined(attrs)
     out = []
-    for name, r in (rs or {"": zero}).items():
-        v, f, a = viscous_loss(amp, w0, c), 2 * r / w0 ** 2, 4 * d * amp ** 2 / 3
-        total = v + f + a
+    for load in _loads(draws):
+        parts = [(loss, np.asarray(part, float)) for loss, part in _loss_parts(draws, swing, load)]
+        total = sum((part for _, part in parts), np.zeros_like(amp))
+        if not np.isfinite(np.median(total)):  # not a swing (beyond critical damping, over the top)
+            continue
         per_period = 200 * total / amp  # % of the amplitude each period
         if np.median(total / amp) > STRONG:  # beyond the small-damping rule the figures below come from
-            out.append(f"The swing{_load_words(name)} loses so much in each half swing (about "
+            out.append(f"The swing{_load_words(load)} loses so much in each half swing (about "
                        f"{sig(100 * float(np.median(total / amp)), 2)} % of {sig(float(np.median(amp)) * k, 3)} {unit} "
                        "by the small-damping rule these sentences use, which holds for a few per cent) that no loss "
                        "per period or halving time is given here: the table gives the fitted values.")
             continue
-        out.append(f"The swing{_load_words(name)} loses {interval_words(per_period, '%')} of its amplitude each "
+        out.append(f"The swing{_load_words(load)} loses {interval_words(per_period, '%')} of its amplitude each "
                    f"period, starting from {sig(float(np.median(amp)) * k, 3)} {unit}.")
-        shares = [(share, words) for share, words in (
-            (v / total, "viscous damping (C)"), (f / total, "friction in the pivot (R)"),
-            (a / total, "air drag (D)")) if np.nanmedian(share) > 0]
+        shares = [(part / total, loss.words(linear=linear)) for loss, part in parts if np.nanmedian(part / total) > 0]
         q = f"Q = {sig(quantiles(math.pi / (per_period / 100))[0])} at this amplitude."
-        unsplit = [words for words, n in (("viscous damping (C)", "viscous.C"), ("friction in the pivot (R)", "coulomb.R"),
-                                          ("air drag (D)", "drag.D")) if n in _undetermined(attrs)]
+        unsplit = [loss.words(linear=linear) for loss, _ in parts if loss.parameter in undetermined]
         if len(unsplit) >= 2:
             out.append(f"How that loss divides between {join_words(unsplit)} is not determined by this record "
                        f"(the warnings say why); {q}")
         elif shares:
-            parts = [f"{share_words(s)} is {words}" for s, words in sorted(shares, key=lambda p: -np.nanmedian(p[0]))]
-            out.append(f"Of that loss, {join_words(parts)}; {q}")
+            parts_words = [f"{share_words(s)} is {words}" for s, words in sorted(shares, key=lambda p: -np.nanmedian(p[0]))]
+            out.append(f"Of that loss, {join_words(parts_words)}; {q}")
         halving = math.log(2) / -np.log1p(-np.minimum(per_period / 100, 1 - 1e-12)) * 2 * math.pi / w0
         out.append(f"At that rate the amplitude halves in {interval_words(halving, 's')}.")
         minute = total * w0 * HALF_SWINGS_PER_MINUTE * k
         if np.median(minute) < np.median(amp) * k:  # a balance's figure; a pendulum at rest sooner has none
             out.append(f"That is {interval_words(minute, unit)} of amplitude lost in the first minute.")
+    return out
+
+
+def _loads(draws: Mapping[str, Any]) -> list[str]:
+    """The loads a fit gives a dissipative effect's coefficient per load for (``"[load=2]"`` ...),
+    else ``[""]``: one set of sentences per load."""
+    params = {cls.LOSS.parameter for cls in losses().values()}
+    found = sorted({n[n.index("["):] for n in draws if "[" in n and n[:n.index("[")] in params})
+    return found or [""]
+
+
+def _loss_parts(draws: Mapping[str, Any], swing, load: str) -> list:
+    """``(Loss, part)`` of every dissipative effect the fit has (the registry's order): its
+    coefficient's draws at ``load`` (or its one value), through the effect's own decrement over
+    the undamped half swing ``swing`` (rad per half swing)."""
+    out = []
+    for cls in losses().values():
+        value = draws.get(cls.LOSS.parameter + load, draws.get(cls.LOSS.parameter))
+        if value is not None:
+            out.append((cls.LOSS, cls.decrement(np.asarray(value, float), swing)))
     return out
 
 

@@ -173,6 +173,9 @@ class Loss:
     phase_constant
         Whether its part is a constant that Monday's phase convention cannot tell from the
         escapement's (Coulomb friction: the two are drawn as one constant there).
+    plain
+        Its name in plain sentences for an angle and for a displacement (``("friction in the
+        pivot", "sliding friction")``); empty: :attr:`name`.
     """
 
     parameter: str
@@ -184,6 +187,11 @@ class Loss:
     units: tuple[str, str]
     forms: tuple[str, str, str, str]
     phase_constant: bool = False
+    plain: tuple[str, str] = ("", "")
+
+    def words(self, *, linear: bool = False) -> str:
+        """Its plain name with its symbol, ``"friction in the pivot (R)"``."""
+        return f"{self.plain[linear] or self.name} ({self.symbol})"
 
     def legend(self, *, stiff: bool, pendulum: bool) -> str:
         """The part's formula for a legend."""

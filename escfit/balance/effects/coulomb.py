@@ -41,7 +41,8 @@ class Coulomb:
     coordinates = frozenset({"angle", "linear"})
     LOSS = Loss("coulomb.R", "R", "Coulomb (dry) friction", "Coulomb", "constant", "#d62728", ("rad/s^2", "m/s^2"),
                 ("2R/omega0^2, constant", "2R/omega0^2 at small A")
-                + ("2R/(omega0^2 (1 + k3 A^2)) on the stiffening spring",) * 2, phase_constant=True)
+                + ("2R/(omega0^2 (1 + k3 A^2)) on the stiffening spring",) * 2, phase_constant=True,
+                plain=("friction in the pivot", "sliding friction"))
     SLOTS = (
         Slot("r", 0.0, "R", "rad/s**2", "Coulomb (sliding) friction torque per inertia", lower=0.0),
         Slot("r_static", 0.0, "R_static", "rad/s**2",

@@ -38,7 +38,8 @@ class Drag:
     SLOTS = (Slot("drag", 0.0, "D", "1/rad", "quadratic air drag per inertia: torque -D |theta'| theta'", lower=0.0),)
     LOSS = Loss("drag.D", "D", "quadratic air drag", "drag", "proportional to A^2", "#2ca02c", ("1/rad", "1/m"),
                 ("4 D A^2/3, proportional to A^2",) * 2
-                + ("D (4A^2/3 + 4k3 A^4/5)/(1 + k3 A^2)", "D (4A^2/3 + 4k3 A^4/5)/(1 + k3 A^2) at small A"))
+                + ("D (4A^2/3 + 4k3 A^4/5)/(1 + k3 A^2)", "D (4A^2/3 + 4k3 A^4/5)/(1 + k3 A^2) at small A"),
+                plain=("air drag", "air drag"))
 
     @staticmethod
     def decrement(value, swing):

@@ -16,8 +16,10 @@ from typing import Callable, Mapping
 
 import numpy as np
 
-from ...analysis.agreement import (COMPARED, MIN_TURNS, Agreement, ModelFacts, ParameterDifference,
+from ...analysis.agreement import (MIN_TURNS, Agreement, ModelFacts, ParameterDifference,
                                    TurnDifferences, judge, smooth_trend, turn_scatter)
+
+from ..decrement import loss_symbols
 
 __all__ = ["check_agreement", "turning_point_refit"]
 
@@ -117,7 +119,7 @@ def turning_point_refit(problem, lsq, refit, *, seed: int = 0):
 
 def _compare_parameters(wave, turns, held_by) -> list[ParameterDifference]:
     out = []
-    for name in COMPARED:
+    for name in ("oscillator.omega0", *(p for p, _ in loss_symbols(effects_of(wave.names)))):
         if name not in wave.names:
             continue
         i = wave.names.index(name)
@@ -175,8 +177,9 @@ def check_agreement(problem, lsq, refit: Callable, *, seed: int = 0) -> Agreemen
     tp = problem.turning_points
     span = float(phase.time[-1] - phase.time[0]) if phase is not None else math.nan
     periods = span / float(tp.period) if math.isfinite(span) else float(tp.swing.size) / 2.0
-    model = ModelFacts(waveform, getattr(problem, "reading_units", "rad"),
-                       frozenset(n.split(".")[0] for n in problem.scene.params.params), problem.scene.restoring)
+    effects = effects_of(problem.scene.params.params)
+    model = ModelFacts(waveform, getattr(problem, "reading_units", "rad"), effects, problem.scene.restoring,
+                       loss_symbols(effects))
     return _pendulum_law(problem, judge(phase, amplitude, parameters, model, periods=periods, comments=comments))
 
 
@@ -191,3 +194,8 @@ def _pendulum_law(problem, agreement: Agreement) -> Agreement:
     if not said or "oscillator.omega0" in agreement.undetermined:
         return agreement
     return replace(agreement, undetermined=("oscillator.omega0",) + tuple(agreement.undetermined))
+
+
+def effects_of(names) -> frozenset:
+    """The effects (``"viscous"``, ``"coulomb"`` ...) of parameter names (``"viscous.C"``)."""
+    return frozenset(n.split(".")[0].split("[")[0] for n in names)
