@@ -173,20 +173,27 @@ def _escapement(attrs, draws, scene, observed, w0, c, rs, k, unit) -> list[str]:
     given = _impulse(windows, draws, amp, w0)
     if not np.any(given > 0):
         return out
-    for name, r in (rs or {"": np.zeros_like(w0)}).items():
-        parts = [f"friction in the pivot (R) takes {interval_words(100 * 2 * r * amp / given, '%')}"]
-        if np.any(c > 0):
-            parts.append(f"viscous damping (C) {interval_words(100 * math.pi / 2 * c * w0 * amp ** 2 / given, '%')}")
-        taken = np.median(2 * r * amp / given + math.pi / 2 * c * w0 * amp ** 2 / given)
-        verdict = (" Friction outweighs the impulse there, so the amplitude falls." if taken > 1 else
+    swing = swing_of(np.full(w0.shape, float(amp)), w0, k3=draws.get("stiffening.k3", 0.0),
+                     restoring=scene.get("oscillator", {}).get("restoring", "spring"))
+    linear = scene.get("oscillator", {}).get("coordinate") == "linear"
+    for load in _loads(draws):
+        # each loss's energy per half swing (its part of the amplitude times dE/dA) against the impulse's
+        shares = [(loss, np.asarray(part, float) * swing.gain / given) for loss, part in _loss_parts(draws, swing, load)]
+        shares = sorted([p for p in shares if np.any(p[1] > 0)], key=lambda p: -np.nanmedian(p[1]))
+        parts = [f"{loss.words(linear=linear)}{' takes' if i == 0 else ''} {interval_words(100 * share, '%')}"
+                 for i, (loss, share) in enumerate(shares)]
+        taken = np.median(sum((share for _, share in shares), np.zeros_like(w0)))
+        verdict = (" The losses outweigh the impulse there, so the amplitude falls." if taken > 1 else
                    " The rest of the impulse goes into the unlocking and a growing swing." if taken < 0.9 else "")
-        out.append(f"At {sig(amp * k, 3)} {unit} of amplitude{_load_words(name)}, {join_words(parts)} of the energy "
-                   f"the escapement's impulse gives each half swing.{verdict}")
+        if parts:
+            out.append(f"At {sig(amp * k, 3)} {unit} of amplitude{_load_words(load)}, {join_words(parts)} of the "
+                       f"energy the escapement's impulse gives each half swing.{verdict}")
         # Monday's phase convention gains and loses constants per half swing: no energy balance in A
+        r = np.asarray(draws.get("coulomb.R" + load, draws.get("coulomb.R", np.zeros_like(w0))), float)
         settles = balance_amplitude(windows, draws, w0, c, r) if scene.get("switching") != "phase" else [np.nan]
         if np.all(np.isfinite(settles)) and np.median(settles) > 0:
             out.append(f"The impulse makes up for these losses at an amplitude of {interval_words(settles * k, unit)}"
-                       f"{_load_words(name)}: there the balance settles.")
+                       f"{_load_words(load)}: there the balance settles.")
     return out
 
 
