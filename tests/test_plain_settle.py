@@ -66,3 +66,31 @@ def test_a_damping_beyond_the_small_damping_rule_gets_no_loss_per_period():
     text = " ".join(plain_sentences(light, {}))
     per_period = 200 * (2 * 9e-4 / 3.756**2 + 4 / 3 * 0.05 * _math.radians(14.3) ** 2) / _math.radians(14.3)
     assert f"loses {per_period:.2g}" in text or f"loses {per_period:.3g}" in text, text
+
+
+def test_a_strong_damping_with_its_scene_gets_the_model_runs_figures():
+    """The same pendulum in its liquid with the fit's scene kept: the first period's loss and the
+    halving time come from runs of the model, against scipy's solve_ivp of the same equation."""
+    import math as _math
+
+    from .test_report_plain import _decay_by_ivp
+
+    n = 200
+    a0 = _math.radians(14.3)
+    draws = {"oscillator.omega0": np.full(n, 3.756), "oscillator.theta0": np.full(n, a0),
+             "viscous.C": np.zeros(n), "coulomb.R": np.full(n, 9e-4), "drag.D": np.full(n, 1.71)}
+    scene = ('model = "balance"\n[oscillator]\nrestoring = "pendulum"\nomega0 = 3.756\ntheta0 = 0.25\n'
+             "[effects.viscous]\nC = 0\n[effects.coulomb]\nR = 0.0009\n[effects.drag]\nD = 1.71\n")
+    text = " ".join(plain_sentences(draws, {"scene": scene}))
+    first, halving = _decay_by_ivp(draws, pendulum=True, n=2)
+    said = re.search(r"loses ([\d.]+) % \(between [\d.]+ and [\d.]+ %, 95 %\) of its amplitude in its first period",
+                     text)
+    assert said and float(said.group(1)) == pytest.approx(100 * first[0], abs=_half_digit(said.group(1))), text
+    assert 0.4 < first[0] < 0.7  # a strong drag: the small-damping rule's 113 % per period is far off
+    halves = re.search(r"The amplitude halves in ([\d.]+) s", text)
+    assert halves and float(halves.group(1)) == pytest.approx(halving[0], abs=_half_digit(halves.group(1))), text
+
+
+def _half_digit(printed: str) -> float:
+    """Half the last printed digit's place (the rounding of a printed figure)."""
+    return 0.5 * 10.0 ** -(len(printed.split(".")[1]) if "." in printed else 0)

@@ -117,17 +117,63 @@ def _free_decay_losses(d: dict, pendulum: bool) -> tuple[np.ndarray, dict[str, n
     return amp, losses
 
 
+def _decay_by_ivp(d: dict, pendulum: bool, n: int = 40) -> tuple[np.ndarray, np.ndarray]:
+    """Share of the release amplitude lost in the first period and seconds until a turn's amplitude
+    is half the release's (linear between turns), by scipy's solve_ivp of the equation of motion
+    (restoring law, viscous, Coulomb and drag torques) from rest at theta0, turn to turn, at ``n``
+    of the draws; a turn where friction holds the balance ends the motion."""
+    from scipy.integrate import solve_ivp
+
+    picks = np.linspace(0, len(d["oscillator.omega0"]) - 1, n).round().astype(int)
+    first, halving = [], []
+    for i in picks:
+        w0, a0 = float(d["oscillator.omega0"][i]), float(d["oscillator.theta0"][i])
+        c, r, drag = (float(d[k][i]) if k in d else 0.0 for k in ("viscous.C", "coulomb.R", "drag.D"))
+        restoring = np.sin if pendulum else (lambda x: x)
+
+        def rhs(_, y):
+            return [y[1], -w0 ** 2 * restoring(y[0]) - c * y[1] - r * np.sign(y[1]) - drag * abs(y[1]) * y[1]]
+
+        y, t, turns, times = np.array([a0, 0.0]), 0.0, [abs(a0)], [0.0]
+        while turns[-1] > 0.5 * abs(a0) or len(turns) < 3:
+            if abs(w0 ** 2 * restoring(y[0])) <= r:  # friction holds it where it turned
+                break
+            event = lambda _, z: z[1]  # noqa: E731
+            event.terminal, event.direction = True, np.sign(y[0])  # the velocity comes back to 0
+            sol = solve_ivp(rhs, (t, t + 100.0 / w0), y, events=event, rtol=1e-10, atol=1e-12, first_step=1e-6)
+            y, t = sol.y_events[0][0], float(sol.t_events[0][0])
+            turns.append(abs(y[0]))
+            times.append(t)
+        a = np.array(turns + [turns[-1]] * 3)  # at rest: the rest angle stays
+        first.append(1.0 - a[2] / abs(a0))
+        k = int(np.argmax(a <= 0.5 * abs(a0))) if np.any(a <= 0.5 * abs(a0)) else -1
+        halving.append(np.nan if k < 1 or k >= len(times) else
+                       times[k - 1] + (a[k - 1] - 0.5 * abs(a0)) / (a[k - 1] - a[k]) * (times[k] - times[k - 1]))
+    return np.array(first), np.array(halving)
+
+
 def _check_free_decay(res, text: str) -> dict[str, np.ndarray]:
     d = _draws(res)
     scene = tomllib.loads(res.attrs["scene"])
-    amp, losses = _free_decay_losses(d, scene.get("oscillator", {}).get("restoring") == "pendulum")
+    pendulum = scene.get("oscillator", {}).get("restoring") == "pendulum"
+    amp, losses = _free_decay_losses(d, pendulum)
     total = sum(losses.values())
     per_period = 200 * total / amp
     found = re.search(rf"loses {NUMBER} % \(between {NUMBER} and {NUMBER} %, 95 %\) of its amplitude each period, "
                       rf"starting from {NUMBER} deg", text)
-    assert found, text
-    _agree_interval(found, per_period)
-    _agree(found.group(4), np.degrees(amp), 0.5)
+    first = re.search(rf"loses {NUMBER} % \(between {NUMBER} and {NUMBER} %, 95 %\) of its amplitude in its first "
+                      rf"period, from {NUMBER} deg \(runs of the fitted model", text)
+    assert bool(found) != bool(first), text
+    if first:  # beyond 2 % a half swing the figures are the model's own run's: against solve_ivp's
+        assert np.median(total / amp) > 0.02
+        ref, ref_halving = _decay_by_ivp(d, pendulum)
+        _agree(first.group(1), 100 * ref, 0.5)
+        assert float(first.group(2)) <= 100 * np.median(ref) <= float(first.group(3))
+        _agree(first.group(4), np.degrees(amp), 0.5)
+        per_period = 100 * ref
+    else:
+        _agree_interval(found, per_period)
+        _agree(found.group(4), np.degrees(amp), 0.5)
     q = re.search(rf"Q = {NUMBER} at this amplitude", text)
     _agree(q.group(1), math.pi / (per_period / 100), 0.5)
     shares = {}
@@ -137,8 +183,12 @@ def _check_free_decay(res, text: str) -> dict[str, np.ndarray]:
             shares[symbol] = 100 * losses[symbol] / total
             _agree_interval(share, shares[symbol])
     halves = re.search(rf"halves in {NUMBER} s \(between {NUMBER} and {NUMBER} s, 95 %\)", text)
-    periods = math.log(2) / -np.log(1 - per_period / 100)
-    _agree_interval(halves, periods * 2 * math.pi / d["oscillator.omega0"])
+    if first:
+        _agree(halves.group(1), ref_halving, 0.5)
+        assert float(halves.group(2)) <= np.median(ref_halving) <= float(halves.group(3))
+    else:
+        periods = math.log(2) / -np.log(1 - per_period / 100)
+        _agree_interval(halves, periods * 2 * math.pi / d["oscillator.omega0"])
     return shares
 
 

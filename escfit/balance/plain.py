@@ -44,6 +44,7 @@ import numpy as np
 from ..core.display import RAD_TO_DEG
 from ..core.plainwords import interval_words, join_words, quantiles, share_words, sig
 from .decrement import losses, swing_of
+from .plain_decay import MODEL_ABOVE, model_decay
 from .derived import inertia_of
 
 __all__ = ["plain_sentences"]
@@ -105,15 +106,25 @@ def plain_sentences(draws: Mapping[str, Any], attrs: Mapping[str, Any], observed
         total = sum((part for _, part in parts), np.zeros_like(amp))
         if not np.isfinite(np.median(total)):  # not a swing (beyond critical damping, over the top)
             continue
-        per_period = 200 * total / amp  # % of the amplitude each period
-        if np.median(total / amp) > STRONG:  # beyond the small-damping rule the figures below come from
+        per_period = 200 * total / amp  # % of the amplitude each period, to first order
+        halving = math.log(2) / -np.log1p(-np.minimum(per_period / 100, 1 - 1e-12)) * 2 * math.pi / w0
+        share = float(np.median(total / amp))
+        model = model_decay(attrs.get("scene", "") or "", draws, load, share=share) if share > MODEL_ABOVE else None
+        start = f"{sig(float(np.median(amp)) * k, 3)} {unit}"
+        if model is not None and np.all(np.isfinite(model.first_period)):
+            per_period, halving = 100 * model.first_period, model.halving
+            out.append(f"The swing{_load_words(load)} loses {interval_words(per_period, '%')} of its amplitude in its "
+                       f"first period, from {start} (runs of the fitted model: at this damping the loss per period "
+                       "changes with the amplitude).")
+        elif share > STRONG:  # beyond the small-damping rule the figures below come from
             out.append(f"The swing{_load_words(load)} loses so much in each half swing (about "
-                       f"{sig(100 * float(np.median(total / amp)), 2)} % of {sig(float(np.median(amp)) * k, 3)} {unit} "
-                       "by the small-damping rule these sentences use, which holds for a few per cent) that no loss "
-                       "per period or halving time is given here: the table gives the fitted values.")
+                       f"{sig(100 * share, 2)} % of {start} by the small-damping rule these sentences use, which "
+                       "holds for a few per cent) that no loss per period or halving time is given here: the table "
+                       "gives the fitted values.")
             continue
-        out.append(f"The swing{_load_words(load)} loses {interval_words(per_period, '%')} of its amplitude each "
-                   f"period, starting from {sig(float(np.median(amp)) * k, 3)} {unit}.")
+        else:
+            out.append(f"The swing{_load_words(load)} loses {interval_words(per_period, '%')} of its amplitude each "
+                       f"period, starting from {start}.")
         shares = [(part / total, loss.words(linear=linear)) for loss, part in parts if np.nanmedian(part / total) > 0]
         q = f"Q = {sig(quantiles(math.pi / (per_period / 100))[0])} at this amplitude."
         unsplit = [loss.words(linear=linear) for loss, _ in parts if loss.parameter in undetermined]
@@ -123,8 +134,10 @@ def plain_sentences(draws: Mapping[str, Any], attrs: Mapping[str, Any], observed
         elif shares:
             parts_words = [f"{share_words(s)} is {words}" for s, words in sorted(shares, key=lambda p: -np.nanmedian(p[0]))]
             out.append(f"Of that loss, {join_words(parts_words)}; {q}")
-        halving = math.log(2) / -np.log1p(-np.minimum(per_period / 100, 1 - 1e-12)) * 2 * math.pi / w0
-        out.append(f"At that rate the amplitude halves in {interval_words(halving, 's')}.")
+        if model is None:
+            out.append(f"At that rate the amplitude halves in {interval_words(halving, 's')}.")
+        elif np.mean(np.isfinite(halving)) >= 0.9:
+            out.append(f"The amplitude halves in {interval_words(halving[np.isfinite(halving)], 's')}.")
         minute = total * w0 * HALF_SWINGS_PER_MINUTE * k
         if np.median(minute) < np.median(amp) * k:  # a balance's figure; a pendulum at rest sooner has none
             out.append(f"That is {interval_words(minute, unit)} of amplitude lost in the first minute.")
