@@ -12,6 +12,7 @@ are read from runs of the scene's own solver, one per posterior draw (at most
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any, Mapping
 
 import numpy as np
@@ -26,6 +27,7 @@ MODEL_DRAWS = 200
 MODEL_SWINGS = 400
 
 
+@dataclass(frozen=True)
 class ModelDecay:
     """The model's own decay at the draws run.
 
@@ -40,9 +42,8 @@ class ModelDecay:
         :data:`MODEL_SWINGS` half swings or stops first.
     """
 
-    def __init__(self, first_period: np.ndarray, halving: np.ndarray):
-        self.first_period = first_period
-        self.halving = halving
+    first_period: np.ndarray
+    halving: np.ndarray
 
 
 def _draw_values(scene, draws: Mapping[str, Any], load: str, i: int) -> dict[str, float]:
