@@ -113,9 +113,14 @@ def plain_sentences(draws: Mapping[str, Any], attrs: Mapping[str, Any], observed
         start = f"{sig(float(np.median(amp)) * k, 3)} {unit}"
         if model is not None and np.all(np.isfinite(model.first_period)):
             per_period, halving = 100 * model.first_period, model.halving
+            later = ""
+            if np.mean(np.isfinite(model.at_half)) >= 0.9:
+                ok = np.isfinite(model.at_half)
+                later = (f"; from {sig(float(np.median(model.half_amplitude[ok])) * k, 3)} {unit}, about half that, "
+                         f"it loses {interval_words(100 * model.at_half[ok], '%')} a period")
             out.append(f"The swing{_load_words(load)} loses {interval_words(per_period, '%')} of its amplitude in its "
-                       f"first period, from {start} (runs of the fitted model: at this damping the loss per period "
-                       "changes with the amplitude).")
+                       f"first period, from {start}{later} (from runs of the fitted model itself: the small-damping "
+                       "rule is not precise at this damping).")
         elif share > STRONG:  # beyond the small-damping rule the figures below come from
             out.append(f"The swing{_load_words(load)} loses so much in each half swing (about "
                        f"{sig(100 * share, 2)} % of {start} by the small-damping rule these sentences use, which "

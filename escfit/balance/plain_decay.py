@@ -40,10 +40,16 @@ class ModelDecay:
         Seconds from the release until a turning point's amplitude is half the release's
         (interpolated linearly between turning points); NaN where it does not within
         :data:`MODEL_SWINGS` half swings or stops first.
+    at_half : ndarray
+        Share of the amplitude lost in the period that starts at the first turning point at or
+        below half the release's amplitude (NaN where there is none, or the swing stops in it);
+        ``half_amplitude`` that turning point's amplitude (rad, or m).
     """
 
     first_period: np.ndarray
     halving: np.ndarray
+    at_half: np.ndarray
+    half_amplitude: np.ndarray
 
 
 def _draw_values(scene, draws: Mapping[str, Any], load: str, i: int) -> dict[str, float]:
@@ -56,8 +62,9 @@ def _draw_values(scene, draws: Mapping[str, Any], load: str, i: int) -> dict[str
     return out
 
 
-def _one(scene, values: dict[str, float], swings: int) -> tuple[float, float]:
-    """(share lost in the first period, halving time in s) of one run from the release."""
+def _one(scene, values: dict[str, float], swings: int) -> tuple[float, float, float, float]:
+    """(share lost in the first period, halving time in s, share lost in the period from the first
+    turn at half the amplitude, that turn's amplitude) of one run from the release."""
     from .solvers import solve_system
 
     a0 = abs(values["oscillator.theta0"])
@@ -67,13 +74,14 @@ def _one(scene, values: dict[str, float], swings: int) -> tuple[float, float]:
     rest = abs(float(tr.final[1])) if tr.status == "stopped" and np.isfinite(tr.final[1]) else np.nan
     a2 = amp[1] if amp.size >= 2 else rest
     below = np.flatnonzero(amp <= 0.5 * a0)
+    halving = at_half = half_amp = np.nan
     if below.size:
         k = int(below[0])
         a_prev, t_prev = (a0, 0.0) if k == 0 else (amp[k - 1], times[k - 1])
         halving = t_prev + (a_prev - 0.5 * a0) / (a_prev - amp[k]) * (times[k] - t_prev)
-    else:
-        halving = np.nan
-    return 1.0 - a2 / a0, halving
+        if k + 2 < amp.size:
+            at_half, half_amp = 1.0 - amp[k + 2] / amp[k], amp[k]
+    return 1.0 - a2 / a0, halving, at_half, half_amp
 
 
 def model_decay(scene_text: str, draws: Mapping[str, Any], load: str = "", *, share: float) -> ModelDecay | None:
@@ -110,5 +118,4 @@ def model_decay(scene_text: str, draws: Mapping[str, Any], load: str = "", *, sh
         runs = [_one(scene, _draw_values(scene, draws, load, int(i)), swings) for i in picks]
     except (EscfitError, ValueError, ArithmeticError, KeyError, AttributeError):
         return None
-    first, halving = (np.array(x, float) for x in zip(*runs))
-    return ModelDecay(first, halving)
+    return ModelDecay(*(np.array(x, float) for x in zip(*runs)))
