@@ -100,7 +100,34 @@ def test_a_better_optimum_nearby_is_adopted():
     upper = minimize(fun, np.array([0.62, 0.0]), lo, hi)
     assert upper.x[0] == pytest.approx(d, abs=1e-6)
     cov = np.linalg.inv(upper.jac.T @ upper.jac)
-    best, said = look_nearby(lambda x: minimize(fun, x, lo, hi), lambda x: float(fun(x) @ fun(x)), upper, cov,
-                             (lo, hi), 1.0, ["x", "y"])
+    best, said, other = look_nearby(lambda x: minimize(fun, x, lo, hi), lambda x: float(fun(x) @ fun(x)), upper,
+                                    cov, (lo, hi), 1.0, ["x", "y"])
+    assert other == {}  # adopted: no other optimum to name
     assert best.x == pytest.approx([0.0, 0.3], abs=1e-6) and best.chisqr < 1e-12
     assert len(said) == 1 and "lower one (0.5 less" in said[0]
+
+
+def test_the_plain_summary_names_the_second_optimum(tmp_path):
+    """The results keep the second optimum (``other_optimum``), and the plain sentences name its
+    physical parameters in display units, as the least-squares warning does."""
+    import json
+
+    from click.testing import CliRunner
+
+    from escfit.cli.main import cli
+    from escfit.results import load_fit
+
+    out = tmp_path / "pohl.h5"
+    r = CliRunner().invoke(cli, ["fit", str(ROOT / "fits" / "real" / "pohl_amplitudes.toml"), "--method", "leastsq",
+                                 "--out", str(out), "--quiet"])
+    assert r.exit_code == 0, r.output
+    other = json.loads(load_fit(out).attrs["other_optimum"])
+    assert set(other) >= {"viscous.C", "coulomb.R"}
+    text = " ".join(CliRunner().invoke(cli, ["summary", str(out)]).output.split())
+    import re
+
+    said = re.search(r"Another fit of this record is nearly as good, with viscous damping C = ([\d.]+) 1/s and "
+                     r"Coulomb friction R = ([\d.]+) rad/s\^2: the ranges above belong to the best fit alone", text)
+    assert said, text
+    assert float(said.group(1)) == pytest.approx(other["viscous.C"], rel=5e-3)  # three significant digits
+    assert float(said.group(2)) == pytest.approx(other["coulomb.R"], rel=5e-3)

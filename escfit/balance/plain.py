@@ -41,7 +41,8 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ..core.display import RAD_TO_DEG
+from ..core.display import RAD_TO_DEG, to_display
+from ..core.names import plain_name
 from ..core.plainwords import interval_words, join_words, quantiles, share_words, sig
 from .decrement import losses, swing_of
 from .plain_decay import MODEL_ABOVE, model_decay
@@ -93,7 +94,7 @@ def plain_sentences(draws: Mapping[str, Any], attrs: Mapping[str, Any], observed
     c = np.asarray(draws.get("viscous.C", zero), float)
     rs = {n: np.asarray(v, float) for n, v in draws.items() if n == "coulomb.R" or n.startswith("coulomb.R[")}
     if any(n.startswith("escapement[") for n in draws):
-        return _escapement(attrs, draws, scene, observed, w0, c, rs, k, unit)
+        return _escapement(attrs, draws, scene, observed, w0, c, rs, k, unit) + _other_optimum(attrs)
     if "oscillator.theta0" not in draws:
         return []
     amp = np.abs(np.asarray(draws["oscillator.theta0"], float))
@@ -146,7 +147,28 @@ def plain_sentences(draws: Mapping[str, Any], attrs: Mapping[str, Any], observed
         minute = total * w0 * HALF_SWINGS_PER_MINUTE * k
         if np.median(minute) < np.median(amp) * k:  # a balance's figure; a pendulum at rest sooner has none
             out.append(f"That is {interval_words(minute, unit)} of amplitude lost in the first minute.")
-    return out
+    return out + _other_optimum(attrs)
+
+
+def _other_optimum(attrs: Mapping[str, Any]) -> list[str]:
+    """A sentence naming another least-squares optimum nearly as good as the best (the results'
+    ``other_optimum``: :mod:`escfit.inference.neighbours`), in its physical parameters."""
+    try:
+        other = json.loads(attrs.get("other_optimum", "{}") or "{}")
+        units = json.loads(attrs.get("units", "{}") or "{}")
+    except (TypeError, ValueError):
+        return []
+    if not isinstance(other, dict) or not isinstance(units, dict):
+        return []
+    parts = []
+    for name, value in other.items():
+        if not name.startswith("observation."):  # the scale's zero and noise: no physical figure to give
+            shown, unit = to_display(float(value), units.get(name, ""), name)
+            parts.append(f"{plain_name(name)} = {sig(shown, 3)} {unit}".rstrip())
+    if not parts:
+        return []
+    return [f"Another fit of this record is nearly as good, with {join_words(parts)}: the ranges above belong to "
+            "the best fit alone, and a posterior fit (--method emcee) covers both."]
 
 
 def _loads(draws: Mapping[str, Any]) -> list[str]:

@@ -379,7 +379,7 @@ def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None,
         "finished": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
         "warnings": warnings, "failures": dict(problem.failures), "misfit": misfit,
         "notes": list(getattr(problem, "notes", [])) + list(fixes or []), "held": _held(problem, lsq),
-        "verdict": status, "undetermined": undetermined,
+        "verdict": status, "undetermined": undetermined, "other_optimum": dict(getattr(lsq, "other_optimum", {})),
     }
     if mc is not None:
         attrs.update(walkers=mc.walkers, steps=mc.steps, burn=mc.burn, resumed=mc.resumed, moves=mc.moves,

@@ -25,9 +25,9 @@ posterior where a prior pins what the data alone cannot.  Noise parameters
 Uncertainties come from the curvature ``J^T J`` of the stacked residuals at the optimum, in
 the parameters' own units.  A singular curvature (a direction the readings do not fix) leaves
 the standard errors of the parameters it involves undefined (nan) instead of round-off
-numbers, and correlations outside [-1, 1] are never reported.  Intervals respect
-the scene's bounds (:func:`bounded_interval`); a parameter on a bound is flagged
-(:attr:`LeastSquaresResult.at_bound`) and given a one-sided interval.
+numbers, and correlations outside [-1, 1] are never reported.  Intervals respect the scene's
+bounds (:func:`bounded_interval`); a parameter on a bound is flagged (``at_bound``) and given a
+one-sided interval.  A fit's final stage looks for a second optimum (:mod:`.neighbours`).
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ from ..core.errors import EscfitError, FitError
 from ..likelihood.problem import FAIL_RESIDUAL, Problem, gaussian_prior_residuals
 from .fdjac import batch_jacobian
 from .neighbours import MAX_READINGS, look_nearby
-from .noise_scale import settle_scale
+from .noise_scale import profiled_scale, settle_scale
 from .starts import multistart_points
 from .trf import minimize, single_blas_thread
 
@@ -100,6 +100,8 @@ class LeastSquaresResult:
         bounds (see :func:`bounded_interval`), in the parameters' units.
     warnings : list[str]
         What makes the covariance unusable (a singular curvature), in words.
+    other_optimum : dict
+        Another optimum nearly as good (:mod:`~escfit.inference.neighbours`), by name; or empty.
     """
 
     names: list[str]
@@ -120,6 +122,7 @@ class LeastSquaresResult:
     at_bound: np.ndarray | None = None
     intervals: dict = field(default_factory=dict)
     warnings: list = field(default_factory=list)
+    other_optimum: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         k = len(self.names)
@@ -249,13 +252,13 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
             free_dof = _data_dof(best, priors, n, len(names) - pinned)
         scaled = profile_noise and not iterate_scale
         cov, undetermined = _covariance(best, len(names), float(best.redchi) if scaled else 1.0)
-        cov_warnings = []
+        cov_warnings, other = [], {}
         if nearby and n <= MAX_READINGS and not undetermined.any() and not getattr(optimizer, "global_search", 0):
-            best, cov_warnings = look_nearby(
+            best, cov_warnings, other = look_nearby(
                 lambda x: optimizer(residual, x, lo, hi, scale_covar=scaled, names=names, **options),
                 lambda x: float(np.sum(residual(x) ** 2)), best, cov, (lo, hi), float(best.redchi) if scaled else 1.0, names)
             cov, undetermined = _covariance(best, len(names), float(best.redchi) if scaled else 1.0)
-            free_dof = _data_dof(best, priors, n, len(names) - pinned)
+            free_dof = _data_dof(best, priors, n, len(names) - pinned)  # (a better optimum may have been adopted)
     value = best.x.copy()
     stderr, corr = _errors_and_correlations(cov)
     if undetermined.any():
@@ -283,7 +286,7 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
         sigma_hat = sigma
     return LeastSquaresResult(names, value, stderr, corr, chisqr, float(redchi), float(sigma_hat), int(n),
                               len(starts), bool(best.success), best.message, vals, profile_noise,
-                              lower=lo.copy(), upper=hi.copy(), warnings=cov_warnings)
+                              lower=lo.copy(), upper=hi.copy(), warnings=cov_warnings, other_optimum=other)
 
 
 def stacked_residuals(r: np.ndarray, priors, x: np.ndarray) -> np.ndarray:
@@ -578,15 +581,6 @@ def _two_stage_ar1(problem, *, n_starts, n_refine, seed, fixed, start, optimizer
     return least_squares(problem, n_starts=1, seed=seed, fixed={**(fixed or {}), "observation.rho": rho},
                          start={n: first.values[n] for n in first.names}, optimizer=optimizer,
                          scale_start=profiled_scale(problem, first), nearby=nearby)
-
-
-def profiled_scale(problem: Problem, lsq: LeastSquaresResult) -> float | None:
-    """The reading scale ``lsq`` profiled, relative to the scene's ``observation.sigma`` (the
-    ``scale_start`` of a refit of the same readings), or ``None``."""
-    sigma = problem.values({}).get("observation.sigma", math.nan)  # the scene's, not the profiled one
-    if not (lsq.profiled and math.isfinite(lsq.sigma_hat) and math.isfinite(sigma) and sigma > 0):
-        return None
-    return float(lsq.sigma_hat / sigma)
 
 
 def _ranked(starts: list[np.ndarray], residual, lo: np.ndarray, hi: np.ndarray,

@@ -130,16 +130,19 @@ def nearby_warning(nearby: Nearby, names: list[str], level: float) -> str | None
 
 
 def look_nearby(refit, cost, best, cov: np.ndarray, bounds, scale: float, names: list[str]):
-    """The best fit after looking for another optimum near it, and the warnings that says.
+    """The best fit after looking for another optimum near it, what that says, and where it is.
 
-    Returns ``(best, warnings)``: ``best`` unchanged with a warning naming another optimum
-    within the 95 % level (``LEVEL_95 * scale``), or a better optimum the multistart missed,
-    adopted, with a warning; see :func:`nearby_optima` for the arguments.
+    Returns ``(best, warnings, other)``: ``best`` unchanged with a warning naming another optimum
+    within the 95 % level (``LEVEL_95 * scale``) and ``other`` its values of the parameters that
+    moved (by name, the fit's units), or a better optimum the multistart missed, adopted, with a
+    warning and ``other`` empty; see :func:`nearby_optima` for the arguments.
     """
     found = nearby_optima(refit, cost, best, cov, *bounds, scale)
     if found and found[0].rise < -1e-9 * best.chisqr:
         return found[0].optimum, [
             f"a refit from the first optimum's interval end found a lower one ({-found[0].rise:.3g} less in "
             "chi-square), which is the result: the multistart missed it, so others may exist; --method emcee "
-            "explores the whole posterior"]
-    return best, [w for f in found[:1] if (w := nearby_warning(f, names, LEVEL_95 * scale))]
+            "explores the whole posterior"], {}
+    said = [w for f in found[:1] if (w := nearby_warning(f, names, LEVEL_95 * scale))]
+    other = {names[j]: float(found[0].x[j]) for j in range(len(names)) if found[0].apart[j] > APART} if said else {}
+    return best, said, other

@@ -29,7 +29,7 @@ import numpy as np
 from ..core.errors import FitError
 from .trf import Optimum, optimum
 
-__all__ = ["settle_scale", "STEP_SE", "SCALE_RTOL", "MAX_POLISH"]
+__all__ = ["settle_scale", "profiled_scale", "STEP_SE", "SCALE_RTOL", "MAX_POLISH"]
 
 #: a linear step larger than this many standard errors (any parameter) is confirmed by a trust-region run
 STEP_SE = 0.25
@@ -162,3 +162,12 @@ def _linear_fixed_point(best: Optimum, s0: float, n: int, lower: np.ndarray, upp
         if done:
             break
     return x0, dx, np.vstack([j_data / s, j_prior]), s
+
+
+def profiled_scale(problem, lsq) -> float | None:
+    """The reading scale ``lsq`` profiled, relative to the scene's ``observation.sigma`` (the
+    ``scale_start`` of a refit of the same readings), or ``None``."""
+    sigma = problem.values({}).get("observation.sigma", math.nan)  # the scene's, not the profiled one
+    if not (lsq.profiled and math.isfinite(lsq.sigma_hat) and math.isfinite(sigma) and sigma > 0):
+        return None
+    return float(lsq.sigma_hat / sigma)
