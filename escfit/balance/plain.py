@@ -20,9 +20,13 @@ part's share of the sum says where the loss goes, and ``Q = pi / (that fraction)
 (``omega0 / C`` for viscous damping alone).  The amplitude halves in
 ``ln 2 / -ln(1 - fraction)`` periods.  A minute holds ``60 omega0 / pi`` half swings; the
 amplitude lost in it is given when it is less than the amplitude (a balance's figure).  Where
-the first-order loss of a half swing exceeds :data:`STRONG` of the amplitude these figures do
-not hold (a strong air drag gave "113 % per period"), and the sentence says so instead of
-giving them.
+the first-order loss of a half swing exceeds :data:`~escfit.balance.plain_decay.MODEL_ABOVE`
+(2 %) of the amplitude, the first period's loss, the loss of the period from about half the
+amplitude and the halving time come from runs of the fitted scene itself
+(:mod:`escfit.balance.plain_decay`); without a scene to run, beyond :data:`STRONG` these
+figures do not hold (a strong air drag gave "113 % per period"), and the sentence says so
+instead of giving them.  Another least-squares optimum nearly as good as the best (the results'
+``other_optimum``) is named in a last sentence.
 
 Escapement-driven balance: the impulse windows give ``X * w`` per half swing (rad^2/s^2 per
 unit inertia, ``w`` the part of the window inside ``[-A, A]``), friction takes ``2 R A`` and
@@ -100,54 +104,74 @@ def plain_sentences(draws: Mapping[str, Any], attrs: Mapping[str, Any], observed
     amp = np.abs(np.asarray(draws["oscillator.theta0"], float))
     swing = swing_of(amp, w0, k3=draws.get("stiffening.k3", 0.0),
                      restoring=scene.get("oscillator", {}).get("restoring", "spring"))
-    undetermined = _undetermined(attrs)
     out = []
     for load in _loads(draws):
-        parts = [(loss, np.asarray(part, float)) for loss, part in _loss_parts(draws, swing, load)]
-        total = sum((part for _, part in parts), np.zeros_like(amp))
-        if not np.isfinite(np.median(total)):  # not a swing (beyond critical damping, over the top)
-            continue
-        per_period = 200 * total / amp  # % of the amplitude each period, to first order
-        halving = math.log(2) / -np.log1p(-np.minimum(per_period / 100, 1 - 1e-12)) * 2 * math.pi / w0
-        share = float(np.median(total / amp))
-        model = model_decay(attrs.get("scene", "") or "", draws, load, share=share) if share > MODEL_ABOVE else None
-        start = f"{sig(float(np.median(amp)) * k, 3)} {unit}"
-        if model is not None and np.all(np.isfinite(model.first_period)):
-            per_period, halving = 100 * model.first_period, model.halving
-            later = ""
-            if np.mean(np.isfinite(model.at_half)) >= 0.9:
-                ok = np.isfinite(model.at_half)
-                later = (f"; from {sig(float(np.median(model.half_amplitude[ok])) * k, 3)} {unit}, about half that, "
-                         f"it loses {interval_words(100 * model.at_half[ok], '%')} a period")
-            out.append(f"The swing{_load_words(load)} loses {interval_words(per_period, '%')} of its amplitude in its "
-                       f"first period, from {start}{later} (from runs of the fitted model itself: the small-damping "
-                       "rule is not precise at this damping).")
-        elif share > STRONG:  # beyond the small-damping rule the figures below come from
-            out.append(f"The swing{_load_words(load)} loses so much in each half swing (about "
-                       f"{sig(100 * share, 2)} % of {start} by the small-damping rule these sentences use, which "
-                       "holds for a few per cent) that no loss per period or halving time is given here: the table "
-                       "gives the fitted values.")
-            continue
-        else:
-            out.append(f"The swing{_load_words(load)} loses {interval_words(per_period, '%')} of its amplitude each "
-                       f"period, starting from {start}.")
-        shares = [(part / total, loss.words(linear=linear)) for loss, part in parts if np.nanmedian(part / total) > 0]
-        q = f"Q = {sig(quantiles(math.pi / (per_period / 100))[0])} at this amplitude."
-        unsplit = [loss.words(linear=linear) for loss, _ in parts if loss.parameter in undetermined]
-        if len(unsplit) >= 2:
-            out.append(f"How that loss divides between {join_words(unsplit)} is not determined by this record "
-                       f"(the warnings say why); {q}")
-        elif shares:
-            parts_words = [f"{share_words(s)} is {words}" for s, words in sorted(shares, key=lambda p: -np.nanmedian(p[0]))]
-            out.append(f"Of that loss, {join_words(parts_words)}; {q}")
-        if model is None:
-            out.append(f"At that rate the amplitude halves in {interval_words(halving, 's')}.")
-        elif np.mean(np.isfinite(halving)) >= 0.9:
-            out.append(f"The amplitude halves in {interval_words(halving[np.isfinite(halving)], 's')}.")
-        minute = total * w0 * HALF_SWINGS_PER_MINUTE * k
-        if np.median(minute) < np.median(amp) * k:  # a balance's figure; a pendulum at rest sooner has none
-            out.append(f"That is {interval_words(minute, unit)} of amplitude lost in the first minute.")
+        out += _free_decay(draws, attrs, swing, load, linear=linear, k=k, unit=unit)
     return out + _other_optimum(attrs)
+
+
+def _free_decay(draws, attrs, swing, load: str, *, linear: bool, k: float, unit: str) -> list[str]:
+    """The sentences of a free decay at one load (``""``: the only one); see the module docstring.
+
+    ``swing`` is the undamped half swing at the release amplitude of every draw; ``k`` and
+    ``unit`` turn radians (or metres) into the amplitude's display unit."""
+    amp, w0 = swing.amplitude, np.asarray(draws["oscillator.omega0"], float)
+    parts = [(loss, np.asarray(part, float)) for loss, part in _loss_parts(draws, swing, load)]
+    total = sum((part for _, part in parts), np.zeros_like(amp))
+    if not np.isfinite(np.median(total)):  # not a swing (beyond critical damping, over the top)
+        return []
+    share = float(np.median(total / amp))
+    start = f"{sig(float(np.median(amp)) * k, 3)} {unit}"
+    model = model_decay(attrs.get("scene", "") or "", draws, load, share=share) if share > MODEL_ABOVE else None
+    if model is not None and not np.all(np.isfinite(model.first_period)):
+        model = None
+    if model is None and share > STRONG:  # beyond the small-damping rule the figures below come from
+        return [f"The swing{_load_words(load)} loses so much in each half swing (about {sig(100 * share, 2)} % of "
+                f"{start} by the small-damping rule these sentences use, which holds for a few per cent) that no loss "
+                "per period or halving time is given here: the table gives the fitted values."]
+    if model is None:
+        per_period = 200 * total / amp  # % of the amplitude each period, to first order
+        out = [f"The swing{_load_words(load)} loses {interval_words(per_period, '%')} of its amplitude each period, "
+               f"starting from {start}."]
+    else:
+        per_period = 100 * model.first_period
+        out = [f"The swing{_load_words(load)} loses {interval_words(per_period, '%')} of its amplitude in its first "
+               f"period, from {start}{_at_half(model, k, unit)} (from runs of the fitted model itself: the "
+               "small-damping rule is not precise at this damping)."]
+    out += _split(parts, total, per_period, attrs, linear)
+    if model is None:
+        halving = math.log(2) / -np.log1p(-np.minimum(per_period / 100, 1 - 1e-12)) * 2 * math.pi / w0
+        out.append(f"At that rate the amplitude halves in {interval_words(halving, 's')}.")
+    elif np.mean(np.isfinite(model.halving)) >= 0.9:
+        out.append(f"The amplitude halves in {interval_words(model.halving[np.isfinite(model.halving)], 's')}.")
+    minute = total * w0 * HALF_SWINGS_PER_MINUTE * k
+    if np.median(minute) < np.median(amp) * k:  # a balance's figure; a pendulum at rest sooner has none
+        out.append(f"That is {interval_words(minute, unit)} of amplitude lost in the first minute.")
+    return out
+
+
+def _at_half(model, k: float, unit: str) -> str:
+    """The clause for the period from about half the amplitude, when most runs reach it."""
+    ok = np.isfinite(model.at_half)
+    if np.mean(ok) < 0.9:
+        return ""
+    return (f"; from {sig(float(np.median(model.half_amplitude[ok])) * k, 3)} {unit}, about half that, it loses "
+            f"{interval_words(100 * model.at_half[ok], '%')} a period")
+
+
+def _split(parts, total, per_period, attrs, linear: bool) -> list[str]:
+    """Where the loss goes: each effect's share (largest first) and Q, or that the record cannot split it."""
+    q = f"Q = {sig(quantiles(math.pi / (per_period / 100))[0])} at this amplitude."
+    undetermined = _undetermined(attrs)
+    unsplit = [loss.words(linear=linear) for loss, _ in parts if loss.parameter in undetermined]
+    if len(unsplit) >= 2:
+        return [f"How that loss divides between {join_words(unsplit)} is not determined by this record (the warnings "
+                f"say why); {q}"]
+    shares = [(part / total, loss.words(linear=linear)) for loss, part in parts if np.nanmedian(part / total) > 0]
+    if not shares:
+        return []
+    words = [f"{share_words(s)} is {name}" for s, name in sorted(shares, key=lambda p: -np.nanmedian(p[0]))]
+    return [f"Of that loss, {join_words(words)}; {q}"]
 
 
 def _other_optimum(attrs: Mapping[str, Any]) -> list[str]:
