@@ -63,6 +63,7 @@ def make_problem(scene, data, *, solver: str | None = None, solver_options: dict
     from ..analysis.recordings.timegrapher import TimegrapherRecording
     from ..analysis.recordings.timeseries import TimeSeries
     from .problems.curves import FitProblem
+    from .problems.facts import RecordFacts
     from .problems.from_series import problem_from_series
     from ..analysis.recordings import UnitCurve
     from ..analysis.recordings.rawsteps import warnings_of
@@ -78,16 +79,13 @@ def make_problem(scene, data, *, solver: str | None = None, solver_options: dict
                        getattr(data, "source", None))
     if isinstance(data, TimeSeries):
         readings = spec.readings if spec is not None else "samples"
-        problem = problem_from_series(sc, data, solver=solver, solver_options=options, readings=readings)
-        problem.notes += _override_notes(sc, recording)
-        reading_warnings = warnings_of(data.meta)  # large repairs of the time base
-        if reading_warnings:
-            problem.data_warnings = list(getattr(problem, "data_warnings", [])) + reading_warnings
+        warnings = list(warnings_of(data.meta))  # large repairs of the time base
         if data.meta.get("angle_unit_assumed"):
-            problem.data_warnings = list(getattr(problem, "data_warnings", [])) + [
-                "the recording gives no angle unit and radians were assumed: if the angles are in another unit "
-                "(deg, encoder counts, a sensor's volts, a position in mm) set [recording] angle_unit and scale"]
-        return problem
+            warnings.append("the recording gives no angle unit and radians were assumed: if the angles are in another "
+                            "unit (deg, encoder counts, a sensor's volts, a position in mm) set [recording] angle_unit "
+                            "and scale")
+        more = RecordFacts(data_warnings=tuple(warnings), trailing=tuple(_override_notes(sc, recording)))
+        return problem_from_series(sc, data, solver=solver, solver_options=options, readings=readings, more=more)
     if math.isnan(sc.params["oscillator.theta0"].value):
         raise FitError("the scene leaves theta0 out, which only a sampled recording (a time series) can supply; "
                        "give [oscillator] theta0", sc.where)

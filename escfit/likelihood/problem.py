@@ -162,6 +162,12 @@ class ProblemBase:
     sampler_coordinates = None
     notes: tuple[str, ...] = ()  # instances set their own lists
     data_warnings: tuple[str, ...] = ()
+    #: what a record's analysis adds (a balance problem built from a record; see its RecordFacts)
+    measured_period = None
+    turning_points = None
+    other_modes: tuple = ()
+    record_window = None
+    given_scene = None
 
     #: derived quantities: name -> (canonical unit, meaning)
     DERIVED: dict[str, tuple[str, str]] = {}

@@ -25,6 +25,7 @@ from ...core.scene import check_keys
 from ...likelihood.freeparams import FreeParameters
 from ...likelihood.problem import FAIL_RESIDUAL
 from .common import BalanceProblem
+from .facts import RecordFacts
 from .loads import LoadRule
 
 __all__ = ["FitProblem", "Curve"]
@@ -100,6 +101,8 @@ class FitProblem(FreeParameters, BalanceProblem):
     solver, solver_options
         Forward solver and its options (default: the scene's, see
         :func:`escfit.balance.default_solver`).
+    facts
+        What the analysis of a sampled record found (:class:`~escfit.balance.problems.facts.RecordFacts`).
 
     Attributes
     ----------
@@ -117,6 +120,7 @@ class FitProblem(FreeParameters, BalanceProblem):
     data: UnitCurve
     solver: str | None = None
     solver_options: dict = field(default_factory=dict)
+    facts: RecordFacts | None = None  # what the record's analysis found (problems built from a record)
     readings_in_branches = True  # a unit curve's per-load curves (see BalanceProblem.misfit_options)
 
     def __post_init__(self) -> None:
@@ -150,6 +154,8 @@ class FitProblem(FreeParameters, BalanceProblem):
         self.solver = self.solver or default_solver(self.scene)
         # a solver with a batch path runs a whole ensemble in one parallel call (log_prob_many)
         self.vectorized = check_scene(self.scene, self.solver, self.solver_options).batch
+        if self.facts is not None:
+            self.facts.give(self)
 
     def _check_release(self, params: ParamSet) -> None:
         """Refuse a fixed release angle that the recording's release reading contradicts.

@@ -38,6 +38,7 @@ from ...analysis.recordings.rawseries import notes_of
 from .amplitude_rows import amplitude_readings_curve
 from ...analysis.recordings.window import window_of
 from .curves import FitProblem
+from .facts import RecordFacts
 from .nuisance import centre_priors
 from .period import check_scene_omega0, hold_omega0, measured_period, start_omega0
 from .release import release_from_record, swing_unit_warnings, table_unit_warnings
@@ -74,7 +75,7 @@ def _free_centre(scene: BalanceScene, curve: UnitCurve, tp) -> BalanceScene:
 
 
 def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_options: dict | None = None,
-                        readings: str = "samples", turns=None):
+                        readings: str = "samples", turns=None, more: RecordFacts | None = None):
     """The fit problem of a sampled record (see the module docstring).
 
     Parameters
@@ -92,6 +93,9 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
         The record's turning points when already found
         (:class:`~escfit.analysis.recordings.turning_points.TurningPoints` of an angle): they are
         then not looked for again.
+    more
+        Notes, warnings and trailing notes the caller adds (the reader's, the command line's),
+        after the analysis's own.
 
     Returns
     -------
@@ -104,10 +108,10 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
     quantity = getattr(series, "quantity", "angle")
     _check_quantity(scene, quantity, series.source)
     if quantity != "angle":
-        return _record_kept(_sampled_problem(scene, series, notes, solver, solver_options), given)
+        return _sampled_problem(scene, series, notes, solver, solver_options, given, more)
     model = dict(scene.extra.get("observation", {})).get("model", "amplitude")
     if readings == "amplitudes":
-        return _amplitude_rows_problem(scene, series, notes, solver, solver_options)
+        return _amplitude_rows_problem(scene, series, notes, solver, solver_options, more)
     from ...analysis.recordings.turning_points import reduce_series
 
     # a waveform fit uses the turning points only for its start (reference, period, centre): an
@@ -126,43 +130,31 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
         from .waveform import WaveformProblem
 
         notes += start_omega0(scene, mp)
-        problem = WaveformProblem(scene, series, tp, solver, solver_options)
-        problem.notes = notes + [_count_note(tp)] + problem.notes
-        problem.measured_period = mp
-        problem.data_warnings = list(getattr(problem, "data_warnings", [])) + list(tp.warnings) + unit_warnings
-        return _record_kept(problem, given, tp, series)
+        facts = RecordFacts(tuple(notes + [_count_note(tp)]), tuple(list(tp.warnings) + unit_warnings), mp,
+                            turning_points=tp, record_window=_window(series, tp, waveform=True), given_scene=given)
+        return WaveformProblem(scene, series, tp, solver, solver_options, facts=facts.plus(more))
     held = hold_omega0(scene, mp)
     curve = turning_point_curve(series, tp)
     notes.append(_count_note(tp))
     notes += held
     notes += release_from_record(scene.params, float(tp.release_theta - tp.offset), series.source, scene.restoring)
-    problem = FitProblem(_free_centre(scene, curve, tp), curve, solver, dict(solver_options or {}))
-    problem.notes = notes
-    problem.measured_period = mp
-    problem.held = ("oscillator.omega0",) if held else ()
-    problem.data_warnings = list(getattr(problem, "data_warnings", [])) + list(tp.warnings) + unit_warnings
-    return _record_kept(problem, given, tp, series)
+    facts = RecordFacts(tuple(notes), tuple(list(tp.warnings) + unit_warnings), mp,
+                        ("oscillator.omega0",) if held else (), tp, _window(series, tp, waveform=False), given)
+    return FitProblem(_free_centre(scene, curve, tp), curve, solver, dict(solver_options or {}), facts.plus(more))
 
 
-def _record_kept(problem, scene: BalanceScene, tp=None, series=None):
-    """Keep what the agreement check (:mod:`escfit.analysis.agreement`) holds the fit against: the
-    record's turning points (``tp``, when not already kept) and the scene as given, from which a
-    turning-point fit of the same record is built; and, with ``series``, the stretch of the record
-    the fit uses against the whole record (``record_window``: first and last sample of the file,
-    first and last instant fitted, s on the series' clock), for the plain summary."""
-    if tp is not None:
-        problem.turning_points = tp
-        problem.other_modes = tuple(getattr(tp, "other_modes", ()))
-        if series is not None and len(series.time):
-            window = window_of(series)
-            first = window.origin
-            last = window.end if window.end is not None else float(series.time[-1])
-            stop = float(tp.stop_time)
-            end = stop if math.isfinite(stop) else (
-                float(series.time[-1]) if hasattr(problem, "sample_time") else float(np.max(tp.time, initial=tp.release_time)))
-            problem.record_window = (float(first), float(last), float(tp.release_time), end)
-    problem.given_scene = scene
-    return problem
+def _window(series, tp, *, waveform: bool) -> tuple[float, float, float, float] | None:
+    """The stretch of the record the fit uses against the whole record (``record_window``: first
+    and last sample of the file, first and last instant fitted, s on the series' clock), for the
+    plain summary; None for an empty series."""
+    if not len(series.time):
+        return None
+    window = window_of(series)
+    last = window.end if window.end is not None else float(series.time[-1])
+    stop = float(tp.stop_time)
+    end = stop if math.isfinite(stop) else (
+        float(series.time[-1]) if waveform else float(np.max(tp.time, initial=tp.release_time)))
+    return float(window.origin), float(last), float(tp.release_time), end
 
 
 def _without_steps(series, tp):
@@ -177,7 +169,8 @@ def _without_steps(series, tp):
     return series
 
 
-def _amplitude_rows_problem(scene: BalanceScene, series, notes: list[str], solver: str, solver_options):
+def _amplitude_rows_problem(scene: BalanceScene, series, notes: list[str], solver: str, solver_options,
+                            more: RecordFacts | None):
     """Rows that are amplitude readings; omega0 held at the scene's value when the rows are
     numbered by their times (amplitudes alone cannot determine it)."""
     p = scene.params.params.get("oscillator.omega0")
@@ -200,11 +193,8 @@ def _amplitude_rows_problem(scene: BalanceScene, series, notes: list[str], solve
 
     centre = judge_rows(series.time, series.theta).centre
     unit_warnings = table_unit_warnings(series, float(np.max(np.abs(series.theta - centre))), scene.restoring)
-    problem = FitProblem(scene, curve, solver, dict(solver_options or {}))
-    problem.notes = notes
-    problem.held = held
-    problem.data_warnings = list(getattr(problem, "data_warnings", [])) + unit_warnings
-    return problem
+    return FitProblem(scene, curve, solver, dict(solver_options or {}),
+                      RecordFacts(tuple(notes), tuple(unit_warnings), held=held).plus(more))
 
 
 def _count_note(tp, quantity: str = "angle") -> str:
@@ -236,7 +226,8 @@ def _check_quantity(scene: BalanceScene, quantity: str, source: str) -> None:
                        "[observation] model = \"waveform\" (or leave model out)", scene.where)
 
 
-def _sampled_problem(scene: BalanceScene, series, notes: list, solver, solver_options):
+def _sampled_problem(scene: BalanceScene, series, notes: list, solver, solver_options, given: BalanceScene,
+                     more: RecordFacts | None):
     """The waveform problem of an angular velocity or a displacement (see the module docstring)."""
     from .waveform import WaveformProblem
 
@@ -261,12 +252,10 @@ def _sampled_problem(scene: BalanceScene, series, notes: list, solver, solver_op
     mp = measured_period(tp, series.source)
     check_scene_omega0(scene, mp)
     notes += start_omega0(scene, mp)
-    problem = WaveformProblem(scene, series, tp, solver, solver_options, centre=centre, noise=noise)
-    problem.notes = notes + [_count_note(tp, series.quantity)] + problem.notes
-    problem.measured_period = mp
-    problem.data_warnings = list(getattr(problem, "data_warnings", [])) + list(getattr(tp, "warnings", []))
-    problem.turning_points = tp
-    return problem
+    facts = RecordFacts(tuple(notes + [_count_note(tp, series.quantity)]), tuple(getattr(tp, "warnings", [])), mp,
+                        turning_points=tp, given_scene=given)
+    return WaveformProblem(scene, series, tp, solver, solver_options, centre=centre, noise=noise,
+                           facts=facts.plus(more))
 
 
 def _refuse_sustained(scene: BalanceScene, tp, source: str) -> None:

@@ -75,10 +75,13 @@ class WaveformProblem(RecordingProblem):
     noise
         The readings' noise scale (their unit), a start for ``observation.sigma``; default: from
         the samples' second differences.
+    facts
+        What the analysis of the record found (:class:`~escfit.balance.problems.facts.RecordFacts`):
+        its notes come before the problem's own.
     """
 
     def __init__(self, scene: BalanceScene, series, reference, solver: str | None = None,
-                 solver_options: dict | None = None, *, centre=None, noise: float | None = None):
+                 solver_options: dict | None = None, *, centre=None, noise: float | None = None, facts=None):
         scene = replace(scene, params=ParamSet(dict(scene.params.params)))  # the release is set on a copy
         super().__init__(scene, series, solver, solver_options)
         self.quantity = getattr(series, "quantity", "angle")
@@ -126,6 +129,8 @@ class WaveformProblem(RecordingProblem):
                                                     span / period if period > 0 else math.nan)
             self.solver_options = {**self.solver_options, "rtol": rtol}
         self.vectorized = self.solver in _BATCH_OPTIONS and set(self.solver_options) <= _BATCH_OPTIONS[self.solver]
+        if facts is not None:
+            facts.give(self)
 
     def provenance(self) -> dict:
         """As every recording problem's, and how the integrator's tolerance was chosen (``solver_tolerance``)."""
