@@ -208,3 +208,21 @@ def test_a_results_file_of_an_lmfit_fit_reads_back_as_any_fit(tmp_path):
         assert p.user_data["name"] == name and p.vary
         assert p.value == pytest.approx(value, rel=1e-6) and p.stderr == pytest.approx(se, rel=1e-4)
     assert params["observation__sigma"].vary is False
+
+
+def test_a_global_search_box_is_said_in_the_optimisers_notes_not_set_on_the_problem():
+    """A global search closes an open range at the prior's 0.1 and 99.9 % points (a normal prior
+    of mean 2 and sd 0.5 here: 2 -+ 3.0902 sd), and says so in the optimiser's notes, which the
+    fit adds to the results; the problem's own notes stay as they were."""
+    from types import SimpleNamespace
+
+    from escfit.inference.lmfit_path import _search_box
+    from escfit.likelihood.priors import normal
+
+    problem = SimpleNamespace(names=["a", "b"], priors=[normal(2.0, 0.5), normal(0.0, 1.0)], notes=[])
+    notes: list[str] = []
+    lo, hi = _search_box(problem, ["a", "b"], np.array([-np.inf, -1.0]), np.array([np.inf, 1.0]), "brute", notes)
+    assert lo[0] == pytest.approx(2.0 - 0.5 * 3.090232306, rel=1e-6) and hi[0] == pytest.approx(2.0 + 0.5 * 3.090232306,
+                                                                                             rel=1e-6)
+    assert (lo[1], hi[1]) == (-1.0, 1.0)  # a closed range is the scene's
+    assert len(notes) == 1 and notes[0].startswith("lmfit:brute searched a in [") and problem.notes == []

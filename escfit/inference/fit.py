@@ -199,7 +199,7 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
                             optimizer=optimizer, nearby=method != "emcee")
         lsq, fixes, unresolved = reconcile(problem, lsq, seed=seed, priors_count=method == "emcee", optimizer=optimizer)
         lsq, more = with_held_uncertainty(problem, lsq)
-    fixes += more
+    fixes += more + list(getattr(optimizer, "notes", []))
     if method == "emcee" and getattr(problem, "held", ()):
         fixes.append(f"the posterior holds {', '.join(problem.held)} where the recording's own measurement puts it; "
                      "its uncertainty is in the least-squares intervals but not in the posterior's")

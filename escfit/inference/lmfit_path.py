@@ -87,8 +87,9 @@ def lmfit_method(method: str) -> str | None:
     return method[len(LMFIT_PREFIX):] if method.startswith(LMFIT_PREFIX) else None
 
 
-def _search_box(problem: Problem, names: list[str], lo: np.ndarray, hi: np.ndarray, method: str):
-    """Finite bounds for a global search: the scene's, an open side closed at the prior's quantile."""
+def _search_box(problem: Problem, names: list[str], lo: np.ndarray, hi: np.ndarray, method: str, notes: list[str]):
+    """Finite bounds for a global search: the scene's, an open side closed at the prior's quantile
+    (said in ``notes``, the optimiser's notes for the results)."""
     lo, hi = lo.copy(), hi.copy()
     closed = []
     for i, name in enumerate(names):
@@ -106,8 +107,8 @@ def _search_box(problem: Problem, names: list[str], lo: np.ndarray, hi: np.ndarr
     if closed:
         note = (f"lmfit:{method} searched {', '.join(closed)} (the prior's 0.1-99.9 % range where the scene "
                 "leaves the range open)")
-        if note not in problem.notes:
-            problem.notes.append(note)
+        if note not in notes:
+            notes.append(note)
     return lo, hi
 
 
@@ -146,7 +147,7 @@ def lmfit_optimizer(problem: Problem, method: str, *, seed: int = 0) -> Callable
             return batch_jacobian(rows, x, lower, upper, f0=fun(x) if f0 is None else f0, rel_step=diff_step)
 
         if method in GLOBAL and method != "basinhopping":
-            lower, upper = _search_box(problem, names, lower, upper, method)
+            lower, upper = _search_box(problem, names, lower, upper, method, run.notes)
             if method == "brute" and 20 ** k > BRUTE_MAX_POINTS:
                 raise FitError(f"lmfit:brute would try 20**{k} = {20 ** k:.3g} grid points over {k} free parameters "
                                f"(at most {BRUTE_MAX_POINTS:g}): fix some parameters or use another method")
@@ -212,6 +213,7 @@ def lmfit_optimizer(problem: Problem, method: str, *, seed: int = 0) -> Callable
                        message=message, nfev=nfev)
 
     run.global_search = method in GLOBAL  # no refits from nearby starts (neighbours.py): it searched the box
+    run.notes = []  # what the runs chose that the results should say (the box a global search searched)
     return run
 
 
