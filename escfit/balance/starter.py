@@ -415,7 +415,15 @@ def window_found(series: TimeSeries, tp) -> dict:
             "left_out": bool(ref - t[0] > period), "stop": float(tp.stop_time) - zero, "period": period,
             "sunk": bool(math.isfinite(float(getattr(tp, "noise_floor", math.nan)))),
             "pushed": bool(getattr(tp, "pushed_after", False)),
-            "last_turn": (float(tp.time[-1]) if len(tp.time) else ref) - zero}
+            "last_turn": (float(tp.time[-1]) if len(tp.time) else ref) - zero,
+            "drive_off": _drive_off(series, zero)}
+
+
+def _drive_off(series, zero: float) -> tuple[float, str] | None:
+    """Where a drive logged beside the signal was switched off (s after the first sample) and its
+    column, when the reader cut the record there (:mod:`escfit.analysis.switch_off`); else None."""
+    at = series.meta.get("drive_off")
+    return None if at is None else (float(at) - zero, str(series.meta.get("drive_column", "")))
 
 
 def _survey_amplitude_rows(s: Survey, series: TimeSeries, restoring: str = "spring") -> None:

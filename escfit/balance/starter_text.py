@@ -164,6 +164,13 @@ def _window_keys(s: Survey) -> tuple[list[str], list[str]]:
                               "at the top of the scene say which): set release (or start) earlier to keep it")
             else:
                 commented.append("# " + line)
+        elif w.get("drive_off") is not None and not (w["left_out"] and ref - 0.25 * period > w["drive_off"][0]):
+            at, column = w["drive_off"]
+            active.append(f"start = {_seconds(at)}    # the drive logged in column {column!r} was switched off here "
+                          "(the warning at the top of the scene gives the evidence): the record before it was driven; "
+                          "set start earlier to keep it")
+            active.append(f"release = {_seconds(ref)}    # the first turning point after the switch-off: the model is "
+                          "released at rest there")
         elif w["left_out"]:
             start = max(ref - 0.25 * period, w["first"])
             active.append(f"start = {_seconds(start)}    # the record before {ref:.6g} s (the reference turning point) "

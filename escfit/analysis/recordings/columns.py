@@ -363,6 +363,21 @@ def _shape_choice(cols: Columns, candidates: list[int], roles: list[str | None],
     return choose_channel(time, values, units=units, key=key)
 
 
+def _drive_off(cols: Columns, spec: RecordingSpec, time: np.ndarray, signal: np.ndarray, used: tuple):
+    """A drive logged in another numeric column and switched off within the record
+    (:func:`~escfit.analysis.switch_off.drive_switched_off`), or None; not looked for when the
+    user set ``start`` or ``release``, or for amplitude tables."""
+    if spec.start is not None or spec.release is not None or spec.readings != "samples":
+        return None
+    from ...analysis.switch_off import drive_switched_off
+
+    others = [i for i in range(cols.ncols) if i not in used and cols.kind(i) == "number"]
+    columns = {cols.label(i): v for i, v in _parsed(cols, others).items() if v.size == signal.size}
+    if not columns or time.size != signal.size:
+        return None
+    return drive_switched_off(time, columns, signal)
+
+
 def _by_position(cols: Columns, choice):
     """The choice with 1-based positions for a table without a header (for ``escfit init``)."""
     if choice is None:
@@ -521,6 +536,7 @@ def series_from_columns(cols: Columns, spec: RecordingSpec | None, *, sha256: st
         factor = 1.0 if tu is None else seconds_per_unit(tu, at)
         time = _floats(cols, t_col) * factor
         reader["time_column"] = cols.named(t_col) + (f", {tu}" if factor != 1.0 else "")
+    drive = _drive_off(cols, spec, time, signal, (t_col, a_col))
     signal = signal * _si_factor(cols, a_col, spec, opts, reader)
     key = {"angle": "angle_column", "angular_velocity": "velocity_column", "displacement": "displacement_column"}
     reader[key[spec.quantity]] = cols.named(a_col)
@@ -550,6 +566,7 @@ def series_from_columns(cols: Columns, spec: RecordingSpec | None, *, sha256: st
     from_file = cols.unit(a_col) or (opts.get("angle_unit") if spec.quantity == "angle" else None)
     unit_from = "option" if spec.signal_unit else ("file" if from_file else "assumed")
     series = build_series(time, signal, spec, source=cols.where, sha256=sha256, meta=meta, notes=cols.notes,
-                          where_of_row=row_where, release_s=release_s, label=cols.label(a_col), unit_from=unit_from)
+                          where_of_row=row_where, release_s=release_s, label=cols.label(a_col), unit_from=unit_from,
+                          not_before=drive)
     series.quantity = spec.quantity
     return series

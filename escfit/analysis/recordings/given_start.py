@@ -84,13 +84,22 @@ def _first_turn(rec, turns: list[Turn]) -> list[Turn]:
 
 
 def _held_angle(rec, instant: float) -> float | None:
-    """The held angle (rad) when the record is flat over the tenth of a period up to ``instant``, else None."""
+    """The held angle (rad) when the record is flat over the tenth of a period up to ``instant``, else None.
+
+    A free turning point is flat there too when the swing is small against the rest band; it is
+    told from a hold by its other side: over the same time before ``instant`` (up to a quarter
+    period) a turning point moves about as far as after it, a hold not a quarter as far.
+    """
     t, x = rec.t, rec.x
     lo, hi = np.searchsorted(t, [instant - HOLD_PERIODS * rec.period, instant], side="right")
     if hi - lo < 3 or t[0] > instant - HOLD_PERIODS * rec.period:
         return None
     level = float(np.median(x[lo:hi]))
     if np.any(np.abs(rec.xs[lo:hi] - level) > rec.band):
+        return None
+    h = min(0.25 * rec.period, instant - t[0], t[-1] - instant)
+    moved_before = abs(float(np.interp(instant - h, t, rec.xs)) - level)
+    if moved_before > 0.25 * abs(float(np.interp(instant + h, t, rec.xs)) - level):
         return None
     right = (t >= instant) & (t <= instant + rec.half_width())
     if np.count_nonzero(right) < 4:

@@ -522,7 +522,9 @@ def reference(rec, turns: list[Turn]) -> tuple[float, float, list[Turn]]:
         raise DataError(f"no turning point found: the {rec.quantity.replace('_', ' ')} never comes back by more than "
                         f"{rec.show(rec.step, 3)}", rec.where)
     at_start = held = False
-    if turns[0].time is None:  # the first extremum lies too close to the start for a local fit
+    if turns[0].time is None and rec.moving_at_start:  # an extremum at the first sample is where the cut fell
+        turns = turns[1:]
+    elif turns[0].time is None:  # the first extremum lies too close to the start for a local fit
         start = _turn_at_start(rec)
         flat = _flat_start(rec) if start is None or start[2] != turns[0].is_max else None
         if flat is not None:  # a held start fits a cubic's turn of the wrong kind

@@ -78,7 +78,8 @@ def _joined(sentences: list[str]) -> str:
 
 def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, source: str, sha256: str,
                  meta: dict[str, str], notes: list[str], where_of_row: Callable[[int], str],
-                 release_s: float = math.nan, label: str = "", unit_from: str = "file") -> TimeSeries:
+                 release_s: float = math.nan, label: str = "", unit_from: str = "file",
+                 not_before=None) -> TimeSeries:
     """Check and window converted samples (time s, theta rad) and wrap them in a TimeSeries.
 
     Non-finite values are refused; the stamps are repaired by the time-base stage (see
@@ -90,7 +91,10 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
     naming the key to set, a suspicion a note.  ``meta`` gets ``window``, ``notes`` and ``warnings``.
     The ``start``, ``stop`` and ``release`` keys are read on the file's clock from its first row
     (the clock rule of :mod:`~escfit.analysis.recordings.window`); the series carries them
-    (``window``) for the analysis.
+    (``window``) for the analysis.  ``not_before``, a
+    :class:`~escfit.analysis.switch_off.SwitchOff` found in another column, moves the start of a
+    window the user did not start to the drive's switch-off, with a note saying why (a warning
+    when it leaves out more than a quarter of the record).
     """
     for name, values in (("time", time), ("angle", theta)):
         bad = np.flatnonzero(~np.isfinite(values))
@@ -110,14 +114,22 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
     notes += clock_notes
     lo = -math.inf if window.start is None else window.start
     hi = math.inf if window.stop is None else window.stop
-    cut = window.start is not None or window.stop is not None
+    warnings: list[str] = []
+    if not_before is not None and not window.given and time[0] < not_before.time < hi:
+        lo = not_before.time
+        dropped = (lo - time[0]) / (min(hi, time[-1]) - time[0])
+        (warnings if dropped > 0.25 else notes).append(
+            not_before.evidence(label or "the signal", window.origin)
+            + f": the first {lo - time[0]:.4g} s ({100 * dropped:.0f} % of the record) are left out as not a free "
+              "decay ([recording] start keeps them)")
+        meta["drive_off"], meta["drive_column"] = f"{lo:.10g}", not_before.column
+    cut = math.isfinite(lo) or window.stop is not None
     if cut and np.any(np.diff(time) <= 0.0):
         # rows stamped outside the window go before the stamps are checked (a logger's clock that
         # stalls after the decay is cut by `stop`); the window is applied again to the times read
         inside = (time >= lo) & (time <= hi)
         if inside.sum() >= 2:
             time, theta, rows = time[inside], theta[inside], rows[inside]
-    warnings: list[str] = []
     time, theta = repaired_times(time, theta, lambda i: where_of_row(int(rows[i])), notes, warnings, source)
     if meta.get("angle_unit_assumed") and np.ptp(theta) > 2.0 * math.pi:
         raise DataError(f"the angles span {np.ptp(theta):.4g} with no unit given (rad assumed): more than a turn, so "
@@ -129,7 +141,7 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
         theta = unwrap_angles(theta, notes)
     if cut:
         keep = (time >= lo) & (time <= hi)
-        shown = f"{'' if window.start is None else f'{window.after_first(lo):g} s <= '}t" \
+        shown = f"{'' if not math.isfinite(lo) else f'{window.after_first(lo):g} s <= '}t" \
                 f"{'' if window.stop is None else f' <= {window.after_first(hi):g} s'}"
         if keep.sum() < MIN_SAMPLES:
             raise DataError(f"the window {shown} (after the first sample) keeps {int(keep.sum())} of {time.size} "

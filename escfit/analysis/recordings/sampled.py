@@ -53,6 +53,7 @@ class SampledRecord:
     find_steps: bool = True  # look for offset steps (not in a record they were already taken out of)
     cut_end: float = float("nan")  # the free decay chosen ends here, s: a push after it (nan: none)
     other_modes: tuple = ()  # weak oscillations besides the swing: (period s, share of its power)
+    moving_at_start: bool = False  # the samples start in motion (cut where a drive was switched off): no hold, no turn there
 
     def show(self, value: float, digits: int = 3, *, signed: bool = False) -> str:
         """A value of the record's quantity for a note (angles in degrees)."""

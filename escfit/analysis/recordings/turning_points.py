@@ -293,6 +293,7 @@ def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool,
     x = np.asarray(series.theta, dtype=float)
     rec = prepare(t, x, window, degree, where, series.quantity, min_noise)
     rec.find_steps = find_steps
+    rec.moving_at_start = "drive_off" in series.meta and not (user_window is not None and user_window.given)
     if origin != 0.0:
         rec.notes.insert(0, f"times in these notes are counted from the record's first sample (t = 0 s there, "
                             f"{origin:.10g} s on the file's clock)")
