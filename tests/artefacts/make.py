@@ -339,6 +339,42 @@ def drive_off(seed: int, periods: int | None = None):
         p, t_off, t[-1], p.a0, expect="fit from the drive's switch-off; the steady swings before it are driven")
 
 
+def drive_logged(seed: int, periods: int | None = None):
+    """A motor drives the pendulum off resonance (beats) for 8-12 periods, its signal logged in a
+    column of its own, and is switched off mid-swing; the free decay follows."""
+    from scipy.integrate import solve_ivp
+
+    p = draw(seed, periods)
+    w_d = p.omega0 * p.rng.choice([p.rng.uniform(0.8, 0.9), p.rng.uniform(1.1, 1.2)])
+    force = abs(p.a0) * abs(p.omega0**2 - w_d**2)  # the driven swing's size about A0
+    t_off = (8 + seed % 5 + p.rng.uniform(0.2, 0.8)) * 2 * math.pi / w_d
+
+    def rhs(t, y):
+        drive = force * math.cos(w_d * t) if t < t_off else 0.0
+        return [y[1], -p.omega0**2 * math.sin(y[0]) - p.C * y[1] - p.R * np.sign(y[1]) + drive]
+
+    def turn(t, y):
+        return y[1]
+
+    driven = solve_ivp(rhs, (0.0, t_off), [0.0, 0.0], method="DOP853", rtol=1e-10, atol=1e-12,
+                       max_step=p.period / 50, dense_output=True)
+    coast = solve_ivp(rhs, (t_off, t_off + 2 * p.period), driven.y[:, -1], method="DOP853", rtol=1e-10,
+                      atol=1e-12, max_step=p.period / 50, dense_output=True, events=turn)
+    t_turn = float(coast.t_events[0][0])  # the first turning point after the switch-off
+    theta_turn = float(coast.y_events[0][0][0])
+    t = grid(p, t_turn + p.duration)
+    theta = np.empty_like(t)
+    a, b, c = t < t_off, (t >= t_off) & (t < t_turn), t >= t_turn
+    theta[a], theta[b] = driven.sol(t[a])[0], coast.sol(t[b])[0]
+    theta[c] = free_record(p, t_turn, theta_turn, t[c])
+    drive = np.where(t < t_off, 2.5 * np.cos(w_d * t), 0.0)
+    csv = csv_text(["time (s)", "motor (V)", "angle (deg)"], [t, drive, np.degrees(noisy(p, theta))],
+                   ["%.5f", "%.4f", "%.5f"])
+    return csv, truth(p, t_turn, t[-1], theta_turn, angle_column=2,
+                      expect="fit from the first turning point after the motor's column goes flat; the beats "
+                      "before it are driven")
+
+
 def _clean_rows(seed: int, periods: int | None):
     p = draw(seed, periods)
     t = grid(p, p.duration)
@@ -515,8 +551,8 @@ def spliced_end(seed: int, periods: int | None = None):
 
 
 CLASSES = {f.__name__: f for f in (
-    clean, guided_start, hold_release, wobble, offset_step, glitch, push_middle, drive_off, burst_stamps,
-    backwards_row, stalled_clock, noise_column_white, noise_column_sine, energy_only, energy_first,
+    clean, guided_start, hold_release, wobble, offset_step, glitch, push_middle, drive_off, drive_logged,
+    burst_stamps, backwards_row, stalled_clock, noise_column_white, noise_column_sine, energy_only, energy_first,
     displacement_mm, acceleration, three_pushes, two_runs, long_jitter, radians_as_degrees, two_modes,
     hand_stop, spliced_end)}
 SLOW = {"long_jitter"}
