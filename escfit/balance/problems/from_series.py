@@ -293,7 +293,9 @@ def _unit_from_period(scene: BalanceScene, series, tp) -> tuple[list[str], list[
     from ...analysis.pendulum_unit import unit_from_period
     from ...core.errors import DataError
 
-    after = series.time >= tp.release_time
+    # the free decay's samples, to its last turning point: not the noise after the swing faded
+    last = float(tp.time[-1]) if len(tp.time) else math.inf
+    after = (series.time >= tp.release_time) & (series.time <= last)
     centre = tp.offset + tp.offset_rate * (series.time[after] - tp.release_time)
     evidence = unit_from_period(series.time[after], series.theta[after] - centre)
     if evidence is None:
