@@ -268,3 +268,47 @@ def test_a_bob_s_height_beside_its_horizontal_position_is_no_rival(tmp_path):
     choice = choose_channel(t, {"column 2": x, "column 3": y})  # a headerless export: no axis names to go by
     assert choice.chosen == "column 2", (choice.scores, choice.why)
     assert "the height beside the horizontal swing of column 2" in choice.why["column 3"]
+
+
+def _track(noise_px: float = 0.5, rate_hz: float = 5.0):
+    """A video track of a pendulum's bob in pixels at 5 frames a second, as a video-analysis
+    program writes it: x, y and each one's velocity by central differences of the track."""
+    t = np.arange(0.0, 300.0, 1.0 / rate_hz)
+    theta = math.radians(20.0) * np.exp(-t / 150.0) * np.cos(2 * math.pi * t / 2.3)
+    rng = np.random.default_rng(11)
+    x = 190.0 + 400.0 * np.sin(theta) + noise_px * rng.standard_normal(t.size)
+    y = 388.0 - 400.0 * np.cos(theta) + noise_px * rng.standard_normal(t.size)
+    return t, x, y, np.gradient(x, t), np.gradient(y, t)
+
+
+def test_a_position_and_its_velocity_are_one_motion_and_the_position_is_fitted(tmp_path):
+    """A tracker's x and its 'X Velocity' decay at one frequency and rate: refused before as one
+    motion with no label naming the calibrated column.  The velocity is x's time derivative
+    (matched to r > 0.99 and in scale), so it is no second sensor: x is chosen, and since its rate
+    is named a velocity, not an angular one, x is read as a displacement."""
+    t, x, y, vx, vy = _track()
+    names = ["Time (s)", "X", "Y", "X Velocity", "Y Velocity"]
+    choice = choose_channel(t, {"X": x, "Y": y, "X Velocity": vx, "Y Velocity": vy})
+    assert choice.chosen == "X", (choice.scores, choice.reason)
+    assert choice.key_of("X") == "displacement_column"
+    assert "'X Velocity' is the rate of change of 'X'" in choice.reason
+    data = _write(tmp_path / "track.csv", names, [t, x, y, vx, vy])
+    result, scene = _init(tmp_path, data)
+    assert result.exit_code == 0, result.output
+    recording = tomllib.loads(scene.read_text())["recording"]
+    assert recording["displacement_column"] == "X"
+
+
+def test_a_neighbour_a_quarter_period_out_of_phase_is_not_a_rate():
+    """The other axis of a bob going round (a conical pendulum) follows x's derivative in shape but
+    is omega times smaller: not x's velocity, and the pair is still refused as one motion."""
+    t = np.arange(0.0, 120.0, 1 / 30)
+    w = 2 * math.pi / 2.3
+    env = 50.0 * np.exp(-t / 80.0)
+    x, y = env * np.cos(w * t), -env * np.sin(w * t)
+    from escfit.analysis.channel import rate_of
+
+    assert rate_of(t, x, y) is None  # the derivative of x is w = 2.7 times y
+    assert rate_of(t, x, np.gradient(x, t)) == pytest.approx(1.0, abs=1e-3)
+    choice = choose_channel(t, {"x": x, "y": y})
+    assert choice.chosen is None and "one motion" in choice.reason

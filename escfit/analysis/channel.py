@@ -20,7 +20,9 @@ falls by the same share (within :data:`SAME_FALL`), the columns record one decay
 coil on one mass, x and y of one tracked bob): they give the same frequency and decay rate, but
 their amplitudes, and so the friction, are only as right as each one's calibration, so the one
 column whose label names an angle (else a displacement) is chosen, the note naming the others;
-when no label or several decide, the refusal says they hold one motion.  Axes of one sensor (labels
+when no label or several decide, the refusal says they hold one motion.  A column that is
+another's time derivative (:func:`rate_of`: a tracker's ``x`` and ``x velocity``) is that
+column's rate, not a second sensor: of a position and its rate the position is chosen.  Axes of one sensor (labels
 that differ only in an axis letter, ``Gyroscope x``, ``y`` and ``z``, one unit): a body swinging
 about one axis turns fastest about it, the others seeing only the sensor's tilt and the body's
 wobble, so the axis whose oscillation is :data:`AXIS_DOMINANCE` times every other's is chosen when
@@ -47,6 +49,8 @@ AXIS_DOMINANCE = 3.0  # an axis of one sensor oscillating this many times more t
 SAME_FREQUENCY = 0.005  # columns whose frequencies agree this closely (relative) ...
 SAME_FALL = 0.1  # ... and whose amplitudes fall by shares this close hold one motion
 SQUARE_FALL = 0.1  # a column keeping (1 - fall)^2 of a neighbour's amplitude, within this, is its square
+RATE_CORRELATION = 0.95  # a column this correlated with another's time derivative ...
+RATE_SCALE = 1.25  # ... and equal to it within this factor, in the file's units, is that column's rate
 
 
 @dataclass(frozen=True)
@@ -170,6 +174,60 @@ def _one_motion(best: str, rivals: list[str], shapes: dict[str, SwingShape]) -> 
     return rivals
 
 
+def rate_of(time: np.ndarray, position: np.ndarray, rate: np.ndarray) -> float | None:
+    """The correlation of ``rate`` with the time derivative of ``position`` when ``rate`` is that
+    derivative (correlated by :data:`RATE_CORRELATION` or more, and equal to it within a factor
+    :data:`RATE_SCALE` in the file's units: a tracker's ``x`` and its ``x velocity``); else None.
+
+    A neighbour a quarter period out of phase (the other axis of a bob going round) correlates
+    with the derivative too, but is ``omega`` times smaller or larger: the scale tells them apart.
+    """
+    t, x, v = (np.asarray(a, float) for a in (time, position, rate))
+    ok = np.isfinite(t) & np.isfinite(x) & np.isfinite(v)
+    if ok.sum() < 10 or np.any(np.diff(t[ok]) <= 0.0):
+        return None
+    dx = np.gradient(x[ok], t[ok])
+    v = v[ok]
+    dx, v = dx - dx.mean(), v - v.mean()
+    norm = math.sqrt(float(np.dot(dx, dx)) * float(np.dot(v, v)))
+    if norm == 0.0:
+        return None
+    r = float(np.dot(dx, v)) / norm
+    scale = float(np.dot(dx, v) / np.dot(dx, dx))
+    if r < RATE_CORRELATION or not 1.0 / RATE_SCALE <= scale <= RATE_SCALE:
+        return None
+    return r
+
+
+_LINEAR_RATE = re.compile(r"\b(velocity|speed|vel|v)\b")
+_ANGULAR = re.compile(r"\b(angular|omega|rotation|rotational|spin|gyro\w*)\b")
+
+
+def _names_linear_rate(label: str) -> bool:
+    """Whether a label names a linear velocity (``X Velocity``, ``v_x``): not an angular one."""
+    words = " ".join(re.split(r"[^a-z]+", label.lower()))
+    return bool(_LINEAR_RATE.search(words)) and not _ANGULAR.search(words)
+
+
+def _drop_rates(group: list[str], columns: dict[str, np.ndarray], time) -> tuple[list[str], str, list[str]]:
+    """``group`` without the columns that are another member's time derivative, a sentence saying
+    which, and the rate columns dropped."""
+    said, rates = [], set()
+    for b in group:
+        for a in group:
+            if a == b or a in rates:
+                continue
+            t = time[a] if isinstance(time, dict) else time
+            if isinstance(time, dict) and not np.array_equal(time[a], time[b]):
+                continue
+            r = rate_of(t, columns[a], columns[b])
+            if r is not None:
+                rates.add(b)
+                said.append(f"{_shown(b)} is the rate of change of {_shown(a)} (its time derivative, r = {r:.3f})")
+                break
+    return [c for c in group if c not in rates], "; ".join(said), sorted(rates)
+
+
 def axis_base(label: str) -> tuple[str, str] | None:
     """``(label without its axis letter, the letter)`` for a label naming one axis (a word ``x``,
     ``y`` or ``z``, any case); None otherwise."""
@@ -261,6 +319,15 @@ def choose_channel(time: np.ndarray | dict[str, np.ndarray], columns: dict[str, 
     if best is not None and scores[best] >= MIN_SCORE:
         same = _one_motion(best, [c for c in order[1:] if scores[c] > MARGIN * scores[best]], shapes)
         if same is not None:
+            kept, rates, dropped = _drop_rates([best, *same], columns, time)
+            if len(kept) == 1:  # a position and its rate: the position is what the model's angle follows
+                linear = key == "angle_column" and all(_names_linear_rate(c) for c in dropped) \
+                    and label_quantity(kept[0], units.get(kept[0])) is None
+                reason = (f"one motion in two columns: {rates}; the position is fitted"
+                          + (", as a displacement (its rate is named a velocity, not an angular one)" if linear
+                             else ""))
+                return ChannelChoice(kept[0], scores, why, reason, "displacement_column" if linear else key, shapes,
+                                     units=dict(units))
             chosen = _plainest(best, same, units)
             if chosen is None:
                 reason = (f"one motion in several columns ({', '.join(_shown(c) for c in [best, *same])} decay at "
