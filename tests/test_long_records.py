@@ -5,7 +5,7 @@ import pytest
 
 from escfit.analysis.recordings.compiled import kinked_design, kinked_lstsq
 from escfit.analysis.recordings.extrema import kinked_vertex
-from escfit.analysis.recordings.motion import _window_range
+from escfit.analysis.recordings.episodes import _window_range
 from escfit.analysis.recordings.timeseries import read_timeseries
 from escfit.core.csvtable import read_numbers, read_table
 from escfit.core.errors import DataError

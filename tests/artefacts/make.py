@@ -328,6 +328,16 @@ def three_pushes(seed: int, periods: int | None = None):
         expect="fit the longest free decay (the second, 45 % of the free time), or refuse naming the pushes")
 
 
+def restarts(seed: int, periods: int | None = None):
+    """Swung, let decay and swung again by hand five times (a phone or a bob restarted over and over):
+    each run loses some 40 % of its amplitude before the hand swings it back to about A0."""
+    p = draw(seed, periods, loss=(2.0, 2.5))
+    t, theta, w = _pushed(p, [0.14, 0.18, 0.32, 0.2, 0.16])
+    return angle_csv(t, noisy(p, theta)), truth(
+        p, w[2][0], w[2][1], None, accept=("fit", "refuse"), reason=r"restart|swung again|set swinging|push",
+        expect="fit the longest free decay (the third, 32 % of the free time), or refuse naming the restarts")
+
+
 def drive_off(seed: int, periods: int | None = None):
     p = draw(seed, periods)
     swings = 1 + seed % 2  # one or two full swings of steady driven amplitude
@@ -551,7 +561,7 @@ def spliced_end(seed: int, periods: int | None = None):
 
 
 CLASSES = {f.__name__: f for f in (
-    clean, guided_start, hold_release, wobble, offset_step, glitch, push_middle, drive_off, drive_logged,
+    clean, guided_start, hold_release, wobble, offset_step, glitch, push_middle, restarts, drive_off, drive_logged,
     burst_stamps, backwards_row, stalled_clock, noise_column_white, noise_column_sine, energy_only, energy_first,
     displacement_mm, acceleration, three_pushes, two_runs, long_jitter, radians_as_degrees, two_modes,
     hand_stop, spliced_end)}

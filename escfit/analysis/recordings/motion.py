@@ -39,6 +39,7 @@ import numpy as np
 from ...core.errors import DataError
 from ...analysis.drive_off import drive_off, not_a_wobble
 from ...analysis.segments import amplitude_growth, driven_start, find_events, robust_scale, swung_up
+from .episodes import envelope, restarted, rises, steady_tail
 from .holds import HOLD_PERIODS, flat_start as _flat_start, held_release, turn_at_start as _turn_at_start
 
 __all__ = ["Turn", "Start", "reference", "faded_end", "growth_tolerance", "growth_steps", "find_start",
@@ -194,107 +195,6 @@ def _driven_prefix(values: np.ndarray, tol: float) -> int:
             and not_a_wobble(pp, steady, after - prefix_loss):  # a slow wobble keeps a size for a while too
         return steady
     return 0
-
-
-def envelope(rec) -> tuple[np.ndarray, np.ndarray]:
-    """Start times (s) and swing (rad) of windows of one and a half periods, a quarter apart.
-
-    The swing is half the range of the smoothed angle in the window: long enough to hold a
-    whole swing of a pendulum whose period shortens as it decays, and blind to the frequency.
-    """
-    t, xs = rec.t, rec.xs
-    width = 1.5 * rec.period
-    starts = np.arange(t[0], t[-1] - width + 1e-9 * width, 0.25 * rec.period)
-    lo = np.searchsorted(t, starts)
-    hi = np.searchsorted(t, starts + width)
-    return starts, 0.5 * _window_range(xs, lo, hi)
-
-
-def _window_range(x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """``max - min`` of ``x[lo[k]:hi[k]]`` for each window (0 for an empty one), in linear time.
-
-    The windows' ends cut ``x`` into segments; each window is a run of whole segments, so its
-    range comes from the segments' maxima and minima (one ``reduceat`` each) over the few
-    segments it spans, instead of one pass over its samples per window.
-    """
-    out = np.zeros(lo.size)
-    full = hi > lo
-    if not full.any():
-        return out
-    lo, hi = lo[full], hi[full]
-    cuts = np.unique(np.concatenate([lo, hi]))
-    cuts = cuts[cuts < x.size]
-    top, bottom = np.maximum.reduceat(x, cuts), np.minimum.reduceat(x, cuts)
-    first = np.searchsorted(cuts, lo)
-    spans = np.searchsorted(cuts, hi) - first  # segments in each window (hi = x.size: up to the end)
-    spans = np.where(hi >= x.size, cuts.size - first, spans)
-    high, low = top[first], bottom[first]
-    for j in range(1, int(spans.max())):
-        more = spans > j
-        high[more] = np.maximum(high[more], top[first[more] + j])
-        low[more] = np.minimum(low[more], bottom[first[more] + j])
-    out[full] = high - low
-    return out
-
-
-def rises(rec) -> list[float]:
-    """Start times (s) of the episodes in which the swing grows, from its :func:`envelope`.
-
-    An episode starts when the envelope climbs a quarter above its lowest value since the last
-    episode (and by more than the smoothed noise can), and ends once it has fallen a tenth below
-    its highest.  A release from a hold or from rest is one episode, beating modes make one per
-    beat.
-    """
-    starts, env = envelope(rec)
-    if starts.size < 3:
-        return []
-    floor = 3.0 * rec.sigma + 2.0 * rec.quantum
-    out: list[float] = []
-    low, high, rising = env[0], env[0], False
-    for s, e in zip(starts, env):
-        if rising:
-            high = max(high, e)
-            if e < 0.9 * high:
-                rising, low = False, e
-        else:
-            low = min(low, e)
-            if e > 1.25 * low + floor:
-                rising, high = True, e
-                out.append(float(s))
-    return out
-
-
-def steady_tail(rec) -> tuple[float, float, float]:
-    """Where the swing settles for good while a free decay could not: start (s), amplitude (rad)
-    and length (periods) of the final stretch of the :func:`envelope` that stays within 15 % of
-    itself; ``(nan, nan, 0)`` when there is none.
-
-    A free decay may slow down as it fades (air drag loses with the square of the speed), but
-    its logarithmic decrement cannot fall faster than the square of the amplitude: with the
-    decrement of the first three periods after the largest swing, ``d0`` at amplitude ``A0``, a
-    stretch at amplitude ``A`` must lose at least ``d0 (A/A0)^2`` per period.  A stretch of ten
-    periods or more that is expected to lose over a quarter of its amplitude that way and loses
-    under a quarter of that is kept going by something (a drive's steady state after its
-    transient, an escapement).
-    """
-    starts, env = envelope(rec)
-    if starts.size < 40:
-        return math.nan, math.nan, 0.0
-    k = env.size - 1
-    while k > 0 and np.max(env[k - 1:]) <= 1.15 * np.min(env[k - 1:]):
-        k -= 1
-    periods = (starts[-1] - starts[k]) / rec.period
-    level = float(np.mean(env[k:]))
-    top = int(np.argmax(env))
-    later = top + int(round(3 * 4))  # windows are a quarter period apart
-    if periods < 10 or level < 20 * (rec.sigma + rec.quantum) or later >= k:
-        return math.nan, math.nan, 0.0
-    d0 = math.log(env[top] / max(env[later], 1e-300)) / 3.0
-    expected = d0 * (level / env[top]) ** 2 * periods
-    observed = math.log(np.max(env[k:]) / max(np.min(env[k:]), 1e-300))
-    if expected > math.log(4.0 / 3.0) and observed < 0.25 * expected:
-        return float(starts[k]), level, periods
-    return math.nan, math.nan, 0.0
 
 
 def find_start(rec, turns: list[Turn], end: int, *, at_start: bool = False) -> Start:
@@ -540,7 +440,10 @@ def reference(rec, turns: list[Turn]) -> tuple[float, float, list[Turn]]:
         else:
             turns = turns[1:]
     episodes = rises(rec)
-    if len(episodes) >= BEAT_EPISODES:
+    again = restarted(rec, episodes) if len(episodes) >= BEAT_EPISODES else None
+    if again is not None:  # separate free decays: the pushes' rule below picks the longest
+        rec.notes.append(again.sentence())
+    elif len(episodes) >= BEAT_EPISODES:
         when = ", ".join(f"{s:.4g}" for s in episodes[:6])
         settled, level, periods = steady_tail(rec)
         if math.isfinite(settled):
@@ -551,7 +454,7 @@ def reference(rec, turns: list[Turn]) -> tuple[float, float, list[Turn]]:
         raise DataError(f"the swing grows again {len(episodes)} times (from about t = {when} s): beating modes, a "
                         "drive or repeated pushes, not one oscillator's free decay; cut the record to one decay with "
                         "[recording] start and stop", rec.where)
-    if len(episodes) >= 2:  # a decay, then the oscillator was set swinging again: the last one counts
+    if len(episodes) >= 2 and again is None:  # a decay, then the oscillator was set swinging again: the last one counts
         later = [i for i, u in enumerate(turns) if u.time is not None and u.time >= episodes[-1] - 0.5 * rec.period]
         if later and later[0] > 0:
             rec.notes.append(f"the swing grows again from about t = {episodes[-1]:.4g} s (a second push or pull): "
