@@ -21,6 +21,16 @@ after which ``escfit fit``, ``summary``, ``report`` and ``fit-many`` (in the sam
 :func:`escfit.fit` take scenes with ``model = "toy"``.  ``tests/test_family_conformance.py``
 runs the same checks over every registered family.
 
+A package that ships a family registers it once for every process, dask's workers included, by
+an entry point in the group ``escfit.families`` (:data:`ENTRY_POINT_GROUP`) of its metadata::
+
+    [project.entry-points."escfit.families"]
+    toy = "toy_package.family:FAMILY"
+
+The entry points are read only when a scene names a family that is not registered, or when the
+families are listed, so a run that uses the shipped families never scans the installed
+packages.  A built-in name, or one registered in the process, wins over an entry point.
+
 This module sits in the lowest layer: it imports no family, and the types it names from higher
 layers (scenes, :class:`~escfit.likelihood.problem.Problem`, results) are only annotations.
 """
@@ -33,7 +43,10 @@ from typing import Any, Callable, Mapping, Protocol, runtime_checkable
 from .errors import SceneError
 
 __all__ = ["Family", "FamilyBase", "Derived", "register_family", "unregister_family", "get_family",
-           "family_names", "BUILTIN_FAMILIES", "check_options"]
+           "family_names", "BUILTIN_FAMILIES", "check_options", "ENTRY_POINT_GROUP"]
+
+#: the entry-point group in which installed packages name their families (``name = "module:attr"``)
+ENTRY_POINT_GROUP = "escfit.families"
 
 #: the families escfit ships: ``model =`` name -> ``"<module>:<attribute>"`` of its entry
 BUILTIN_FAMILIES: dict[str, str] = {
@@ -244,8 +257,27 @@ def unregister_family(name: str) -> None:
         _REGISTRY.pop(name, None)
 
 
+_FROM_ENTRY_POINTS: dict[str, str] = {}  # name -> "module:attr" of the families installed packages declare
+_SCANNED = False
+
+
+def _entry_points() -> None:
+    """Add the families installed packages declare (:data:`ENTRY_POINT_GROUP`), once per process,
+    by path (imported on first use); a name already registered keeps its entry."""
+    global _SCANNED
+    if _SCANNED:
+        return
+    _SCANNED = True
+    from importlib.metadata import entry_points
+
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        if ep.name not in _REGISTRY:
+            _REGISTRY[ep.name] = _FROM_ENTRY_POINTS[ep.name] = ep.value
+
+
 def family_names() -> list[str]:
-    """The registered families' names, sorted."""
+    """The registered families' names, those installed packages declare included, sorted."""
+    _entry_points()
     return sorted(_REGISTRY)
 
 
@@ -258,11 +290,20 @@ def get_family(name: str) -> Family:
         An unknown family name (the known ones listed).
     """
     entry = _REGISTRY.get(name) if isinstance(name, str) else None
+    if entry is None and isinstance(name, str):
+        _entry_points()
+        entry = _REGISTRY.get(name)
     if entry is None:
         raise SceneError(f"unknown model {name!r}; known models: {family_names()}")
     if isinstance(entry, str):
         module, _, attr = entry.partition(":")
-        entry = getattr(importlib.import_module(module), attr)
+        try:
+            entry = getattr(importlib.import_module(module), attr)
+        except (ImportError, AttributeError) as exc:
+            if name not in _FROM_ENTRY_POINTS:
+                raise
+            raise SceneError(f"model {name!r}: the entry point {entry!r} an installed package declares in "
+                             f"{ENTRY_POINT_GROUP!r} cannot be loaded ({type(exc).__name__}: {exc})") from None
         _REGISTRY[name] = entry
     return entry
 
