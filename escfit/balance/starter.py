@@ -310,6 +310,12 @@ def _amplitude_rows(path, series: TimeSeries, table: dict, why: dict, fmt, reduc
             reduced.update(series=series, turns=tp)
         return series
     except DataError as exc:
+        modes = getattr(exc, "modes", None)
+        if modes is not None and "mode" not in table:  # two modes: the lowest is fitted unless the user says
+            table["mode"] = 1
+            why["mode"] = (f"the record rings in two modes (periods {modes[0]:.4g} s and {modes[1]:.4g} s): the "
+                           "slower, the lowest, is fitted and the other filtered out; mode = 2 fits the faster")
+            return _amplitude_rows(path, read_data(path, recording=table, fmt=fmt), table, why, fmt, reduced)
         key, value, reason = _table_reading(series, exc)
     table[key] = value
     why[key] = f"{reason}: read as amplitudes, as {READINGS_HINT} asks"

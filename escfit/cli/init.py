@@ -22,7 +22,7 @@ __all__ = ["init", "offer_starter", "write_starter", "interactive"]
 
 RECORDING_OPTIONS = ("time_column", "sample_rate", "angle_column", "angle_unit", "counts_per_turn", "scale", "start",
                      "stop", "release", "readings", "velocity_column", "velocity_unit", "displacement_column",
-                     "displacement_unit", "run")
+                     "displacement_unit", "run", "mode")
 
 
 def interactive() -> bool:
@@ -162,6 +162,9 @@ def next_command(data: str, scene: Path) -> str:
 @click.option("--displacement-unit", default=None, help="[recording] displacement_unit: m, cm, mm, or V with --scale.")
 @click.option("--run", type=click.IntRange(min=1), default=None,
               help="[recording] run: which run (from 1) of a file holding several side by side (Vernier, PASCO, CASSY).")
+@click.option("--mode", type=click.IntRange(min=1, max=2), default=None,
+              help="[recording] mode: of a record ringing in two modes, fit the slower (1, the default) or the "
+                   "faster (2); the other is filtered out.")
 def init(data, out, kind, force, fmt, **options):
     """Write a starter scene that fits DATA (a recording of your own), and say what to run next.
 

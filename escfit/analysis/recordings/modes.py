@@ -87,10 +87,14 @@ def check_other_modes(t: np.ndarray, x: np.ndarray, period: float, where: str) -
         if side == "slower" and prominence < MIN_PROMINENCE:
             continue  # the skirt of a hold's, a step's or a drift's low frequencies, not an oscillation
         if share >= SECOND_MODE_SHARE:
-            raise DataError(f"besides the swing of period {period:.4g} s the record holds a second oscillation of period "
+            slow, fast = max(period, other), min(period, other)
+            err = DataError(f"besides the swing of period {period:.4g} s the record holds a second oscillation of period "
                             f"{other:.4g} s ({side}) with {100 * share:.0f} % of its power: two modes (a structure's, "
                             "a rod's) or two coupled oscillators, not one oscillator's free decay, and which one to fit "
-                            "is not determined; isolate one mode (a band-pass filter around it) before fitting", where)
+                            f"is not determined; set [recording] mode = 1 to fit the slower (period {slow:.4g} s) or "
+                            f"mode = 2 the faster ({fast:.4g} s), the other filtered out", where)
+            err.modes = (slow, fast)  # what escfit init offers: the lowest mode by default
+            raise err
         if prominence >= MIN_PROMINENCE:
             notes.append(f"a weak second oscillation of period {other:.4g} s ({side}, {100 * share:.2g} % of the main "
                          f"swing's power) rides on the swing of period {period:.4g} s: the fit follows "

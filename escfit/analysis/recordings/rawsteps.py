@@ -149,6 +149,12 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
                             f"at least {MIN_SAMPLES} are needed", f"{source} [recording].start/stop")
         time, theta = time[keep], theta[keep]
         meta["window"] = shown
+    if spec.mode is not None and spec.readings == "samples":
+        from ..mode_filter import isolate_mode
+
+        time, theta, split = isolate_mode(time, theta, spec.mode, f"{source} [recording].mode")
+        notes.append(split.sentence())
+        meta["mode"] = str(spec.mode)
     need = MIN_SAMPLES if spec.readings == "samples" else MIN_AMPLITUDE_ROWS
     if time.size < need:
         what = "samples" if spec.readings == "samples" else "amplitude readings"

@@ -22,6 +22,7 @@ the angle, in which units, and which part of the record to keep::
     run = 2                        # which run of a file holding several (CASSY, PASCO, Vernier), from 1
     lift_angle = "52 deg"          # timegrapher files that do not say the lift angle set
     bph = 28800                    # timegrapher files that do not say the beat rate
+    mode = 1                       # a record ringing in two modes: fit the slower (1) or the faster (2)
 
 Every key is optional; what is not given is detected from the file where that is safe.
 The command line overrides the table key by key (:func:`merge_spec`).
@@ -121,6 +122,9 @@ class RecordingSpec:
         Lift angle set on a timegrapher, rad, for files that do not record it.
     bph : int or None
         Beats per hour of the watch, for timegrapher files that do not record it.
+    mode : int or None
+        Of a record ringing in two modes, the one fitted: 1 the slower, 2 the faster; the other
+        is filtered out (:mod:`escfit.analysis.mode_filter`).
     """
 
     time_column: Column | None = None
@@ -141,6 +145,7 @@ class RecordingSpec:
     lift_angle: float | None = None
     bph: int | None = None
     release: Instant | None = None
+    mode: int | None = None
 
     def __post_init__(self):
         for key in WINDOW_KEYS:  # a plain number is a time after the first sample
@@ -434,7 +439,16 @@ _PARSE: dict[str, Callable[[Any, str, bool], Any]] = {
     "run": _run,
     "lift_angle": _lift,
     "bph": lambda v, w, cli: _bph(v, w, cli),
+    "mode": lambda v, w, cli: _mode(v, w, cli),
 }
+
+
+def _mode(value: Any, where: str, cli: bool) -> int:
+    if cli and isinstance(value, str) and value.strip().isdigit():
+        value = int(value)
+    if isinstance(value, bool) or value not in (1, 2):
+        raise SceneError(f"mode is 1 (the slower of a record's two modes) or 2 (the faster), got {value!r}", where)
+    return value
 
 
 def _instant(value: Any, where: str) -> Instant:

@@ -1,0 +1,135 @@
+"""One mode of a record that rings in two, isolated by a zero-phase filter.
+
+A linear structure (a beam, a rod, two coupled pendulums) rings in several modes at once.  Each
+mode is a damped oscillator of its own, so each can be fitted alone once the others are taken
+out.  A one-oscillator model fitted to the sum follows neither mode.  The record analysis refuses
+such a record (:mod:`escfit.analysis.recordings.modes`) and names ``[recording] mode``; with
+``mode = 1`` (the slower mode, the lowest) or ``mode = 2`` (the faster one), this stage keeps that
+mode and removes the other.
+
+The filter works in the frequency domain with zero phase, so it shifts no turning point and moves
+no release.  A mode at frequency ``f1`` and another at ``f2 = r f1`` (``r >= 2``: the analysis calls
+nearer peaks one oscillation) are split at a raised-cosine crossover running from
+``f1 r^(1/3)`` to ``f1 r^(2/3)``.  The kept mode's line, damping included, lies wholly on its own
+side; at ``r = 2`` the crossover runs from 1.26 to 1.59 ``f1``, and a mode with Q above 3 has
+almost all its power within 15 % of its frequency.  The lower mode is kept with a low-pass (the
+centre and its slow drift stay with it), the upper one with the matching high-pass.  The record
+is mirrored at both ends before the transform, by three periods of the slower mode, so the ends
+do not wrap into each other.  The ends still carry the filter's edge (on two modes of one size a
+period ratio of 2.7 apart: 7 % of the kept mode's amplitude in its first period, 0.7 % in the
+second, 0.17 % in the third and 0.03 % after), so :data:`TRIM_PERIODS` periods of the slower mode
+are cut from each end;
+a free decay's release at a turning point is exact physics wherever it is taken, so the fit
+starts at the first turning point after the cut.  The samples must be evenly spaced (within
+:data:`EVEN`); a logger's uneven clock is repaired before this stage or the record is refused.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core.errors import DataError
+from .recordings.extrema import spectral_period
+from .recordings.modes import MIN_PROMINENCE, SECOND_MODE_SHARE, other_modes
+
+__all__ = ["ModeSplit", "two_modes", "isolate_mode", "EVEN"]
+
+EVEN = 0.02  # the samples' intervals within this share of their median: evenly spaced
+PAD_PERIODS = 3.0  # the record is mirrored at each end over this many periods of the slower mode
+TRIM_PERIODS = 2.0  # periods of the slower mode cut from each end of the filtered record (the filter's edge)
+MIN_PERIODS = 6.0  # periods of the slower mode the record must keep after the cut
+
+
+@dataclass(frozen=True)
+class ModeSplit:
+    """A record's two modes and the one kept.
+
+    Attributes
+    ----------
+    periods : tuple of float
+        The two modes' periods (s), the slower first.
+    share : float
+        The weaker mode's spectral power over the stronger one's.
+    chosen : int
+        The mode kept: 1 the slower, 2 the faster.
+    crossover : tuple of float
+        The filter's crossover band (Hz): full pass on the kept side of the first, none beyond the second.
+    trimmed : float
+        Time cut from each end of the record (s).
+    """
+
+    periods: tuple
+    share: float
+    chosen: int
+    crossover: tuple
+    trimmed: float = 0.0
+
+    def sentence(self) -> str:
+        """The decision and its evidence, for the record's notes."""
+        kept, other = self.periods[self.chosen - 1], self.periods[2 - self.chosen]
+        which = "slower" if self.chosen == 1 else "faster"
+        return (f"two modes, of periods {self.periods[0]:.4g} s and {self.periods[1]:.4g} s (the weaker holds "
+                f"{100 * self.share:.0f} % of the stronger's power): the {which} one (period {kept:.4g} s, "
+                f"[recording] mode = {self.chosen}) is fitted and the other ({other:.4g} s) filtered out with zero "
+                f"phase (crossover {self.crossover[0]:.4g} to {self.crossover[1]:.4g} Hz), and the first and last "
+                f"{self.trimmed:.3g} s, where the filter's edge lies, are left out; set mode = {3 - self.chosen} to fit "
+                "the other")
+
+
+def two_modes(t: np.ndarray, x: np.ndarray) -> tuple[tuple[float, float], float] | None:
+    """The periods of a record's two modes (s, the slower first) and the weaker one's share of the
+    stronger's power, when a second oscillation holds :data:`~escfit.analysis.recordings.modes.SECOND_MODE_SHARE`
+    of the main one's power or more (the record analysis' refusal); else None."""
+    period, prominence = spectral_period(t, x)
+    if not math.isfinite(period) or prominence < MIN_PROMINENCE:
+        return None
+    found = [(p, s) for p, s, prom in other_modes(t, x, period)
+             if s >= SECOND_MODE_SHARE and (p < period or prom >= MIN_PROMINENCE)]
+    if not found:
+        return None
+    other, share = max(found, key=lambda f: f[1])
+    return (max(period, other), min(period, other)), float(min(share, 1.0 / share) if share > 0 else share)
+
+
+def isolate_mode(t: np.ndarray, x: np.ndarray, mode: int, where: str) -> tuple[np.ndarray, np.ndarray, ModeSplit]:
+    """The times and samples of ``t``, ``x`` (s, any unit) with only mode ``mode`` kept (1 the
+    slower, 2 the faster) and the filter's edges cut off.
+
+    Raises
+    ------
+    DataError
+        The record holds one mode only, its samples are not evenly spaced, or it is too short for
+        the cut.
+    """
+    t, x = np.asarray(t, float), np.asarray(x, float)
+    dt = np.diff(t)
+    step = float(np.median(dt))
+    if not np.all(np.abs(dt - step) <= EVEN * step):
+        raise DataError(f"[recording] mode = {mode}: isolating a mode needs evenly spaced samples (intervals within "
+                        f"{100 * EVEN:g} % of their median, {step:.4g} s); these range from {dt.min():.4g} to "
+                        f"{dt.max():.4g} s", where)
+    found = two_modes(t, x)
+    if found is None:
+        raise DataError(f"[recording] mode = {mode}: the record holds one oscillation, not two modes; remove the key",
+                        where)
+    periods, share = found
+    f1, f2 = 1.0 / periods[0], 1.0 / periods[1]
+    r = f2 / f1
+    lo, hi = f1 * r ** (1.0 / 3.0), f1 * r ** (2.0 / 3.0)
+    pad = min(x.size - 1, int(math.ceil(PAD_PERIODS * periods[0] / step)))
+    padded = np.concatenate([x[pad:0:-1], x, x[-2:-pad - 2:-1]])
+    freq = np.fft.rfftfreq(padded.size, step)
+    s = np.clip((freq - lo) / (hi - lo), 0.0, 1.0)
+    low_pass = 0.5 * (1.0 + np.cos(math.pi * s))  # 1 below lo, 0 above hi
+    gain = low_pass if mode == 1 else 1.0 - low_pass
+    kept = np.fft.irfft(np.fft.rfft(padded) * gain, n=padded.size)[pad:pad + x.size]
+    trim = TRIM_PERIODS * periods[0]
+    inside = (t >= t[0] + trim) & (t <= t[-1] - trim)
+    if t[-1] - t[0] - 2 * trim < MIN_PERIODS * periods[0]:
+        raise DataError(f"[recording] mode = {mode}: the record spans {(t[-1] - t[0]) / periods[0]:.3g} periods of its "
+                        f"slower mode ({periods[0]:.4g} s); isolating a mode needs "
+                        f"{MIN_PERIODS + 2 * TRIM_PERIODS:g} (the filter's edge is cut from each end)", where)
+    return t[inside], kept[inside], ModeSplit(periods, share, mode, (lo, hi), trim)
