@@ -90,3 +90,18 @@ def test_uneven_samples_are_refused():
     t = T + 0.004 * np.random.default_rng(2).uniform(-1, 1, T.size)
     with pytest.raises(DataError, match="evenly spaced"):
         isolate_mode(np.sort(t), _record(), 1, "uneven.csv [recording].mode")
+
+
+@pytest.mark.parametrize("slow, fast, warned", [(0.5, 1.0, True), (1.0, 0.5, False)])
+def test_keeping_the_weaker_mode_is_a_warning(tmp_path, slow, fast, warned):
+    """mode = 1 (the default) keeps the slower mode; when that one holds a quarter of the other's
+    power (a stand's rocking under a swing, say) the choice is a warning naming mode = 2."""
+    import escfit
+
+    x = slow * _mode(W1, G1) + fast * _mode(W2, G1, 0.4)
+    data = tmp_path / "two.csv"
+    np.savetxt(data, np.c_[T, x], delimiter=",", header="t (s),x (m)", comments="", fmt="%.8g")
+    series = escfit.read_recording(data, recording={"mode": 1, "displacement_column": "x (m)"})
+    said = series.meta.get("warnings", "") if warned else series.meta.get("notes", "")
+    assert "set mode = 2" in said and ("weaker one" in said) == warned
+    assert ("two modes" in series.meta.get("warnings", "")) == warned

@@ -59,6 +59,8 @@ class ModeSplit:
         The filter's crossover band (Hz): full pass on the kept side of the first, none beyond the second.
     trimmed : float
         Time cut from each end of the record (s).
+    stronger : int
+        The mode with more of the record's power: 1 the slower, 2 the faster.
     """
 
     periods: tuple
@@ -66,23 +68,33 @@ class ModeSplit:
     chosen: int
     crossover: tuple
     trimmed: float = 0.0
+    stronger: int = 1
+
+    @property
+    def kept_weaker(self) -> bool:
+        """Whether the mode kept holds under half the other's power (a support's rocking, say,
+        rather than the swing): then the choice is a warning, not a note."""
+        return self.chosen != self.stronger and self.share < 0.5
 
     def sentence(self) -> str:
         """The decision and its evidence, for the record's notes."""
         kept, other = self.periods[self.chosen - 1], self.periods[2 - self.chosen]
         which = "slower" if self.chosen == 1 else "faster"
+        weaker = (f"; it is the weaker one, with {100 * self.share:.0f} % of the other's power: if the other is the "
+                  f"oscillation you recorded, set mode = {3 - self.chosen}" if self.kept_weaker else "")
         return (f"two modes, of periods {self.periods[0]:.4g} s and {self.periods[1]:.4g} s (the weaker holds "
-                f"{100 * self.share:.0f} % of the stronger's power): the {which} one (period {kept:.4g} s, "
+                f"{100 * self.share:.0f} % of the stronger's power){weaker}: the {which} one (period {kept:.4g} s, "
                 f"[recording] mode = {self.chosen}) is fitted and the other ({other:.4g} s) filtered out with zero "
                 f"phase (crossover {self.crossover[0]:.4g} to {self.crossover[1]:.4g} Hz), and the first and last "
                 f"{self.trimmed:.3g} s, where the filter's edge lies, are left out; set mode = {3 - self.chosen} to fit "
                 "the other")
 
 
-def two_modes(t: np.ndarray, x: np.ndarray) -> tuple[tuple[float, float], float] | None:
-    """The periods of a record's two modes (s, the slower first) and the weaker one's share of the
-    stronger's power, when a second oscillation holds :data:`~escfit.analysis.recordings.modes.SECOND_MODE_SHARE`
-    of the main one's power or more (the record analysis' refusal); else None."""
+def two_modes(t: np.ndarray, x: np.ndarray) -> tuple[tuple[float, float], float, int] | None:
+    """The periods of a record's two modes (s, the slower first), the weaker one's share of the
+    stronger's power and which is the stronger (1 the slower, 2 the faster), when a second
+    oscillation holds :data:`~escfit.analysis.recordings.modes.SECOND_MODE_SHARE` of the main one's
+    power or more (the record analysis' refusal); else None."""
     period, prominence = spectral_period(t, x)
     if not math.isfinite(period) or prominence < MIN_PROMINENCE:
         return None
@@ -91,7 +103,9 @@ def two_modes(t: np.ndarray, x: np.ndarray) -> tuple[tuple[float, float], float]
     if not found:
         return None
     other, share = max(found, key=lambda f: f[1])
-    return (max(period, other), min(period, other)), float(min(share, 1.0 / share) if share > 0 else share)
+    main_first = share <= 1.0  # the periodogram's main peak holds more power than the other
+    stronger = (1 if period > other else 2) if main_first else (2 if period > other else 1)
+    return (max(period, other), min(period, other)), float(min(share, 1.0 / share)), stronger
 
 
 def isolate_mode(t: np.ndarray, x: np.ndarray, mode: int, where: str) -> tuple[np.ndarray, np.ndarray, ModeSplit]:
@@ -115,7 +129,7 @@ def isolate_mode(t: np.ndarray, x: np.ndarray, mode: int, where: str) -> tuple[n
     if found is None:
         raise DataError(f"[recording] mode = {mode}: the record holds one oscillation, not two modes; remove the key",
                         where)
-    periods, share = found
+    periods, share, stronger = found
     f1, f2 = 1.0 / periods[0], 1.0 / periods[1]
     r = f2 / f1
     lo, hi = f1 * r ** (1.0 / 3.0), f1 * r ** (2.0 / 3.0)
@@ -132,4 +146,4 @@ def isolate_mode(t: np.ndarray, x: np.ndarray, mode: int, where: str) -> tuple[n
         raise DataError(f"[recording] mode = {mode}: the record spans {(t[-1] - t[0]) / periods[0]:.3g} periods of its "
                         f"slower mode ({periods[0]:.4g} s); isolating a mode needs "
                         f"{MIN_PERIODS + 2 * TRIM_PERIODS:g} (the filter's edge is cut from each end)", where)
-    return t[inside], kept[inside], ModeSplit(periods, share, mode, (lo, hi), trim)
+    return t[inside], kept[inside], ModeSplit(periods, share, mode, (lo, hi), trim, stronger)
