@@ -59,6 +59,20 @@ def test_window_ranges_equal_a_pass_over_each_window():
     assert np.array_equal(_window_range(x, lo, hi), want)
 
 
+def test_window_medians_equal_a_median_per_window():
+    """The running medians of the push and free-law tests, one strided call per window width,
+    give bit for bit the median of each window (ends clipped, an empty window nan)."""
+    from escfit.analysis.free_law import window_medians
+
+    rng = np.random.default_rng(3)
+    x = rng.standard_normal(500)
+    j = np.arange(-10, 520)
+    for lo, hi in ((j - 7, j), (j + 2, j + 2 + 7), (np.maximum(0, j - 7), np.maximum(1, j - 1))):
+        want = np.array([np.median(x[max(0, a):max(0, b)]) if min(b, 500) > max(a, 0) else np.nan
+                         for a, b in zip(lo, hi)])
+        assert np.array_equal(window_medians(x, lo, hi), want, equal_nan=True)
+
+
 @pytest.mark.parametrize("uc, degs, shared", [(0.05, (4, 4), False), (-0.6, (4, 3), False), (0.3, (4, 4), True),
                                               (0.0, (0, 4), False), (0.7, (6, 2), False)])
 def test_compiled_least_squares_agree_with_numpy(uc, degs, shared):

@@ -86,6 +86,24 @@ def free_law_gains(p: np.ndarray, iterations: int = 20) -> np.ndarray:
     return law - loss
 
 
+def window_medians(x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """``median(x[lo[j]:hi[j]])`` for every ``j`` (bounds clipped to ``x``; ``nan`` for an empty window).
+
+    The windows of one width are taken as rows of one strided view and their medians found in
+    one call: the same numbers as a median per window, in linear time instead of a Python call
+    per half swing.
+    """
+    x = np.asarray(x, float)
+    lo = np.clip(np.asarray(lo), 0, x.size)
+    hi = np.clip(np.asarray(hi), 0, x.size)
+    width = hi - lo
+    out = np.full(lo.size, np.nan)
+    for w in np.unique(width[width > 0]):
+        rows = np.flatnonzero(width == w)
+        out[rows] = np.median(np.lib.stride_tricks.sliding_window_view(x, int(w))[lo[rows]], axis=1)
+    return out
+
+
 def law_steps(p: np.ndarray, side: int = SIDE) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Step of the gained energy ``G`` at each half swing, its reading noise and the swing before it.
 
@@ -107,13 +125,13 @@ def law_steps(p: np.ndarray, side: int = SIDE) -> tuple[np.ndarray, np.ndarray, 
     except np.linalg.LinAlgError:  # no law to test against
         return step, err, level
     s_p = robust_scale(np.diff(p, 2)) / math.sqrt(2.0)
-    for j in range(n):
-        before, after = g[max(0, j - side):j], g[j + 2:j + 2 + side]
-        if before.size < MIN_SIDE or after.size < MIN_SIDE:
-            continue
-        step[j] = float(np.median(after) - np.median(before))
-        err[j] = MEDIAN_SE * math.sqrt(2.0) * s_p * math.sqrt(1.0 / before.size + 1.0 / after.size)
-        level[j] = float(np.median(p[max(0, j - side):j]))
+    j = np.arange(n)
+    n_before = np.minimum(j, side)
+    n_after = np.clip(g.size - (j + 2), 0, side)
+    ok = (n_before >= MIN_SIDE) & (n_after >= MIN_SIDE)
+    step[ok] = (window_medians(g, j + 2, j + 2 + side) - window_medians(g, j - side, j))[ok]
+    err[ok] = MEDIAN_SE * math.sqrt(2.0) * s_p * np.sqrt(1.0 / n_before[ok] + 1.0 / n_after[ok])
+    level[ok] = window_medians(p, j - side, j)[ok]
     return step, err, level
 
 

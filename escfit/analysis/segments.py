@@ -45,7 +45,7 @@ from typing import Callable
 
 import numpy as np
 
-from .free_law import free_law_gains, law_pushes, robust_scale
+from .free_law import free_law_gains, law_pushes, robust_scale, window_medians
 
 __all__ = ["SwingEvent", "swing_gains", "find_events", "driven_start", "amplitude_growth", "robust_scale", "stands_out", "SIDE",
            "Z_PUSH"]
@@ -330,7 +330,8 @@ def find_events(times: np.ndarray, values: np.ndarray, *, resolution: float, qua
     # scattered gains no longer set the wobble's scale where the swing is large
     relative = robust_scale(gain / err) * err
     scale = np.fmax(err, np.fmin(spread, relative) if math.isfinite(spread) else 0.0)
-    level = np.array([np.median(p[max(0, j - 1 - SIDE):max(1, j - 1)]) for j in range(p.size)])
+    j = np.arange(p.size)
+    level = window_medians(p, np.maximum(0, j - 1 - SIDE), np.maximum(1, j - 1))
     absolute = level * np.expm1(np.nan_to_num(gain))  # the gain in the record's unit
     pushes = np.isfinite(gain) & (gain > Z_PUSH * scale) & (absolute > floor)
     # pushes a short record with several of them hides from the level test: energy gained
