@@ -56,7 +56,7 @@ def probe(recipe: Path) -> dict:
         problem.residuals_many = counted_many
     clock, cpu = time.perf_counter(), time.process_time()
     lsq = least_squares(problem, n_starts=defaults.get("n_starts", 8), n_refine=defaults.get("n_refine"), seed=seed)
-    lsq, _, _ = reconcile(problem, lsq, seed=seed)
+    lsq, *_ = reconcile(problem, lsq, seed=seed)
     seconds, cpu = time.perf_counter() - clock, time.process_time() - cpu
     return {"recipe": recipe.stem, "seconds": seconds, "cpu_seconds": cpu, "evaluations": calls[0],
             "batch_sets": batch[0], "names": list(lsq.names),

@@ -27,7 +27,7 @@ def fit(tmp_path: Path, text: str, scene: str, n_starts: int = 1):
     data = tmp_path / "record.csv"
     data.write_text(text)
     problem = make_problem(load_scene(str(tmp_path / "scene.toml"), text=scene), str(data))
-    res, fixes, unresolved = reconcile(problem, least_squares(problem, n_starts=n_starts))
+    res, fixes, unresolved, problem = reconcile(problem, least_squares(problem, n_starts=n_starts))
     assert not unresolved, unresolved
     res, more = with_held_uncertainty(problem, res)
     fixes += more

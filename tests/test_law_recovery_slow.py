@@ -71,7 +71,7 @@ def fit_record(tmp_path: Path, text: str, scene: str):
     data = tmp_path / "record.csv"
     data.write_text(text)
     problem = make_problem(load_scene(str(tmp_path / "scene.toml"), text=scene), str(data))
-    res, _, unresolved = reconcile(problem, least_squares(problem, n_starts=1))
+    res, _, unresolved, _ = reconcile(problem, least_squares(problem, n_starts=1))
     assert not unresolved, unresolved
     res, _ = with_held_uncertainty(problem, res)
     return res

@@ -141,14 +141,14 @@ def test_a_fit_that_contradicts_the_measured_period_is_refitted_from_it():
     problem = PeriodToy(measured=1.0)
     first = least_squares(problem, n_starts=1)
     assert abs(first.values["w"] - 1.0) > 0.3  # a secondary minimum
-    res, notes, unresolved = reconcile(problem, first)
+    res, notes, unresolved, _ = reconcile(problem, first)
     assert not unresolved and abs(res.values["w"] - 1.0) < 1e-6
     assert notes and "refitted from w = 1" in notes[0] and "fits the readings better" in notes[0]
 
 
 def test_a_fit_the_measurement_cannot_rescue_is_not_determined():
     problem = PeriodToy(measured=4.9)  # the record's period says 4.9; the readings want 1
-    res, notes, unresolved = reconcile(problem, least_squares(problem, n_starts=4))
+    res, notes, unresolved, _ = reconcile(problem, least_squares(problem, n_starts=4))
     assert unresolved
     status, missing, message = verdict(problem, res, unresolved)
     assert status == NOT_DETERMINED and missing == ["w"] and "NOT determined" in message

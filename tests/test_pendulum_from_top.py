@@ -60,3 +60,24 @@ def test_a_missing_turning_point_at_like_amplitudes_is_still_refused(tmp_path):
     data, scene = _record(tmp_path, 40.0, drop_one=True)
     with pytest.raises(DataError, match="irregular interval"):
         fit(scene, str(data))
+
+
+def test_a_held_omega0_moves_in_a_copy_and_the_problem_stays_as_built(tmp_path):
+    """reconcile moves the held omega0 to where the model's period matches the record's: the fit
+    it returns belongs to a copy holding the new value, and the problem it was given is unchanged
+    (the least squares on the copy and on a problem built with that omega0 agree)."""
+    from escfit.balance.family import make_problem
+    from escfit.inference.lsq import least_squares
+    from escfit.inference.reconcile import reconcile
+
+    data, scene_path = _record(tmp_path, 179.4)
+    problem = make_problem(escfit.load_scene(scene_path), str(data))
+    assert problem.held == ("oscillator.omega0",)
+    built = problem.params["oscillator.omega0"].value
+    first = least_squares(problem, n_starts=1, seed=0)
+    got = reconcile(problem, first, seed=0)
+    moved = got.problem.params["oscillator.omega0"].value
+    assert problem.params["oscillator.omega0"].value == built and problem.values(first.values)["oscillator.omega0"] == built
+    assert got.problem is not problem and moved != built
+    assert got.problem.values(got.lsq.values)["oscillator.omega0"] == moved
+    assert abs(moved - TRUTH["omega0"]) < 0.01 * TRUTH["omega0"]

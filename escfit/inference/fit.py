@@ -197,7 +197,8 @@ def fit_problem(problem: Problem, *, method: str = "leastsq", out: str | Path | 
     with phase("least squares"):
         lsq = least_squares(problem, n_starts=n_starts, n_refine=n_refine, seed=seed, priors_count=method == "emcee",
                             optimizer=optimizer, nearby=method != "emcee")
-        lsq, fixes, unresolved = reconcile(problem, lsq, seed=seed, priors_count=method == "emcee", optimizer=optimizer)
+        lsq, fixes, unresolved, problem = reconcile(problem, lsq, seed=seed, priors_count=method == "emcee",
+                                                    optimizer=optimizer)
         lsq, more = with_held_uncertainty(problem, lsq)
     fixes += more + list(getattr(optimizer, "notes", []))
     if method == "emcee" and getattr(problem, "held", ()):
@@ -492,6 +493,6 @@ def _refit(problem, start, seed: int):
     fit): from ``start``, checked against the measured period, with the held omega0's
     uncertainty; ``(result, unresolved)``."""
     lsq = least_squares(problem, n_starts=1, seed=seed, start=start)
-    lsq, _, unresolved = reconcile(problem, lsq, seed=seed)
+    lsq, _, unresolved, problem = reconcile(problem, lsq, seed=seed)
     lsq, _ = with_held_uncertainty(problem, lsq)
     return lsq, unresolved

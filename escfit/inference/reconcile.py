@@ -8,7 +8,8 @@ parameter at all (turning-point amplitudes never fix omega0).  :func:`reconcile`
 
 - moves a parameter the problem *holds* (an omega0 taken from the period) to the value the
   model's own period implies and refits (exact for turning-point amplitudes, whose fit is the
-  same at any omega0 once C and R scale with it);
+  same at any omega0 once C and R scale with it): a new problem holding the new value
+  (:meth:`Problem.holding`), returned with the fit, since a problem is never changed once built;
 - refits a *free* one from the measured value, and keeps the refit when it agrees;
 - otherwise reports the disagreement as unresolved.
 
@@ -21,6 +22,7 @@ The command line exits with status 3 when nothing is determined.
 from __future__ import annotations
 
 import math
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -28,11 +30,33 @@ from ..likelihood.consistency import Implied
 from .lsq import LeastSquaresResult, least_squares, profiled_scale
 from .trf import minimize
 
-__all__ = ["reconcile", "with_held_uncertainty", "verdict", "NOT_DETERMINED", "PARTLY", "DETERMINED"]
+__all__ = ["reconcile", "Reconciled", "with_held_uncertainty", "verdict", "NOT_DETERMINED", "PARTLY", "DETERMINED"]
 
 DETERMINED, PARTLY, NOT_DETERMINED = "determined", "partly determined", "not determined"
 ROUNDS = 4
 HELD_RTOL = 1e-4  # a held parameter is moved until the model's measurement matches the record's this closely
+
+
+class Reconciled(NamedTuple):
+    """What :func:`reconcile` returns.
+
+    Attributes
+    ----------
+    lsq : LeastSquaresResult
+        The fit to report (the refit when one was made and kept).
+    notes : list of str
+        What was done, as sentences.
+    unresolved : list of Implied
+        Measurements the reported fit still contradicts.
+    problem : Problem
+        The problem that fit belongs to: the one given, or a copy holding a held parameter at
+        its new value.
+    """
+
+    lsq: LeastSquaresResult
+    notes: list
+    unresolved: list
+    problem: Any
 
 
 def _start(lsq: LeastSquaresResult) -> dict[str, float]:
@@ -40,23 +64,16 @@ def _start(lsq: LeastSquaresResult) -> dict[str, float]:
 
 
 def reconcile(problem, lsq: LeastSquaresResult, *, seed: int = 0, priors_count: bool = False,
-              optimizer=minimize) -> tuple[LeastSquaresResult, list[str], list[Implied]]:
+              optimizer=minimize) -> Reconciled:
     """Check ``lsq`` against the recording's direct measurements; refit where that settles it.
 
     Refits run ``optimizer`` from one start (see :func:`~escfit.inference.lsq.least_squares`).
-
-    Returns
-    -------
-    lsq : LeastSquaresResult
-        The fit to report (the refit when one was made and kept).
-    notes : list of str
-        What was done, as sentences.
-    unresolved : list of Implied
-        Measurements the reported fit still contradicts.
+    ``problem`` is not changed: a held parameter moved is held by a copy, returned as
+    :attr:`Reconciled.problem` with the fit.
     """
     consistency = getattr(problem, "consistency", None)
     if consistency is None:
-        return lsq, [], []
+        return Reconciled(lsq, [], [], problem)
     notes: list[str] = []
     held = tuple(getattr(problem, "held", ()))
     for _ in range(ROUNDS):
@@ -64,10 +81,11 @@ def reconcile(problem, lsq: LeastSquaresResult, *, seed: int = 0, priors_count: 
         bad = [c for c in consistency(lsq.values)
                if (abs(c.fitted - c.implied) > HELD_RTOL * abs(c.implied) if c.name in held else not c.agrees)]
         if not bad:
-            return lsq, notes, []
+            return Reconciled(lsq, notes, [], problem)
         c = bad[0]
         if c.name in held:
-            problem.hold(c.name, c.implied)
+            problem = problem.holding(c.name, c.implied)
+            consistency = problem.consistency
             lsq = least_squares(problem, n_starts=1, seed=seed, start=_start(lsq), priors_count=priors_count,
                                 optimizer=optimizer, scale_start=profiled_scale(problem, lsq))
             if not notes or not notes[-1].startswith(f"{c.name} moved"):
@@ -77,7 +95,7 @@ def reconcile(problem, lsq: LeastSquaresResult, *, seed: int = 0, priors_count: 
                 notes[-1] = notes[-1].replace(notes[-1].split(" to ")[1].split(" so")[0], f"{c.implied:.6g}", 1)
             continue
         if c.name not in lsq.names:
-            return lsq, notes, [c]
+            return Reconciled(lsq, notes, [c], problem)
         i = lsq.names.index(c.name)
         start = _start(lsq)
         start[c.name] = float(np.clip(c.implied, lsq.lower[i], lsq.upper[i]))
@@ -85,7 +103,7 @@ def reconcile(problem, lsq: LeastSquaresResult, *, seed: int = 0, priors_count: 
                               optimizer=optimizer, scale_start=profiled_scale(problem, lsq))
         again = [x for x in consistency(refit.values) if x.name == c.name]
         if again and not again[0].agrees:
-            return lsq, notes, [c]
+            return Reconciled(lsq, notes, [c], problem)
         ratio = refit.chisqr / lsq.chisqr if lsq.chisqr > 0 else math.inf
         how = "it also fits the readings better" if ratio <= 1.0 + 1e-9 else \
             f"its residuals are {math.sqrt(ratio):.3g} times the first optimum's, which the measured period rules out"
@@ -93,7 +111,7 @@ def reconcile(problem, lsq: LeastSquaresResult, *, seed: int = 0, priors_count: 
                      f"{start[c.name]:.6g}, the measured value; {how}")
         lsq = refit
     bad = [c for c in consistency(lsq.values) if not c.agrees]
-    return lsq, notes, bad
+    return Reconciled(lsq, notes, bad, problem)
 
 
 def with_held_uncertainty(problem, lsq: LeastSquaresResult) -> tuple[LeastSquaresResult, list[str]]:

@@ -123,9 +123,9 @@ class Problem(Protocol):
         """What the recording measures directly about parameters, at ``values``
         (:class:`~escfit.likelihood.consistency.Implied`; empty when it measures nothing)."""
 
-    def hold(self, name: str, value: float) -> None:
-        """Set a parameter the problem holds fixed (one it chose to hold, such as an omega0
-        taken from the measured period) to ``value``."""
+    def holding(self, name: str, value: float) -> "Problem":
+        """A copy of the problem with a parameter it holds fixed (one it chose to hold, such as
+        an omega0 taken from the measured period) at ``value``; the problem itself never changes."""
 
 
 def gaussian_prior_residuals(priors, x: np.ndarray) -> np.ndarray:
@@ -210,7 +210,7 @@ class ProblemBase:
 
     held: tuple[str, ...] = ()  # fixed parameters the problem chose to hold and may move (see hold)
 
-    def hold(self, name: str, value: float) -> None:
+    def holding(self, name: str, value: float) -> "Problem":
         from ..core.errors import FitError
 
         raise FitError(f"{name} is not a parameter this problem holds")

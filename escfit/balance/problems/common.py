@@ -123,19 +123,21 @@ class BalanceProblem(ProblemBase):
 
         return period_consistency(self, values)
 
-    def hold(self, name: str, value: float) -> None:
-        """Move a parameter the problem holds (``held``) to ``value``: the fixed values the
-        forward model reads, and the parameter's record."""
-        from dataclasses import replace
+    def holding(self, name: str, value: float):
+        """A copy of this problem with a parameter it holds (``held``) at ``value``: the fixed
+        values the forward model reads and the parameter's record; this problem is unchanged."""
+        import copy
 
         from ...core.errors import FitError
 
         if name not in self.held:
             raise FitError(f"{name} is not a parameter this problem holds")
-        self._base[name] = float(value)
-        self.params.params[name] = replace(self.params[name], value=float(value))
+        new = copy.copy(self)
+        new._base = {**self._base, name: float(value)}
+        new.params = self.params.with_values({name: value})
         for cache in ("_merged_fixed", "_merge_keys", "_layout_cache", "_readings_cache"):
-            self.__dict__.pop(cache, None)
+            new.__dict__.pop(cache, None)
+        return new
 
     def held_effects(self, values: Mapping[str, float]) -> list[tuple[str, float, dict[str, float]]]:
         """For each held parameter: its standard error and the derivative of every fitted
