@@ -39,21 +39,28 @@ def test_switch_off_found_at_its_row():
     assert found.time == pytest.approx(T[OFF_ROW], abs=1e-12)
     assert found.flat_rows == T.size - OFF_ROW
     assert found.value == 0.0
+    assert found.frequency == pytest.approx(1 / 1.45, rel=0.01) and found.explained > 0.99
     # the range after the switch-off over the range before: exp(-0.02 * 40 s) of the swing is left
     assert found.swing_kept == pytest.approx(math.exp(-0.8), rel=0.02)
 
 
-def test_switch_off_to_the_drive_centre_counts():
-    drive = _drive() + 1.0  # an offset signal switched off to its own centre
-    drive[OFF_ROW:] = 1.0 + 0.05 * 2.5  # within a tenth of its half range of the centre
-    assert switched_off(T, drive, SWING) is not None
-
-
-def test_a_stalled_logger_is_not_a_drive():
-    drive = _drive()
-    drive[OFF_ROW:] = drive[OFF_ROW - 1]  # repeats its last reading: 2.5 cos(...) far from the centre here
-    assert abs(drive[OFF_ROW - 1]) > 0.25 * 2.5
+@pytest.mark.parametrize("phase", np.linspace(0.0, 2 * math.pi, 9)[:-1])
+def test_a_stalled_logger_is_not_a_drive(phase):
+    """A logger that stalls repeats its last reading, wherever in the swing that falls (near the
+    centre too): only a column that reads exactly 0 is a drive switched off."""
+    drive = 2.5 * np.cos(2 * math.pi * T / 1.45 + phase)
+    drive[OFF_ROW:] = drive[OFF_ROW - 1]
+    assert drive[OFF_ROW - 1] != 0.0
     assert switched_off(T, drive, SWING) is None
+
+
+def test_a_noise_channel_that_drops_to_zero_is_not_a_drive():
+    """A sensor's noise, rounded to a coarse step, changes at most rows and can stop on 0 exactly
+    when the sensor is unplugged: it never oscillated, so it drove nothing."""
+    noise = np.round(0.02 * np.random.default_rng(5).standard_normal(T.size), 2)
+    noise[OFF_ROW:] = 0.0
+    assert np.mean(np.diff(noise[:OFF_ROW]) != 0) > 0.5
+    assert switched_off(T, noise, SWING) is None
 
 
 def test_a_column_that_stops_with_the_swing_is_the_same_motion():

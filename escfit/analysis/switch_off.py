@@ -10,20 +10,24 @@ plainly.  A switched-off drive reads one value, row after row, to the end of the
 A column beside the signal is taken as a drive switched off at the instant of its last change
 when all of the following hold:
 
-- **Active before.**  In the stretch before it goes flat, it changes at almost every row
-  (:data:`ACTIVE_SHARE`), and it changed at least :data:`MIN_CHANGES` times in all.  A setting,
-  a flag or a counter fails this test.
+- **A drive before.**  In the stretch before it goes flat it changes at almost every row
+  (:data:`ACTIVE_SHARE`), at least :data:`MIN_CHANGES` times in all, and it oscillates.  A
+  sinusoid explains at least :data:`DRIVE_EXPLAINED` of its variance, over the last
+  :data:`SHAPE_ROWS` rows before the flat tail at most (:func:`~escfit.analysis.quantity.swing_shape`).
+  A setting, a flag or a counter fails this test, and so does a sensor's noise.
 - **Flat after.**  From its last change to the end it holds one value for at least
   :data:`MIN_FLAT_ROWS` rows and :data:`MIN_FLAT_SHARE` of the record.
-- **Off, not stalled.**  That value is 0, or it lies within :data:`OFF_BAND` of the half range
-  of the column's centre.  A logger that stalls repeats its last reading, which is rarely the
-  centre of a swing.
+- **Off, not stalled.**  That value is exactly 0: a drive's voltage, current or speed switched off.
+  A logger that stalls repeats its last reading, and a sinusoid's last reading is 0 only by
+  chance.  Noise rounded to a coarse step can stop on 0 too, which is why the column must also
+  have oscillated.
 - **The signal goes on.**  After that instant the signal still swings, by at least
   :data:`STILL_SWINGS` of its range before.  If the signal stopped too, the column is the same
   motion's, not its drive.
 
-The free decay cannot start before that instant.  The user's ``[recording] start`` or
-``release`` overrides this choice.
+A column left empty after the switch-off, rather than reading 0, is not taken for a drive: a
+table pads a shorter column the same way.  The free decay cannot start before the instant found.
+The user's ``[recording] start`` or ``release`` overrides this choice.
 """
 
 from __future__ import annotations
@@ -39,7 +43,8 @@ ACTIVE_SHARE = 0.5  # share of rows, just before the flat tail, at which an acti
 MIN_CHANGES = 20  # changes of the column before its flat tail, at least
 MIN_FLAT_ROWS = 20  # rows of the flat tail, at least
 MIN_FLAT_SHARE = 0.1  # share of the record's rows in the flat tail, at least
-OFF_BAND = 0.1  # the flat value's distance from the column's centre, in its half range, at most
+DRIVE_EXPLAINED = 0.8  # share of the column's variance a sinusoid explains before it goes flat, at least
+SHAPE_ROWS = 20000  # rows before the flat tail whose shape is measured, at most
 STILL_SWINGS = 0.2  # the signal's range after the switch-off, as a share of its range before, at least
 
 
@@ -57,6 +62,10 @@ class SwitchOff:
         The value it holds from there to the end (in the file's units).
     flat_rows : int
         Rows from there to the end.
+    frequency : float
+        The drive's frequency before, Hz.
+    explained : float
+        Share of the column's variance a sinusoid of that frequency explains there (0-1).
     active_share : float
         Share of rows at which the column changed in the stretch just before (0-1).
     swing_kept : float
@@ -69,13 +78,15 @@ class SwitchOff:
     flat_rows: int
     active_share: float
     swing_kept: float
+    frequency: float = float("nan")
+    explained: float = float("nan")
 
     def evidence(self, signal: str, origin: float) -> str:
         """The decision in one sentence, times counted from the file's first sample ``origin`` (s)."""
-        return (f"column {self.column!r} changes at {100 * self.active_share:.0f} % of the rows until "
-                f"t = {self.time - origin:.4g} s and reads {self.value:g} at every one of the {self.flat_rows} rows "
-                f"after, while {signal!r} goes on swinging ({100 * self.swing_kept:.0f} % of its range before): a "
-                "drive switched off there")
+        return (f"column {self.column!r} oscillates at {self.frequency:.4g} Hz (a sinusoid explains "
+                f"{100 * self.explained:.0f} % of it) until t = {self.time - origin:.4g} s and reads {self.value:g} "
+                f"at every one of the {self.flat_rows} rows after, while {signal!r} goes on swinging "
+                f"({100 * self.swing_kept:.0f} % of its range before): a drive switched off there")
 
 
 def switched_off(time: np.ndarray, column: np.ndarray, signal: np.ndarray, *, name: str = "") -> SwitchOff | None:
@@ -111,15 +122,20 @@ def switched_off(time: np.ndarray, column: np.ndarray, signal: np.ndarray, *, na
     if active < ACTIVE_SHARE:
         return None
     level = float(v[first_flat])
-    lo, hi = float(np.min(v[:first_flat])), float(np.max(v[:first_flat]))
-    half = 0.5 * (hi - lo)
-    if level != 0.0 and not abs(level - 0.5 * (hi + lo)) <= OFF_BAND * half:
+    if level != 0.0:
         return None
     before, after = np.ptp(s[:first_flat]), np.ptp(s[first_flat:])
     kept = float(after / before) if before > 0.0 else 0.0
     if kept < STILL_SWINGS:
         return None
-    return SwitchOff(name, float(t[first_flat]), level, flat_rows, active, kept)
+    from .quantity import swing_shape
+
+    lo = max(0, first_flat - SHAPE_ROWS)
+    shape = swing_shape(t[lo:first_flat], v[lo:first_flat])
+    if not shape.explained >= DRIVE_EXPLAINED:
+        return None
+    return SwitchOff(name, float(t[first_flat]), level, flat_rows, active, kept, float(shape.frequency),
+                     float(shape.explained))
 
 
 def drive_switched_off(time: np.ndarray, columns: Mapping[str, np.ndarray], signal: np.ndarray) -> SwitchOff | None:
