@@ -58,3 +58,20 @@ def test_beats_are_not_restarts(f2):
     series = TimeSeries(time=t, theta=y + 0.01 * rng.standard_normal(t.size), source="beats")
     with pytest.raises(DataError, match=r"grows again \d+ times .* beating modes"):
         reduce_series(series)
+
+
+def test_a_record_that_ends_just_after_the_last_restart(tmp_path, monkeypatch):
+    """The record's end cuts the last decay short, three seconds after the hand: that decay's
+    fall cannot be judged, the others' can, so the record is still restarts, not beats."""
+    from .artefacts.make import _pushed, angle_csv, draw, noisy
+
+    p = draw(4, 60, loss=(2.0, 2.5))
+    t, theta, windows = _pushed(p, [0.14, 0.18, 0.32, 0.2, 0.16])
+    keep = t <= windows[-1][0] + 3.0
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "cut.csv").write_text(angle_csv(t[keep], noisy(p, theta[keep])))
+    r = CliRunner().invoke(cli, ["init", "cut.csv", "--pendulum"])
+    assert r.exit_code == 0, r.output
+    scene = (tmp_path / "cut.toml").read_text()
+    assert "set swinging again" in scene
+    assert windows[2][0] - 0.5 * p.period <= _key(scene, "start") <= windows[2][0]

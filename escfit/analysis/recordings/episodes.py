@@ -135,7 +135,8 @@ class Restarts:
     starts : tuple of float
         When each episode's rise began (s).
     rise, fall : tuple of float
-        How long each rise and the fall after it lasted (periods).
+        How long each rise and the fall after it lasted (periods); the last fall, which the
+        record's end cuts short, is not among the falls.
     """
 
     starts: tuple
@@ -147,7 +148,8 @@ class Restarts:
         when = ", ".join(f"{s:.4g}" for s in self.starts[:6]) + (", ..." if len(self.starts) > 6 else "")
         return (f"the oscillator is set swinging again {len(self.starts)} times (the swing grows from about t = "
                 f"{when} s), each time within {max(self.rise):.2g} periods, and then decays for at least "
-                f"{min(self.fall):.2g} periods: separate free decays one after another, not beats or a drive")
+                f"{min(self.fall):.2g} periods (the last until the record ends): separate free decays one after "
+                "another, not beats or a drive")
 
 
 def restarted(rec, episodes: list[float]) -> Restarts | None:
@@ -161,11 +163,19 @@ def restarted(rec, episodes: list[float]) -> Restarts | None:
     rise, fall = [], []
     for k in range(len(episodes)):
         seg = env[bounds[k]:bounds[k + 1]]
+        last = k == len(episodes) - 1
         if seg.size < 2:
+            if last:  # the record ends within the last restart: nothing of it to judge
+                continue
             return None
         top = int(np.argmax(seg))
+        if last and top == seg.size - 1:  # still rising where the record ends
+            continue
         rise.append(top * step)
         fall.append((seg.size - 1 - top) * step)
-    if max(rise) > RESTART_RISE or any(f < RESTART_FALL * max(r, 1.0) for r, f in zip(rise, fall)):
+    # the record's end cuts the last fall short: only the rise of the last restart is judged
+    judged = len(episodes) - 1
+    if len(fall[:judged]) < 2 or max(rise) > RESTART_RISE \
+            or any(f < RESTART_FALL * max(r, 1.0) for r, f in zip(rise[:judged], fall[:judged])):
         return None
-    return Restarts(tuple(float(s) for s in episodes), tuple(rise), tuple(fall))
+    return Restarts(tuple(float(s) for s in episodes), tuple(rise), tuple(fall[:judged]))
