@@ -69,7 +69,31 @@ def test_init_and_fit_recover_the_mode_asked(tmp_path, args, w, g):
     recording, params = _fit(tmp_path, *args)
     assert recording["mode"] == (2 if args else 1)
     assert params["oscillator.omega0"]["estimate"] == pytest.approx(w, rel=1e-4)
-    assert params["viscous.C"]["estimate"] == pytest.approx(2 * g, rel=0.02)
+    assert params["viscous.C"]["estimate"] == pytest.approx(2 * g, rel=2e-3)  # the filter's bias stays under 0.2 %
+
+
+def test_modes_closer_than_the_clean_ratio_are_isolated_with_a_warning():
+    """2.1 times apart the damped lines' tails cross the filter's crossover: the kept mode is
+    still given, with a warning that its damping may be off (1.6 % low on this record)."""
+    from escfit.analysis.mode_filter import CLEAN_RATIO
+
+    x = _mode(W1, G1) + _mode(2.1 * W1, G2, 0.4)
+    t, kept, split = isolate_mode(T, x, 1, "close.csv")
+    assert split.close and split.warns and 2.1 < CLEAN_RATIO
+    assert "times apart" in split.sentence() and "beyond its interval" in split.sentence()
+    _, _, far = isolate_mode(T, _record(noise=0.0), 1, "far.csv")
+    assert not far.close and not far.warns
+
+
+def test_a_weak_second_mode_is_taken_out_when_asked():
+    """A second mode with some 6 % of the power is only noted by the analysis (the fit follows
+    the main swing, its C a few per cent off); with mode = 1 it is filtered out and the kept
+    mode follows its closed form."""
+    x = _mode(W1, G1) + 0.25 * _mode(W2, G2, 0.4)
+    t, kept, split = isolate_mode(T, x, 1, "weak.csv")
+    exact = 0.01 * np.exp(-G1 * t) * np.cos(math.sqrt(W1 * W1 - G1 * G1) * t)
+    assert split.share < 0.2
+    assert np.max(np.abs(kept - exact)) < 2e-3 * 0.01
 
 
 def test_without_a_mode_the_fit_refuses_naming_the_key(tmp_path):
@@ -103,5 +127,5 @@ def test_keeping_the_weaker_mode_is_a_warning(tmp_path, slow, fast, warned):
     np.savetxt(data, np.c_[T, x], delimiter=",", header="t (s),x (m)", comments="", fmt="%.8g")
     series = escfit.read_recording(data, recording={"mode": 1, "displacement_column": "x (m)"})
     said = series.meta.get("warnings", "") if warned else series.meta.get("notes", "")
-    assert "set mode = 2" in said and ("weaker one" in said) == warned
+    assert "mode = 2" in said and ("if the other is the oscillation you recorded" in said) == warned
     assert ("two modes" in series.meta.get("warnings", "")) == warned

@@ -310,8 +310,10 @@ def _amplitude_rows(path, series: TimeSeries, table: dict, why: dict, fmt, reduc
             reduced.update(series=series, turns=tp)
         return series
     except DataError as exc:
-        modes = getattr(exc, "modes", None)
-        if modes is not None and "mode" not in table:  # two modes: the lowest is fitted unless the user says
+        from ..analysis.recordings.modes import TwoModes
+
+        if isinstance(exc, TwoModes) and "mode" not in table:  # two modes: the lowest is fitted unless the user says
+            modes = exc.modes
             table["mode"] = 1
             why["mode"] = (f"the record rings in two modes (periods {modes[0]:.4g} s and {modes[1]:.4g} s): the "
                            "slower, the lowest, is fitted and the other filtered out; mode = 2 fits the faster")

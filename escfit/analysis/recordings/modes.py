@@ -16,12 +16,27 @@ import numpy as np
 from ...core.errors import DataError
 from .extrema import periodogram
 
-__all__ = ["other_modes", "check_other_modes", "SECOND_MODE_SHARE", "MIN_PROMINENCE"]
+__all__ = ["other_modes", "check_other_modes", "TwoModes", "SECOND_MODE_SHARE", "MIN_PROMINENCE"]
 
 # a second oscillation with this share of the main one's spectral power is another mode (real
 # decays in the shared corpus stay under 0.04; a struck rod's second mode holds 0.53)
 SECOND_MODE_SHARE = 0.2
 MIN_PROMINENCE = 50.0  # a periodogram peak over the median power; white noise alone gives ~log2(n)
+
+
+class TwoModes(DataError):
+    """A record refused for ringing in two modes of comparable size.
+
+    Attributes
+    ----------
+    modes : tuple of float
+        The two periods (s), the slower first: what ``[recording] mode`` chooses between.
+    """
+
+    def __init__(self, message: str, where: str | None = None,
+                 modes: tuple[float, float] = (math.nan, math.nan)) -> None:
+        super().__init__(message, where)
+        self.modes = modes
 
 
 def other_modes(t: np.ndarray, x: np.ndarray, period: float, *, min_ratio: float = 0.5, harmonic_tol: float = 0.04,
@@ -88,13 +103,11 @@ def check_other_modes(t: np.ndarray, x: np.ndarray, period: float, where: str) -
             continue  # the skirt of a hold's, a step's or a drift's low frequencies, not an oscillation
         if share >= SECOND_MODE_SHARE:
             slow, fast = max(period, other), min(period, other)
-            err = DataError(f"besides the swing of period {period:.4g} s the record holds a second oscillation of period "
-                            f"{other:.4g} s ({side}) with {100 * share:.0f} % of its power: two modes (a structure's, "
-                            "a rod's) or two coupled oscillators, not one oscillator's free decay, and which one to fit "
-                            f"is not determined; set [recording] mode = 1 to fit the slower (period {slow:.4g} s) or "
-                            f"mode = 2 the faster ({fast:.4g} s), the other filtered out", where)
-            err.modes = (slow, fast)  # what escfit init offers: the lowest mode by default
-            raise err
+            raise TwoModes(f"besides the swing of period {period:.4g} s the record holds a second oscillation of period "
+                           f"{other:.4g} s ({side}) with {100 * share:.0f} % of its power: two modes (a structure's, "
+                           "a rod's) or two coupled oscillators, not one oscillator's free decay, and which one to fit "
+                           f"is not determined; set [recording] mode = 1 to fit the slower (period {slow:.4g} s) or "
+                           f"mode = 2 the faster ({fast:.4g} s), the other filtered out", where, (slow, fast))
         if prominence >= MIN_PROMINENCE:
             notes.append(f"a weak second oscillation of period {other:.4g} s ({side}, {100 * share:.2g} % of the main "
                          f"swing's power) rides on the swing of period {period:.4g} s: the fit follows "

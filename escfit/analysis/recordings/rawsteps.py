@@ -153,7 +153,7 @@ def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, so
         from ..mode_filter import isolate_mode
 
         time, theta, split = isolate_mode(time, theta, spec.mode, f"{source} [recording].mode")
-        (warnings if split.kept_weaker else notes).append(split.sentence())
+        (warnings if split.warns else notes).append(split.sentence())
         meta["mode"] = str(spec.mode)
     need = MIN_SAMPLES if spec.readings == "samples" else MIN_AMPLITUDE_ROWS
     if time.size < need:
