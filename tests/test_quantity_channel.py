@@ -312,3 +312,22 @@ def test_a_neighbour_a_quarter_period_out_of_phase_is_not_a_rate():
     assert rate_of(t, x, np.gradient(x, t)) == pytest.approx(1.0, abs=1e-3)
     choice = choose_channel(t, {"x": x, "y": y})
     assert choice.chosen is None and "one motion" in choice.reason
+
+
+@pytest.mark.parametrize("order", [("p", "q", "r"), ("r", "p", "q"), ("q", "r", "p")])
+def test_a_position_its_velocity_and_its_acceleration_in_any_order(order):
+    """Three unlabelled columns of one motion: a position p, its velocity q and q's own rate r.
+    r is q's rate and q is p's, so both are dropped whatever the columns' order and p is chosen."""
+    t, x, _, vx, _ = _track(noise_px=0.05, rate_hz=30.0)
+    series = {"p": x, "q": vx, "r": np.gradient(vx, t)}
+    choice = choose_channel(t, {k: series[k] for k in order})
+    assert choice.chosen == "p", (choice.scores, choice.reason)
+    assert "one motion in 3 columns" in choice.reason
+
+
+def test_a_volt_unit_is_not_a_velocity():
+    from escfit.analysis.channel import _names_linear_rate
+
+    assert not _names_linear_rate("CH2 (V)") and not _names_linear_rate("Winkel / V")
+    assert _names_linear_rate("v_x (m/s)") and _names_linear_rate("X Velocity")
+    assert not _names_linear_rate("angular velocity (rad/s)")

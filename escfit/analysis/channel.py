@@ -204,25 +204,31 @@ _ANGULAR = re.compile(r"\b(angular|omega|rotation|rotational|spin|gyro\w*)\b")
 
 
 def _names_linear_rate(label: str) -> bool:
-    """Whether a label names a linear velocity (``X Velocity``, ``v_x``): not an angular one."""
-    words = " ".join(re.split(r"[^a-z]+", label.lower()))
+    """Whether a label names a linear velocity (``X Velocity``, ``v_x``): not an angular one.
+
+    The unit in brackets is left out first (``CH2 (V)`` is a voltage, not a ``v``)."""
+    from .roles import base_name
+
+    words = " ".join(re.split(r"[^a-z]+", base_name(label)))
     return bool(_LINEAR_RATE.search(words)) and not _ANGULAR.search(words)
 
 
-def _drop_rates(group: list[str], columns: dict[str, np.ndarray], time) -> tuple[list[str], str, list[str]]:
-    """``group`` without the columns that are another member's time derivative, a sentence saying
-    which, and the rate columns dropped."""
-    said, rates = [], set()
+def _drop_rates(group: list[str], columns: dict[str, np.ndarray],
+                time: np.ndarray | dict[str, np.ndarray]) -> tuple[list[str], str, list[str]]:
+    """``group`` without the columns that are another member's time derivative (a rate of a rate,
+    an acceleration beside its velocity, included), a sentence saying which, and the rate columns
+    dropped."""
+    said, rates = [], []
     for b in group:
         for a in group:
-            if a == b or a in rates:
+            if a == b:
                 continue
             t = time[a] if isinstance(time, dict) else time
             if isinstance(time, dict) and not np.array_equal(time[a], time[b]):
                 continue
             r = rate_of(t, columns[a], columns[b])
             if r is not None:
-                rates.add(b)
+                rates.append(b)
                 said.append(f"{_shown(b)} is the rate of change of {_shown(a)} (its time derivative, r = {r:.3f})")
                 break
     return [c for c in group if c not in rates], "; ".join(said), sorted(rates)
@@ -323,7 +329,7 @@ def choose_channel(time: np.ndarray | dict[str, np.ndarray], columns: dict[str, 
             if len(kept) == 1:  # a position and its rate: the position is what the model's angle follows
                 linear = key == "angle_column" and all(_names_linear_rate(c) for c in dropped) \
                     and label_quantity(kept[0], units.get(kept[0])) is None
-                reason = (f"one motion in two columns: {rates}; the position is fitted"
+                reason = (f"one motion in {len(dropped) + 1} columns: {rates}; the position is fitted"
                           + (", as a displacement (its rate is named a velocity, not an angular one)" if linear
                              else ""))
                 return ChannelChoice(kept[0], scores, why, reason, "displacement_column" if linear else key, shapes,
