@@ -85,3 +85,21 @@ def test_the_shipped_families_never_read_the_entry_points(monkeypatch):
     monkeypatch.setattr(registry, "_SCANNED", False)
     assert registry.get_family("balance").name == "balance"
     assert registry.get_family("verge").name == "verge"
+
+
+def test_a_declared_family_comes_back_after_unregistering(monkeypatch):
+    """An entry point with extras names its module and attribute only; unregistering a declared
+    family that was replaced in the process brings the declared one back, as for a built-in."""
+    import importlib.metadata
+
+    ep = importlib.metadata.EntryPoint(name="toy_declared", value="tests.toy_family:FAMILY [fast]",
+                                       group=registry.ENTRY_POINT_GROUP)
+    monkeypatch.setattr(importlib.metadata, "entry_points", lambda group=None: [ep])
+    monkeypatch.setattr(registry, "_SCANNED", False)
+    monkeypatch.setattr(registry, "_REGISTRY", dict(registry._REGISTRY))
+    monkeypatch.setattr(registry, "_FROM_ENTRY_POINTS", {})
+    assert registry.get_family("toy_declared") is toy_family.FAMILY
+    registry.register_family(toy_family.FAMILY, "toy_declared", replace=True)
+    registry.unregister_family("toy_declared")
+    assert "toy_declared" in registry.family_names()
+    assert registry.get_family("toy_declared") is toy_family.FAMILY

@@ -58,6 +58,8 @@ BUILTIN_FAMILIES: dict[str, str] = {
 
 # name -> the family, or the path of its entry until first use
 _REGISTRY: dict[str, "Family | str"] = dict(BUILTIN_FAMILIES)
+_FROM_ENTRY_POINTS: dict[str, str] = {}  # name -> "module:attr" of the families installed packages declare
+_SCANNED = False  # whether the entry points were read in this process
 
 
 #: one derived quantity of a fit, for the report: (label, unit shown, values at every draw, formula)
@@ -250,15 +252,14 @@ def register_family(family: "Family | str", name: str | None = None, *, replace:
 
 
 def unregister_family(name: str) -> None:
-    """Remove a family added with :func:`register_family` (a built-in one comes back as shipped)."""
+    """Remove a family added with :func:`register_family` (a built-in one comes back as shipped,
+    one an installed package declares as declared)."""
     if name in BUILTIN_FAMILIES:
         _REGISTRY[name] = BUILTIN_FAMILIES[name]
+    elif name in _FROM_ENTRY_POINTS:
+        _REGISTRY[name] = _FROM_ENTRY_POINTS[name]
     else:
         _REGISTRY.pop(name, None)
-
-
-_FROM_ENTRY_POINTS: dict[str, str] = {}  # name -> "module:attr" of the families installed packages declare
-_SCANNED = False
 
 
 def _entry_points() -> None:
@@ -272,7 +273,7 @@ def _entry_points() -> None:
 
     for ep in entry_points(group=ENTRY_POINT_GROUP):
         if ep.name not in _REGISTRY:
-            _REGISTRY[ep.name] = _FROM_ENTRY_POINTS[ep.name] = ep.value
+            _REGISTRY[ep.name] = _FROM_ENTRY_POINTS[ep.name] = f"{ep.module}:{ep.attr}"  # extras, if any, dropped
 
 
 def family_names() -> list[str]:

@@ -21,7 +21,7 @@ Readers fill :attr:`TimeSeries.meta` with strings only (so it survives
 from __future__ import annotations
 
 import math
-from typing import Callable, Mapping
+from typing import TYPE_CHECKING, Callable, Mapping
 
 import numpy as np
 
@@ -30,6 +30,9 @@ from ...core.errors import DataError, SceneError
 from .recording_spec import RecordingSpec, parse_option, parse_seconds
 from .series import TimeSeries
 from .window import resolve_window
+
+if TYPE_CHECKING:
+    from ..switch_off import SwitchOff
 
 __all__ = ["build_series", "repaired_times", "notes_of", "warnings_of", "merge_file_meta", "file_options", "unwrap_angles",
            "FILE_OPTIONS", "MIN_SAMPLES"]
@@ -79,7 +82,7 @@ def _joined(sentences: list[str]) -> str:
 def build_series(time: np.ndarray, theta: np.ndarray, spec: RecordingSpec, *, source: str, sha256: str,
                  meta: dict[str, str], notes: list[str], where_of_row: Callable[[int], str],
                  release_s: float = math.nan, label: str = "", unit_from: str = "file",
-                 not_before=None) -> TimeSeries:
+                 not_before: SwitchOff | None = None) -> TimeSeries:
     """Check and window converted samples (time s, theta rad) and wrap them in a TimeSeries.
 
     Non-finite values are refused; the stamps are repaired by the time-base stage (see
