@@ -19,6 +19,17 @@ def test_the_sentence_counts_time_from_the_record_s_first_sample():
         "left out, and the notes and warnings below say why."]
 
 
+def test_a_window_the_scene_set_is_named_with_its_keys():
+    """A window the scene's [recording] keys set (escfit init writes them where it left part of the
+    record out, with its reasons as comments) is said to be theirs: the fit's own notes do not
+    repeat the reasons."""
+    attrs = {"record_first_s": 0.0, "record_last_s": 139.0, "fit_first_s": 95.3, "fit_last_s": 139.0,
+             "window_keys": "start, release"}
+    assert window_sentences(attrs) == [
+        "These numbers come from the part of the record from t = 95.3 to 139 s (31 % of its 139 s); the scene's "
+        "[recording] start and release left the rest out (the scene's comments say why)."]
+
+
 def test_a_fit_of_most_of_the_record_or_without_a_record_says_nothing():
     assert window_sentences({"record_first_s": 0.0, "record_last_s": 10.0, "fit_first_s": 0.5, "fit_last_s": 9.0}) == []
     assert window_sentences({}) == []

@@ -70,7 +70,8 @@ def window_sentences(attrs) -> list[str]:
 
     From the results' ``record_first_s``, ``record_last_s`` (the file's first and last sample)
     and ``fit_first_s``, ``fit_last_s`` (the first and last instant fitted), on the file's clock;
-    the sentence counts time from the first sample, as the notes do.
+    the sentence counts time from the first sample, as the notes do.  ``window_keys`` names the
+    scene's ``[recording]`` keys that set the window, when they did.
     """
     try:
         first, last, a, b = (float(attrs[k]) for k in ("record_first_s", "record_last_s", "fit_first_s", "fit_last_s"))
@@ -79,6 +80,8 @@ def window_sentences(attrs) -> list[str]:
     span = last - first
     if not (span > 0 and b > a) or (b - a) >= MOST * span:
         return []
+    keys = [k for k in str(attrs.get("window_keys", "")).split(", ") if k]
+    why = (f"the scene's [recording] {' and '.join(keys)} left the rest out (the scene's comments say why)" if keys
+           else "the rest was left out, and the notes and warnings below say why")
     return [f"These numbers come from the part of the record from t = {sig(a - first, 3)} to {sig(b - first, 3)} s "
-            f"({100 * (b - a) / span:.0f} % of its {sig(span, 3)} s); the rest was left out, and the notes and warnings "
-            "below say why."]
+            f"({100 * (b - a) / span:.0f} % of its {sig(span, 3)} s); {why}."]

@@ -92,6 +92,10 @@ class BalanceProblem(ProblemBase):
         window = getattr(self, "record_window", None)
         if window is not None:  # the record's first and last sample, the first and last instant fitted
             out.update(zip(("record_first_s", "record_last_s", "fit_first_s", "fit_last_s"), map(float, window)))
+        keys = getattr(self.data, "window", None)  # the [recording] keys that set the window, if any
+        set_by = [k for k in ("start", "release", "stop") if getattr(keys, k, None) is not None]
+        if set_by:
+            out.update(window_keys=", ".join(set_by))
         modes = getattr(self, "other_modes", ())
         if modes:  # the strongest weak oscillation beside the swing, which the fit leaves in the residuals
             period, share = max(modes, key=lambda m: m[1])
