@@ -48,6 +48,18 @@ def test_the_unit_as_read_radians_read_as_degrees_and_no_pendulum():
     assert unit_from_period(t, x).verdict == "unlike a pendulum"
 
 
+def test_noise_crossing_zero_back_and_forth_makes_no_period():
+    """A downward crossing read down, up, down (one sample's noise) gave an upward crossing half a
+    period early: two half periods among the full ones, and a clean pendulum called unlike one."""
+    t, x = _record(0.3, noise=1e-4)
+    down = np.flatnonzero((x[:-1] >= 0.0) & (x[1:] < 0.0))[20]  # a downward crossing mid-record
+    x = x.copy()
+    x[down + 1], x[down + 2] = -0.01 * abs(x[down + 3]), 0.01 * abs(x[down + 3])  # below 0, back above, then on
+    period, _ = swing_periods(t, x)
+    assert np.all(np.abs(period / np.median(period) - 1.0) < 0.01)
+    assert unit_from_period(t, x).verdict == "as read"
+
+
 def test_small_swings_in_degrees_are_never_taken_for_radians():
     for seed in range(6):  # 1-3 degree swings, the unit right: the clock cannot say, or agrees
         t, x = _record(math.radians(1.0 + seed / 3), seed=seed, noise=2e-5)

@@ -127,9 +127,11 @@ RADIAL = GYRO / "bicycle-wheel-radial-inertia-rate-gyro-measurement.csv"
 AXIAL = GYRO / "bicycle-wheel-axial-inertia-rate-gyro-measurement.csv"
 
 DECAYS = [
+    # fitted without drag from 146 deg: fitted again from one period later, R is four times larger
+    # and C 15 % smaller (each several standard errors): the split of the losses is not determined
     Decay("encoder pendulum, 1 kHz, from 135 deg (jensen)", OURS / "encoder_pendulum_jensen" /
           "pendulum_free_swing_data_02.txt", "encoder_pendulum_jensen.toml", 15,
-          slow=True,
+          slow=True, verdict="partly determined",
           reference=(("the source's zero-crossing period, 0.65 s (amplitude-dependent)",
                       lambda r: (measured_period(r), 0.65, 0.03)),
                      ("compute.py's decay of the first period (first two maxima)", jensen_first_period))),
@@ -147,9 +149,11 @@ DECAYS = [
           "galileo_2024-07-19_09-27-13.csv", "galileo_encoder_pendulum.toml", 30,
           slow=True,
           reference=(("the source's period, 1.16 s", lambda r: (small_swing_period(r), 1.16, 0.02)),)),
+    # from 66 deg without drag: fitted again from one period later, R is 18 % larger (7 of its
+    # standard errors) and C 4 % smaller (10): the split of the losses is not determined
     Decay("encoder pendulum, Arduino 50 Hz, 90 s from 69 deg", REAL / "gpl_tests_only" /
           "arduino_encoder_galileo_ferrucci" / "galileo_2024-07-19_15-25-54.csv", "galileo_encoder_pendulum.toml",
-          129, slack=2, slow=True,
+          129, slack=2, slow=True, verdict="partly determined",
           reference=(("the source's period, 1.36 s", lambda r: (small_swing_period(r), 1.36, 0.02)),)),
     # an 82-degree swing fitted without drag: the envelope wanders about the C + R decay by half of
     # what separates a viscous from a friction decay (the model's damping law is not the record's),

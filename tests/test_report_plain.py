@@ -203,7 +203,10 @@ def test_quick_start_pendulum_says_its_loss_in_words(tmp_path):
     res, text, output = _fit(tmp_path, "fits/real/encoder_pendulum_jensen.toml")
     shares = _check_free_decay(res, text)
     assert "in its first period, from 146 deg; from" in text and "about half that" in text  # the model's runs
-    assert set(shares) == {"C", "R"}
+    # fitted again from one period later the split moves (R fourfold): the loss is stated, the split is not
+    assert not shares and set(res.undetermined) == {"viscous.C", "coulomb.R"}, res.warnings
+    assert ("How that loss divides between viscous damping (C) and friction in the pivot (R) is not determined by "
+            "this record") in " ".join(text.split())
     assert output.splitlines()[1].startswith("The swing loses")  # escfit fit prints them first too
     # escfit summary prints the same sentences
     summary = CliRunner().invoke(cli, ["summary", str(tmp_path / "fit.h5")]).output

@@ -57,6 +57,7 @@ DECIDE = 30.0  # one reading's chi-square this far below the other's decides bet
 ACCEPT = 16.0  # ... within this: the scale fits as well as the free curve (4 sigma, one parameter)
 MIN_PERIODS = 10
 LINEAR_PART = 0.3  # samples within this share of the amplitude of zero time a crossing
+MIN_GAP = 0.75  # an upward crossing sooner than this share of the median interval after the last is noise
 SCALES = {"as read": 1.0, "radians read as degrees": 180.0 / math.pi}
 SMALL_AS_READ = math.radians(3.0)  # radians read as degrees swing at most ~3 "degrees" (3 rad is over the top)
 
@@ -120,10 +121,13 @@ def swing_periods(time: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.n
     Each crossing is where the swing is fastest, so its time is the best measured: a straight
     line is fitted to the samples within :data:`LINEAR_PART` of the amplitude of zero on either
     side (a symmetric window: the sine's cubic term, odd about the crossing, does not move it).
+    Reading noise can cross zero back and forth where the swing does (a downward crossing read
+    down, up, down makes an upward one half a period early): an upward crossing within
+    :data:`MIN_GAP` of the typical interval after the last one kept is no swing's.
     """
     t = np.asarray(time, dtype=float)
     x = np.asarray(theta, dtype=float)
-    up = np.flatnonzero((x[:-1] < 0.0) & (x[1:] >= 0.0))
+    up = _swing_crossings(t, np.flatnonzero((x[:-1] < 0.0) & (x[1:] >= 0.0)))
     if up.size < 3:
         return np.zeros(0), np.zeros(0)
     hi = np.maximum.reduceat(x, up)[:-1]
@@ -143,6 +147,19 @@ def swing_periods(time: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.n
         slope, icpt = np.polyfit(tt - t[i], xx, 1)
         cross[k] = t[i] - icpt / slope if slope > 0 else t[i] - x[i] * (t[i + 1] - t[i]) / (x[i + 1] - x[i])
     return np.diff(cross), amp[:-1]
+
+
+def _swing_crossings(t: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """The upward crossings ``up`` (sample indices) less those that follow the last one kept by
+    under :data:`MIN_GAP` of the median interval (noise crossing back and forth)."""
+    if up.size < 3:
+        return up
+    gap = MIN_GAP * float(np.median(np.diff(t[up])))
+    kept = [int(up[0])]
+    for i in up[1:]:
+        if t[i] - t[kept[-1]] >= gap:
+            kept.append(int(i))
+    return np.array(kept, dtype=up.dtype)
 
 
 def unit_from_period(time: np.ndarray, theta: np.ndarray) -> UnitEvidence | None:

@@ -213,8 +213,8 @@ def verdict(problem, lsq: LeastSquaresResult, unresolved: list[Implied], *,
     split = tuple(getattr(agreement, "undetermined", ()) or ())
     if split:
         names = ", ".join(split)
-        return PARTLY, list(split), (f"{names} are not determined by this record (the warnings say why); the other "
-                                     "values stand")
+        return PARTLY, list(split), (f"{names} {'is' if len(split) == 1 else 'are'} not determined by this record "
+                                     "(the warnings say why); the other values stand")
     if posterior:
         return DETERMINED, [], ""
     missing = [n for n, e in zip(lsq.names, lsq.stderr) if n in structural and not np.isfinite(e)]

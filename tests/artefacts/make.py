@@ -346,7 +346,10 @@ def drive_off(seed: int, periods: int | None = None):
     theta = p.a0 * np.cos(p.omega0 * t)  # ends at +a0, a turning point, at t_off
     theta[t >= t_off] = free_record(p, t_off, p.a0, t[t >= t_off])
     return angle_csv(t, noisy(p, theta)), truth(
-        p, t_off, t[-1], p.a0, expect="fit from the drive's switch-off; the steady swings before it are driven")
+        p, t_off, t[-1], p.a0, accept=("fit", "not determined"),
+        expect="fit from the drive's switch-off; the steady swings before it are driven (or, where one or two steady "
+        "swings lie within the noise of the turning points, say that C and R are not separately determined: "
+        "fitted from the record's start, the split of the losses depends on where the decay is taken to start)")
 
 
 def drive_logged(seed: int, periods: int | None = None):

@@ -21,7 +21,7 @@ from ...analysis.agreement import (MIN_TURNS, Agreement, ModelFacts, ParameterDi
 
 from ..decrement import loss_symbols
 
-__all__ = ["check_agreement", "turning_point_refit"]
+__all__ = ["check_agreement", "turning_point_refit", "later_start_refit"]
 
 
 def _model_turns(problem, values: Mapping[str, float], swings: np.ndarray):
@@ -180,7 +180,72 @@ def check_agreement(problem, lsq, refit: Callable, *, seed: int = 0) -> Agreemen
     effects = effects_of(problem.scene.params.params)
     model = ModelFacts(waveform, getattr(problem, "reading_units", "rad"), effects, problem.scene.restoring,
                        loss_symbols(effects))
-    return _pendulum_law(problem, judge(phase, amplitude, parameters, model, periods=periods, comments=comments))
+    agreement = _pendulum_law(problem, judge(phase, amplitude, parameters, model, periods=periods, comments=comments))
+    if parameters and agreement.agrees:  # a waveform fit of an angle that the turning-point fit could check
+        agreement = _start_dependence(problem, lsq, refit, seed, agreement, model)
+    return agreement
+
+
+# -- the fit against the fit of the same record from one period later -----------------------------
+
+def later_start_refit(problem, lsq, refit, *, seed: int = 0):
+    """The fit of a waveform problem's scene and record from one period after its reference turning point.
+
+    The record is the same series with ``[recording] start`` set three quarters of a period after
+    the reference (the first turning point from there is one period after it; a ``release`` the
+    user set gives way to it); ``refit`` is as for :func:`turning_point_refit`, started from the
+    fit's physical values.  Returns the least-squares result and the later problem or, when
+    there is no such fit, the reason (str).
+    """
+    from ...analysis.recordings.window import window_of
+    from ...analysis.start_dependence import LATER_PERIODS, MIN_PERIODS
+    from ...core.errors import EscfitError
+    from .from_series import problem_from_series
+
+    tp, series = problem.turning_points, problem.data
+    period = float(tp.period)
+    start = float(tp.release_time) + (LATER_PERIODS - 0.25) * period
+    stop = float(getattr(tp, "stop_time", math.nan))
+    end = stop if math.isfinite(stop) else float(series.time[-1])
+    if not end - start >= MIN_PERIODS * period:
+        return f"the record is too short to be fitted again from one period later (under {MIN_PERIODS:g} periods after it)"
+    used = np.isin(series.time, problem.sample_time)  # a thinned record: the same samples, nested
+    if not used.all():
+        series = replace(series, time=series.time[used], theta=series.theta[used])
+    later = replace(series, window=replace(window_of(series), start=start, release=None), release_s=math.nan)
+    try:
+        again = problem_from_series(problem.given_scene, later, solver=problem.solver,
+                                    solver_options=dict(problem.solver_options or {}))
+        begin = {n: float(lsq.values[n]) for n in again.names
+                 if n in lsq.values and not n.startswith("observation.") and n != "oscillator.theta0"}
+        fit, unresolved = refit(again, begin, seed)
+    except (EscfitError, ValueError, ArithmeticError) as exc:
+        return f"no fit from one period later to compare with ({str(exc).splitlines()[0][:160]})"
+    if unresolved:
+        return "the fit from one period later contradicts the record's measured period: not compared"
+    return fit, again
+
+
+def _start_dependence(problem, lsq, refit, seed: int, agreement: Agreement, model: ModelFacts) -> Agreement:
+    """The agreement with the loss coefficients that move when the first period is left out
+    marked not determined (:mod:`escfit.analysis.start_dependence`), or a note that none do."""
+    from ...analysis.start_dependence import StartDifference, start_dependence
+
+    got = later_start_refit(problem, lsq, refit, seed=seed)
+    if isinstance(got, str):
+        return replace(agreement, comments=agreement.comments + (got,))
+    later, again = got
+    differences = []
+    for name, _ in model.losses:
+        if name in lsq.names and name in later.names:
+            i, j = lsq.names.index(name), later.names.index(name)
+            differences.append(StartDifference(name, float(lsq.value[i]), float(lsq.stderr[i]),
+                                               float(later.value[j]), float(later.stderr[j])))
+    found = start_dependence(differences, float(again.turning_points.release_time))
+    if not found.moved:
+        return replace(agreement, comments=agreement.comments + (found.note(),))
+    return replace(agreement, undetermined=tuple(dict.fromkeys(tuple(agreement.undetermined) + found.moved)),
+                   cautions=(found.clause(model.short),) + tuple(agreement.cautions))
 
 
 def _pendulum_law(problem, agreement: Agreement) -> Agreement:
