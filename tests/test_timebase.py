@@ -111,6 +111,25 @@ def test_stamps_of_a_logger_sampling_in_bursts_are_kept(tmp_path):
                for n in notes_of(ts.meta)), notes_of(ts.meta)
 
 
+def test_kept_burst_stamps_written_twice_keep_one_row_a_stamp(tmp_path):
+    """The same burst-sampled logger writing its stamps to 1 ms, with a few rows twice (a copy of
+    the row) and a few readings taken a fraction of a millisecond after the one before (the same
+    stamp, another reading): one row a stamp is kept, each at its true time (refused before as
+    "time does not increase", naming a constant rate that would have put every burst wrong)."""
+    t = (np.arange(N) // 10) * 0.2 + (np.arange(N) % 10) * 1e-3
+    a = 0.1 * np.exp(-0.05 * t) * np.cos(2 * math.pi * t / PERIOD)
+    copies, ticks = np.arange(37, N, 97), np.arange(81, N, 113)
+    stamps, values = np.insert(t, copies, t[copies - 1]), np.insert(a, copies, a[copies - 1])
+    at = ticks + np.searchsorted(copies, ticks)  # the same rows in the longer arrays
+    stamps = np.insert(stamps, at, stamps[at - 1])
+    values = np.insert(values, at, values[at - 1] + 1e-4)
+    ts = read_data(write(tmp_path, "burst_twice.csv", stamps, values))
+    np.testing.assert_allclose(ts.time, t, rtol=0, atol=STAMP)
+    np.testing.assert_allclose(ts.theta, a, rtol=0, atol=1e-8)
+    said = [w for w in warnings_of(ts.meta) + notes_of(ts.meta) if "on the same stamp as the row before" in w]
+    assert said and said[0].startswith(f"{copies.size + ticks.size} row(s)"), said
+
+
 def test_arrival_stamps_with_noisy_readings_are_kept_with_a_warning(tmp_path):
     """Readings dominated by noise cannot say whether the rows were even: the stamps are kept and
     the user is warned, with the fix."""

@@ -206,7 +206,7 @@ def time_base(time, values=None, *, where_of_row: Callable[[int], str] | None = 
         t, idx = _stalls(t, idx, bursty, where, repairs)
         kept = None if v_read is None else v_read[idx]
         if clusters:
-            t = _clusters(t, idx, kept, where, repairs)
+            t, idx = _clusters(t, idx, kept, where, repairs)
         else:
             t = _retime(t, idx, bursty, where, repairs)
         return _finish(t, idx, repairs, where, int(np.size(time)))
@@ -458,7 +458,7 @@ def _clusters(t, idx, v, where, repairs):
                                                  "evenly (stamps of arrival can be a tenth of a second late), so the "
                                                  f"stamps are kept as the sample times; if the logger samples evenly, "
                                                  f"{FIX}", doubt=True))
-        return t
+        return _one_row_a_stamp(t, idx, v, repairs)
     line = _burst_line(t, idx, starts + runs - 1, runs, where, [])  # rows arrive after the last is taken
     off = float(np.max(np.abs(t - line)))
     repairs.append(Repair("clusters", int(t.size),
@@ -466,7 +466,24 @@ def _clusters(t, idx, v, where, repairs):
                           f"({across / inside:.2f} times): the logger sampled evenly and the stamps are arrival "
                           f"times. All {t.size} rows re-timed by a straight line of stamp on row number, "
                           f"{(t.size - 1) / (line[-1] - line[0]):.6g} Hz (every stamp within {off:.3g} s of it)"))
-    return line
+    return line, idx
+
+
+def _one_row_a_stamp(t, idx, v, repairs):
+    """Stamps kept as the sample times: a row on the same stamp as the row before it is dropped
+    (one instant holds one reading; a copy of the row, or a second reading the logger wrote on
+    the same tick)."""
+    same = np.r_[False, np.diff(t) == 0.0]
+    if not same.any():
+        return t, idx
+    n = int(same.sum())
+    copies = int(np.sum(same[1:] & (np.diff(v) == 0.0))) if v is not None else 0
+    what = ("all repeating its reading too" if copies == n else
+            f"{copies} repeating its reading too" if copies else "with another reading")
+    repairs.append(Repair("repeated rows", n, f"{n} row(s) on the same stamp as the row before ({what}) dropped, "
+                                              f"the first at t = {float(t[np.flatnonzero(same)[0]]):g} s: the "
+                                              "stamps are the sample times, and one instant holds one reading"))
+    return t[~same], idx[~same]
 
 
 def _steps_of_readings(t, v) -> tuple[float, float]:
