@@ -11,7 +11,8 @@ noise (scale ``s``) except where a sample jumps.  Each candidate is then judged 
 arc ``c + a cos(w t) + b sin(w t) + d t`` is fitted to the samples within half a period of it,
 leaving out :data:`LONGEST` samples either side; the samples off that arc by more than
 :data:`Z_OFF` times the fit's own robust scatter (and by more than :data:`FLOOR` of the
-swing), in a run of at most :data:`LONGEST`, are a glitch.  Longer departures are motion (a push, a hand), not glitches, and are left to the
+swing), in a run of at most :data:`LONGEST`, that leave the line between the samples either side
+of the run by at least :data:`NEIGHBOURS` of that, are a glitch.  Longer departures are motion (a push, a hand), not glitches, and are left to the
 segment analysis.
 """
 
@@ -30,6 +31,7 @@ Z_CANDIDATE = 8.0  # a second difference this many noise scales from the smooth 
 FLOOR = 0.01  # ... and by more than this share of the swing
 MAD = 1.4826
 MIN_SIDE = 3  # samples on the arc at least before a glitch and after it
+NEIGHBOURS = 0.5  # ... and its largest departure from the line between its two neighbours, at least this share of it
 
 
 @dataclass(frozen=True)
@@ -76,7 +78,16 @@ def _judge(t: np.ndarray, x: np.ndarray, i: int, period: float) -> Glitch | None
         return None
     inside = (idx >= first) & (idx <= last)
     k = int(np.argmax(np.abs(off[inside])))
-    return Glitch(first, last, float(off[inside][k]))
+    size = float(off[inside][k])
+    # the raw samples around the run say it too: a glitch leaves its neighbours as far as it
+    # leaves the arc (a sample of a hold, off an arc that cannot follow a hold and its release
+    # at once, is where its neighbours are)
+    if first > 0 and last + 1 < x.size:
+        a, b = x[first - 1], x[last + 1]
+        line = a + (b - a) * (t[first:last + 1] - t[first - 1]) / (t[last + 1] - t[first - 1])
+        if not np.max(np.abs(x[first:last + 1] - line)) >= NEIGHBOURS * abs(size):
+            return None
+    return Glitch(first, last, size)
 
 
 def find_glitches(time: np.ndarray, values: np.ndarray, period: float, smoothed: np.ndarray) -> list[Glitch]:

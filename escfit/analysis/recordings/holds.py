@@ -43,8 +43,10 @@ def held_release(rec, turn, amplitude: float = math.inf) -> tuple[float, float] 
     right = np.flatnonzero(out[turn.last:])
     if not right.size:
         return None
-    j1 = turn.last + int(right[0])
-    left = np.flatnonzero(out[:turn.first + 1])
+    j1 = _raw_departure(rec, turn.last + int(right[0]), level)
+    # the hold's start, by the samples themselves too: the smoothing spreads a motion or one
+    # sample's step (a sensor's quantum) into the hold around it
+    left = np.flatnonzero(out[:turn.first + 1] & (np.abs(x[:turn.first + 1] - level) > rec.band))
     j0 = int(left[-1]) + 1 if left.size else 0
     free = rec.period / math.pi * math.sqrt(2.0 * rec.band / amplitude) if amplitude > rec.band else rec.period
     if t[j1] - t[j0] < max(HOLD_PERIODS * rec.period, 2.0 * free):
@@ -100,8 +102,17 @@ def flat_start(rec) -> tuple[float, float] | None:
     out = np.flatnonzero(np.abs(rec.xs - level) > rec.band)
     if not out.size or out[0] < 3:
         return None
-    got = release_instant(rec, int(out[0]))
-    return got if got is not None else rec.refine(int(out[0]), int(out[0]), flat="left", degree=RELEASE_DEGREE)
+    j1 = _raw_departure(rec, int(out[0]), level)
+    got = release_instant(rec, j1)
+    return got if got is not None else rec.refine(j1, j1, flat="left", degree=RELEASE_DEGREE)
+
+
+def _raw_departure(rec, j: int, level: float) -> int:
+    """The first sample from ``j`` on whose own reading leaves the rest band about ``level``: the
+    smoothing reaches back from the motion into the hold (by a third of a period and more at 20
+    samples a period), so the smoothed record leaves the band before the oscillator moves."""
+    raw = np.flatnonzero(np.abs(rec.x[j:] - level) > rec.band)
+    return j + int(raw[0]) if raw.size else j
 
 
 def turn_at_start(rec) -> tuple[float, float, bool] | None:
