@@ -25,16 +25,9 @@ from escfit.core.scene import load_scene
 from escfit.inference import make_problem
 from escfit.inference.fit import fit_problem
 
-SCENE = """model = "balance"
-[oscillator]
-omega0 = { value = 6.0, vary = true, min = 4, max = 8 }
-[effects.viscous]
-C = { value = 0.01, vary = true, min = 0, max = 1 }
-[effects.coulomb]
-R = { value = 0.01, vary = true, min = 0, max = 1 }
-[observation]
-model = "waveform"
-"""
+from .test_agreement import SCENE as SCENES
+
+SCENE = SCENES % "waveform"  # omega0, C and R free (viscous and Coulomb losses)
 TRUTH = {"oscillator.omega0": 2 * math.pi, "viscous.C": 0.02, "coulomb.R": 0.02, "oscillator.theta0": 0.5}
 SIGMA, RATE, PERIODS, DRIVEN = 0.004, 40.0, 40, 2.0  # rad, samples per second, s (1 s periods), s
 

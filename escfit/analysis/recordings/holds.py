@@ -24,6 +24,7 @@ START_TURN_PERIODS = 0.03  # a turn this close before the first sample counts as
 # a cubic after a release: a quartic's freedom trades the release instant against the first
 # curvature when the noise is some 1 % of the swing (errors of 0.6 s on a 9 s period)
 RELEASE_DEGREE = 3
+DEPARTED = 0.03  # a sample this share of the swing off the held level has left the hold
 
 
 def held_release(rec, turn, amplitude: float = math.inf) -> tuple[float, float] | None:
@@ -108,10 +109,14 @@ def flat_start(rec) -> tuple[float, float] | None:
 
 
 def _raw_departure(rec, j: int, level: float) -> int:
-    """The first sample from ``j`` on whose own reading leaves the rest band about ``level``: the
-    smoothing reaches back from the motion into the hold (by a third of a period and more at 20
-    samples a period), so the smoothed record leaves the band before the oscillator moves."""
-    raw = np.flatnonzero(np.abs(rec.x[j:] - level) > rec.band)
+    """The first sample from ``j`` on whose own reading has left ``level`` by more than the rest
+    band and :data:`DEPARTED` of the swing: the smoothing reaches back from the motion into the
+    hold (a third of a period and more at 20 samples a period), and a hand's hold wanders by a
+    sensor step or two, so the smoothed record leaves the band before the oscillator moves.  A
+    swing released at rest leaves by that share within 0.04 periods, well inside the quarter
+    period before it in which :func:`release_instant` looks for the release."""
+    far = max(rec.band, DEPARTED * 0.5 * float(np.ptp(rec.xs)))
+    raw = np.flatnonzero(np.abs(rec.x[j:] - level) > far)
     return j + int(raw[0]) if raw.size else j
 
 

@@ -99,22 +99,30 @@ def turning_point_refit(problem, lsq, refit, *, seed: int = 0):
     result and whether the period was left unresolved.  Returns the least-squares result and the
     turning-point problem or, when the record's turning points cannot be fitted so, the reason (str).
     """
-    from ...core.errors import EscfitError
-    from .from_series import problem_from_series
-
     scene = problem.given_scene
     obs = {k: v for k, v in dict(scene.extra.get("observation", {})).items() if k in ("offset", "offset_rate")}
     scene = replace(scene, extra={**scene.extra, "observation": {**obs, "model": "amplitude"}})
+    return _second_fit(problem, scene, problem.data, lsq, refit, seed, "turning-point fit", turns=problem.turning_points)
+
+
+def _second_fit(problem, scene, series, lsq, refit, seed: int, what: str, *, keep=lambda name: True, **options):
+    """Least squares of another problem of the same record (``problem_from_series(scene, series,
+    **options)`` with the problem's solver), started from the fit's physical values whose names
+    ``keep`` accepts.  Returns the result and that problem, or why there is none (str)."""
+    from ...core.errors import EscfitError
+    from .from_series import problem_from_series
+
     try:
-        turns = problem_from_series(scene, problem.data, solver=problem.solver,
-                                    solver_options=dict(problem.solver_options or {}), turns=problem.turning_points)
-        start = {n: float(lsq.values[n]) for n in turns.names if n in lsq.values and not n.startswith("observation.")}
-        fit, unresolved = refit(turns, start, seed)
+        other = problem_from_series(scene, series, solver=problem.solver,
+                                    solver_options=dict(problem.solver_options or {}), **options)
+        begin = {n: float(lsq.values[n]) for n in other.names
+                 if n in lsq.values and not n.startswith("observation.") and keep(n)}
+        fit, unresolved = refit(other, begin, seed)
     except (EscfitError, ValueError, ArithmeticError) as exc:
-        return f"no turning-point fit to compare with ({str(exc).splitlines()[0][:160]})"
+        return f"no {what} to compare with ({str(exc).splitlines()[0][:160]})"
     if unresolved:
-        return "the turning-point fit of this record contradicts its measured period: not compared"
-    return fit, turns
+        return f"the {what} contradicts the record's measured period: not compared"
+    return fit, other
 
 
 def _compare_parameters(wave, turns, held_by) -> list[ParameterDifference]:
@@ -199,8 +207,6 @@ def later_start_refit(problem, lsq, refit, *, seed: int = 0):
     """
     from ...analysis.recordings.window import window_of
     from ...analysis.start_dependence import LATER_PERIODS, MIN_PERIODS
-    from ...core.errors import EscfitError
-    from .from_series import problem_from_series
 
     tp, series = problem.turning_points, problem.data
     period = float(tp.period)
@@ -213,17 +219,8 @@ def later_start_refit(problem, lsq, refit, *, seed: int = 0):
     if not used.all():
         series = replace(series, time=series.time[used], theta=series.theta[used])
     later = replace(series, window=replace(window_of(series), start=start, release=None), release_s=math.nan)
-    try:
-        again = problem_from_series(problem.given_scene, later, solver=problem.solver,
-                                    solver_options=dict(problem.solver_options or {}))
-        begin = {n: float(lsq.values[n]) for n in again.names
-                 if n in lsq.values and not n.startswith("observation.") and n != "oscillator.theta0"}
-        fit, unresolved = refit(again, begin, seed)
-    except (EscfitError, ValueError, ArithmeticError) as exc:
-        return f"no fit from one period later to compare with ({str(exc).splitlines()[0][:160]})"
-    if unresolved:
-        return "the fit from one period later contradicts the record's measured period: not compared"
-    return fit, again
+    return _second_fit(problem, problem.given_scene, later, lsq, refit, seed, "fit from one period later",
+                       keep=lambda name: name != "oscillator.theta0")
 
 
 def _start_dependence(problem, lsq, refit, seed: int, agreement: Agreement, model: ModelFacts) -> Agreement:
