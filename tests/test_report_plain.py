@@ -207,6 +207,13 @@ def test_quick_start_pendulum_says_its_loss_in_words(tmp_path):
     assert not shares and set(res.undetermined) == {"viscous.C", "coulomb.R"}, res.warnings
     assert ("How that loss divides between viscous damping (C) and friction in the pivot (R) is not determined by "
             "this record") in " ".join(text.split())
+    # what C or R gives alone is marked too; the first half swing's loss, their sum, is not
+    from escfit.report.quantities import derived_rows
+
+    labels = [row[0] for row in derived_rows(res)[1]]
+    alone = [lab for lab in labels if lab.startswith(("quality factor", "logarithmic decrement", "amplitude lost per"))]
+    assert len(alone) == 3 and all(lab.endswith("(not determined by this record)") for lab in alone), labels
+    assert not any(lab.startswith("amplitude lost in the first") and "not determined" in lab for lab in labels), labels
     assert output.splitlines()[1].startswith("The swing loses")  # escfit fit prints them first too
     # escfit summary prints the same sentences
     summary = CliRunner().invoke(cli, ["summary", str(tmp_path / "fit.h5")]).output

@@ -90,17 +90,19 @@ def derived_quantities(draws: Mapping[str, np.ndarray], attrs: Mapping[str, Any]
     linear = osc.get("coordinate") == "linear"
     small = " (small swings)" if str(osc.get("restoring", "spring")) == "pendulum" else ""
     k, unit = (1.0, "m") if linear else (RAD_TO_DEG, "deg")  # amplitudes as people read them
+    open_ = _undetermined(attrs)
     if np.any(c > 0):
         with np.errstate(divide="ignore"):
-            add("quality factor Q (viscous damping alone)", "", np.where(c > 0, w0 / c, np.inf), "ω0 / C")
-        add("logarithmic decrement per period Λ (viscous)", "", math.pi * c / wd, "π C / ωd")
+            add(f"quality factor Q (viscous damping alone){open_('viscous.C')}", "", np.where(c > 0, w0 / c, np.inf),
+                "ω0 / C")
+        add(f"logarithmic decrement per period Λ (viscous){open_('viscous.C')}", "", math.pi * c / wd, "π C / ωd")
     has_escapement = any(n.startswith("escapement[") for n in draws)
     # with an escapement the impulse gives the amplitude back: say it is what friction alone would take
     taken = "amplitude Coulomb friction alone would take per half swing" if has_escapement else \
         "amplitude lost per half swing to Coulomb friction"
     for name, r in rs.items():
         at = _at_load(name, loads_in)
-        add(f"{taken}{at}{small}", unit, 2 * r / w0 ** 2 * k, "2 R / ω0²")
+        add(f"{taken}{at}{small}{open_(name)}", unit, 2 * r / w0 ** 2 * k, "2 R / ω0²")
     a0 = draws.get("oscillator.theta0")
     if a0 is not None and not has_escapement:
         amp = np.abs(a0)
@@ -112,18 +114,28 @@ def derived_quantities(draws: Mapping[str, np.ndarray], attrs: Mapping[str, Any]
     inertia = inertia_of(attrs)
     if inertia is not None:
         for name, r in rs.items():
-            add(f"Coulomb friction torque{_at_load(name, loads_in)}", "N m", r * inertia, "R I")
+            add(f"Coulomb friction torque{_at_load(name, loads_in)}{open_(name)}", "N m", r * inertia, "R I")
         for name, x in draws.items():
             found = re.fullmatch(r"escapement\[(\d+)\]\.X", name)
             if found:
                 add(f"escapement torque of window {found.group(1)}", "N m", x * inertia, "X I")
         if "viscous.C" in draws:
-            add("viscous coefficient c", "N m s", c * inertia, "C I")
+            add(f"viscous coefficient c{open_('viscous.C')}", "N m s", c * inertia, "C I")
         note = f"Torques from the scene's moment of inertia I = {inertia:.4g} kg m²."
     else:
         note = ("The model is per unit mass: R is a friction force per mass (m/s² in the table above)." if linear
                 else "The scene gives no moment of inertia, so torques stay per unit inertia (rad/s² in the table above).")
     return rows, note
+
+
+def _undetermined(attrs: Mapping[str, Any]):
+    """``mark(name)``: what a quantity computed from parameter ``name`` alone adds to its label when
+    the fit leaves that parameter not determined (the split of the losses, say: the sum stands)."""
+    try:
+        names = set(json.loads(attrs.get("undetermined", "[]") or "[]"))
+    except (TypeError, ValueError):
+        names = set()
+    return lambda name: " (not determined by this record)" if name in names else ""
 
 
 def _at_load(name: str, loads_in: str) -> str:
