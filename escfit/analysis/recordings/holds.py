@@ -44,13 +44,19 @@ def held_release(rec, turn, amplitude: float = math.inf) -> tuple[float, float] 
     right = np.flatnonzero(out[turn.last:])
     if not right.size:
         return None
-    j1 = _raw_departure(rec, turn.last + int(right[0]), level)
+    far = _far(rec)
+    j1 = _raw_departure(rec, turn.last + int(right[0]), level, far)
     # the hold's start, by the samples themselves too: the smoothing spreads a motion or one
     # sample's step (a sensor's quantum) into the hold around it
     left = np.flatnonzero(out[:turn.first + 1] & (np.abs(x[:turn.first + 1] - level) > rec.band))
     j0 = int(left[-1]) + 1 if left.size else 0
-    free = rec.period / math.pi * math.sqrt(2.0 * rec.band / amplitude) if amplitude > rec.band else rec.period
-    if t[j1] - t[j0] < max(HOLD_PERIODS * rec.period, 2.0 * free):
+    # the samples read as held (from j0 to the one before j1) against the longest a free turning
+    # point keeps its samples within the rest band before its vertex and within ``far`` after it
+    if amplitude > far:
+        free = rec.period / (2.0 * math.pi) * (math.sqrt(2.0 * rec.band / amplitude) + math.sqrt(2.0 * far / amplitude))
+    else:
+        free = rec.period
+    if t[max(j1 - 1, j0)] - t[j0] < max(HOLD_PERIODS * rec.period, 2.0 * free):
         return None
     got = release_instant(rec, j1)
     if got is None:
@@ -108,14 +114,19 @@ def flat_start(rec) -> tuple[float, float] | None:
     return got if got is not None else rec.refine(j1, j1, flat="left", degree=RELEASE_DEGREE)
 
 
-def _raw_departure(rec, j: int, level: float) -> int:
+def _far(rec) -> float:
+    """How far (rad) a sample's own reading must be from a held level to have left it."""
+    return max(rec.band, DEPARTED * 0.5 * float(np.ptp(rec.xs)))
+
+
+def _raw_departure(rec, j: int, level: float, far: float | None = None) -> int:
     """The first sample from ``j`` on whose own reading has left ``level`` by more than the rest
     band and :data:`DEPARTED` of the swing: the smoothing reaches back from the motion into the
     hold (a third of a period and more at 20 samples a period), and a hand's hold wanders by a
     sensor step or two, so the smoothed record leaves the band before the oscillator moves.  A
     swing released at rest leaves by that share within 0.04 periods, well inside the quarter
     period before it in which :func:`release_instant` looks for the release."""
-    far = max(rec.band, DEPARTED * 0.5 * float(np.ptp(rec.xs)))
+    far = _far(rec) if far is None else far
     raw = np.flatnonzero(np.abs(rec.x[j:] - level) > far)
     return j + int(raw[0]) if raw.size else j
 
