@@ -7,9 +7,9 @@ first held sample to the first moving one (two sample intervals, 0.12 periods, a
 period a hold needs), so the first half period was read as "held at -9.77 deg" and the fit
 started at a release that never happened.  The envelope then wandered by more than what splits
 viscous from friction losses, and C and R were marked not determined on a record of the fitted
-model (13 of 2000 such records at 15-19 samples a period).  A hold is now measured by the
-samples read as held, against the longest a free turning point keeps its samples within the
-thresholds that bound it.
+model (13 of 2000 such records at 15-19 samples a period).  Held samples must now be ones a
+free turning point of that amplitude cannot follow (a misfit above three reading noises); a
+free vertex passes through any two samples.
 """
 
 from __future__ import annotations

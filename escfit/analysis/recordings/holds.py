@@ -24,6 +24,7 @@ START_TURN_PERIODS = 0.03  # a turn this close before the first sample counts as
 # a cubic after a release: a quartic's freedom trades the release instant against the first
 # curvature when the noise is some 1 % of the swing (errors of 0.6 s on a 9 s period)
 RELEASE_DEGREE = 3
+TURN_MISFIT = 3.0  # a free turning point's misfit (in reading noises) above which flat samples are held
 DEPARTED = 0.03  # a sample this share of the swing off the held level has left the hold
 
 
@@ -31,10 +32,10 @@ def held_release(rec, turn, amplitude: float = math.inf) -> tuple[float, float] 
     """The release from a hold at ``turn`` (a :class:`~escfit.analysis.recordings.motion.Turn`): the
     instant motion starts and the held angle.
 
-    ``None`` unless the angle stays within the rest band of the turn's level for at least
-    :data:`HOLD_PERIODS` periods up to the departure, and for twice as long as a free turning
-    point of that ``amplitude`` (rad, about the centre) would (a small swing is flat near its
-    turning points for a good part of a period).
+    ``None`` unless the angle stays within the rest band of the turn's level up to the departure
+    for at least :data:`HOLD_PERIODS` periods, and flatter than a free turning point of that
+    ``amplitude`` (rad, about the centre) would (:func:`_flatter_than_a_turn`: a small swing is
+    flat near its turning points for a good part of a period).
     """
     t, x, xs = rec.t, rec.x, rec.xs
     k = max(1, int(round(0.05 * rec.period / rec.dt)))
@@ -44,19 +45,12 @@ def held_release(rec, turn, amplitude: float = math.inf) -> tuple[float, float] 
     right = np.flatnonzero(out[turn.last:])
     if not right.size:
         return None
-    far = _far(rec)
-    j1 = _raw_departure(rec, turn.last + int(right[0]), level, far)
+    j1 = _raw_departure(rec, turn.last + int(right[0]), level)
     # the hold's start, by the samples themselves too: the smoothing spreads a motion or one
     # sample's step (a sensor's quantum) into the hold around it
     left = np.flatnonzero(out[:turn.first + 1] & (np.abs(x[:turn.first + 1] - level) > rec.band))
     j0 = int(left[-1]) + 1 if left.size else 0
-    # the samples read as held (from j0 to the one before j1) against the longest a free turning
-    # point keeps its samples within the rest band before its vertex and within ``far`` after it
-    if amplitude > far:
-        free = rec.period / (2.0 * math.pi) * (math.sqrt(2.0 * rec.band / amplitude) + math.sqrt(2.0 * far / amplitude))
-    else:
-        free = rec.period
-    if t[max(j1 - 1, j0)] - t[j0] < max(HOLD_PERIODS * rec.period, 2.0 * free):
+    if not _flatter_than_a_turn(rec, j0, j1, turn.is_max, amplitude):
         return None
     got = release_instant(rec, j1)
     if got is None:
@@ -114,19 +108,54 @@ def flat_start(rec) -> tuple[float, float] | None:
     return got if got is not None else rec.refine(j1, j1, flat="left", degree=RELEASE_DEGREE)
 
 
+def _flatter_than_a_turn(rec, j0: int, j1: int, is_max: bool, amplitude: float) -> bool:
+    """Whether the samples ``j0 .. j1 - 1`` (read as held) are a hold rather than a free turning
+    point of that ``amplitude`` (rad, about the centre).
+
+    They must last :data:`HOLD_PERIODS` periods at least, and a free turning point must not
+    follow them: ``v - s a (1 - cos(w (t - t_v)))`` (``s`` = +1 at a maximum, ``w = 2 pi /
+    period``, ``a`` the amplitude, ``v`` and ``t_v`` fitted) leaves a root mean square residual
+    above :data:`TURN_MISFIT` times the reading noise (or the sensor step's).  Two samples
+    either side of a free vertex (a coarse record) or a rest band widened by the noise are then
+    no hold; a hand's hold to within a sensor step, with the swing that leaves it, is.
+    """
+    t, x = rec.t, rec.x
+    last = max(j1 - 1, j0)
+    if t[last] - t[j0] < HOLD_PERIODS * rec.period:
+        return False
+    if not math.isfinite(amplitude):  # no swing to compare with: the duration decides
+        return True
+    if last - j0 < 2:  # a free vertex passes through any two samples
+        return False
+    noise = max(rec.sigma, rec.quantum / math.sqrt(12.0), 1e-12)
+    return _free_turn_misfit(t[j0:last + 1], x[j0:last + 1], rec.period, is_max, amplitude) > TURN_MISFIT * noise
+
+
+def _free_turn_misfit(tt: np.ndarray, xx: np.ndarray, period: float, is_max: bool, amplitude: float) -> float:
+    """Root mean square residual (rad) of the best free turning point of ``amplitude`` through the
+    samples, its vertex time searched from a tenth of a period before them to a tenth after."""
+    w = 2.0 * math.pi / period
+    sign = 1.0 if is_max else -1.0
+    vertex = np.linspace(tt[0] - 0.1 * period, tt[-1] + 0.1 * period, 201)
+    shape = -sign * amplitude * (1.0 - np.cos(w * (tt[None, :] - vertex[:, None])))
+    r = xx[None, :] - shape
+    r -= r.mean(axis=1, keepdims=True)
+    return float(np.sqrt(np.min(np.mean(r * r, axis=1))))
+
+
 def _far(rec) -> float:
     """How far (rad) a sample's own reading must be from a held level to have left it."""
     return max(rec.band, DEPARTED * 0.5 * float(np.ptp(rec.xs)))
 
 
-def _raw_departure(rec, j: int, level: float, far: float | None = None) -> int:
+def _raw_departure(rec, j: int, level: float) -> int:
     """The first sample from ``j`` on whose own reading has left ``level`` by more than the rest
     band and :data:`DEPARTED` of the swing: the smoothing reaches back from the motion into the
     hold (a third of a period and more at 20 samples a period), and a hand's hold wanders by a
     sensor step or two, so the smoothed record leaves the band before the oscillator moves.  A
     swing released at rest leaves by that share within 0.04 periods, well inside the quarter
     period before it in which :func:`release_instant` looks for the release."""
-    far = _far(rec) if far is None else far
+    far = _far(rec)
     raw = np.flatnonzero(np.abs(rec.x[j:] - level) > far)
     return j + int(raw[0]) if raw.size else j
 
