@@ -99,9 +99,9 @@ def test_scores_of_a_decay_a_drive_noise_an_energy_and_a_clock():
 def test_kinetic_energy_alone_is_refused_as_an_energy_at_fit_and_at_init(tmp_path):
     t, _, rate = _decay()
     data = _write(tmp_path / "ke.csv", ["t", "y"], [t, rate ** 2 / 2])
-    with pytest.raises(DataError, match=r"by shape: 'y' 0\.00 \(an energy"):
+    with pytest.raises(DataError, match=r"by shape: 'y' 0\.00 \(an even function of the swing, such as an energy"):
         read_data(data)
-    with pytest.raises(DataError, match=r"an energy \(two peaks per swing, never negative\).*not an angle"):
+    with pytest.raises(DataError, match=r"such as an energy \(two peaks per swing, never below its floor\).*not an angle"):
         read_data(data, recording={"angle_column": "y", "angle_unit": "rad"})
     result, scene = _init(tmp_path, data)
     assert result.exit_code == 2 and scene is None and "energy" in result.output
@@ -113,7 +113,7 @@ def test_an_energy_column_beside_the_angle_is_passed_over(tmp_path):
     result, scene = _init(tmp_path, data)
     assert result.exit_code == 0, result.output
     assert tomllib.loads(scene.read_text())["recording"]["angle_column"] == "v"
-    assert "'u' 0 %: an energy" in result.output
+    assert "'u' 0 %: an even function of the swing, such as an energy" in result.output
     # named as two angles, the reader itself passes the energy over
     series = read_data(_write(tmp_path / "named.csv", ["t (s)", "angle 1 (rad)", "angle 2 (rad)"], [t, rate ** 2 / 2, theta]))
     np.testing.assert_allclose(series.theta, theta, atol=1e-8)

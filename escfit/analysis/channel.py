@@ -133,7 +133,8 @@ def decay_score(time: np.ndarray, values: np.ndarray, *, name: str = "", unit: s
     if said in ("acceleration", "energy", "velocity", "time"):
         return 0.0, f"labelled {unit or name!r}: {'an' if said[0] in 'aeiou' else 'a'} {said}", shape
     if shape.energy_like:
-        return 0.0, "an energy (two peaks per swing, never negative)", shape
+        return 0.0, ("an even function of the swing, such as an energy (two peaks per swing, never below its "
+                     "floor)"), shape
     score = shape.explained * min(1.0, max(0.0, shape.fall) / FULL_FALL)
     return float(score), _words(shape, score), shape
 

@@ -303,9 +303,9 @@ def check_quantity(time: np.ndarray, values: np.ndarray, *, claimed: str = "angl
     evidence: list[str] = []
     said = label_quantity(name, unit) or label_quantity(name, None)
     if shape.energy_like:
-        evidence.append(f"an energy (two peaks per swing, never negative): its troughs stay within "
-                        f"{100 * shape.trough_floor:.0f} % of the range above its minimum while its peaks fall by "
-                        f"{100 * shape.peak_fall:.0f} %: not {'an' if what[0] in 'aeiou' else 'a'} {what}")
+        evidence.append("an even function of the swing, such as an energy (two peaks per swing, never below its "
+                        f"floor): its troughs stay within {100 * shape.trough_floor:.0f} % of the range above its "
+                        f"minimum while its peaks fall by {100 * shape.peak_fall:.0f} %: not {'an' if what[0] in 'aeiou' else 'a'} {what}")
         return QuantityCheck("energy", unit, tuple(evidence), "refuse", COLUMN_KEYS.get(claimed, "angle_column"),
                              shape)
     if said in ("acceleration", "energy", "velocity") or (said == "displacement" and claimed != "displacement"):

@@ -90,11 +90,16 @@ def companions(names: Sequence[str], values: Mapping[int, np.ndarray]) -> dict[i
 
 def rising_clock(values: Mapping[int, np.ndarray], *, min_rows: int = 20) -> int | None:
     """The one column that rises at every row (its finite values; stamps repeated by rounding, as
-    when a clock is written to three digits, are allowed: it never falls and rises at one row in ten at least), or None when none or several do."""
+    when a clock is written to three digits, are allowed: it never falls and rises at one row in
+    ten at least, or rounds an even clock, :func:`~escfit.analysis.rounded_stamps.rounded_clock`),
+    or None when none or several do."""
+    from .rounded_stamps import rounded_clock
+
     rising = []
     for i, v in values.items():
         finite = v[np.isfinite(v)]
         steps = np.diff(finite)
-        if finite.size >= min_rows and np.all(steps >= 0.0) and np.mean(steps > 0.0) >= 0.1:
+        if finite.size >= min_rows and np.all(steps >= 0.0) and \
+                (np.mean(steps > 0.0) >= 0.1 or rounded_clock(finite) is not None):
             rising.append(i)
     return rising[0] if len(rising) == 1 else None

@@ -27,7 +27,8 @@ Repairs, in this order, each recorded as a :class:`Repair` whose sentence says w
    burst spans.  A few short runs of a repeated stamp in a record stamped row by row are
    instead re-timed evenly between the neighbouring stamps;
    Stamps written with too few digits (never falling, a fifth of the rows sharing a stamp in
-   short runs) are re-timed on the same line.  So are stamps that arrive in *clusters* (a
+   short runs) are re-timed on the same line; a clock written to a few significant digits,
+   whose runs grow tenfold with each decade, first (:mod:`escfit.analysis.rounded_stamps`).  So are stamps that arrive in *clusters* (a
    computer stamping rows as they come out of a logger's buffer: most steps shorter than half
    the mean step, many of them above zero), but only when the readings show that the rows were
    taken evenly: they step no more across a cluster's gap than within a cluster.  Otherwise the
@@ -54,6 +55,7 @@ from typing import Callable
 import numpy as np
 
 from ..core.errors import DataError
+from .rounded_stamps import rounded_clock
 from .runs import appended_runs
 
 __all__ = ["TimeBase", "Repair", "time_base", "FIX", "LARGE_FRACTION"]
@@ -200,6 +202,10 @@ def time_base(time, values=None, *, where_of_row: Callable[[int], str] | None = 
                           where(0), t)
         t, idx, v = _restarts(t, idx, v, repairs)
         t, idx, v = _order(t, idx, v, where, repairs)
+        even = rounded_clock(t)
+        if even is not None:  # a clock written with too few digits: every row re-timed on its line
+            repairs.append(Repair("rounded", int(t.size), even[1]))
+            return _finish(even[0], idx, repairs, where, int(np.size(time)))
         clusters = _clustered(t)
         bursty = _bursty(t) or _rounded(t) or clusters
         t, idx = _repeated_rows(t, idx, v, bursty, repairs)

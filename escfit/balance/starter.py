@@ -162,6 +162,10 @@ _OTHER_QUANTITY = re.compile(r"column '([^']+)' looks like (angular velocity|dis
 def _help(path, table: dict, exc: DataError, fmt) -> tuple[str, object, str] | None:
     """One ``[recording]`` option the reader's message asks for and the record can settle."""
     message = str(exc)
+    length = getattr(exc, "other_quantity", None)
+    if length is not None and length[0] not in table:
+        return length[0], length[1], (f"column {length[1]!r} holds a length ({length[2]}), not an angle: read as a "
+                                      "displacement and fitted as measured")
     other = _OTHER_QUANTITY.search(message)
     if other and other.group(3) not in table:
         return other.group(3), other.group(1), (f"column {other.group(1)!r} holds the {other.group(2)}, not an angle: "

@@ -225,6 +225,18 @@ def _all_numbers(fields: list[str], dc: bool) -> bool:
     return all(parse_number(f, dc) is not None for f in fields)
 
 
+def _split_decimals(rows: list[list[str]]) -> bool:
+    """Whether two comma-separated "columns" are one column written with a decimal comma: every
+    cell of both a plain integer, the second always of one width of 2 digits or more and led by
+    a zero in some rows (``38,0169``; a count or a time in whole units has no leading zeros)."""
+    pairs = [r for r in rows if len(r) == 2]
+    whole = re.compile(r"[-+]?\d+")
+    if not pairs or not all(whole.fullmatch(a.strip()) and b.strip().isdigit() for a, b in pairs):
+        return False
+    widths = {len(b.strip()) for _, b in pairs}
+    return len(widths) == 1 and widths.pop() >= 2 and any(b.strip().startswith("0") for _, b in pairs)
+
+
 def _kinds_agree(rows: list[list[str]], n: int, dc: bool, need: float) -> bool:
     """Rows of mixed cells: some column numeric in nearly every row, every column of one kind."""
     full = [r for r in rows if len(r) == n]
@@ -267,6 +279,8 @@ def detect_dialect(sample: list[str], where: str) -> tuple[Dialect, int]:
                     if _kinds_agree(rows, n, dc, 0.9):
                         return Dialect(name, delim, dc), n
                 elif sum(len(r) == n and _all_numbers(r, dc) for r in rows) >= need:
+                    if delim == "," and n == 2 and _split_decimals(rows):
+                        return Dialect("one column", None, True), 1
                     return Dialect(name, delim, dc), n
     for dc in (False, True):
         if sum(parse_number(s.strip(), dc) is not None for s in sample) >= need:

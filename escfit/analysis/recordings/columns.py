@@ -219,6 +219,8 @@ def _choose(cols: Columns, spec: RecordingSpec, rate: float | None) -> tuple[int
             if not numeric:
                 raise DataError(f"no column of numbers to read; {hint}", first)
             a = numeric[-1] if t != numeric[-1] else numeric[0]
+            if t is None and not uniform and not clocks and len(numeric) == 2:
+                a = _second_is_clock(cols, numeric, a)
         if t is None and not uniform and n > 1:
             if clocks:
                 t = clocks[0]
@@ -311,6 +313,18 @@ def _rising_clock(cols: Columns, candidates: list[int]) -> list[int]:
     cols.notes.append(f"column {cols.label(found)!r} taken as the time: no name says which column is, and it alone "
                       "rises at every row ([recording] time_column chooses another)")
     return [found]
+
+
+def _second_is_clock(cols: Columns, numeric: list[int], a: int) -> int:
+    """The signal of a headerless pair of columns: the first when the second alone rises at every
+    row (a ``reading, time`` log), with a note; else ``a``."""
+    from ...analysis.roles import rising_clock
+
+    if rising_clock(_parsed(cols, numeric)) != numeric[1]:
+        return a
+    cols.notes.append(f"column {numeric[1] + 1} taken as the time: the file has no header, and it alone rises at every "
+                      f"row ([recording] time_column chooses another)")
+    return numeric[0]
 
 
 def _parsed(cols: Columns, indices: list[int]) -> dict[int, np.ndarray]:
@@ -497,7 +511,10 @@ def _si_factor(cols: Columns, col: int, spec: RecordingSpec, opts: dict, reader:
             msg += (f" (a length: read it as a displacement with [recording] displacement_column = {name!r})"
                     if said == "displacement" else f" ({'an' if said[0] in 'ae' else 'a'} {said}: escfit fits "
                     "angles, angular velocities and displacements)")
-        raise DataError(msg, exc.where) from None
+        err = DataError(msg, exc.where)
+        if said == "displacement" and "not an angle unit" in msg:
+            err.other_quantity = ("displacement_column", name, head_unit)  # the option that reads it (escfit init)
+        raise err from None
     reader["angle_unit"] = unit + (f" ({cpt:g} per turn)" if cpt is not None and unit.lower() in COUNT_WORDS else "")
     if scale != 1.0:
         reader["scale"] = f"{scale:g}"

@@ -112,6 +112,8 @@ def candidates(path: str | Path) -> list[str]:
 def _fields(line: str) -> list[str]:
     s = line.strip()
     delim = max((",", ";", "\t"), key=s.count) if any(d in s for d in ",;\t") else None
+    if delim is None and len(s) > 1 and s[0] == s[-1] == '"':  # one quoted name: a one-column table's header
+        return [s[1:-1]]
     return split_fields(s, delim)
 
 

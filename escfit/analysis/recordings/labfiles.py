@@ -142,9 +142,9 @@ def _run_of(name: str, numbered: bool = False) -> tuple[str | None, str]:
 
 def sniff_run_csv(header: list[str]) -> str | None:
     """``"vernier-csv"`` or ``"pasco-csv"`` when a header's names carry run labels, else None."""
-    if len(header) >= 2 and all(_VERNIER_RUN.match(h) for h in header) or _numbered_runs(header):
+    if header and all(_VERNIER_RUN.match(h) for h in header) or _numbered_runs(header):
         return "vernier-csv"
-    if len(header) >= 2 and sum(bool(_PASCO_RUN.match(h)) for h in header) >= len(header) - 1:
+    if header and sum(bool(_PASCO_RUN.match(h)) for h in header) >= max(1, len(header) - 1):
         return "pasco-csv"
     return None
 
