@@ -163,7 +163,7 @@ def read_data(path, *, recording: dict | None = None, fmt: str | None = None, no
     """
     from ..analysis.recordings.recording_spec import recording_spec_from_table
 
-    spec = recording_spec_from_table(recording, where or f"{path} [recording]") if recording else None
+    spec = recording_spec_from_table(recording, where or str(path)) if recording else None
     return _read_data(path, spec, fmt, notch_deg)
 
 

@@ -353,7 +353,7 @@ _NUMBER = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)")
 _NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 # A leading number, or a short product or quotient of numbers and pi ("pi/2 rad", "1/4 turn"):
 # at most four factors and no powers, so nothing pint computes from it can grow.
-_PREFIX = re.compile(rf"\s*(?:{_NUM}|pi)(?:\s*[*/]\s*(?:{_NUM}|pi)(?![A-Za-z_])){{0,3}}(?![A-Za-z_\d.])")
+_PREFIX = re.compile(rf"\s*(?:{_NUM}|pi)(?:\s*[*/]\s*(?:{_NUM}|pi)(?![A-Za-z_])){{0,3}}(?![\d.eE])")
 _PREFIX_NUMBER = re.compile(_NUM)
 
 
