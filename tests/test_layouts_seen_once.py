@@ -102,3 +102,18 @@ def test_x_y_table_with_the_clock_second_and_rounded_is_read(tmp_path):
     res = CliRunner().invoke(cli, ["init", str(path), "--pendulum", "--out", str(out)])
     assert res.exit_code == 0, res.output
     assert 'angle_column = "x"' in out.read_text() or "angle_column = 1" in out.read_text()
+
+
+def test_two_runs_without_a_clock_are_refused_naming_both_options(tmp_path):
+    """Two PASCO runs side by side and no time column: one message names the run and the rate
+    (a user had to meet three refusals in turn), and with both given the run is read."""
+    t = np.arange(2000) / 100.0
+    one, two = (40.0 * np.exp(-0.05 * t) * np.cos(2 * math.pi * t / p) for p in (1.11, 0.87))
+    rows = "".join(f"{a:.4f};{b:.4f}\r\n".replace(".", ",") for a, b in zip(one, two))
+    path = tmp_path / "two.csv"
+    path.write_text('"Position (mm) Run #1";"Position (mm) Run #2"\r\n' + rows)
+    with pytest.raises(DataError, match=r"set \[recording\] run \(1-based\); the runs have no time column either: "
+                                        r"set \[recording\] sample_rate"):
+        read_data(path)
+    data = read_data(path, recording={"run": 2, "sample_rate": "100 Hz", "displacement_column": "Position (mm)"})
+    assert np.allclose(data.theta, two / 1000.0, atol=1e-7)

@@ -172,7 +172,11 @@ def read_run_csv(path: str | Path, spec: RecordingSpec | None = None, *, program
     elif len(runs) == 1:
         run = runs[0]
     else:
-        raise DataError(f"{len(runs)} runs side by side ({', '.join(runs)}); set [recording] run (1-based)",
+        clockless = spec.sample_rate is None and spec.time_column is None and \
+            not any(header_role(what)[0] == "time" for _, what in labelled)
+        also = ("; the runs have no time column either: set [recording] sample_rate (or --sample-rate) to the "
+                "logger's rate too") if clockless else ""
+        raise DataError(f"{len(runs)} runs side by side ({', '.join(runs)}); set [recording] run (1-based){also}",
                         f"{where}:{cols.header_line}")
     keep = [j for j, (r, _) in enumerate(labelled) if r in (run, None)]
     cols.names = [labelled[j][1] for j in keep]
