@@ -136,16 +136,11 @@ def _free_turn_misfit(tt: np.ndarray, xx: np.ndarray, period: float, is_max: boo
     samples, its vertex time searched from a tenth of a period before them to a tenth after."""
     w = 2.0 * math.pi / period
     sign = 1.0 if is_max else -1.0
-    vertex = np.linspace(tt[0] - 0.1 * period, tt[-1] + 0.1 * period, 201)
-    shape = -sign * amplitude * (1.0 - np.cos(w * (tt[None, :] - vertex[:, None])))
-    r = xx[None, :] - shape
-    r -= r.mean(axis=1, keepdims=True)
-    return float(np.sqrt(np.min(np.mean(r * r, axis=1))))
-
-
-def _far(rec) -> float:
-    """How far (rad) a sample's own reading must be from a held level to have left it."""
-    return max(rec.band, DEPARTED * 0.5 * float(np.ptp(rec.xs)))
+    best = math.inf
+    for vertex in np.linspace(tt[0] - 0.1 * period, tt[-1] + 0.1 * period, 201):  # memory: one row at a time
+        r = xx + sign * amplitude * (1.0 - np.cos(w * (tt - vertex)))
+        best = min(best, float(np.var(r)))
+    return math.sqrt(best)
 
 
 def _raw_departure(rec, j: int, level: float) -> int:
@@ -155,7 +150,7 @@ def _raw_departure(rec, j: int, level: float) -> int:
     sensor step or two, so the smoothed record leaves the band before the oscillator moves.  A
     swing released at rest leaves by that share within 0.04 periods, well inside the quarter
     period before it in which :func:`release_instant` looks for the release."""
-    far = _far(rec)
+    far = max(rec.band, DEPARTED * 0.5 * float(np.ptp(rec.xs)))
     raw = np.flatnonzero(np.abs(rec.x[j:] - level) > far)
     return j + int(raw[0]) if raw.size else j
 
