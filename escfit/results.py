@@ -19,75 +19,107 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import xarray as xr
 
 from .core.errors import ResultsError
 from .core.h5write import write_netcdf
 from .core.inputs import check_input_file
+from .core.plain_tree import Tree
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 __all__ = ["SCHEMA_VERSION", "FitResult", "load_fit", "write_fit", "check_results_file"]
 
 SCHEMA_VERSION = "escfit-fit/1"
 
 
-@dataclass
 class FitResult:
     """A fit read from (or about to be written to) a results file.
+
+    ``tree`` is the :class:`xarray.DataTree` of the file's groups.  A fit just run holds them as
+    a :class:`~escfit.core.plain_tree.Tree` (numpy arrays) and makes the DataTree on first use of
+    ``tree`` or :meth:`group`, so that fitting, writing and printing never import xarray; the
+    attributes, the summary and the file written are the same either way.
 
     ``timings`` holds the seconds each phase of the fit took in this process (empty for a
     fit read from a file, whose ``attrs["timings"]`` keeps them without the write).
     """
 
-    tree: xr.DataTree
-    path: str = ""
-    timings: dict = field(default_factory=dict)
+    def __init__(self, tree: "xr.DataTree | Tree", path: str = "", timings: dict | None = None):
+        self._plain = tree if isinstance(tree, Tree) else None
+        self._tree = None if isinstance(tree, Tree) else tree
+        self.path = path
+        self.timings = dict(timings or {})
+
+    @property
+    def tree(self) -> "xr.DataTree":
+        if self._tree is None:  # from here on the DataTree is the result (callers may change it)
+            self._tree, self._plain = self._plain.to_xarray(), None
+        return self._tree
+
+    @tree.setter
+    def tree(self, value: "xr.DataTree") -> None:
+        self._tree, self._plain = value, None
+
+    def contents(self) -> "xr.DataTree | Tree":
+        """What is written: the plain tree of a fit just run, or the DataTree once it was made."""
+        return self._plain if self._plain is not None else self._tree
+
+    @property
+    def _attrs(self):
+        return self.contents().attrs
 
     @property
     def attrs(self) -> dict[str, Any]:
-        return dict(self.tree.attrs)
+        return dict(self._attrs)
 
     def group(self, name: str) -> xr.Dataset | None:
         return self.tree[name].to_dataset() if name in self.tree.children else None
 
+    def arrays(self, name: str):
+        """Group ``name`` as the plain tree or the DataTree holds it (both give ``[var].values``)."""
+        if self._plain is not None:
+            return self._plain.children.get(name)
+        return self.group(name)
+
     @property
     def warnings(self) -> list[str]:
         """Identifiability and convergence warnings recorded with the fit."""
-        return json.loads(self.tree.attrs.get("warnings", "[]"))
+        return json.loads(self._attrs.get("warnings", "[]"))
 
     @property
     def notes(self) -> list[str]:
         """What was done to the recording before fitting (re-timing, windows, release, stops)."""
-        return json.loads(self.tree.attrs.get("notes", "[]") or "[]")
+        return json.loads(self._attrs.get("notes", "[]") or "[]")
 
     @property
     def verdict(self) -> str:
         """What the fit determines: ``"determined"``, ``"partly determined"`` or ``"not determined"``
         (see :func:`escfit.inference.reconcile.verdict`; ``""`` in files written before it existed)."""
-        return str(self.tree.attrs.get("verdict", ""))
+        return str(self._attrs.get("verdict", ""))
 
     @property
     def undetermined(self) -> list[str]:
         """Structural parameters the fit does not determine."""
-        return json.loads(self.tree.attrs.get("undetermined", "[]") or "[]")
+        return json.loads(self._attrs.get("undetermined", "[]") or "[]")
 
     @property
     def misfit(self) -> dict[str, float]:
         """Residual-structure figures at the best fit (see :mod:`escfit.inference.misfit`)."""
-        return json.loads(self.tree.attrs.get("misfit", "{}") or "{}")
+        return json.loads(self._attrs.get("misfit", "{}") or "{}")
 
     @property
     def parameter_names(self) -> list[str]:
-        return json.loads(self.tree.attrs["parameters"])
+        return json.loads(self._attrs["parameters"])
 
     @property
     def derived_names(self) -> list[str]:
         """Quantities computed from the parameters at every posterior draw (e.g. Monday's K)."""
-        return json.loads(self.tree.attrs.get("derived", "[]") or "[]")
+        return json.loads(self._attrs.get("derived", "[]") or "[]")
 
     def summary(self) -> dict[str, dict[str, Any]]:
         """One row per parameter (and derived quantity) for tables and reports.
@@ -107,51 +139,57 @@ class FitResult:
         stored get ``best_fit +- 1`` and ``+- 1.96`` standard errors, clipped to the bounds
         when the file holds them.
         """
-        post = self.group("posterior")
-        lsq = self.group("least_squares")
-        diag = self.group("diagnostics")
-        units = json.loads(self.tree.attrs.get("units", "{}"))
-        lsq_names = list(map(str, lsq["parameter"].values)) if lsq is not None else []
+        post = self.arrays("posterior")
+        lsq = self.arrays("least_squares")
+        diag = self.arrays("diagnostics")
+        units = json.loads(self._attrs.get("units", "{}"))
+        lsq_index = _index(lsq)
+        diag_index = _index(diag) if diag is not None and "rhat" in diag else {}
         out: dict[str, dict[str, Any]] = {}
         for name in self.parameter_names + [n for n in self.derived_names if n not in self.parameter_names]:
             row: dict[str, Any] = {"unit": units.get(name, "")}
-            at_bound = _at_bound(lsq, name) if name in lsq_names else None
+            at_bound = _at_bound(lsq, lsq_index[name]) if name in lsq_index else None
             if post is not None and name in post:
-                x = post[name].values.ravel()
+                x = np.asarray(post[name].values).ravel()
                 q = np.quantile(x, [0.025, 0.16, 0.5, 0.84, 0.975])
                 row.update(estimate=float(q[2]), estimate_kind="median", at_bound=at_bound, median=float(q[2]),
                            lo68=float(q[1]), hi68=float(q[3]), lo95=float(q[0]), hi95=float(q[4]),
                            mean=float(x.mean()), sd=float(x.std(ddof=1)))
-                if diag is not None and "rhat" in diag and name in list(diag["parameter"].values):
-                    sel = diag.sel(parameter=name)
-                    row.update(rhat=float(sel["rhat"]), ess_bulk=float(sel["ess_bulk"]), ess_tail=float(sel["ess_tail"]),
-                               tau=float(sel["tau"]))
-            elif name in lsq_names:
-                sel = lsq.sel(parameter=name)
-                v, se = float(sel["value"]), float(sel["stderr"])
+                if name in diag_index:
+                    i = diag_index[name]
+                    row.update({k: float(diag[k].values[i]) for k in ("rhat", "ess_bulk", "ess_tail", "tau")})
+            elif name in lsq_index:
+                i = lsq_index[name]
+                v, se = float(lsq["value"].values[i]), float(lsq["stderr"].values[i])
                 row.update(estimate=v, estimate_kind="best fit", at_bound=at_bound, best_fit=v, stderr=se,
-                           **_lsq_intervals(sel, v, se))
+                           **_lsq_intervals(lsq, i, v, se))
             else:
                 continue
             out[name] = row
         return out
 
 
-def _at_bound(lsq: xr.Dataset, name: str) -> str | None:
-    """``"min"``/``"max"`` from the stored least-squares flag (``None`` in files without it)."""
+def _index(group) -> dict[str, int]:
+    """Position of each parameter along a group's ``parameter`` dimension (empty without the group)."""
+    return {} if group is None else {str(n): i for i, n in enumerate(np.asarray(group["parameter"].values))}
+
+
+def _at_bound(lsq, i: int) -> str | None:
+    """``"min"``/``"max"`` from the stored least-squares flag of parameter ``i`` (``None`` in files without it)."""
     if "at_bound" not in lsq:
         return None
-    flag = int(lsq["at_bound"].sel(parameter=name))
+    flag = int(lsq["at_bound"].values[i])
     return "min" if flag < 0 else ("max" if flag > 0 else None)
 
 
-def _lsq_intervals(sel: xr.Dataset, value: float, stderr: float) -> dict[str, float]:
-    """The stored bounded intervals, or (older files) the symmetric ones clipped to any stored bounds."""
+def _lsq_intervals(lsq, i: int, value: float, stderr: float) -> dict[str, float]:
+    """The stored bounded intervals of parameter ``i``, or (older files) the symmetric ones clipped
+    to any stored bounds."""
     keys = ("lo68", "hi68", "lo95", "hi95")
-    if all(k in sel for k in keys):
-        return {k: float(sel[k]) for k in keys}
-    lower = float(sel["min"]) if "min" in sel else -math.inf
-    upper = float(sel["max"]) if "max" in sel else math.inf
+    if all(k in lsq for k in keys):
+        return {k: float(lsq[k].values[i]) for k in keys}
+    lower = float(lsq["min"].values[i]) if "min" in lsq else -math.inf
+    upper = float(lsq["max"].values[i]) if "max" in lsq else math.inf
     out = {}
     for level, z in (("68", 1.0), ("95", 1.96)):
         lo, hi = value - z * stderr, value + z * stderr
@@ -173,6 +211,8 @@ def load_fit(path: str | Path) -> FitResult:
         version, or a file whose layout :func:`check_results_file` refuses.
     """
     import warnings
+
+    import xarray as xr
 
     p = Path(path)
     check_input_file(p, "results", ResultsError)
@@ -286,7 +326,7 @@ def write_fit(result: FitResult, path: str | Path, *, force: bool = False) -> No
     (:func:`load_fit`) instead of giving changed numbers; the file is built in memory first, so
     a full disk is one clear error and leaves nothing behind (:mod:`escfit.core.h5write`).
     """
-    write_netcdf(result.tree, path, force=force)
+    write_netcdf(result.contents(), path, force=force)
     result.path = str(path)
 
 

@@ -26,7 +26,11 @@ import traceback
 import warnings
 from pathlib import Path
 
-import click
+# Small linear algebra (Jacobians of a few parameters): OpenBLAS's spinning thread pool costs more
+# CPU than it saves.  One thread unless the environment says otherwise; set before numpy loads.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import click  # noqa: E402
 
 from ..core.version import __version__
 from ..core.errors import EscfitError

@@ -1,4 +1,4 @@
-"""netCDF-4 images of xarray datasets and trees written with h5netcdf directly.
+"""netCDF-4 images of xarray datasets and trees (or their plain stand-ins) written with h5netcdf directly.
 
 ``xarray``'s ``to_netcdf`` asks dask which scheduler is running before it writes anything,
 and when dask is installed that imports ``dask.distributed``: about a CPU second of every
@@ -25,6 +25,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .plain_tree import Tree
+
 if TYPE_CHECKING:
     import xarray as xr
 
@@ -43,19 +45,25 @@ def _kind(values: np.ndarray) -> str | None:
 
 
 def _datasets(obj) -> list[tuple[str, "xr.Dataset"]]:
-    """(group path, the group's own dataset) of a tree, or of a dataset as the root group."""
+    """(group path, the group's own dataset) of a tree, or of a dataset as the root group
+    (xarray's objects, or :mod:`escfit.core.plain_tree`'s)."""
+    if isinstance(obj, Tree):
+        return obj.groups()
     if hasattr(obj, "subtree"):
         return [(node.path, node.to_dataset(inherit=False)) for node in obj.subtree]
     return [("/", obj)]
 
 
 def supported(obj) -> bool:
-    """Whether every variable of ``obj`` (a Dataset or a DataTree) is of a kind this module writes."""
+    """Whether every variable of ``obj`` (a Dataset or a DataTree, or a plain Group or Tree) is of
+    a kind this module writes."""
     for _path, ds in _datasets(obj):
-        if any(len(index.names) > 1 if hasattr(index, "names") else False for index in ds.indexes.values()):
+        indexes = getattr(ds, "indexes", {})  # a plain group has no (multi-)indexes
+        if any(len(index.names) > 1 if hasattr(index, "names") else False for index in indexes.values()):
             return False
         for var in {**ds.coords, **ds.data_vars}.values():
-            if _kind(np.asarray(var.values)) is None or var.encoding.get("dtype") not in (None, var.dtype):
+            encoded = getattr(var, "encoding", {}).get("dtype")
+            if _kind(np.asarray(var.values)) is None or encoded not in (None, var.values.dtype):
                 return False
     return True
 

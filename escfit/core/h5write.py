@@ -18,12 +18,15 @@ from __future__ import annotations
 import errno
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import xarray as xr
 
 from .atomic import atomic_path
 from .errors import ResultsError
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 __all__ = ["checksum_encoding", "netcdf_image", "xarray_image", "write_netcdf", "write_bytes"]
 
@@ -50,6 +53,10 @@ def netcdf_image(obj: xr.Dataset | xr.DataTree, *, checksums: bool = True) -> by
 
 def xarray_image(obj: xr.Dataset | xr.DataTree, *, checksums: bool = True) -> bytes:
     """The bytes of ``obj`` written as a netCDF-4/HDF5 file by xarray's ``to_netcdf`` (h5netcdf engine)."""
+    import xarray as xr
+
+    if hasattr(obj, "to_xarray") and not isinstance(obj, (xr.Dataset, xr.DataTree)):  # a plain Group or Tree
+        obj = obj.to_xarray()
     if isinstance(obj, xr.DataTree):
         encoding = {node.path: checksum_encoding(node.to_dataset(inherit=False)) for node in obj.subtree} \
             if checksums else None

@@ -33,8 +33,7 @@ from .registry import family
 from .trf import minimize
 
 if TYPE_CHECKING:
-    import xarray as xr
-
+    from ..core.plain_tree import Group, Tree
     from ..results import FitResult
     from .mcmc import McmcResult
 
@@ -289,7 +288,7 @@ def _remove_stale_temporaries(out: str | Path, checkpoint: str | Path | None) ->
 
 def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None, *, method: str, seed: int,
                started: str, predictive_draws: int = 400, fixes: list[str] | None = None,
-               unresolved: list | None = None, agreement=None) -> xr.DataTree:
+               unresolved: list | None = None, agreement=None) -> Tree:
     """The results tree of a fit (groups and attributes of :mod:`escfit.results`).
 
     ``fixes`` and ``unresolved`` come from :func:`~escfit.inference.reconcile.reconcile`: what was
@@ -297,22 +296,21 @@ def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None,
     ``agreement`` is the problem's check of the fit against the record
     (:class:`escfit.analysis.agreement.Agreement`), or ``None``.
     """
-    import xarray as xr
-
+    from ..core.plain_tree import Group, Tree
     from ..results import SCHEMA_VERSION, clean_attrs
 
     names = list(problem.names)
     units, meanings = dict(problem.units), dict(problem.meanings)
     obs_coords = problem.obs_coords()
     reading_units = problem.reading_units
-    groups: dict[str, xr.Dataset] = {}
-    groups["observed_data"] = xr.Dataset({"reading": ("obs", problem.observed, {"units": reading_units})},
+    groups: dict[str, Group] = {}
+    groups["observed_data"] = Group({"reading": ("obs", problem.observed, {"units": reading_units})},
                                          coords=obs_coords)
     bounded = {key: ("parameter", np.asarray(lsq.intervals[key], float),
                      {"long_name": f"{key[2:]} % interval inside the bounds ({'lower' if key[:2] == 'lo' else 'upper'} "
                                    "end), delta method in log/logit coordinates"})
                for key in ("lo68", "hi68", "lo95", "hi95")}
-    groups["least_squares"] = xr.Dataset(
+    groups["least_squares"] = Group(
         {"value": ("parameter", lsq.value), "stderr": ("parameter", lsq.stderr),
          "correlation": (("parameter", "parameter_b"), lsq.correlation),
          **bounded,
@@ -347,15 +345,15 @@ def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None,
         coords = {"chain": np.arange(mc.walkers), "draw": np.arange(mc.chain.shape[1])}
         derived = _derived(problem, mc, units, meanings)
         post.update(derived)
-        groups["posterior"] = xr.Dataset(post, coords=coords)
-        groups["sample_stats"] = xr.Dataset({"lp": (("chain", "draw"), mc.log_prob)}, coords=coords)
+        groups["posterior"] = Group(post, coords=coords)
+        groups["sample_stats"] = Group({"lp": (("chain", "draw"), mc.log_prob)}, coords=coords)
         groups["diagnostics"] = _diagnostics(groups["posterior"], names, mc)
         groups["posterior_predictive"], groups["log_likelihood"] = _predictive(problem, mc, obs_coords, reading_units,
                                                                              predictive_draws)
         flat = mc.chain.reshape(-1, len(names))
         pc = np.corrcoef(flat.T) if len(names) > 1 else np.ones((1, 1))
         convergence = []  # first: an unconverged run makes every other statement provisional
-        bad = [n for n in names if float(groups["diagnostics"]["rhat"].sel(parameter=n)) > 1.05]
+        bad = [n for n, r in zip(names, groups["diagnostics"]["rhat"].values) if float(r) > 1.05]
         if bad:
             convergence.append(f"split R-hat above 1.05 for {', '.join(bad)}: the walkers have not converged; "
                                "run longer")
@@ -387,10 +385,7 @@ def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None,
                      derived=list(derived), steps_mode="auto" if mc.auto else "fixed")
         if mc.auto:
             attrs.update(converged=int(bool(mc.converged)), convergence=mc.verdict)
-    root = xr.DataTree(dataset=xr.Dataset(attrs=clean_attrs(attrs)))
-    for name, ds in groups.items():
-        root[name] = xr.DataTree(dataset=ds)
-    return root
+    return Tree(clean_attrs(attrs), groups)
 
 
 def _held(problem: Problem, lsq: LeastSquaresResult) -> dict[str, float]:
@@ -446,17 +441,15 @@ def _derived(problem: Problem, mc: McmcResult, units: dict, meanings: dict) -> d
     return out
 
 
-def _diagnostics(post: xr.Dataset, names: list[str], mc: McmcResult) -> xr.Dataset:
-    import xarray as xr
-
+def _diagnostics(post: Group, names: list[str], mc: McmcResult) -> Group:
+    from ..core.plain_tree import Group
     from .convergence import chain_diagnostics
 
     if mc.figures is not None and list(names) == list(mc.names):
         rhat, ess_b, ess_t = mc.figures  # the automatic stop's figures, of these very draws
     else:  # (chain, draw, parameter), each parameter's draws as the posterior group holds them
-        rhat, ess_b, ess_t = chain_diagnostics(np.stack([post[n].transpose("chain", "draw").values for n in names],
-                                                        axis=-1))
-    return xr.Dataset(
+        rhat, ess_b, ess_t = chain_diagnostics(np.stack([post[n].values for n in names], axis=-1))  # (chain, draw)
+    return Group(
         {"rhat": ("parameter", rhat),
          "ess_bulk": ("parameter", ess_b),
          "ess_tail": ("parameter", ess_t),
@@ -466,9 +459,9 @@ def _diagnostics(post: xr.Dataset, names: list[str], mc: McmcResult) -> xr.Datas
 
 
 def _predictive(problem: Problem, mc: McmcResult, obs_coords: dict, reading_units: str,
-                draws: int) -> tuple[xr.Dataset, xr.Dataset]:
+                draws: int) -> tuple[Group, Group]:
     """Expected readings and pointwise log-likelihood for a thinned set of draws."""
-    import xarray as xr
+    from ..core.plain_tree import Group
 
     per_chain = max(1, draws // mc.walkers)
     idx = np.unique(np.linspace(0, mc.chain.shape[1] - 1, per_chain).astype(int))
@@ -483,8 +476,8 @@ def _predictive(problem: Problem, mc: McmcResult, obs_coords: dict, reading_unit
             except Exception:  # noqa: BLE001 - a failed draw stays NaN / -inf
                 problem.failures["posterior predictive solve failed"] += 1
     coords = {"chain": np.arange(mc.walkers), "draw": idx, **obs_coords}
-    return (xr.Dataset({"expected": (("chain", "draw", "obs"), exp, {"units": reading_units})}, coords=coords),
-            xr.Dataset({"reading": (("chain", "draw", "obs"), ll)}, coords=coords,
+    return (Group({"expected": (("chain", "draw", "obs"), exp, {"units": reading_units})}, coords=coords),
+            Group({"reading": (("chain", "draw", "obs"), ll)}, coords=coords,
                        attrs={"note": "pointwise log-likelihood on the thinned draws of posterior_predictive"}))
 
 

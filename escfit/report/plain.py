@@ -46,7 +46,7 @@ def plain_summary(res) -> list[str]:
     plain = getattr(family, "plain", None)
     if plain is None:
         return coefficient_sentences(draws) + window_sentences(res.attrs) + mode_sentences(res.attrs)
-    return plain(draws, res.attrs, res.group("observed_data")) + window_sentences(res.attrs) + mode_sentences(res.attrs)
+    return plain(draws, res.attrs, res.arrays("observed_data")) + window_sentences(res.attrs) + mode_sentences(res.attrs)
 
 
 def mode_sentences(attrs) -> list[str]:

@@ -25,7 +25,7 @@ MIN_INSIDE = 50  # below one draw in this many inside the bounds, the draws are 
 def parameter_draws(res, rng: np.random.Generator | None = None) -> dict[str, np.ndarray]:
     """Draws of every parameter (canonical units): the posterior's, else the least-squares normal
     approximation restricted to the bounds (:func:`_bounded_normal`); held parameters as constants."""
-    post, lsq = res.group("posterior"), res.group("least_squares")
+    post, lsq = res.arrays("posterior"), res.arrays("least_squares")
     out: dict[str, np.ndarray] = {}
     if post is not None:
         for name in res.parameter_names:
