@@ -24,8 +24,8 @@ leave_out(unused_by(sys.argv[1:]))  # as the console entry point does, before an
 import escfit.inference.fit
 module = sys.modules["escfit.inference.fit"]
 inner, seen = module.least_squares, {}
-WATCH = ("scipy.signal", "scipy.stats", "pandas", "xarray", "h5py", "emcee", "arviz", "matplotlib", "lmfit",
-         "distributed", "dask")
+WATCH = ("scipy.signal", "scipy.stats", "pandas", "xarray", "h5py", "emcee", "arviz", "arviz_stats", "matplotlib",
+         "lmfit", "distributed", "dask")
 
 def hooked(*a, **k):
     seen.setdefault("before_fit", [m for m in WATCH if sys.modules.get(m) is not None])
@@ -65,6 +65,22 @@ def test_least_squares_fit_imports_no_signal_stats_or_pandas_before_the_fit(tmp_
     never = {"scipy.signal", "scipy.stats", "emcee", "arviz", "matplotlib", "distributed", "dask", "xarray", "pandas"}
     assert not never & set(seen["at_end"]), seen
     assert out.is_file()
+
+
+def test_sampler_fit_imports_no_statistics_signal_or_data_libraries(tmp_path):
+    # the quick start's posterior: emcee without scipy.stats, convergence figures without ArviZ's
+    # dependencies, results written as plain arrays
+    out = tmp_path / "fit.h5"
+    recipe = ROOT / "fits" / "monday_unit3.toml"
+    r = subprocess.run([sys.executable, "-c", DRIVER, "fit", str(recipe), "--out", str(out), "--quiet"],
+                       capture_output=True, text=True, env=_env(), cwd=tmp_path, timeout=900)
+    line = [ln for ln in r.stdout.splitlines() if ln.startswith("SEEN ")]
+    assert line, r.stderr[-3000:]
+    seen = json.loads(line[0][5:])
+    assert seen.get("exit") in (0, None), r.stderr[-3000:]
+    assert "emcee" in seen["at_end"] and out.is_file()
+    never = {"scipy.signal", "scipy.stats", "arviz", "arviz_stats", "matplotlib", "distributed", "dask", "xarray", "pandas"}
+    assert not never & set(seen["at_end"]), seen
 
 
 def test_timings_table_adds_up_to_the_process(tmp_path):

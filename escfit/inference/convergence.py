@@ -4,7 +4,8 @@ A run stops when, over the draws kept after burn-in (the second half of the run 
 
 * the rank-normalised split R-hat of every parameter is at most ``RHAT_MAX`` (1.01),
 * the bulk and the tail effective sample sizes of every parameter are at least ``ESS_MIN``
-  (400), both as ArviZ computes them with each walker taken as a chain (Vehtari et al. 2021),
+  (400), both as ArviZ computes them with each walker taken as a chain (Vehtari et al. 2021;
+  :mod:`escfit.inference.rank_diagnostics`),
 * and the whole run is longer than ``TAU_FACTOR`` (50) integrated autocorrelation times of
   every parameter (emcee's own criterion; with 32 walkers it also gives an ensemble ESS of
   walkers * steps / (2 tau) >= 800).
@@ -69,7 +70,7 @@ def autocorr_time(chain: np.ndarray) -> np.ndarray:
 
     NaN when the run is too short to estimate it (fewer than two steps).
     """
-    import emcee
+    from .emcee_import import emcee
 
     if chain.shape[0] < 2:
         return np.full(chain.shape[-1], np.nan)
@@ -97,12 +98,12 @@ def chain_diagnostics(kept: np.ndarray, *, rhat_first: bool = False) -> tuple[np
     Returns
     -------
     rhat, ess_bulk, ess_tail : ndarray, shape (ndim,)
-        ArviZ's figures (``arviz_stats``' array functions: the same numbers as ``arviz.rhat`` and
-        ``arviz.ess`` without importing ArviZ's plotting and data layers, about a second of
-        every sampler run's start).  The tail ESS is that of the 5 % and 95 % quantiles.  NaN for a
-        parameter whose draws never move, and for all with fewer than 4 draws per chain.
+        ArviZ's figures (``arviz.rhat`` and ``arviz.ess``), computed by
+        :mod:`escfit.inference.rank_diagnostics` without importing ArviZ's dependencies.  The
+        tail ESS is that of the 5 % and 95 % quantiles.  NaN for a parameter whose draws never
+        move, and for all with fewer than 4 draws per chain.
     """
-    from arviz_stats.base import array_stats
+    from .rank_diagnostics import ess_bulk, ess_tail, split_rhat
 
     kept = np.asarray(kept, float)
     ndim = kept.shape[-1]
@@ -112,12 +113,11 @@ def chain_diagnostics(kept: np.ndarray, *, rhat_first: bool = False) -> tuple[np
     moving = np.flatnonzero(np.ptp(kept, axis=(0, 1)) > 0)
     if not moving.size:
         return rhat, bulk, tail
-    x = kept[:, :, moving]
-    rhat[moving] = array_stats.rhat(x, chain_axis=0, draw_axis=1)
+    rhat[moving] = [split_rhat(kept[:, :, i]) for i in moving]
     if rhat_first and not np.all(rhat <= RHAT_MAX):
         return rhat, bulk, tail
-    bulk[moving] = array_stats.ess(x, chain_axis=0, draw_axis=1, method="bulk")
-    tail[moving] = array_stats.ess(x, chain_axis=0, draw_axis=1, method="tail", prob=(0.05, 0.95))
+    bulk[moving] = [ess_bulk(kept[:, :, i]) for i in moving]
+    tail[moving] = [ess_tail(kept[:, :, i]) for i in moving]
     return rhat, bulk, tail
 
 

@@ -26,7 +26,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-import emcee
 import numpy as np
 
 from ..core.errors import FitError, ResultsError
@@ -34,6 +33,7 @@ from ..core.limits import check_sampler_size
 from ..likelihood.problem import Problem
 from .checkpoint import Checkpoint, check_identity, load_checkpoint, run_identity, save_checkpoint
 from .convergence import Assessment, assess, autocorr_time
+from .emcee_import import emcee
 from .lsq import LeastSquaresResult
 from .moves import de_t_moves
 from .space import IDENTITY, SamplerSpace, sampler_space

@@ -27,8 +27,9 @@ from __future__ import annotations
 
 import math
 
-import emcee
 import numpy as np
+
+from .emcee_import import emcee
 
 __all__ = ["EnsembleTMove", "de_t_moves", "complement_splits"]
 
