@@ -172,7 +172,7 @@ def test_interrupted_emcee_run_resumes(monday_like, tmp_path, monkeypatch):
         fit(scene, data, method="emcee", walkers=16, steps=120, seed=2, out=out)
     res = fit(scene, data, method="emcee", walkers=16, steps=120, seed=2, out=out, resume=True)
     post = res.group("posterior")
-    assert post.sizes == {"chain": 16, "draw": 60}
+    assert post.sizes == {"chain": 16, "draw": 90}  # the first quarter of 120 steps discarded
     assert res.attrs["resumed"] == 1
     diag = res.group("diagnostics")
     assert np.all(np.isfinite(diag["rhat"].values)) and np.all(diag["acceptance"].values > 0)

@@ -161,8 +161,8 @@ def test_autocorrelation_time_of_an_ar1_chain_matches_its_closed_form():
         x[t, :, 0] = phi * x[t - 1, :, 0] + e[t]
     a = assess(x)
     assert a.tau[0] == pytest.approx((1 + phi) / (1 - phi), rel=0.1)
-    # bulk ESS of the kept half: walkers * draws / tau
-    assert a.ess_bulk[0] == pytest.approx(walkers * steps / 2 / 9.0, rel=0.15)
+    # bulk ESS of the kept three quarters: walkers * draws / tau
+    assert a.ess_bulk[0] == pytest.approx(walkers * steps * 0.75 / 9.0, rel=0.15)
     assert a.rhat[0] < 1.01 and a.converged
 
 
@@ -281,3 +281,16 @@ def test_bad_run_lengths_are_refused():
         run_emcee(Gaussian2D(), walkers=8, steps="many")
     with pytest.raises(FitError, match="at least 10"):
         run_emcee(Gaussian2D(), walkers=8, steps=5)
+
+
+def test_burn_in_is_a_quarter_from_the_optimum_and_half_from_elsewhere():
+    from types import SimpleNamespace
+
+    at_optimum = SimpleNamespace(names=["a", "b"], value=Gaussian2D.mean.copy(), stderr=np.array([0.5, 2.0]),
+                                 sigma_hat=float("nan"), values={"a": 1.0, "b": -2.0})
+    started = run_emcee(Gaussian2D(), at_optimum, walkers=8, steps=200, seed=2, moves="de")
+    elsewhere = run_emcee(Gaussian2D(), walkers=8, steps=200, seed=2, moves="de")
+    assert (started.burn, started.chain.shape[1]) == (50, 150)
+    assert (elsewhere.burn, elsewhere.chain.shape[1]) == (100, 100)
+    # a burn-in given is kept either way
+    assert run_emcee(Gaussian2D(), at_optimum, walkers=8, steps=200, seed=2, moves="de", burn=20).burn == 20

@@ -37,7 +37,7 @@ EXIT_SOME_FAILED = 3
 @click.option("--walkers", type=click.IntRange(2, WALKERS_MAX), default=None, help="emcee walkers (default: the family's).")
 @click.option("--steps", type=StepsType(), default=None,
               help="emcee steps or 'auto' (until converged; default: the family's).")
-@click.option("--burn", type=click.IntRange(0), default=None, help="Default: half the steps.")
+@click.option("--burn", type=click.IntRange(0), default=None, help="Default: the first quarter of the steps.")
 @click.option("--n-starts", type=click.IntRange(1), default=None,
               help="Least-squares start points (default: the family's).")
 @click.option("--unit", "units", multiple=True, help="Fit only this unit (repeatable).")

@@ -36,7 +36,7 @@ class RigFamily(FamilyBase):
 
     ``fit_defaults``: the log posterior is closed-form and vectorised over the ensemble, so
     32 walkers x 3000 steps (about 40 autocorrelation times of the Monday sessions' 5
-    parameters, burn-in half the run) take a few seconds.
+    parameters, burn-in a quarter of the run) take a few seconds.
     """
 
     name = "friction_rig"

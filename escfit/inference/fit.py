@@ -94,8 +94,9 @@ def fit(scene, data, *, method: str = "leastsq", out: str | Path | None = None, 
         its folder is missing or not writable.
     seed, walkers, steps, burn, n_starts, progress
         Sampler and optimiser settings (``seed`` in [0, 2**32 - 1]); ``None`` takes the family's default
-        (``fit_defaults``; ``burn`` defaults to half the steps).  ``steps = "auto"`` samples
-        until converged (see :func:`~escfit.inference.mcmc.run_emcee`), at most ``max_steps``.
+        (``fit_defaults``; ``burn`` defaults to the first quarter of the run: the walkers start at the
+        least-squares optimum).  ``steps = "auto"`` samples until converged (see
+        :func:`~escfit.inference.mcmc.run_emcee`), at most ``max_steps``.
     resume
         Continue an interrupted emcee run from its checkpoint.
     checkpoint

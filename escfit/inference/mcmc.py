@@ -32,7 +32,7 @@ from ..core.errors import FitError, ResultsError
 from ..core.limits import check_sampler_size
 from ..likelihood.problem import Problem
 from .checkpoint import Checkpoint, check_identity, load_checkpoint, run_identity, save_checkpoint
-from .convergence import Assessment, assess, autocorr_time
+from .convergence import BURN_FAR, BURN_FRACTION, Assessment, assess, autocorr_time, default_burn
 from .emcee_import import emcee
 from .lsq import LeastSquaresResult
 from .moves import de_t_moves
@@ -225,7 +225,8 @@ def run_emcee(problem: Problem, lsq: LeastSquaresResult | None = None, *, walker
         (:mod:`escfit.inference.convergence`), looking first after 400 steps and then each time
         the run has grown by a quarter, up to ``max_steps``.
     burn
-        Steps discarded at the start (default: half the run).
+        Steps discarded at the start (default: the first quarter of the run when the walkers start
+        at ``lsq``'s optimum, else the first half; :func:`~escfit.inference.convergence.default_burn`).
     seed
         Seeds the start ball and emcee's own generator.
     checkpoint
@@ -293,6 +294,7 @@ def run_emcee(problem: Problem, lsq: LeastSquaresResult | None = None, *, walker
         fn = problem.log_prob_many if vectorize else problem.log_prob
     sampler = emcee.EnsembleSampler(walkers, ndim, fn, vectorize=vectorize, moves=MOVES[moves]())
     run = _Run(problem, sampler, previous, checkpoint, seed, moves, checkpoint_every, ident, space)
+    run.burn_fraction = BURN_FRACTION if lsq is not None else BURN_FAR  # walkers started at the optimum, or not
     if previous is None:
         sampler.random_state = np.random.RandomState(seed).get_state()
         start = space.to_sampler(_start(problem, lsq, walkers, np.random.default_rng(seed)))
@@ -306,7 +308,7 @@ def run_emcee(problem: Problem, lsq: LeastSquaresResult | None = None, *, walker
     # the stop's last assessment dropped the same burn-in when it was complete and of this run
     same = (assessment is not None and assessment.complete and assessment.steps == total
             and (burn is None or int(burn) <= total - 1))
-    burn = total // 2 if burn is None else min(int(burn), total - 1)
+    burn = default_burn(total, run.burn_fraction) if burn is None else min(int(burn), total - 1)
     tau = assessment.tau if assessment is not None and assessment.steps == total else autocorr_time(chain)
     kept = chain[burn:].transpose(1, 0, 2)
     return McmcResult(list(problem.names), kept, lp[burn:].T, run.accepted / max(total, 1), np.asarray(tau),
@@ -331,6 +333,7 @@ class _Run:
         self.state: emcee.State | None = None
         self.saved_steps = 0
         self.timings = {"sampling_s": 0.0, "checkpoint_s": 0.0, "checkpoint_saves": 0}
+        self.burn_fraction = BURN_FRACTION  # of the run discarded when no burn-in is given
         if previous is not None:
             self.parts, self.lp_parts = [previous.chain], [previous.log_prob]
             self.accepted = previous.accepted.copy()
@@ -374,7 +377,7 @@ class _Run:
         """
         assessment = None
         if auto and self.steps in look_points(self.steps):
-            assessment = assess(self.chain(), burn, rhat_first=True)
+            assessment = assess(self.chain(), burn, rhat_first=True, burn_fraction=self.burn_fraction)
             if assessment.converged:
                 return assessment
         look = next_look(self.steps)
@@ -400,7 +403,7 @@ class _Run:
                     done = self.steps + len(buf)
                     if auto and done >= look:
                         self._flush(buf, lp_buf)
-                        assessment = assess(self.chain(), burn, rhat_first=True)
+                        assessment = assess(self.chain(), burn, rhat_first=True, burn_fraction=self.burn_fraction)
                         if assessment.converged:
                             break
                         look = next_look(done)
@@ -423,7 +426,7 @@ class _Run:
         if self.path is not None and self.steps > self.saved_steps:
             self.save()  # an interrupt during the diagnostics or the writing keeps every draw
         if auto and (assessment is None or assessment.steps != self.steps or not assessment.complete):
-            assessment = assess(self.chain(), burn)
+            assessment = assess(self.chain(), burn, burn_fraction=self.burn_fraction)
         return assessment
 
     def _flush(self, buf: list, lp_buf: list) -> None:

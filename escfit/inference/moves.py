@@ -66,8 +66,9 @@ class EnsembleTMove(emcee.moves.RedBlueMove):
         mean, chol = factor
         z = random.randn(ns, ndim)
         w = random.chisquare(self.df, size=(ns, 1)) / self.df
-        q = mean + (z @ chol.T) / np.sqrt(w)
-        return q, self._log_density(s, mean, chol) - self._log_density(q, mean, chol)
+        y = z / np.sqrt(w)  # the proposal's whitened deviation, so no solve is needed at q
+        q = mean + y @ chol.T
+        return q, self._log_density(self._whiten(s, mean, chol)) - self._log_density(y.T)
 
     def _factor(self, comp: np.ndarray, ndim: int) -> tuple[np.ndarray, np.ndarray] | None:
         """Mean and Cholesky factor of the proposal's scatter, or None when the complement fixes none."""
@@ -85,10 +86,17 @@ class EnsembleTMove(emcee.moves.RedBlueMove):
             return None
         return mean, chol
 
-    def _log_density(self, x: np.ndarray, mean: np.ndarray, chol: np.ndarray) -> np.ndarray:
-        """Log density of the proposal at the rows of ``x``, up to a constant shared by all rows."""
-        y = np.linalg.solve(chol, (x - mean).T)
-        return -0.5 * (self.df + x.shape[1]) * np.log1p(np.sum(y * y, axis=0) / self.df)
+    @staticmethod
+    def _whiten(x: np.ndarray, mean: np.ndarray, chol: np.ndarray) -> np.ndarray:
+        """``chol^-1 (x - mean)`` of the rows of ``x``, as columns (a triangular solve)."""
+        from scipy.linalg import solve_triangular
+
+        return solve_triangular(chol, (x - mean).T, lower=True, check_finite=False)
+
+    def _log_density(self, y: np.ndarray) -> np.ndarray:
+        """Log density of the proposal at whitened deviations ``y`` (columns), up to a constant
+        shared by all of them."""
+        return -0.5 * (self.df + y.shape[0]) * np.log1p(np.sum(y * y, axis=0) / self.df)
 
 
 def complement_splits(walkers: int, ndim: int) -> int:

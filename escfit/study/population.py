@@ -391,7 +391,7 @@ def fit_population(draws: UnitDraws, *, walkers: int = 32, steps: int = 2000, bu
     draws
         From :func:`collect_draws`.
     walkers, steps, burn, seed
-        emcee settings (``burn`` defaults to half the steps).
+        emcee settings (``burn`` defaults to half the steps: the walkers do not start at a least-squares optimum).
     tau_scale
         Scale of the half-normal prior of each log-sd (1.0: a factor e between units is
         plausible, a factor e^3 is not).
