@@ -72,7 +72,7 @@ def test_results_file_layout_and_readers(monday_like, monday_fit):
     for group in ("posterior", "sample_stats", "observed_data", "posterior_predictive", "least_squares", "diagnostics"):
         assert group in back.tree.children
     post = back.group("posterior")
-    assert post.sizes == {"chain": 24, "draw": 1500}
+    assert post.sizes == {"chain": 24, "draw": 2250}
     assert "escfit" in back.attrs["versions"] and "seed" in back.attrs
     tree = xr.open_datatree(path, engine="h5netcdf")
     assert set(tree["posterior"].data_vars) >= set(TRUTH)

@@ -259,7 +259,7 @@ def test_shipped_trace_example_emcee_summary_and_report(trace_fit, tmp_path):
     assert params["geneva.mu"]["hi95"] - params["geneva.mu"]["lo95"] < 0.005
     assert js["method"] == "emcee" and js["data_file"].endswith("synthetic_four_pin_trace.csv")
     fitted = load_fit(trace_fit)
-    assert fitted.group("posterior").sizes == {"chain": 8, "draw": 100}
+    assert fitted.group("posterior").sizes == {"chain": 8, "draw": 150}  # the first quarter of 200 steps discarded
     assert fitted.attrs["moves"] == "de-t" and fitted.attrs["data_sha256"]
     html = tmp_path / "r.html"
     run("report", trace_fit, "--out", html)
@@ -290,7 +290,7 @@ def test_interrupted_emcee_run_resumes_to_the_same_draws(tmp_path, monkeypatch):
     assert refused.exit_code == 2 and "--resume" in refused.output
     run("fit", *args, "--out", out, "--resume")
     a, b = load_fit(out), load_fit(whole)
-    assert a.attrs["resumed"] == 1 and a.group("posterior").sizes == {"chain": 8, "draw": 20}
+    assert a.attrs["resumed"] == 1 and a.group("posterior").sizes == {"chain": 8, "draw": 30}  # 40 steps, a quarter burnt
     for name in TRACE_TRUTH:
         np.testing.assert_array_equal(a.group("posterior")[name].values, b.group("posterior")[name].values)
     assert not Path(f"{out}.emcee").exists()
