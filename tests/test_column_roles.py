@@ -23,6 +23,7 @@ from escfit.analysis.roles import companions, rising_clock
 from escfit.balance.family import read_data
 from escfit.cli.main import cli
 from escfit.core.errors import DataError
+from .cli_folder import new_folder
 
 OMEGA0, C = 4.0, 0.05
 RATE, DURATION = 30.0, 40.0
@@ -37,7 +38,7 @@ def _decay(amplitude=0.4):
 
 def _init(tmp_path, data, *args):
     runner = CliRunner()
-    with runner.isolated_filesystem(temp_dir=tmp_path) as here:
+    with new_folder(tmp_path) as here:
         result = runner.invoke(cli, ["init", str(data), "--pendulum", *args], catch_exceptions=False)
         scene = Path(here) / f"{Path(data).stem}.toml"
         return result, (tomllib.loads(scene.read_text()) if scene.exists() else None)

@@ -21,6 +21,7 @@ from escfit.core.scene import load_scene
 from escfit.inference import fit
 
 from .conftest import DATASETS, SHARED
+from .cli_folder import new_folder
 
 REAL = DATASETS / "real"
 
@@ -54,7 +55,7 @@ def _decay_file(tmp_path, scene, *, name="decay.csv", rate=25.0, sigma_deg=0.2, 
 
 def _init(args, tmp_path, input=None):
     runner = CliRunner()
-    with runner.isolated_filesystem(temp_dir=tmp_path) as here:
+    with new_folder(tmp_path) as here:
         result = runner.invoke(cli, ["init", *map(str, args)], input=input, catch_exceptions=False)
         return result, Path(here)
 
@@ -149,7 +150,7 @@ def test_fit_without_a_scene_on_a_terminal_writes_the_starter_and_fits(tmp_path,
     scene = _truth_scene(tmp_path, swings=16)
     data = _decay_file(tmp_path, scene)
     runner = CliRunner()
-    with runner.isolated_filesystem(temp_dir=tmp_path) as here:
+    with new_folder(tmp_path) as here:
         result = runner.invoke(cli, ["fit", str(data), "--out", "d.h5", "--quiet"], input="y\npendulum\n")
         assert result.exit_code == 0, result.output
         assert "wrote decay.toml" in result.output and "wrote d.h5" in result.output

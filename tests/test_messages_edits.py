@@ -24,6 +24,7 @@ from escfit.inference.reconcile import NOT_DETERMINED, verdict
 from escfit.likelihood.consistency import Implied
 
 from .conftest import balance_toml
+from .cli_folder import new_folder
 
 # --- did you mean ---------------------------------------------------------------------------------
 
@@ -142,7 +143,7 @@ def test_next_line_is_quoted_and_its_outputs_do_not_clash(tmp_path):
     folder.mkdir()
     data = _write(folder / "swing 1.csv", *_decay(0.3))
     runner = CliRunner()
-    with runner.isolated_filesystem(temp_dir=tmp_path) as here:
+    with new_folder(tmp_path) as here:
         Path(here, "my scene_fit.h5").write_text("an earlier fit")
         Path(here, "my scene.html").write_text("its report")
         r = runner.invoke(cli, ["init", str(data), "--spring", "--angle-unit", "rad", "--out", "my scene.toml"])
@@ -162,7 +163,7 @@ def test_degrees_read_as_radians_by_option_are_refused_at_init_naming_the_unit(t
     t, theta = _decay(math.radians(130.0), rate=1000.0)  # as an encoder logs: a few degrees between samples
     data = _write(tmp_path / "deg.csv", t, np.degrees(theta))  # 130 "rad" = 21 turns
     runner = CliRunner()
-    with runner.isolated_filesystem(temp_dir=tmp_path) as here:
+    with new_folder(tmp_path) as here:
         for kind in ("--pendulum", "--spring"):
             r = runner.invoke(cli, ["init", str(data), kind, "--angle-unit", "rad"])
             assert r.exit_code == 2, r.output
@@ -177,7 +178,7 @@ def test_radians_read_as_degrees_by_option_are_warned_at_init_and_at_fit(tmp_pat
     t, theta = _decay(math.radians(40.0))
     data = _write(tmp_path / "rad.csv", t, theta)  # 0.70 rad, read as 0.70 deg
     runner = CliRunner()
-    with runner.isolated_filesystem(temp_dir=tmp_path) as here:
+    with new_folder(tmp_path) as here:
         r = runner.invoke(cli, ["init", str(data), "--pendulum", "--angle-unit", "deg"])
         assert r.exit_code == 0, r.output
         warning = next(x for x in r.output.splitlines() if x.startswith("warning: read in deg"))
@@ -187,7 +188,7 @@ def test_radians_read_as_degrees_by_option_are_warned_at_init_and_at_fit(tmp_pat
         problem = make_problem(scene, str(data))
         assert any('angle_unit = "rad"' in w for w in problem.data_warnings)
     # with the unit right there is nothing to say
-    with runner.isolated_filesystem(temp_dir=tmp_path):
+    with new_folder(tmp_path):
         r = runner.invoke(cli, ["init", str(data), "--pendulum", "--angle-unit", "rad"])
         assert r.exit_code == 0 and "angle_unit" not in r.output.replace("angle_unit = 'rad'", "")
 

@@ -21,6 +21,7 @@ from click.testing import CliRunner
 from escfit.analysis.mode_filter import isolate_mode
 from escfit.cli.main import cli
 from escfit.core.errors import DataError
+from .cli_folder import new_folder
 
 W1, G1 = 2 * math.pi / 1.3, 0.04  # rad/s, 1/s: x'' + 2 g x' + w^2 x = 0, so C = 2 g
 W2, G2 = 2.7 * W1, 0.12
@@ -54,7 +55,7 @@ def _fit(tmp_path, *init_args):
     data = tmp_path / "beam.csv"
     np.savetxt(data, np.c_[T, _record()], delimiter=",", header="t (s),x (m)", comments="", fmt="%.8g")
     runner = CliRunner()
-    with runner.isolated_filesystem(temp_dir=tmp_path):
+    with new_folder(tmp_path):
         r = runner.invoke(cli, ["init", str(data), "--spring", "--out", "s.toml", *init_args])
         assert r.exit_code == 0, r.output
         recording = tomllib.loads(open("s.toml").read())["recording"]

@@ -24,6 +24,7 @@ from escfit.inference import make_problem
 from escfit.inference.fit import fit_problem
 
 from .test_motion_found import pushed, viscous
+from .cli_folder import new_folder
 
 PERIOD, Q, SIGMA, RATE = 1.0, 30.0, 0.005, 50.0  # s, -, rad, samples per second
 W0 = 2 * math.pi / PERIOD
@@ -151,7 +152,7 @@ def test_init_writes_the_stop_for_a_gyroscope_sunk_into_its_noise(tmp_path):
     data = tmp_path / "gyro.csv"
     data.write_text("t (s),Gyroscope z (rad/s)\n" + "".join(f"{a:.3f},{b:.5f}\n" for a, b in zip(t, rate)))
     runner = CliRunner()
-    with runner.isolated_filesystem(temp_dir=tmp_path) as here:
+    with new_folder(tmp_path) as here:
         result = runner.invoke(cli, ["init", str(data), "--spring", "--out", "gyro.toml"], catch_exceptions=False)
         assert result.exit_code == 0, result.output
         text = (tmp_path / here / "gyro.toml").read_text()

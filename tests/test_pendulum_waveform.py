@@ -22,6 +22,7 @@ from escfit.analysis.pendulum_unit import third_harmonic_ratio, waveform_shape
 from escfit.cli.main import cli
 from escfit.core.errors import DataError
 from escfit.core.scene import load_scene
+from .cli_folder import new_folder
 
 
 @pytest.mark.parametrize("deg", [20, 60, 120, 170])
@@ -55,7 +56,7 @@ def _write(tmp_path, name, t, x, header="time (s)\tangle (deg)"):
 
 def _init(args, tmp_path):
     runner = CliRunner()
-    with runner.isolated_filesystem(temp_dir=tmp_path) as here:
+    with new_folder(tmp_path) as here:
         return runner.invoke(cli, ["init", *map(str, args)], catch_exceptions=False), Path(here)
 
 

@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
+from .cli_folder import new_folder
 from escfit.analysis.channel import MARGIN, MIN_SCORE, choose_channel
 from escfit.analysis.quantity import MAX_TURNS, SMALL_DEG, check_quantity, swing_shape
 from escfit.balance.family import make_problem, read_data
@@ -45,7 +46,7 @@ def _write(path: Path, header: list[str] | None, columns) -> Path:
 
 def _init(tmp_path, data, *args):
     runner = CliRunner()
-    with runner.isolated_filesystem(temp_dir=tmp_path) as here:
+    with new_folder(tmp_path) as here:
         result = runner.invoke(cli, ["init", str(data), "--spring", *args], catch_exceptions=False)
         scene = Path(here) / f"{Path(data).stem}.toml"
         return result, (scene if scene.exists() else None)
@@ -127,7 +128,7 @@ def test_a_pendulum_bobs_position_starts_omega0_at_its_period(tmp_path):
     t, theta, _ = _decay()
     data = _write(tmp_path / "bob.csv", ["t (s)", "x (m)"], [t, 600.0 * theta])
     runner = CliRunner()
-    with runner.isolated_filesystem(temp_dir=tmp_path) as here:
+    with new_folder(tmp_path) as here:
         result = runner.invoke(cli, ["init", str(data), "--pendulum"], catch_exceptions=False)
         assert result.exit_code == 0, result.output
         doc = tomllib.loads((Path(here) / "bob.toml").read_text())

@@ -25,6 +25,7 @@ from click.testing import CliRunner
 
 from escfit.cli.main import cli
 from escfit.results import load_fit
+from .cli_folder import new_folder
 
 ROOT = Path(__file__).resolve().parents[1]
 NUMBER = r"(-?[\d.]+(?:e[-+]?\d+)?)"
@@ -33,7 +34,7 @@ NUMBER = r"(-?[\d.]+(?:e[-+]?\d+)?)"
 def _fit(tmp_path: Path, recipe: str, *options: str):
     out, report = tmp_path / "fit.h5", tmp_path / "fit.html"
     runner = CliRunner()
-    with runner.isolated_filesystem(temp_dir=tmp_path):
+    with new_folder(tmp_path):
         r = runner.invoke(cli, ["fit", str(ROOT / recipe), "--out", str(out), "--report", str(report), "--quiet",
                                 *options])
     assert r.exit_code == 0, r.output

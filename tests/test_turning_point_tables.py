@@ -20,6 +20,7 @@ from click.testing import CliRunner
 import escfit
 from escfit.analysis.recordings.row_kind import judge_rows
 from escfit.cli.main import cli
+from .cli_folder import new_folder
 
 OMEGA0, C, R = 4.08, 0.02, 0.002
 
@@ -106,7 +107,7 @@ def _write(tmp_path, name, t, v, header="time\tangle (rad)"):
 
 def _init(args, tmp_path):
     runner = CliRunner()
-    with runner.isolated_filesystem(temp_dir=tmp_path) as here:
+    with new_folder(tmp_path) as here:
         result = runner.invoke(cli, ["init", *map(str, args)], catch_exceptions=False)
         return result, Path(here)
 
