@@ -139,10 +139,11 @@ def assess(chain: np.ndarray, burn: int | None = None, *, rhat_first: bool = Fal
            burn_fraction: float = BURN_FRACTION) -> Assessment:
     """Convergence figures of ``chain`` (steps, walkers, ndim) with the first ``burn`` steps dropped.
 
-    ``burn`` defaults to ``burn_fraction`` of the run (:func:`default_burn`).  Parameters that never move (a chain with zero spread)
-    get R-hat NaN and ESS NaN, which fail the criteria.  With ``rhat_first``, a run whose R-hat
-    already fails gets an incomplete assessment (``complete`` False: ESS and tau NaN), which
-    says "not converged" exactly as the complete one would.
+    ``burn`` defaults to ``burn_fraction`` of the run (:func:`default_burn`).  Parameters that
+    never move (a chain with zero spread) get R-hat NaN and ESS NaN, which fail the criteria.
+    With ``rhat_first``, a run whose R-hat already fails gets an incomplete assessment
+    (``complete`` False: ESS and tau NaN), which says "not converged" exactly as the complete one
+    would.
     """
     steps = int(chain.shape[0])
     burn = default_burn(steps, burn_fraction) if burn is None else int(burn)

@@ -290,7 +290,8 @@ def _remove_stale_temporaries(out: str | Path, checkpoint: str | Path | None) ->
 def build_tree(problem: Problem, lsq: LeastSquaresResult, mc: McmcResult | None, *, method: str, seed: int,
                started: str, predictive_draws: int = 400, fixes: list[str] | None = None,
                unresolved: list | None = None, agreement=None) -> Tree:
-    """The results tree of a fit (groups and attributes of :mod:`escfit.results`).
+    """The results tree of a fit (groups and attributes of :mod:`escfit.results`), as plain arrays:
+    a :class:`~escfit.core.plain_tree.Tree`, whose ``to_xarray()`` gives the ``xarray.DataTree``.
 
     ``fixes`` and ``unresolved`` come from :func:`~escfit.inference.reconcile.reconcile`: what was
     refitted to agree with the recording's direct measurements, and what still disagrees;
