@@ -146,3 +146,32 @@ def test_the_commands_that_leave_dask_out():
     assert unused_by(["--debug", "report", "x.h5"]) == ("dask",)
     assert unused_by(["fit-many", "a.csv"]) == ()  # runs its fits on dask
     assert unused_by(["--version"]) == ()
+
+
+INIT = r"""
+import sys
+from escfit.core.unused import leave_out, unused_by
+leave_out(unused_by(sys.argv[1:]))
+from escfit.cli.main import cli
+try:
+    cli.main(sys.argv[1:], prog_name="escfit")
+except SystemExit as exc:
+    print("EXIT", exc.code)
+print("INTEGRATE", "scipy.integrate" in sys.modules)
+"""
+
+
+def test_init_reads_the_dop853_tables_without_scipy_integrate(tmp_path):
+    import numpy as np
+    import scipy.integrate._ivp.dop853_coefficients as scipys
+
+    from escfit.balance.dop853_tables import tables
+
+    for name in ("N_STAGES", "A", "B", "C", "D", "E3", "E5"):  # the file scipy's solve_ivp reads
+        assert np.array_equal(getattr(tables, name), getattr(scipys, name)), name
+    record = ROOT / "datasets" / "real" / "encoder_pendulum_jensen" / "pendulum_free_swing_data_02.txt"
+    r = subprocess.run([sys.executable, "-c", INIT, "init", str(record), "--pendulum", "--out",
+                        str(tmp_path / "scene.toml")], capture_output=True, text=True, env=_env(), cwd=tmp_path,
+                       timeout=900)
+    assert "EXIT 0" in r.stdout or (tmp_path / "scene.toml").is_file(), r.stderr[-2000:]
+    assert "INTEGRATE False" in r.stdout, r.stdout[-2000:]

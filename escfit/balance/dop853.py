@@ -35,11 +35,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.integrate._ivp import dop853_coefficients as _coefficients
 
 from ..core.errors import SolverError
 from ..core.kernels import kernel
 from ..core.status import Status
+from .dop853_tables import tables as _coefficients
 from .kernel_records import ROWS_FULL, columns, half_swings, run_options, with_rows
 from .segment import creep_horizon
 from .solution import ROW_DOP853, RowSolution, write_row

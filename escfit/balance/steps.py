@@ -10,10 +10,10 @@ partial length, which carries the integrator's own accuracy there.
 from __future__ import annotations
 
 import numpy as np
-from scipy.integrate._ivp import dop853_coefficients as _coefficients
 
 from ..core.kernels import kernel
 from .acceleration import acceleration
+from .dop853_tables import tables as _coefficients
 
 __all__ = ["dop853_step", "rk4_step", "N_STAGES", "stage_arrays"]
 
