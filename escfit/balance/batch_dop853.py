@@ -33,6 +33,7 @@ from .solution import ROW_DOP853, _states_at
 from .solvers import capability
 from .steps import N_STAGES
 from .system import System
+from .walker import Walk
 
 __all__ = ["DOP853_SAMPLING", "sample_batch_dop853", "THETA", "OMEGA"]
 
@@ -86,20 +87,20 @@ def _run_dense(k, run, n):
 
 
 @kernel
-def _sample_one(ks, i, spec, times, shift, value, row):
-    """Set ``i``: run long enough to pass the last time, then its state at every time (see the module)."""
-    k = ks[i]
-    n_t = times.shape[0]
-    t = np.empty(n_t)
-    for q in range(n_t):
-        t[q] = times[q] - shift
+def dense_run(k, spec, t):
+    """The dense run of one set long enough to pass its last time ``t[-1]`` (s since its release).
+
+    Returns ``(ran, res, rows, reached)``: whether the set was run at all (not when the one-set
+    path would refuse its tolerances or its first time precedes the release), the walk's
+    :class:`~escfit.balance.walker.Walk`, its dense rows and whether the run reached the last time.  Shared by :func:`_sample_one` and the sensitivities (:mod:`escfit.balance.sensitivity`).
+    """
+    n_t = t.shape[0]
     t_end = t[n_t - 1]
     max_swings = spec.max_swings
     n = _first_swings(t_end, k.omega0, max_swings)
     atol_x, atol_v = _tolerances(k, spec)
     if n < 1 or not (t[0] >= 0.0) or math.isnan(atol_x):
-        row.status = _REFUSED
-        return
+        return False, Walk(0, _REFUSED, 0, 0, math.nan, math.nan, math.nan, 0), np.empty((0, _N_ROW)), False
     runs = np.empty(1, _RUN)
     run = runs[0]
     run.t_end = t_end
@@ -114,24 +115,39 @@ def _sample_one(ks, i, spec, times, shift, value, row):
         run.max_segments = spec.max_segments if spec.max_segments > 0 else 64 * n + 1000
         run.max_steps = spec.max_steps if spec.max_steps > 0 else 10_000 * n + 100_000
         res, rows = _run_dense(k, run, n)
-        n_done, status, n_seg, t_fin, n_rows = res.n_done, res.status, res.n_seg, res.t, res.rows
-        reached = t_fin >= t_end
-        if reached or n_done < n or n >= max_swings:
+        reached = res.t >= t_end
+        if reached or res.n_done < n or n >= max_swings:
             break
         # the half swings were longer than pi/omega0: scale by the time covered (as sample_state)
-        n = min(max_swings, max(2 * n, int(n * t_end / max(t_fin, 1e-300) * 1.1) + 2))
+        n = min(max_swings, max(2 * n, int(n * t_end / max(res.t, 1e-300) * 1.1) + 2))
+    return True, res, rows[:res.rows], reached
+
+
+@kernel
+def _sample_one(ks, i, spec, times, shift, value, row):
+    """Set ``i``: run long enough to pass the last time, then its state at every time (see the module)."""
+    k = ks[i]
+    n_t = times.shape[0]
+    t = np.empty(n_t)
+    for q in range(n_t):
+        t[q] = times[q] - shift
+    ran, res, rows, reached = dense_run(k, spec, t)
+    if not ran:
+        row.status = _REFUSED
+        return
+    status = res.status
     beyond = (res.theta, 0.0) if status == _STOPPED else (math.nan, math.nan)
     stages = (np.empty(N_STAGES + 1), np.empty(N_STAGES + 1))
     other = np.empty(n_t)
-    sol = (rows[:n_rows], ROW_DOP853, ks[i:i + 1], stages)
+    sol = (rows, ROW_DOP853, ks[i:i + 1], stages)
     if spec.which == THETA:
         _states_at(sol, t, beyond, value, other)
     else:
         _states_at(sol, t, beyond, other, value)
     row.status = status
-    row.n_done = n_done
-    row.n_seg = n_seg
-    row.t = t_fin
+    row.n_done = res.n_done
+    row.n_seg = res.n_seg
+    row.t = res.t
     row.usable = 1 if status == _STOPPED or ((status == _OK or status == _BANKED) and reached) else 0
 
 

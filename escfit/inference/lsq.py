@@ -41,7 +41,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.errors import EscfitError, FitError
-from ..likelihood.problem import FAIL_RESIDUAL, Problem, gaussian_prior_residuals
+from ..likelihood.problem import FAIL_RESIDUAL, Problem, gaussian_prior_residuals, gaussian_prior_slopes
 from .fdjac import batch_jacobian
 from .neighbours import MAX_READINGS, look_nearby
 from .noise_scale import profiled_scale, settle_scale
@@ -311,7 +311,16 @@ def _batch_jacobian(problem, names, fixed, priors, n, scale, last, lo, hi, rel_s
         r = np.asarray(problem.residuals_many(vecs), float)[:, :n] / scale[0]
         return np.array([stacked_residuals(ri, priors, p) for ri, p in zip(r, points)])
 
+    exact = getattr(problem, "residual_jacobian", None)
+    counts = getattr(problem, "jacobians", Counter())
+
     def jac(x: np.ndarray) -> np.ndarray:
+        if exact is not None:
+            j = exact(problem.values({**fixed, **dict(zip(names, (float(v) for v in x)))}), names)
+            if j is not None:
+                counts["sensitivities"] += 1
+                return np.vstack([np.asarray(j, float)[:n] / scale[0], gaussian_prior_slopes(priors, x)])
+        counts["forward differences"] += 1
         seen = "x" in last and last["scale"] == scale[0] and np.array_equal(last["x"], x)
         return batch_jacobian(rows, x, lo, hi, f0=last["out"] if seen else None, rel_step=rel_step)
 

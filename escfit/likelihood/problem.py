@@ -148,6 +148,20 @@ def gaussian_prior_residuals(priors, x: np.ndarray) -> np.ndarray:
     return np.asarray(out, float)
 
 
+def gaussian_prior_slopes(priors, x: np.ndarray) -> np.ndarray:
+    """Derivatives of :func:`gaussian_prior_residuals` by ``x``: one row per Gaussian prior,
+    shape (rows, len(x)), the prior's own parameter's column non-zero."""
+    rows = []
+    for i, (pr, v) in enumerate(zip(priors, x)):
+        if pr.kind not in ("normal", "halfnormal", "lognormal"):
+            continue
+        row = np.zeros(len(x))
+        a = pr.args
+        row[i] = 1.0 / a[-1] if pr.kind != "lognormal" else (1.0 / (v * a[1]) if v > 0 else 0.0)
+        rows.append(row)
+    return np.array(rows, float).reshape(len(rows), len(x))
+
+
 class ProblemBase:
     """Defaults of the optional parts of :class:`Problem`, for families to inherit.
 

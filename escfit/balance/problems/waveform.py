@@ -18,6 +18,7 @@ to at most :attr:`~escfit.balance.observation.waveform.WaveformObservation.MAX_S
 from __future__ import annotations
 
 import math
+from collections import Counter
 from dataclasses import replace
 from typing import Mapping
 
@@ -128,6 +129,7 @@ class WaveformProblem(RecordingProblem):
             rtol, self.tolerance_basis = noise_rtol(sigma0, 0.5 * float(np.ptp(series.theta[idx])), idx.size,
                                                     span / period if period > 0 else math.nan)
             self.solver_options = {**self.solver_options, "rtol": rtol}
+        self.jacobians = Counter()  # least squares' Jacobians by how they were made
         self.vectorized = self.solver in _BATCH_OPTIONS and set(self.solver_options) <= _BATCH_OPTIONS[self.solver]
         if facts is not None:
             facts.give(self)
@@ -137,6 +139,8 @@ class WaveformProblem(RecordingProblem):
         out = super().provenance()
         if self.tolerance_basis:
             out["solver_tolerance"] = self.tolerance_basis
+        if self.jacobians:
+            out["jacobian"] = ", ".join(f"{n} by {how}" for how, n in self.jacobians.most_common())
         return out
 
     @property
@@ -252,6 +256,14 @@ class WaveformProblem(RecordingProblem):
             out[i] = self.residuals(self.values(vecs[i]))
         return np.where(np.isfinite(out), out, FAIL_RESIDUAL)
 
+    def residual_jacobian(self, vals: Mapping, names: list[str]) -> np.ndarray | None:
+        """The standardised residuals' derivatives by ``names`` at ``vals``, shape (readings, names),
+        from the integrator's sensitivities (:mod:`escfit.balance.problems.waveform_jacobian`);
+        None where they do not apply (then forward differences are the way)."""
+        from .waveform_jacobian import residual_jacobian
+
+        return residual_jacobian(self, vals, names)
+
     def _residual_rows(self, model: np.ndarray, vals: Mapping) -> np.ndarray:
         """:meth:`WaveformObservation.residuals` of rows of ``model`` with per-row parameters."""
         obs = self.observation
@@ -262,11 +274,18 @@ class WaveformProblem(RecordingProblem):
 
         gain = col("observation.gain", 1.0)
         mu = gain * model - col("observation.offset") - col("observation.offset_rate") * (self.sample_time - obs.t_ref)
-        r = self.curves[0].y - mu
+        return self.standardise(self.curves[0].y - mu, vals)
+
+    def standardise(self, r: np.ndarray, vals: Mapping) -> np.ndarray:
+        """Rows of raw residuals (readings minus the mean, shape (sets, readings)) over the noise:
+        white or AR(1)-whitened (each thinned block its own chain) or over the rounding spread,
+        with each row's ``observation.sigma`` and ``observation.rho`` (scalars or one per row).
+        Linear in ``r``, so it also carries a residual's derivatives."""
+        obs = self.observation
         sigma = np.asarray(vals["observation.sigma"], float)
         if obs.noise == "ar1":
-            rho = np.broadcast_to(np.asarray(vals["observation.rho"], float), (model.shape[0],))
-            sigma = np.broadcast_to(sigma, (model.shape[0],))
+            rho = np.broadcast_to(np.asarray(vals["observation.rho"], float), (r.shape[0],))
+            sigma = np.broadcast_to(sigma, (r.shape[0],))
             scale = np.array([s * math.sqrt(max(1.0 - p * p, 1e-300)) for s, p in zip(sigma, rho)])
             e = r.copy()
             e[:, 1:] -= rho[:, None] * r[:, :-1]
@@ -276,7 +295,7 @@ class WaveformProblem(RecordingProblem):
                 e[:, obs.fresh] = r[:, obs.fresh] / sigma[:, None]
             return e
         spread = np.array([math.sqrt(s**2 + obs.quantum**2 / 12.0)
-                           for s in np.broadcast_to(sigma, (model.shape[0],))])
+                           for s in np.broadcast_to(sigma, (r.shape[0],))])
         return r / spread[:, None]
 
     def _samples(self) -> np.ndarray:

@@ -1,0 +1,326 @@
+"""Forward sensitivities of the DOP853 motion: d theta(t) / d p for every parameter in one run.
+
+A least-squares fit needs the model's derivative by each parameter at every sample.  Forward
+differences run the model once per parameter, and an integrator error ``e`` puts an error of
+about ``e / 1.5e-8`` into each column, which keeps the integrator's tolerance far tighter than
+the readings' noise needs (:mod:`escfit.balance.problems.tolerance`).  Here the derivatives come
+from the variational equation, integrated along the run's own steps.
+
+**The equations.**  Inside a region of a half swing the swing-frame state ``(x, v)`` obeys
+``x' = v``, ``v' = a(x, v; k)`` (:func:`escfit.balance.acceleration.acceleration`).  Its
+sensitivity ``S = (Sx, Sv) = d(x, v)/dp`` at fixed time obeys::
+
+    Sx' = Sv
+    Sv' = a_x Sx + a_v Sv + a_p
+
+with ``a_x``, ``a_v`` the partial derivatives (the restoring torque's and each smooth effect's)
+and ``a_p = sum over record fields f of (da/df)(df/dp)``: the record's tangent ``dk = dk/dp``
+(:func:`record_tangents`) enters as ``-dC v - dw2 g(x) - dR - s d(offset)`` plus the smooth
+terms evaluated on ``dk`` -- each smooth effect's torque is linear in its own record fields
+(``tests/test_sensitivity.py`` checks that contract for every registered smooth effect).
+
+**The steps.**  The primal run (:func:`escfit.balance.batch_dop853.dense_run`) keeps every
+accepted step as a dense row.  The tangents are carried through those rows by the same DOP853
+step applied to the augmented system: for an explicit Runge-Kutta step of fixed length the
+derivative of the step map is that step applied to the variational equation, so the tangents are
+the derivatives of the computed motion, to the integrator's own accuracy, at whatever tolerance.
+A sample inside a row is a step of the partial length, as the dense solution evaluates it.
+
+**The turning points.**  At a turning point the velocity passes through zero and sliding Coulomb
+friction changes sign: the acceleration jumps from ``a-`` to ``a+``.  The turn's time depends on
+the parameters (``dtau/dp = -Sv / a-``), and the fixed-time sensitivity jumps by
+``(f- - f+) dtau/dp`` (the saltation rule for a state-dependent switch), which in the new half
+swing's frame (``x -> -x``) reads::
+
+    Sx+ = -Sx-        Sv+ = (a+ / a-) Sv-
+
+A balance that static friction holds at a turning point has ``a+ = 0``: the velocity's
+sensitivity vanishes there and the angle's stays.  The sensitivity of the turn's time itself is
+thereby exact: nothing of the Newton iteration that located it is differentiated.
+
+**What is covered.**  Scenes without escapement windows, hairspring break angles, banking pins
+or damping drift (:func:`covers`): their only switches are turning points.  A run ending in a
+creep to rest is not covered either.  The caller falls back to forward differences for those
+(``usable`` 0).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..core.kernels import kernel
+from ..core.status import Status
+from .acceleration import acceleration, smooth_terms
+from .batch_dop853 import DOP853_SAMPLING, dense_run
+from .dop853_tables import tables as _coefficients
+from .steps import N_STAGES
+from .system import System
+
+__all__ = ["covers", "record_tangents", "sample_sensitivities"]
+
+_A = np.ascontiguousarray(_coefficients.A[:N_STAGES, :N_STAGES])
+_B = np.ascontiguousarray(_coefficients.B)
+_OK, _STOPPED, _REFUSED = int(Status.OK), int(Status.STOPPED), int(Status.REFUSED)
+_SWING = 8  # the dense row's column holding its half swing (escfit.balance.solution)
+
+
+def covers(system: System) -> bool:
+    """Whether every parameter set's only switches are turning points (see the module docstring)."""
+    k = system.k
+    return bool(np.all(k["n_windows"] == 0) and np.all(k["n_pieces"] == 1) and np.all(np.isinf(k["bank"]))
+                and np.all(k["drift_rate"] == 0.0))
+
+
+def record_tangents(records_at, vals: dict, names: list[str], steps: np.ndarray) -> np.ndarray:
+    """The coefficient record's derivative by each parameter, by central differences of its assembly.
+
+    Assembling a record is arithmetic on the parameters (no model run); its fields are mostly
+    linear in them (C, R, drag D, the release angle), for which the central difference is exact
+    to rounding, and otherwise smooth (``omega0**2``, ``k3 omega0**2``: an error of order
+    ``step**2``, about 1e-10 relative with the steps used).
+
+    Parameters
+    ----------
+    records_at
+        ``records_at(values, n) -> System``: the scene's assembly (``BalanceScene.system``).
+    vals
+        Every parameter's value (a complete mapping).
+    names
+        The parameters to differentiate by.
+    steps
+        Each one's step (its unit; > 0).
+
+    Returns
+    -------
+    ndarray of the coefficient record's dtype, shape (len(names),)
+        Field ``f`` of entry ``j`` is ``df/d names[j]``; fields that do not change are 0.
+    """
+    m = len(names)
+    batch = {key: np.full(2 * m, float(v)) for key, v in vals.items()}
+    for j, name in enumerate(names):
+        batch[name][2 * j] += steps[j]
+        batch[name][2 * j + 1] -= steps[j]
+    k = records_at(batch, 2 * m).k
+    out = np.zeros(m, k.dtype)
+    for field in k.dtype.names:
+        if k.dtype[field].base.kind != "f":
+            continue
+        hi, lo = k[field][0::2], k[field][1::2]
+        shape = (m,) + (1,) * (hi.ndim - 1)
+        with np.errstate(invalid="ignore"):
+            d = (hi - lo) / (2.0 * np.asarray(steps, float).reshape(shape))
+        out[field] = np.where(hi == lo, 0.0, d)
+    return out
+
+
+@kernel(inline="always")
+def _partials(x, v, w2, k):
+    """``(a_x, a_v)``: the swing-frame acceleration's derivatives by angle (1/s^2) and velocity (1/s)."""
+    a_x = -w2 * (math.cos(x) if k.pendulum else 1.0)
+    a_v = -k.c
+    if k.smooth:
+        _, s_x, s_v = smooth_terms(x, v, k)
+        a_x += s_x
+        a_v += s_v
+    return a_x, a_v
+
+
+@kernel(inline="always")
+def _by_record(x, v, s, k, dk):
+    """The acceleration's derivative along the record tangent ``dk`` (rad/s^2 per the parameter's unit)."""
+    g = math.sin(x) if k.pendulum else x
+    da = -dk.c * v - dk.sp_w2[0] * g - dk.r - s * dk.sp_off[0]
+    if k.smooth:
+        d_smooth, _, _ = smooth_terms(x, v, dk)
+        da += d_smooth
+    return da
+
+
+@kernel
+def _tangent_step(state, tangent, h, regime, work):
+    """One DOP853 step of length ``h`` (s) of the state and its tangents.
+
+    Parameters
+    ----------
+    state : tuple
+        ``(x, v, a)`` at the step start (swing frame).
+    tangent : ndarray, shape (m, 2)
+        ``(Sx, Sv)`` of each parameter at the step start.
+    regime : tuple
+        ``(w2, xc, s, k, dks)``: the region, the direction, the record and its tangents.
+    work : tuple
+        ``(kx, kv, tx, tv, out)``: stage arrays (``N_STAGES + 1``; tangents ``(m, N_STAGES + 1)``)
+        and the tangents at the step end, shape (m, 2), written here.
+
+    Returns
+    -------
+    x, v, a : float
+        State and acceleration at the step end.
+    """
+    x, v, a = state
+    w2, xc, s, k, dks = regime
+    kx, kv, tx, tv, out = work
+    m = tangent.shape[0]
+    kx[0] = v
+    kv[0] = a
+    a_x, a_v = _partials(x, v, w2, k)
+    for p in range(m):
+        tx[p, 0] = tangent[p, 1]
+        tv[p, 0] = a_x * tangent[p, 0] + a_v * tangent[p, 1] + _by_record(x, v, s, k, dks[p])
+    for i in range(1, N_STAGES):
+        dx = 0.0
+        dv = 0.0
+        for j in range(i):
+            dx += _A[i, j] * kx[j]
+            dv += _A[i, j] * kv[j]
+        xs = x + h * dx
+        vs = v + h * dv
+        kx[i] = vs
+        kv[i] = acceleration(xs, vs, w2, xc, k)
+        a_x, a_v = _partials(xs, vs, w2, k)
+        for p in range(m):
+            sx = 0.0
+            sv = 0.0
+            for j in range(i):
+                sx += _A[i, j] * tx[p, j]
+                sv += _A[i, j] * tv[p, j]
+            sx = tangent[p, 0] + h * sx
+            sv = tangent[p, 1] + h * sv
+            tx[p, i] = sv
+            tv[p, i] = a_x * sx + a_v * sv + _by_record(xs, vs, s, k, dks[p])
+    sx = 0.0
+    sv = 0.0
+    for j in range(N_STAGES):
+        sx += _B[j] * kx[j]
+        sv += _B[j] * kv[j]
+    x1 = x + h * sx
+    v1 = v + h * sv
+    for p in range(m):
+        sx = 0.0
+        sv = 0.0
+        for j in range(N_STAGES):
+            sx += _B[j] * tx[p, j]
+            sv += _B[j] * tv[p, j]
+        out[p, 0] = tangent[p, 0] + h * sx
+        out[p, 1] = tangent[p, 1] + h * sv
+    return x1, v1, acceleration(x1, v1, w2, xc, k)
+
+
+@kernel
+def _sensitivities(k, dks, spec, t, out, tangents):
+    """Run one set (:func:`escfit.balance.batch_dop853.dense_run`) and carry its tangents.
+
+    ``out`` (3, times): theta (rad), omega (rad/s), theta'' (rad/s^2) at each time; ``tangents``
+    (2, m, times): d theta / dp and d omega / dp.  Returns the run's status, or -1 when the run
+    is not covered (a creep to rest, a grazing turn, times beyond a run that did not stop).
+    """
+    ran, res, rows, reached = dense_run(k, spec, t)
+    if not ran:
+        return _REFUSED
+    status = res.status
+    if not (status == _STOPPED or (status == _OK and reached)):
+        return status
+    m = dks.shape[0]
+    work = (np.empty(N_STAGES + 1), np.empty(N_STAGES + 1), np.empty((m, N_STAGES + 1)),
+            np.empty((m, N_STAGES + 1)), np.empty((m, 2)))
+    tangent = np.zeros((m, 2))
+    s0 = rows[0, 2] if rows.shape[0] > 0 else 1.0
+    for p in range(m):  # the release: theta0 and v0 are record fields too
+        tangent[p, 0] = s0 * dks[p].theta0
+        tangent[p, 1] = s0 * dks[p].v0
+    n_rows = rows.shape[0]
+    n_t = t.shape[0]
+    q = 0
+    for i in range(n_rows):
+        s = rows[i, 2]
+        state = (rows[i, 3], rows[i, 4], rows[i, 7])
+        regime = (rows[i, 6], rows[i, 5], s, k, dks)
+        end = rows[i, 0] + rows[i, 1]
+        last = i + 1 == n_rows
+        while q < n_t and (t[q] < rows[i + 1, 0] if not last else t[q] <= end):
+            u = min(max(t[q] - rows[i, 0], 0.0), rows[i, 1])
+            x, v, a = _tangent_step(state, tangent, u, regime, work)
+            out[0, q] = s * x
+            out[1, q] = s * v
+            out[2, q] = s * a
+            for p in range(m):
+                tangents[0, p, q] = s * work[4][p, 0]
+                tangents[1, p, q] = s * work[4][p, 1]
+            q += 1
+        if last and q == n_t:
+            break
+        x, v, a = _tangent_step(state, tangent, rows[i, 1], regime, work)
+        step_end = work[4]
+        if not last and rows[i + 1, _SWING] == rows[i, _SWING]:
+            tangent[:, :] = step_end  # the next step of the same region starts where this one ended
+            continue
+        # a turning point: the next row starts the next half swing, or the run stopped there
+        if not a < 0.0:
+            return -1  # a graze: the turn's time is not a smooth function of the parameters
+        if not last:
+            a_next = rows[i + 1, 7]
+            for p in range(m):
+                tangent[p, 0] = -step_end[p, 0]
+                tangent[p, 1] = a_next / a * step_end[p, 1]
+            continue
+        if status != _STOPPED or abs(res.theta - s * x) > 1e-9 * (abs(x) + 1e-3):
+            return -1  # stopped by a creep to rest, or samples beyond a run that did not stop
+        while q < n_t:  # held by static friction at this turning point
+            out[0, q] = res.theta
+            out[1, q] = 0.0
+            out[2, q] = 0.0
+            for p in range(m):
+                tangents[0, p, q] = s * step_end[p, 0]
+                tangents[1, p, q] = 0.0
+            q += 1
+    if q < n_t:
+        return -1
+    return status
+
+
+@kernel
+def _sensitivities_one(ks, dks, spec, t, out, tangents):
+    """:func:`_sensitivities` on ``ks[0]`` (the front end's single call)."""
+    return _sensitivities(ks[0], dks, spec[0], t, out, tangents)
+
+
+def sample_sensitivities(system: System, times: np.ndarray, tangents: np.ndarray, *, rtol: float = 1e-10,
+                         atol: float | None = None, max_segments: int | None = None, max_steps: int | None = None,
+                         max_swings: int = 10_000_000) -> tuple[np.ndarray | None, np.ndarray | None, int]:
+    """The motion and its parameter sensitivities at ``times`` (s since the release), by solver dop853.
+
+    Parameters
+    ----------
+    system
+        One parameter set (a scene's assembly), covered by :func:`covers`.
+    times
+        Sample times (s since the release, ascending, the first >= 0).
+    tangents
+        The record's derivative by each parameter (:func:`record_tangents`).
+    rtol, atol, max_segments, max_steps, max_swings
+        The dop853 run's options, as :func:`~escfit.balance.batch_dop853.sample_batch_dop853`
+        takes them: the run is that of the waveform's samples, step for step.
+
+    Returns
+    -------
+    motion : ndarray, shape (3, times), or None
+        theta (rad), theta' (rad/s) and theta'' (rad/s^2).
+    sensitivity : ndarray, shape (2, parameters, times), or None
+        d theta / dp and d theta' / dp (per the parameter's unit).
+    status : int
+        The run's :class:`~escfit.core.status.Status` code; -1: the run is not covered (both
+        arrays None then, as for a status other than ok or stopped).
+    """
+    times = np.ascontiguousarray(times, float)
+    spec = np.zeros(1, DOP853_SAMPLING)
+    spec[0] = (0, int(max_segments or 0), int(max_steps or 0), int(max_swings), float(rtol),
+               math.nan if atol is None else float(atol))
+    m = tangents.shape[0]
+    motion = np.full((3, times.size), np.nan)
+    sens = np.full((2, m, times.size), np.nan)
+    status = int(_sensitivities_one(system.k, np.ascontiguousarray(tangents), spec, times, motion, sens))
+    if status not in (_OK, _STOPPED):
+        return None, None, status
+    return motion, sens, status
