@@ -127,12 +127,23 @@ class WaveformProblem(RecordingProblem):
             # the tolerance from the readings' noise and the Jacobian's steps, stated in the results
             span = float(self.sample_time[-1] - t_ref)
             rtol, self.tolerance_basis = noise_rtol(sigma0, 0.5 * float(np.ptp(series.theta[idx])), idx.size,
-                                                    span / period if period > 0 else math.nan)
+                                                    span / period if period > 0 else math.nan,
+                                                    sensitivities=self._sensitivities_apply())
             self.solver_options = {**self.solver_options, "rtol": rtol}
         self.jacobians = Counter()  # least squares' Jacobians by how they were made
         self.vectorized = self.solver in _BATCH_OPTIONS and set(self.solver_options) <= _BATCH_OPTIONS[self.solver]
         if facts is not None:
             facts.give(self)
+
+    def _sensitivities_apply(self) -> bool:
+        """Whether least squares will differentiate this scene by the integrator's sensitivities
+        (:mod:`escfit.balance.sensitivity`: dop853, no switch but turning points)."""
+        from ..sensitivity import covers
+
+        try:
+            return covers(self.scene.system(self.values(self.initial)))
+        except (EscfitError, ValueError, ArithmeticError, KeyError):
+            return False
 
     def provenance(self) -> dict:
         """As every recording problem's, and how the integrator's tolerance was chosen (``solver_tolerance``)."""
