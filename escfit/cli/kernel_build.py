@@ -6,7 +6,8 @@ Run from a checkout after changing a kernel or a module compiled into one::
 
 A child process with an empty numba cache, numba's generic x86-64 processor
 (``NUMBA_CPU_NAME=generic``) and the store turned off runs :data:`WORKLOADS` (what a newcomer
-runs first: the README's two examples, the string pendulum's least squares, a starter scene)
+runs first: the README's two examples, the string pendulum's least squares, a starter scene,
+and a short posterior run of the first example for the whole-ensemble dop853 sampler)
 and stores every kernel it compiled; ``escfit/_kernels`` is then replaced with the result.
 About a minute on two cores.
 """
@@ -27,6 +28,8 @@ __all__ = ["WORKLOADS", "build"]
 
 WORKLOADS = (
     ["fit", "fits/real/encoder_pendulum_jensen.toml", "--out", "{tmp}/a.h5", "--quiet"],
+    ["fit", "fits/real/encoder_pendulum_jensen.toml", "--method", "emcee", "--steps", "40", "--out", "{tmp}/e.h5",
+     "--quiet"],
     ["fit", "fits/monday_unit3.toml", "--out", "{tmp}/b.h5", "--quiet"],
     ["fit", "fits/real/string_pendulum_lab1.toml", "--method", "leastsq", "--out", "{tmp}/c.h5", "--quiet"],
     ["init", "datasets/real/phy180_pendulum_lefebvre/q2_data.csv", "--pendulum", "--out", "{tmp}/d.toml"],
