@@ -13,7 +13,7 @@ each observation model, friction rig, Geneva, verge) maps onto lmfit the same wa
   (``free``, ``noise``, ``fixed`` or ``tied``);
 * the residual is the vector escfit's own least squares minimises: the readings' standardised
   residuals and one row per Gaussian prior of a fitted parameter
-  (:func:`~escfit.inference.lsq.stacked_residuals`), so any lmfit method minimises the same
+  (:func:`~escfit.likelihood.problem.stacked_residuals`), so any lmfit method minimises the same
   cost and ``lmfit.conf_interval`` profiles it.
 
 lmfit is imported here only, and only when one of these functions runs.
@@ -32,7 +32,7 @@ import numpy as np
 from ..core.errors import FitError, ResultsError
 from ..core.params import safe_name
 from ..likelihood.problem import Problem
-from .lsq import stacked_residuals
+from ..likelihood.problem import stacked_residuals
 
 if TYPE_CHECKING:
     import lmfit

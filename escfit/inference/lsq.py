@@ -1,9 +1,11 @@
 """Bounded least squares with a multistart, for every model family.
 
 Each start runs scipy's trust-region reflective method (:mod:`escfit.inference.trf`, the
-algorithm lmfit's ``least_squares`` method wraps, called directly).  Its forward-difference
-Jacobian runs as one batch call when the problem offers ``residuals_many`` (many parameter
-sets at once, :mod:`escfit.inference.fdjac`: the same steps, hence the same fit).
+algorithm lmfit's ``least_squares`` method wraps, called directly).  Its Jacobian is the
+problem's own (the integrator's sensitivities of a waveform fit) where it has one,
+else forward differences run as one batch call when the problem offers ``residuals_many`` (many
+parameter sets at once, :mod:`escfit.inference.fdjac`: the same steps, hence the same fit); see
+:mod:`escfit.inference.lsq_jacobian`.
 
 The optimiser sees :meth:`Problem.residuals` (the readings' standardised residuals) plus one
 residual per Gaussian prior of a fitted parameter (see
@@ -41,8 +43,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.errors import EscfitError, FitError
-from ..likelihood.problem import FAIL_RESIDUAL, Problem, gaussian_prior_residuals, gaussian_prior_slopes
-from .fdjac import batch_jacobian
+from ..likelihood.problem import Problem, stacked_residuals
+from .lsq_jacobian import LeastSquaresJacobian
 from .neighbours import MAX_READINGS, look_nearby
 from .noise_scale import profiled_scale, settle_scale
 from .starts import multistart_points
@@ -224,11 +226,11 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
         last.update(x=np.array(x, float), scale=scale[0], out=out)
         return out
 
-    # the forward differences in one batch call where the problem has one (same steps, same fit)
+    # the problem's sensitivities, else forward differences in one batch call (same steps, same fit)
     if callable(getattr(problem, "residuals_many", None)) and getattr(problem, "vectorized", True) \
             and "jac" not in options:
-        options["jac"] = _batch_jacobian(problem, names, fixed, priors, n, scale, last, lo, hi,
-                                         options.get("diff_step"))
+        options["jac"] = LeastSquaresJacobian(problem, names, fixed, priors, scale, last, (lo, hi),
+                                              options.get("diff_step"))
 
     with single_blas_thread(), _quiet():
         starts = _ranked(starts, residual, lo, hi, N_REFINE if n_refine is None else n_refine)
@@ -287,44 +289,6 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
     return LeastSquaresResult(names, value, stderr, corr, chisqr, float(redchi), float(sigma_hat), int(n),
                               len(starts), bool(best.success), best.message, vals, profile_noise,
                               lower=lo.copy(), upper=hi.copy(), warnings=cov_warnings, other_optimum=other)
-
-
-def stacked_residuals(r: np.ndarray, priors, x: np.ndarray) -> np.ndarray:
-    """The readings' residuals and the Gaussian priors' ones, failures made large and finite."""
-    out = np.concatenate([r, gaussian_prior_residuals(priors, x)])
-    return np.where(np.isfinite(out), out, FAIL_RESIDUAL)
-
-
-def _batch_jacobian(problem, names, fixed, priors, n, scale, last, lo, hi, rel_step):
-    """The Jacobian of the least squares' residual vector for a problem with ``residuals_many``:
-    scipy's "2-point" forward differences (:func:`~escfit.inference.fdjac.batch_jacobian`), the
-    stepped points run in one batch call, the base point's residuals reused from the evaluation
-    scipy made there; the same noise-scale division, prior rows and failure values as the
-    residual function."""
-    base = problem.values(dict(fixed))
-    full = np.array([base[nm] for nm in problem.names], float)
-    cols = [problem.names.index(nm) for nm in names]
-
-    def rows(points: np.ndarray) -> np.ndarray:
-        vecs = np.repeat(full[None, :], points.shape[0], axis=0)
-        vecs[:, cols] = points
-        r = np.asarray(problem.residuals_many(vecs), float)[:, :n] / scale[0]
-        return np.array([stacked_residuals(ri, priors, p) for ri, p in zip(r, points)])
-
-    exact = getattr(problem, "residual_jacobian", None)
-    counts = getattr(problem, "jacobians", Counter())
-
-    def jac(x: np.ndarray) -> np.ndarray:
-        if exact is not None:
-            j = exact(problem.values({**fixed, **dict(zip(names, (float(v) for v in x)))}), names)
-            if j is not None:
-                counts["sensitivities"] += 1
-                return np.vstack([np.asarray(j, float)[:n] / scale[0], gaussian_prior_slopes(priors, x)])
-        counts["forward differences"] += 1
-        seen = "x" in last and last["scale"] == scale[0] and np.array_equal(last["x"], x)
-        return batch_jacobian(rows, x, lo, hi, f0=last["out"] if seen else None, rel_step=rel_step)
-
-    return jac
 
 
 def _failures_since(problem: Problem, before: Counter) -> tuple[int, str] | None:

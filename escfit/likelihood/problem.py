@@ -148,6 +148,12 @@ def gaussian_prior_residuals(priors, x: np.ndarray) -> np.ndarray:
     return np.asarray(out, float)
 
 
+def stacked_residuals(r: np.ndarray, priors, x: np.ndarray) -> np.ndarray:
+    """The readings' residuals ``r`` and the Gaussian priors' ones at ``x``, failures made large and finite."""
+    out = np.concatenate([r, gaussian_prior_residuals(priors, x)])
+    return np.where(np.isfinite(out), out, FAIL_RESIDUAL)
+
+
 def gaussian_prior_slopes(priors, x: np.ndarray) -> np.ndarray:
     """Derivatives of :func:`gaussian_prior_residuals` by ``x``: one row per Gaussian prior,
     shape (rows, len(x)), the prior's own parameter's column non-zero."""
