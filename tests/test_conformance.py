@@ -256,3 +256,54 @@ def test_the_declared_part_is_what_a_half_swing_loses(effect, restoring):
     for a, b in zip(amp[:-1], amp[1:]):
         part = law_parts(np.array([0.5 * (a + b)]), omega0=W0, restoring=restoring, **{loss.symbol: value})[effect]
         assert abs((a - b) - part[0]) <= 0.02 * (a - b), (effect, restoring, a - b, part[0])
+
+
+# -- forward sensitivities -----------------------------------------------------------------
+
+@pytest.mark.parametrize("effect", SMOOTH)
+def test_smooth_torque_is_linear_in_its_record_fields(effect):
+    """The sensitivities' parameter term is the smooth torque evaluated on the record's tangent
+    (:mod:`escfit.balance.sensitivity`): each smooth torque must be linear in its own fields."""
+    torque = importlib.import_module(EFFECTS[effect].__module__).torque
+    own = [s.name for s in getattr(EFFECTS[effect], "SLOTS", ())]
+    assert own, f"{effect} has a torque but no record field of its own"
+    k = load(example_tables(effect)).build().k.copy()
+    records = np.repeat(k, 3)
+    rng = np.random.default_rng(11)
+    for name in own:
+        records[name][:2] = rng.uniform(0.1, 2.0, 2)
+        records[name][2] = 0.7 * records[name][0] - 1.3 * records[name][1]
+    for x, v in rng.uniform(-1.5, 1.5, (6, 2)) * (A0, A0 * W0):
+        a0, a1, a2 = (np.array(torque(x, v, records[i])) for i in range(3))
+        np.testing.assert_allclose(a2, 0.7 * a0 - 1.3 * a1, rtol=1e-12, atol=1e-12 * np.max(np.abs(a0) + np.abs(a1)))
+
+
+@pytest.mark.parametrize("effect", list(EFFECTS))
+def test_sensitivities_match_central_differences(effect):
+    """d theta(t)/dp from the variational equation against central differences of the dop853
+    sampler at rtol 1e-13, for every parameter of every effect the sensitivities cover."""
+    from escfit.balance.batch_dop853 import sample_batch_dop853
+    from escfit.balance.sensitivity import covers, record_tangents, sample_sensitivities
+
+    scene = load(example_tables(effect))
+    if not claims("dop853", scene):
+        pytest.skip(f"dop853 does not claim {effect}")
+    vals = scene.params.values()
+    if not covers(scene.system(vals)):
+        pytest.skip(f"{effect} switches within a half swing: least squares keeps forward differences")
+    names = [n for n, v in vals.items() if v != 0.0]
+    t = np.linspace(0.01, SWINGS * math.pi / W0, 400)
+    tangents = record_tangents(scene.system, vals, names, np.array([1e-6 * abs(vals[n]) for n in names]))
+    motion, sens, _ = sample_sensitivities(scene.system(vals), t, tangents, rtol=1e-12)
+    assert motion is not None
+    for j, name in enumerate(names):
+        h = 1e-5 * abs(vals[name])
+        batch = {key: np.array([v, v]) for key, v in vals.items()}
+        batch[name] = np.array([vals[name] + h, vals[name] - h])
+        y, _ = sample_batch_dop853(scene.system(batch, 2), t, np.zeros(2), rtol=1e-13)
+        ref = (y[0] - y[1]) / (2 * h)
+        scale = np.max(np.abs(ref))
+        if name.endswith("_static"):  # it decides only whether the balance stays at a turning point
+            assert scale == 0.0 and np.all(sens[0, j] == 0.0), (effect, name)
+            continue
+        assert scale > 0.0 and np.max(np.abs(sens[0, j] - ref)) < 2e-6 * scale, (effect, name)

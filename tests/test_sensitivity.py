@@ -8,9 +8,10 @@ saltation rule), static friction holding the balance at a turning point, air dra
 stiffening spring.  A Jacobian that ignored the turning points' jumps would miss by the size of
 Coulomb's share of the decay, orders of magnitude beyond the tolerance.  Then the whole residual
 Jacobian (AR(1) whitening, gain, offset drift, the release instant) against scipy's
-``approx_derivative``, a fit by sensitivities against one by scipy's own forward differences,
-and the contract the sensitivities rest on: every smooth effect's torque is linear in its own
-record fields.
+``approx_derivative``, and a fit by sensitivities against one by scipy's own forward
+differences.  The conformance suite (``tests/test_conformance.py``) checks every registered
+effect the sensitivities cover, and the contract they rest on: every smooth torque is linear in
+its own record fields.
 """
 
 from __future__ import annotations
@@ -19,10 +20,7 @@ import numpy as np
 import pytest
 from scipy.optimize._numdiff import approx_derivative
 
-from escfit.balance.acceleration import smooth_terms
 from escfit.balance.batch_dop853 import OMEGA, THETA, sample_batch_dop853
-from escfit.balance.effects import EFFECTS
-from escfit.balance.kernel_records import blank
 from escfit.balance.sensitivity import covers, record_tangents, sample_sensitivities
 from escfit.balance.problems.tolerance import JACOBIAN_RTOL
 from escfit.core.scene import load_scene
@@ -103,22 +101,6 @@ def test_sensitivities_are_the_central_differences(case):
             keep = ~near_turn if row == 1 else slice(None)
             err = np.max(np.abs(sens[row, j] - ref)[keep]) / scale
             assert err < 2e-6, f"{case}: d{'theta' if row == 0 else 'omega'}/d{name} off by {err:.2g}"
-
-
-def test_smooth_effects_are_linear_in_their_record_fields():
-    """``a_p`` is the smooth terms evaluated on the record's tangent: each smooth effect's torque
-    must be linear in its own fields (a new smooth effect that is not breaks this)."""
-    smooth = [cls for cls in EFFECTS.values() if "smooth" in (cls.needs if isinstance(cls.needs, frozenset) else ())]
-    fields = [s.name for cls in smooth for s in cls.SLOTS]
-    assert {"drag", "k3_w2"} <= set(fields)
-    rng = np.random.default_rng(3)
-    k = blank(3)
-    for f in fields:
-        k[f][:2] = rng.uniform(0.1, 2.0, 2)
-        k[f][2] = 0.7 * k[f][0] - 1.3 * k[f][1]
-    for x, v in rng.uniform(-2.0, 2.0, (6, 2)):
-        a0, a1, a2 = (np.array(smooth_terms(x, v, k[i])) for i in range(3))
-        np.testing.assert_allclose(a2, 0.7 * a0 - 1.3 * a1, rtol=1e-12, atol=1e-12)
 
 
 def _ar1_problem():
