@@ -7,8 +7,8 @@ For each recipe: the problem is built as ``escfit fit`` builds it, the model is 
 kernels loaded, so the timing is warm), then the least squares ``escfit fit`` runs (the family's
 multistart, then the reconciliation of estimates on bounds) is timed.  Printed: wall-clock and CPU seconds, model
 evaluations (calls of ``problem.residuals``; with a batch Jacobian also the parameter sets of
-``problem.residuals_many``, counted apart as ``batch_sets``), and every fitted parameter's estimate and standard
-error.
+``problem.residuals_many``, counted apart as ``batch_sets``; with a Jacobian from the integrator's
+sensitivities the augmented runs, ``augmented``), and every fitted parameter's estimate and standard error.
 """
 
 from __future__ import annotations
@@ -54,12 +54,24 @@ def probe(recipe: Path) -> dict:
             return many(vecs)
 
         problem.residuals_many = counted_many
+    augmented = [0]
+    exact = getattr(problem, "residual_jacobian", None)
+    if exact is not None and getattr(problem, "has_sensitivities", False):
+        fitted = [n for n in problem.names if n not in ("observation.sigma", "observation.rho")]
+        exact(problem.values(problem.initial), fitted)  # warm: the sensitivity kernels loaded too
+
+        def counted_exact(vals, names):
+            jac = exact(vals, names)
+            augmented[0] += jac is not None
+            return jac
+
+        problem.residual_jacobian = counted_exact
     clock, cpu = time.perf_counter(), time.process_time()
     lsq = least_squares(problem, n_starts=defaults.get("n_starts", 8), n_refine=defaults.get("n_refine"), seed=seed)
     lsq, *_ = reconcile(problem, lsq, seed=seed)
     seconds, cpu = time.perf_counter() - clock, time.process_time() - cpu
     return {"recipe": recipe.stem, "seconds": seconds, "cpu_seconds": cpu, "evaluations": calls[0],
-            "batch_sets": batch[0], "names": list(lsq.names),
+            "batch_sets": batch[0], "augmented": augmented[0], "names": list(lsq.names),
             "value": [float(v) for v in lsq.value], "stderr": [float(v) for v in lsq.stderr],
             "chisqr": float(lsq.chisqr),
             "rms_reading": float(np.sqrt(np.mean((problem.observed - problem.expected(lsq.values)) ** 2)))}

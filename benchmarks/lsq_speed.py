@@ -59,7 +59,8 @@ def shift(old: dict, new: dict) -> float:
 def _evals(rec: dict, prefix: str = "") -> str:
     """One-set evaluations, and the parameter sets batch Jacobians ran (when any)."""
     sets = rec.get(f"{prefix}batch_sets", 0)
-    return f"{rec[f'{prefix}evaluations']}" + (f" + {sets}" if sets else "")
+    augmented = rec.get(f"{prefix}augmented", 0)
+    return f"{rec[f'{prefix}evaluations']}" + (f" + {sets}" if sets else "") + (f" + {augmented} aug." if augmented else "")
 
 
 def row(old: dict, new: dict) -> dict:
@@ -68,6 +69,7 @@ def row(old: dict, new: dict) -> dict:
             "speedup": old["seconds"] / new["seconds"], "cpu_speedup": old["cpu_seconds"] / new["cpu_seconds"],
             "previous_evaluations": old["evaluations"], "current_evaluations": new["evaluations"],
             "previous_batch_sets": old.get("batch_sets", 0), "current_batch_sets": new.get("batch_sets", 0),
+            "previous_augmented": old.get("augmented", 0), "current_augmented": new.get("augmented", 0),
             "max_shift_in_se": shift(old, new), "chisqr_previous": old["chisqr"], "chisqr_current": new["chisqr"]}
 
 
@@ -99,7 +101,7 @@ def main() -> None:
              f"warm), load average {load_before[0]:.1f} before / {os.getloadavg()[0]:.1f} after on "
              f"{os.cpu_count()} CPUs:",
              "",
-             "| run | wall s | CPU s | model evaluations (+ sets in batch Jacobians) |",
+             "| run | wall s | CPU s | model evaluations (+ sets in batch Jacobians, + augmented sensitivity runs) |",
              "| --- | ---: | ---: | ---: |",
              f"| previous ({args.baseline}) | {old['seconds']:.2f} | {old['cpu_seconds']:.2f} | {_evals(old)} |",
              f"| current | {new['seconds']:.2f} | {new['cpu_seconds']:.2f} | {_evals(new)} |",
@@ -115,7 +117,7 @@ def main() -> None:
              "the previous standard errors):",
              "",
              "| recipe | previous s | current s | speed-up | CPU speed-up | evaluations before / after "
-             "(+ batch sets) | shift (se) |",
+             "(+ batch sets, + augmented runs) | shift (se) |",
              "| --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for r in rows:
         lines.append(f"| {r['recipe']} | {r['previous_s']:.2f} | {r['current_s']:.2f} | {r['speedup']:.1f}x | "

@@ -3,7 +3,8 @@
 The vector :func:`escfit.inference.lsq.least_squares` minimises is the readings' standardised
 residuals divided by the current noise scale, then one row per Gaussian prior.  Its Jacobian is:
 
-* the problem's own where it has one (``residual_jacobian(values, names)``, e.g. a waveform fit
+* the problem's own where it has one (``has_sensitivities`` true and ``residual_jacobian(values,
+  names)``, e.g. a waveform fit
   differentiated by the integrator's forward sensitivities,
   :mod:`escfit.balance.problems.waveform_jacobian`), with the prior rows' slopes
   (:func:`~escfit.likelihood.problem.gaussian_prior_slopes`);
@@ -68,7 +69,8 @@ class LeastSquaresJacobian:
         self._full = np.array([base[nm] for nm in self.problem.names], float)
         self._cols = [self.problem.names.index(nm) for nm in self.names]
         self._n = self.problem.n_data
-        self._exact = getattr(self.problem, "residual_jacobian", None)
+        has = getattr(self.problem, "has_sensitivities", False)
+        self._exact = getattr(self.problem, "residual_jacobian", None) if has else None
         self._counts = getattr(self.problem, "jacobians", Counter())
 
     def __call__(self, x: np.ndarray) -> np.ndarray:

@@ -123,12 +123,14 @@ class WaveformProblem(RecordingProblem):
         self.curves = [Curve("waveform", math.nan, np.arange(idx.size), series.theta[idx], self.sample_time)]
         # the exact or dop853 dense solution is sampled for a whole ensemble in one call (log_prob_many)
         self.tolerance_basis = ""
+        #: least squares differentiates by the integrator's sensitivities (else by forward differences)
+        self.has_sensitivities = self.solver == "dop853" and self._sensitivities_apply()
         if self.solver == "dop853" and not {"rtol", "atol"} & set(self.solver_options):
             # the tolerance from the readings' noise and the Jacobian's steps, stated in the results
             span = float(self.sample_time[-1] - t_ref)
             rtol, self.tolerance_basis = noise_rtol(sigma0, 0.5 * float(np.ptp(series.theta[idx])), idx.size,
                                                     span / period if period > 0 else math.nan,
-                                                    sensitivities=self._sensitivities_apply())
+                                                    sensitivities=self.has_sensitivities)
             self.solver_options = {**self.solver_options, "rtol": rtol}
         self.jacobians = Counter()  # least squares' Jacobians by how they were made
         self.vectorized = self.solver in _BATCH_OPTIONS and set(self.solver_options) <= _BATCH_OPTIONS[self.solver]

@@ -51,10 +51,11 @@ def residual_jacobian(problem, vals: Mapping[str, float], names: list[str]) -> n
     names
         The parameters differentiated by, in the columns' order.
     """
+    if not getattr(problem, "has_sensitivities", False) or problem.solver != "dop853" \
+            or not set(problem.solver_options) <= {"rtol", "atol", "max_segments", "max_steps"}:
+        return None
     from ..sensitivity import covers, record_tangents, sample_sensitivities
 
-    if problem.solver != "dop853" or not set(problem.solver_options) <= {"rtol", "atol", "max_segments", "max_steps"}:
-        return None
     scene_names = [n for n in names if not n.startswith("observation.")]
     if any(n.startswith("observation.") and n not in OBSERVATION_COLUMNS for n in names):
         return None
