@@ -11,7 +11,9 @@ separate venv: ``python -m venv /tmp/jaxenv && /tmp/jaxenv/bin/pip install jax d
    escfit's estimates and standard errors, the AR(1) correlation it settles on, its integrator
    tolerance.
 2. The peer's input is written: the very samples escfit fits, the reference time, that
-   correlation (held), escfit's tolerance, and escfit's starting values (from the record's
+   correlation and escfit's settled noise scale (held), the Gaussian priors escfit puts on the
+   sensor's centre and its drift (measured from the record), escfit's tolerance, and escfit's
+   starting values (from the record's
    analysis: a JAX user would have to write that analysis; its time is escfit's alone here,
    which favours the peer).
 3. Whole processes, in turn (escfit, peer, escfit, peer ...), after one warm-up of each:
@@ -19,8 +21,8 @@ separate venv: ``python -m venv /tmp/jaxenv && /tmp/jaxenv/bin/pip install jax d
    record's analysis, the multistart, both noise stages, the checks, the results written) against
    ``benchmarks/jax_peer.py`` (imports, jit compilation, one trust-region fit).  Wall time and
    CPU seconds (the operating system's accounting of each child).
-4. The peer's optimum is checked with escfit's own residual function: its chi-square against
-   escfit's, and each estimate's distance from escfit's in escfit's standard errors.
+4. The peer's optimum is checked with escfit's own residual function and priors: its cost
+   against escfit's, and each estimate's distance from escfit's in escfit's standard errors.
 
 Printed, and written to ``jax_compare.md`` / ``jax_compare.json``.
 """
@@ -72,6 +74,9 @@ def peer_input(problem, start: dict, lsq, path: Path) -> None:
             "t_ref": float(problem.observation.t_ref), "rho": float(lsq.values["observation.rho"]),
             "rtol": rtol, "atol": 1e-2 * rtol * abs(float(start["oscillator.theta0"])),
             "fresh": [] if fresh is None else np.flatnonzero(fresh).tolist(),
+            "sigma": float(lsq.values["observation.sigma"]),
+            "priors": {n: list(map(float, problem.priors[problem.names.index(n)].args)) for n in NAMES
+                       if problem.priors[problem.names.index(n)].kind == "normal"},
             "start": {n: float(start[n]) for n in NAMES}}
     path.write_text(json.dumps(spec))
 
@@ -87,6 +92,8 @@ def timed(cmd: list[str], env: dict) -> tuple[float, float, int]:
 
 
 def main() -> None:
+    from escfit.likelihood.problem import stacked_residuals
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--jax-python", default=sys.executable, help="an interpreter with jax and diffrax")
     ap.add_argument("--repeat", type=int, default=5)
@@ -116,13 +123,17 @@ def main() -> None:
         peer = json.loads(dst.read_text())
     names = list(lsq.names)
     at_peer = problem.values({**lsq.values, **{n: peer["values"][n] for n in NAMES}})
-    r_peer = np.asarray(problem.residuals(at_peer), float)
-    r_mine = np.asarray(problem.residuals(lsq.values), float)
+    priors = [problem.priors[problem.names.index(n)] for n in names]
+
+    def cost_vector(vals):
+        return stacked_residuals(np.asarray(problem.residuals(vals), float), priors, np.array([vals[n] for n in names]))
+
+    r_peer, r_mine = cost_vector(at_peer), cost_vector(lsq.values)
     shift = {n: (peer["values"][n] - lsq.value[names.index(n)]) / lsq.stderr[names.index(n)] for n in NAMES}
     ratios = [p[1] / e[1] for e, p in zip(runs["escfit"], runs["peer"])]
     med = {k: (statistics.median(w for w, _ in v), statistics.median(c for _, c in v)) for k, v in runs.items()}
     record = {"runs": runs, "median_wall_cpu": med, "pairwise_cpu_ratio_median": statistics.median(ratios),
-              "peer": peer, "chisqr_escfit_residuals": {"escfit": float(r_mine @ r_mine), "peer": float(r_peer @ r_peer)},
+              "peer": peer, "cost_escfit_residuals_and_priors": {"escfit": float(r_mine @ r_mine), "peer": float(r_peer @ r_peer)},
               "shift_in_escfit_se": shift, "rtol": problem.solver_options.get("rtol"), "load_average": load}
     lines = [f"String pendulum least squares, whole process, {args.repeat} pairs in turn (load average "
              f"{load[0]:.1f} -> {load[1]:.1f}, 2 CPUs); jax {peer['jax']}, diffrax {peer['diffrax']}; rtol "
@@ -134,7 +145,7 @@ def main() -> None:
              f"(range {min(ratios):.2f}-{max(ratios):.2f}x).  The peer's last run: imports {peer['import_s']:.2f} s, "
              f"jit compilation {peer['compile_s']:.2f} s, fit {peer['fit_s']:.2f} s ({peer['nfev']} evaluations, "
              f"{peer['njev']} Jacobians).",
-             f"Peer's optimum in escfit's residuals: chi-square {r_peer @ r_peer:.6g} against escfit's "
+             f"Peer's optimum in escfit's residuals and priors: cost {r_peer @ r_peer:.6g} against escfit's "
              f"{r_mine @ r_mine:.6g}; largest estimate shift {max(abs(v) for v in shift.values()):.2g} of escfit's "
              "standard errors."]
     print("\n".join(lines))

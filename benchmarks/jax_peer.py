@@ -9,8 +9,9 @@ The model is the one escfit fits to the record (``fits/real/string_pendulum_lab1
     theta'' = -omega0**2 sin(theta) - C theta' - R sign(theta'),  theta(0) = theta0, theta'(0) = 0
     mean(t) = theta(t - t_release) - offset - offset_rate (t - t_ref)
 
-with residuals whitened for AR(1) noise of correlation ``rho`` (held at the value the input
-gives).  diffrax integrates it with Dopri8 under a PID step-size controller (rtol and atol from
+with residuals whitened for AR(1) noise of correlation ``rho`` and divided by the noise scale
+(both held at the input's values), and one residual ``(x - mu)/sd`` per Gaussian prior the input
+gives (escfit's priors on the sensor's centre and drift, measured from the record).  diffrax integrates it with Dopri8 under a PID step-size controller (rtol and atol from
 the input); the Jacobian is forward-mode differentiation through the solve (``jax.jacfwd`` with
 ``diffrax.ForwardMode``: the discretised sensitivity equations, step sizes held), the release
 instant's column ``-theta'(t)``; ``scipy.optimize.least_squares`` (trust region reflective, C
@@ -66,6 +67,8 @@ def main(src: str, dst: str) -> None:
     y = np.asarray(spec["readings"], float)
     t_ref, rho, rtol, atol = spec["t_ref"], spec["rho"], spec["rtol"], spec["atol"]
     fresh = np.asarray(spec.get("fresh", []), int)
+    sigma = float(spec.get("sigma", 1.0))
+    pinned = [(NAMES.index(n), mu, sd) for n, (mu, sd) in spec.get("priors", {}).items()]
     t_imported = time.perf_counter()
     motion = jax.jit(lambda p, ts: _solve(p, ts, rtol, atol, diffrax.RecursiveCheckpointAdjoint()))
     tangent = jax.jit(jax.jacfwd(lambda p, ts: _solve(p, ts, rtol, atol, diffrax.ForwardMode())[:, 0]))
@@ -76,7 +79,7 @@ def main(src: str, dst: str) -> None:
         e = r.copy()
         e[1:] = (r[1:] - rho * r[:-1]) / scale
         e[fresh] = r[fresh]
-        return e
+        return e / sigma
 
     def ts_of(x):
         return jnp.asarray(np.maximum(t - x[6], 0.0))
@@ -84,7 +87,8 @@ def main(src: str, dst: str) -> None:
     def residuals(x):
         counts["nfev"] += 1
         ys = np.asarray(motion(jnp.asarray(x[:4]), ts_of(x)))
-        return whiten(y - (ys[:, 0] - x[4] - x[5] * (t - t_ref)))
+        prior = [(x[i] - mu) / sd for i, mu, sd in pinned]
+        return np.concatenate([whiten(y - (ys[:, 0] - x[4] - x[5] * (t - t_ref))), prior])
 
     def jacobian(x):
         counts["njev"] += 1
@@ -92,7 +96,10 @@ def main(src: str, dst: str) -> None:
         d = np.asarray(tangent(jnp.asarray(x[:4]), ts))
         omega = np.asarray(motion(jnp.asarray(x[:4]), ts))[:, 1]
         dmu = np.column_stack([d, -np.ones_like(t), -(t - t_ref), -omega])
-        return np.column_stack([whiten(-dmu[:, j]) for j in range(dmu.shape[1])])
+        rows = np.zeros((len(pinned), x.size))
+        for row, (i, _, sd) in enumerate(pinned):
+            rows[row, i] = 1.0 / sd
+        return np.vstack([np.column_stack([whiten(-dmu[:, j]) for j in range(dmu.shape[1])]), rows])
 
     x0 = np.array([spec["start"][n] for n in NAMES], float)
     lo = np.array([-np.inf, -np.inf, 0.0, 0.0, -np.inf, -np.inf, -np.inf])
