@@ -38,7 +38,6 @@ captured (scripts, logs, tests).  ``ESCFIT_QUIET_COMPILE=1`` silences it.
 
 from __future__ import annotations
 
-import ast
 import functools
 import hashlib
 import inspect
@@ -50,6 +49,8 @@ from typing import Any, Callable, Iterable
 
 import numba
 from numba.core import caching
+
+from .import_scan import import_requests
 
 __all__ = ["kernel", "kernel_sources", "module_sources", "notice_compilation", "notice_uncached", "compiled_kernels"]
 
@@ -66,59 +67,24 @@ def _module_file(root: Path, name: str) -> Path | None:
     return None
 
 
-# the fields of a statement (or an except clause, a match case) that hold further statements
-_BLOCKS = ("body", "orelse", "finalbody", "handlers", "cases")
-
-
-def _statements(body: list) -> Iterable[ast.AST]:
-    """Every statement of ``body`` and of the blocks nested in it (functions, classes, ``if``,
-    ``try``, ...), without descending into expressions: an import is always a statement, and
-    skipping the expressions makes the scan several times faster than ``ast.walk``."""
-    todo = list(body)
-    while todo:
-        node = todo.pop()
-        yield node
-        for field in _BLOCKS:
-            todo.extend(getattr(node, field, ()))
-
-
 @functools.lru_cache(maxsize=None)
 def _imported_modules(path: Path, module: str, top: str, root: Path) -> frozenset[Path]:
     """Files of package ``top`` that module ``module`` (source ``path``) imports from.
 
     Every import statement counts, including those inside functions or ``if`` blocks: taking
-    one too many only costs a recompilation, one too few a stale cache.  Each file is parsed
-    once per process: the closures of the kernels' modules share most of their files.
+    one too many only costs a recompilation, one too few a stale cache.  The statements come
+    from :func:`escfit.core.import_scan.import_requests` (parsed once per file content, kept
+    between processes); which files they name is resolved here, in every process.
     """
-    tree = ast.parse(path.read_bytes(), filename=str(path))
-    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
     found: set[Path] = set()
-
-    def add(name: str) -> bool:
-        if name.split(".")[0] != top:
-            return False
-        file = _module_file(root, name)
-        if file is not None:
-            found.add(file)
-        return file is not None
-
-    for node in _statements(tree.body):
-        if isinstance(node, ast.Import):
-            for alias in node.names:
-                add(alias.name)
-        elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                parts = package.split(".")
-                if node.level - 1 > len(parts) - 1:
-                    continue  # beyond the top-level package: not ours
-                parts = parts[:len(parts) - (node.level - 1)]
-                base = ".".join(parts + ([node.module] if node.module else []))
-            else:
-                base = node.module or ""
-            for alias in node.names:
-                # ``from pkg import sub`` brings in a module; ``from mod import name`` reads mod
-                if alias.name == "*" or not add(f"{base}.{alias.name}"):
-                    add(base)
+    for name, fallback in import_requests(path, module):
+        for candidate in (name, fallback):
+            if candidate is None or candidate.split(".")[0] != top:
+                continue
+            file = _module_file(root, candidate)
+            if file is not None:
+                found.add(file)
+                break
     return frozenset(found)
 
 
