@@ -175,3 +175,17 @@ def test_init_reads_the_dop853_tables_without_scipy_integrate(tmp_path):
                        timeout=900)
     assert "EXIT 0" in r.stdout or (tmp_path / "scene.toml").is_file(), r.stderr[-2000:]
     assert "INTEGRATE False" in r.stdout, r.stdout[-2000:]
+
+
+def test_the_command_line_sets_one_blas_thread_and_a_higher_collector_threshold():
+    """Set when the command line loads, before numpy (escfit/cli/process.py); the environment's
+    own BLAS setting wins, and the older generations keep Python's default ratios."""
+    code = ("import gc, os, sys; default = gc.get_threshold(); import escfit.cli.main as m; "
+            "print(os.environ['OPENBLAS_NUM_THREADS'], gc.get_threshold()[0], gc.get_threshold()[1:] == default[1:], "
+            "'numpy' in sys.modules)")
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["1", "20000", "True", "False"]
+    env["OPENBLAS_NUM_THREADS"] = "2"
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout
+    assert out.split()[0] == "2"

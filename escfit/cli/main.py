@@ -26,9 +26,7 @@ import traceback
 import warnings
 from pathlib import Path
 
-# Small linear algebra (Jacobians of a few parameters): OpenBLAS's spinning thread pool costs more
-# CPU than it saves.  One thread unless the environment says otherwise; set before numpy loads.
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+from . import process  # noqa: F401,E402 - one BLAS thread, the collector's thresholds: before numpy loads
 
 import click  # noqa: E402
 
