@@ -30,7 +30,12 @@ from typing import Sequence
 import numpy as np
 
 from ...core.errors import SceneError
-from ..segment import propagate
+from ...core.kernels import plain_python
+from ..segment import propagate as _propagate_kernel
+
+# A handful of closed-form pieces per call, from Python: the kernel as plain Python gives the
+# same numbers without loading numba's compiled code (0.4 s of a report that needs no other).
+propagate = plain_python(_propagate_kernel)
 
 __all__ = [
     "REFERENCE_POWER_ANGLE", "Pulse", "cycle_offset", "steady_state", "graph_factor",
