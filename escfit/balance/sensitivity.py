@@ -52,10 +52,10 @@ import numpy as np
 
 from ..core.kernels import kernel
 from ..core.status import Status
-from .acceleration import acceleration, smooth_terms
+from .acceleration import smooth_terms
 from .batch_dop853 import DOP853_SAMPLING, dense_run
 from .dop853_tables import tables as _coefficients
-from .steps import N_STAGES
+from .steps import N_STAGES, dop853_step
 from .system import System
 
 __all__ = ["covers", "record_tangents", "sample_sensitivities"]
@@ -142,6 +142,9 @@ def _by_record(x, v, s, k, dk):
 def _tangent_step(state, tangent, h, regime, work):
     """One DOP853 step of length ``h`` (s) of the state and its tangents.
 
+    The state's step is :func:`~escfit.balance.steps.dop853_step` itself (the same numbers as the
+    run's); the tangents' stages are evaluated at its stages' states.
+
     Parameters
     ----------
     state : tuple
@@ -159,26 +162,20 @@ def _tangent_step(state, tangent, h, regime, work):
     x, v, a : float
         State and acceleration at the step end.
     """
-    x, v, a = state
+    x, v, _ = state
     w2, xc, s, k, dks = regime
     kx, kv, tx, tv, out = work
+    x1, v1, a1 = dop853_step(state, h, (w2, xc, k), (kx, kv))  # the primal step, its stages kept
     m = tangent.shape[0]
-    kx[0] = v
-    kv[0] = a
-    a_x, a_v = _partials(x, v, w2, k)
-    for p in range(m):
-        tx[p, 0] = tangent[p, 1]
-        tv[p, 0] = a_x * tangent[p, 0] + a_v * tangent[p, 1] + _by_record(x, v, s, k, dks[p])
-    for i in range(1, N_STAGES):
-        dx = 0.0
-        dv = 0.0
-        for j in range(i):
-            dx += _A[i, j] * kx[j]
-            dv += _A[i, j] * kv[j]
-        xs = x + h * dx
-        vs = v + h * dv
-        kx[i] = vs
-        kv[i] = acceleration(xs, vs, w2, xc, k)
+    for i in range(N_STAGES):
+        # the stage's state: x + h sum_j A_ij kx_j, and its velocity is the stage kx_i itself
+        xs = x
+        if i > 0:
+            dx = 0.0
+            for j in range(i):
+                dx += _A[i, j] * kx[j]
+            xs = x + h * dx
+        vs = kx[i] if i > 0 else v
         a_x, a_v = _partials(xs, vs, w2, k)
         for p in range(m):
             sx = 0.0
@@ -190,13 +187,6 @@ def _tangent_step(state, tangent, h, regime, work):
             sv = tangent[p, 1] + h * sv
             tx[p, i] = sv
             tv[p, i] = a_x * sx + a_v * sv + _by_record(xs, vs, s, k, dks[p])
-    sx = 0.0
-    sv = 0.0
-    for j in range(N_STAGES):
-        sx += _B[j] * kx[j]
-        sv += _B[j] * kv[j]
-    x1 = x + h * sx
-    v1 = v + h * sv
     for p in range(m):
         sx = 0.0
         sv = 0.0
@@ -205,7 +195,7 @@ def _tangent_step(state, tangent, h, regime, work):
             sv += _B[j] * tv[p, j]
         out[p, 0] = tangent[p, 0] + h * sx
         out[p, 1] = tangent[p, 1] + h * sv
-    return x1, v1, acceleration(x1, v1, w2, xc, k)
+    return x1, v1, a1
 
 
 @kernel
