@@ -64,6 +64,15 @@ def _first_swings(t_end, omega0, max_swings):
 
 
 @kernel
+def since_release(times, shift):
+    """The sample times (s, one clock) as seconds since a set's release at ``shift`` (that clock)."""
+    t = np.empty(times.shape[0])
+    for q in range(times.shape[0]):
+        t[q] = times[q] - shift
+    return t
+
+
+@kernel
 def _run_dense(k, run, n):
     """:func:`run_angle` with its segment log, the log enlarged fourfold until it fits (as
     :func:`escfit.balance.kernel_records.with_rows`); returns the kernel's result and the log."""
@@ -81,10 +90,8 @@ def _run_dense(k, run, n):
 def _sample_one(ks, i, spec, times, shift, value, row):
     """Set ``i``: run long enough to pass the last time, then its state at every time (see the module)."""
     k = ks[i]
-    n_t = times.shape[0]
-    t = np.empty(n_t)
-    for q in range(n_t):
-        t[q] = times[q] - shift
+    t = since_release(times, shift)
+    n_t = t.shape[0]
     t_end = t[n_t - 1]
     max_swings = spec.max_swings
     n = _first_swings(t_end, k.omega0, max_swings)

@@ -26,7 +26,7 @@ from numba import from_dtype, prange
 from ..core.errors import SolverError
 from ..core.kernels import kernel
 from ..core.status import Status
-from .batch_dense import OMEGA, THETA, _first_swings, run_sampling
+from .batch_dense import OMEGA, THETA, _first_swings, run_sampling, since_release
 from .dop853 import run_dop853
 from .kernel_records import HALF_SWING, ROWS_FULL, RUN
 from .solution import ROW_DOP853, _states_at
@@ -127,10 +127,8 @@ def dense_run(k, spec, t):
 def _sample_one(ks, i, spec, times, shift, value, row):
     """Set ``i``: run long enough to pass the last time, then its state at every time (see the module)."""
     k = ks[i]
-    n_t = times.shape[0]
-    t = np.empty(n_t)
-    for q in range(n_t):
-        t[q] = times[q] - shift
+    t = since_release(times, shift)
+    n_t = t.shape[0]
     ran, res, rows, reached = dense_run(k, spec, t)
     if not ran:
         row.status = _REFUSED
