@@ -94,3 +94,27 @@ def test_after_a_stop_the_balance_stays_at_rest_and_unreached_levels_clamp(solve
 def test_naive_rk4_has_no_dense_solution():
     with pytest.raises(SolverError, match="locate_events=True"):
         solve(escfit.load_scene("d.toml", text=DAMPED), "rk4", h=1e-4, locate_events=False, dense=True)
+
+
+def test_dop853_continuous_extension_is_of_order_seven():
+    """The continuous extension inside one DOP853 step, against the damped oscillator's closed
+    form: it starts at the step's start, and its error at interior points falls as h**8 (a
+    polynomial of order 7: halving the step divides the error by about 256, where the step's
+    own end, of order 8, gains about 512)."""
+    from escfit.balance.kernel_records import blank
+    from escfit.balance.steps import N_EXTENDED, dop853_extension, extension_at
+
+    k = blank(1)
+    k["c"] = C
+    regime = (W0 * W0, 0.0, k[0])
+    coef = np.empty((7, 2))
+    stages = (np.empty(N_EXTENDED), np.empty(N_EXTENDED))
+    errors = []
+    for h in (0.12, 0.06):  # omega0 h = 0.84 and 0.42 rad
+        dop853_extension((TH0, 0.0, -W0 * W0 * TH0), h, regime, stages, coef)  # released at rest
+        r = np.linspace(0.0, 1.0, 41)
+        x, v = np.array([extension_at(coef, TH0, 0.0, ri) for ri in r]).T
+        theta, omega = _damped(r * h)
+        assert x[0] == TH0 and v[0] == 0.0
+        errors.append(np.max(np.maximum(np.abs(x - theta), np.abs(v - omega) / W0)))
+    assert 150.0 < errors[0] / errors[1] < 400.0 and errors[1] < 2e-9

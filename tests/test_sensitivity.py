@@ -9,7 +9,7 @@ stiffening spring.  A Jacobian that ignored the turning points' jumps would miss
 Coulomb's share of the decay, orders of magnitude beyond the tolerance.  Then the whole residual
 Jacobian (AR(1) whitening, gain, offset drift, the release instant) against scipy's
 ``approx_derivative``, and a fit by sensitivities against one by scipy's own forward
-differences.  The conformance suite (``tests/test_conformance.py``) checks every registered
+(central) differences.  The conformance suite (``tests/test_conformance.py``) checks every registered
 effect the sensitivities cover, and the contract they rest on: every smooth torque is linear in
 its own record fields.
 """
@@ -22,6 +22,7 @@ from scipy.optimize._numdiff import approx_derivative
 
 from escfit.balance.batch_dop853 import OMEGA, THETA, sample_batch_dop853
 from escfit.balance.sensitivity import covers, record_tangents, sample_sensitivities
+from escfit.balance.waveform import sample_state
 from escfit.balance.problems.tolerance import JACOBIAN_RTOL
 from escfit.core.scene import load_scene
 from escfit.inference import make_problem
@@ -121,20 +122,30 @@ def test_residual_jacobian_is_scipys_approx_derivative():
     def residuals(v):
         return problem.residuals({**vals, **dict(zip(names, v))})
 
-    ref = approx_derivative(residuals, x, method="3-point", rel_step=1e-5)
+    # steps of 1e-4: at 1e-5 and below, the adaptive steps' changes with the parameters (jumps near the
+    # tolerance, 1e-12) show in the differences of the smallest parameters (R = 0.02)
+    ref = approx_derivative(residuals, x, method="3-point", rel_step=1e-4)
     jac = problem.residual_jacobian(vals, names)
     scale = np.max(np.abs(ref), axis=0)
     assert np.all(scale > 0)
-    np.testing.assert_allclose(jac / scale, ref / scale, rtol=0, atol=1e-5)
+    # as in the test above: no central-difference reference where theta' is a hair from zero at a
+    # turning point (the two runs turn on either side of the sample); the whitening spreads a
+    # reading's error to the next one
+    _, omega, _ = sample_state(problem.scene.system(vals), problem.sample_time - vals["observation.t_release"],
+                               "dop853", rtol=1e-12)
+    near = np.abs(omega) < 1e-3 * np.max(np.abs(omega))
+    near[1:] |= near[:-1].copy()
+    assert near.mean() < 0.02
+    np.testing.assert_allclose((jac / scale)[~near], (ref / scale)[~near], rtol=0, atol=1e-5)
 
 
 def test_fit_by_sensitivities_is_the_forward_difference_fit():
-    """At rtol 1e-12, where scipy's forward differences are accurate, both fits agree."""
+    """At rtol 1e-12 both fits agree with one by scipy's central differences (its "3-point" rule)."""
     problem = _ar1_problem()
     exact = least_squares(problem, n_starts=1)
     assert problem.jacobians["sensitivities"] > 3 and not problem.jacobians["forward differences"]
     assert "by sensitivities" in problem.provenance()["jacobian"]
-    problem.lsq_options = {"jac": "2-point"}
+    problem.lsq_options = {"jac": "3-point"}
     ref = least_squares(problem, n_starts=1)
     assert exact.success and ref.success and exact.names == ref.names
     assert np.max(np.abs(exact.value - ref.value) / ref.stderr) < 1e-3

@@ -17,14 +17,15 @@ with ``a_x``, ``a_v`` the partial derivatives (the restoring torque's and each s
 and ``a_p = sum over record fields f of (da/df)(df/dp)``: the record's tangent ``dk = dk/dp``
 (:func:`record_tangents`) enters as ``-dC v - dw2 g(x) - dR - s d(offset)`` plus the smooth
 terms evaluated on ``dk`` -- each smooth effect's torque is linear in its own record fields
-(``tests/test_sensitivity.py`` checks that contract for every registered smooth effect).
+(the conformance suite, ``tests/test_conformance.py``, checks that contract for every smooth effect).
 
 **The steps.**  The primal run (:func:`escfit.balance.batch_dop853.dense_run`) keeps every
 accepted step as a dense row.  The tangents are carried through those rows by the same DOP853
 step applied to the augmented system: for an explicit Runge-Kutta step of fixed length the
 derivative of the step map is that step applied to the variational equation, so the tangents are
 the derivatives of the computed motion, to the integrator's own accuracy, at whatever tolerance.
-A sample inside a row is a step of the partial length, as the dense solution evaluates it.
+The samples inside a row are read from the step's continuous extension, of the augmented system
+here as the dense solution's is of the motion (:func:`escfit.balance.steps.dop853_extension`).
 
 **The turning points.**  At a turning point the velocity passes through zero and sliding Coulomb
 friction changes sign: the acceleration jumps from ``a-`` to ``a+``.  The turn's time depends on
@@ -52,10 +53,11 @@ import numpy as np
 
 from ..core.kernels import kernel
 from ..core.status import Status
-from .acceleration import smooth_terms
+from .acceleration import acceleration, smooth_terms
 from .batch_dop853 import DOP853_SAMPLING, dense_run
 from .dop853_tables import tables as _coefficients
-from .steps import N_STAGES, dop853_step
+from .steps import (A_EXTENDED, N_EXTENDED, N_STAGES, dop853_step, extension_column, extension_stages,
+                    extension_value)
 from .system import System
 
 __all__ = ["covers", "record_tangents", "sample_sensitivities"]
@@ -199,6 +201,49 @@ def _tangent_step(state, tangent, h, regime, work):
 
 
 @kernel
+def _tangent_extension(state, tangent, h, regime, work, coef, tcoef):
+    """The step of the state and its tangents, and the continuous extension of both.
+
+    As :func:`~escfit.balance.steps.dop853_extension` for the state: ``coef`` (7, 2) receives the
+    state's polynomial, ``tcoef`` (7, m, 2) each tangent's, from the same three extra stages of the
+    augmented system (``work``'s stage arrays of length :data:`~escfit.balance.steps.N_EXTENDED`).
+    """
+    x, v, _ = state
+    w2, xc, s, k, dks = regime
+    kx, kv, tx, tv, out = work
+    m = tangent.shape[0]
+    x1, v1, _ = _tangent_step(state, tangent, h, regime, work)
+    a_x, a_v = _partials(x1, v1, w2, k)
+    for p in range(m):  # the tangents' last stage: their derivative at the step end
+        tx[p, N_STAGES] = out[p, 1]
+        tv[p, N_STAGES] = a_x * out[p, 0] + a_v * out[p, 1] + _by_record(x1, v1, s, k, dks[p])
+    extension_stages(state, h, (w2, xc, k), (kx, kv))
+    for i in range(N_STAGES + 1, N_EXTENDED):
+        dx = 0.0
+        for j in range(i):
+            dx += A_EXTENDED[i, j] * kx[j]
+        xs = x + h * dx
+        vs = kx[i]
+        a_x, a_v = _partials(xs, vs, w2, k)
+        for p in range(m):
+            sx = 0.0
+            sv = 0.0
+            for j in range(i):
+                sx += A_EXTENDED[i, j] * tx[p, j]
+                sv += A_EXTENDED[i, j] * tv[p, j]
+            sx = tangent[p, 0] + h * sx
+            sv = tangent[p, 1] + h * sv
+            tx[p, i] = sv
+            tv[p, i] = a_x * sx + a_v * sv + _by_record(xs, vs, s, k, dks[p])
+    extension_column(coef, 0, x1 - x, kx, h)
+    extension_column(coef, 1, v1 - v, kv, h)
+    for p in range(m):
+        extension_column(tcoef[:, p, :], 0, out[p, 0] - tangent[p, 0], tx[p], h)
+        extension_column(tcoef[:, p, :], 1, out[p, 1] - tangent[p, 1], tv[p], h)
+    return x1, v1
+
+
+@kernel
 def _sensitivities(k, dks, spec, t, out, tangents):
     """Run one set (:func:`escfit.balance.batch_dop853.dense_run`) and carry its tangents.
 
@@ -213,8 +258,10 @@ def _sensitivities(k, dks, spec, t, out, tangents):
     if not (status == _STOPPED or (status == _OK and reached)):
         return status
     m = dks.shape[0]
-    work = (np.empty(N_STAGES + 1), np.empty(N_STAGES + 1), np.empty((m, N_STAGES + 1)),
-            np.empty((m, N_STAGES + 1)), np.empty((m, 2)))
+    work = (np.empty(N_EXTENDED), np.empty(N_EXTENDED), np.empty((m, N_EXTENDED)), np.empty((m, N_EXTENDED)),
+            np.empty((m, 2)))
+    coef = np.empty((7, 2))
+    tcoef = np.empty((7, m, 2))
     tangent = np.zeros((m, 2))
     s0 = rows[0, 2] if rows.shape[0] > 0 else 1.0
     for p in range(m):  # the release: theta0 and v0 are record fields too
@@ -229,19 +276,29 @@ def _sensitivities(k, dks, spec, t, out, tangents):
         regime = (rows[i, 6], rows[i, 5], s, k, dks)
         end = rows[i, 0] + rows[i, 1]
         last = i + 1 == n_rows
+        extended = False
+        x_end = v_end = 0.0
         while q < n_t and (t[q] < rows[i + 1, 0] if not last else t[q] <= end):
-            u = min(max(t[q] - rows[i, 0], 0.0), rows[i, 1])
-            x, v, a = _tangent_step(state, tangent, u, regime, work)
+            if not extended:  # the step's continuous extension serves every time inside it
+                x_end, v_end = _tangent_extension(state, tangent, rows[i, 1], regime, work, coef, tcoef)
+                extended = True
+            r = min(max((t[q] - rows[i, 0]) / rows[i, 1], 0.0), 1.0) if rows[i, 1] > 0.0 else 0.0
+            x = extension_value(coef, 0, state[0], r)
+            v = extension_value(coef, 1, state[1], r)
             out[0, q] = s * x
             out[1, q] = s * v
-            out[2, q] = s * a
+            out[2, q] = s * acceleration(x, v, rows[i, 6], rows[i, 5], k)
             for p in range(m):
-                tangents[0, p, q] = s * work[4][p, 0]
-                tangents[1, p, q] = s * work[4][p, 1]
+                tangents[0, p, q] = s * extension_value(tcoef[:, p, :], 0, tangent[p, 0], r)
+                tangents[1, p, q] = s * extension_value(tcoef[:, p, :], 1, tangent[p, 1], r)
             q += 1
         if last and q == n_t:
             break
-        x, v, a = _tangent_step(state, tangent, rows[i, 1], regime, work)
+        if extended:  # the step to the row's end is the one the extension made
+            x, v = x_end, v_end
+            a = acceleration(x, v, rows[i, 6], rows[i, 5], k)
+        else:
+            x, v, a = _tangent_step(state, tangent, rows[i, 1], regime, work)
         step_end = work[4]
         if not last and rows[i + 1, _SWING] == rows[i, _SWING]:
             tangent[:, :] = step_end  # the next step of the same region starts where this one ended

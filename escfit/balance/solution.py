@@ -34,7 +34,7 @@ import numpy as np
 from ..core.kernels import kernel
 from ..core.status import Status
 from .segment import cross_time, propagate
-from .steps import N_STAGES, dop853_step, rk4_step
+from .steps import N_EXTENDED, N_STAGES, dop853_extension, dop853_step, extension_at, rk4_step
 
 __all__ = ["DenseSolution", "RowSolution", "ROW_EXACT", "ROW_DOP853", "ROW_RK4", "swing_starts", "write_row"]
 
@@ -164,12 +164,22 @@ def _row_motion(sol, i, u):
 def _states_at(sol, times, beyond, theta, omega):
     """theta, omega at ascending ``times``: each time in the last row starting at or before it.
 
-    Times after the end of the last row (all times when there are no rows) get ``beyond``.
+    Times after the end of the last row (all times when there are no rows) get ``beyond``.  A
+    dop853 row is evaluated by its step's continuous extension
+    (:func:`~escfit.balance.steps.dop853_extension`: the step and three more stages once, then a
+    polynomial per time) instead of a step of the partial length per time: samples a few per
+    step apart cost a fraction, and the motion is one smooth function of the parameters
+    whichever way the samples fall among the steps.
     """
-    rows = sol[0]
+    rows, kind, ks, _ = sol
     n = rows.shape[0]
     i = 0
     end = rows[n - 1, 0] + rows[n - 1, 1] if n > 0 else -math.inf
+    dop853 = kind == ROW_DOP853
+    kx = np.empty(N_EXTENDED)
+    kv = np.empty(N_EXTENDED)
+    coef = np.empty((7, 2))
+    extended = -1  # the row whose continuous extension coef holds
     for q in range(times.shape[0]):
         t = times[q]
         if not t <= end:
@@ -177,7 +187,15 @@ def _states_at(sol, times, beyond, theta, omega):
             continue
         while i + 1 < n and rows[i + 1, 0] <= t:
             i += 1
-        x, v = _row_motion(sol, i, t - rows[i, 0])
+        if extended != i and dop853 and rows[i, 1] > 0.0:
+            # the step's continuous extension, made once, serves every time inside it
+            dop853_extension((rows[i, 3], rows[i, 4], rows[i, 7]), rows[i, 1], (rows[i, 6], rows[i, 5], ks[0]),
+                             (kx, kv), coef)
+            extended = i
+        if extended == i:
+            x, v = extension_at(coef, rows[i, 3], rows[i, 4], min(max((t - rows[i, 0]) / rows[i, 1], 0.0), 1.0))
+        else:
+            x, v = _row_motion(sol, i, t - rows[i, 0])
         s = rows[i, 2]
         theta[q] = s * x
         omega[q] = s * v

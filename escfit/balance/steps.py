@@ -15,11 +15,15 @@ from ..core.kernels import kernel
 from .acceleration import acceleration
 from .dop853_tables import tables as _coefficients
 
-__all__ = ["dop853_step", "rk4_step", "N_STAGES", "stage_arrays"]
+__all__ = ["dop853_step", "dop853_extension", "extension_stages", "extension_column", "extension_value",
+           "extension_at", "rk4_step", "N_STAGES", "N_EXTENDED", "stage_arrays"]
 
 N_STAGES = _coefficients.N_STAGES  # 12 stages, plus the first-same-as-last evaluation at the step end
+N_EXTENDED = _coefficients.N_STAGES_EXTENDED  # and three more for the continuous extension
 _A = np.ascontiguousarray(_coefficients.A[:N_STAGES, :N_STAGES])
+A_EXTENDED = np.ascontiguousarray(_coefficients.A)  # every stage's row, the extension's three included
 _B = np.ascontiguousarray(_coefficients.B)
+_D = np.ascontiguousarray(_coefficients.D)
 
 
 def stage_arrays() -> tuple[np.ndarray, np.ndarray]:
@@ -71,6 +75,82 @@ def dop853_step(state, h, regime, stages):
     kx[N_STAGES] = v1
     kv[N_STAGES] = a1
     return x1, v1, a1
+
+
+@kernel
+def dop853_extension(state, h, regime, stages, coef):
+    """The step of length ``h`` and its continuous extension: the state anywhere inside the step.
+
+    DOP853's dense output (Hairer, Norsett and Wanner, *Solving Ordinary Differential Equations I*,
+    section II.6; the coefficients are scipy's): three more stages after the step give a
+    polynomial of degree 7 in ``r = u/h`` that matches the state and its derivative at both ends
+    and carries the step's order of accuracy inside it, read by :func:`extension_at`.
+
+    Parameters
+    ----------
+    state, h, regime
+        As :func:`dop853_step`.
+    stages : tuple
+        ``(kx, kv)`` of length :data:`N_EXTENDED` at least.
+    coef : ndarray, shape (7, 2)
+        Receives the polynomial's coefficients for ``x`` (column 0) and ``v`` (column 1).
+    """
+    x, v, _ = state
+    kx, kv = stages
+    x1, v1, _ = dop853_step(state, h, regime, stages)
+    extension_stages(state, h, regime, stages)
+    extension_column(coef, 0, x1 - x, kx, h)
+    extension_column(coef, 1, v1 - v, kv, h)
+
+
+@kernel
+def extension_stages(state, h, regime, stages):
+    """The continuous extension's three extra stages, after :func:`dop853_step` filled ``stages``."""
+    x, v, _ = state
+    w2, xc, k = regime
+    kx, kv = stages
+    for i in range(N_STAGES + 1, N_EXTENDED):
+        dx = 0.0
+        dv = 0.0
+        for j in range(i):
+            dx += A_EXTENDED[i, j] * kx[j]
+            dv += A_EXTENDED[i, j] * kv[j]
+        vs = v + h * dv
+        kx[i] = vs
+        kv[i] = acceleration(x + h * dx, vs, w2, xc, k)
+
+
+@kernel(inline="always")
+def extension_column(coef, col, d, ks, h):
+    """Column ``col`` of the continuous extension from the step's change ``d`` and stages ``ks``."""
+    coef[0, col] = d
+    coef[1, col] = h * ks[0] - d
+    coef[2, col] = 2.0 * d - h * (ks[N_STAGES] + ks[0])
+    for r in range(4):
+        acc = 0.0
+        for j in range(N_EXTENDED):
+            acc += _D[r, j] * ks[j]
+        coef[3 + r, col] = h * acc
+
+
+@kernel(inline="always")
+def extension_value(coef, col, y0, r):
+    """Component ``col`` of the state at the fraction ``r`` (0 to 1) of a step from its value
+    ``y0`` there, by the continuous extension's coefficients ``coef`` (column ``col``)."""
+    p = coef[5, col] + r * coef[6, col]
+    p = coef[4, col] + (1.0 - r) * p
+    p = coef[3, col] + r * p
+    p = coef[2, col] + (1.0 - r) * p
+    p = coef[1, col] + r * p
+    p = coef[0, col] + (1.0 - r) * p
+    return y0 + r * p
+
+
+@kernel(inline="always")
+def extension_at(coef, x, v, r):
+    """State ``(x, v)`` at the fraction ``r`` (0 to 1) of a step from ``(x, v)``, by the continuous
+    extension ``coef`` of :func:`dop853_extension`."""
+    return extension_value(coef, 0, x, r), extension_value(coef, 1, v, r)
 
 
 @kernel(inline="always")
