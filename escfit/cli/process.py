@@ -3,12 +3,14 @@
 * **One BLAS thread** unless the environment says otherwise: escfit's linear algebra is a few
   parameters wide (Jacobians, covariances), and OpenBLAS's spinning thread pool cost 0.1-0.3 CPU s
   at start-up for nothing.
-* **The cyclic garbage collector's first threshold at 20 000 allocations** instead of 700: a
-  command imports numba, scipy and its kernels, hundreds of thousands of objects that live as
-  long as the process, and with the default thresholds the collector walked them again and
-  again (0.26 s of the quick start, 0.2 s of a least-squares fit; 0.09 s now).  The older
-  generations keep their default ratios, so full collections still run in a long sampling run
-  and cyclic garbage stays bounded.
+* **What the imports leave, frozen out of the cyclic collector's full passes.**  A command
+  imports numba, scipy and its kernels: hundreds of thousands of objects that live as long as the
+  process, which each full collection walked again (three of them, 0.15 s of the quick start's
+  0.26 s of collection).  After each of the first :data:`FROZEN_PASSES` full collections, whatever
+  survived it is moved to the collector's permanent generation (``gc.freeze``), so the next pass
+  walks only what came after.  Later passes (a long sampling run) are left as they are, so
+  cyclic garbage made while sampling is still collected; the youngest generation's threshold is
+  not touched (raising it slowed the sampler's many short-lived arrays).
 """
 
 from __future__ import annotations
@@ -16,12 +18,25 @@ from __future__ import annotations
 import gc
 import os
 
-__all__ = ["FIRST_THRESHOLD"]
+__all__ = ["FROZEN_PASSES"]
 
-#: allocations (net of deallocations) between collections of the youngest generation
-FIRST_THRESHOLD = 20_000
+#: full collections after which the survivors are frozen (the imports' objects)
+FROZEN_PASSES = 3
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-_, _second, _third = gc.get_threshold()
-if gc.get_threshold()[0] < FIRST_THRESHOLD:
-    gc.set_threshold(FIRST_THRESHOLD, _second, _third)
+
+_passes = 0
+
+
+def _freeze_after_full_pass(phase: str, info: dict) -> None:
+    global _passes
+    if phase != "stop" or info.get("generation") != 2:
+        return
+    _passes += 1
+    gc.freeze()
+    if _passes >= FROZEN_PASSES:
+        gc.callbacks.remove(_freeze_after_full_pass)
+
+
+if _freeze_after_full_pass not in gc.callbacks:
+    gc.callbacks.append(_freeze_after_full_pass)
