@@ -180,16 +180,18 @@ def test_init_reads_the_dop853_tables_without_scipy_integrate(tmp_path):
 def test_the_command_line_sets_one_blas_thread_and_freezes_what_the_imports_leave():
     """Set when the command line loads, before numpy (escfit/cli/process.py); the environment's
     own BLAS setting wins; after a full collection its survivors are out of the next one's walk,
-    for the first passes only, and the collector's thresholds stay Python's."""
+    for the first passes only, and the collector's thresholds stay Python's; callbacks registered
+    after it (dask's count passes) see every pass start and stop."""
     code = ("import gc, os, sys; default = gc.get_threshold(); import escfit.cli.main as m\n"
+            "pairs = []; gc.callbacks.append(lambda phase, info: pairs.append(phase))\n"
             "before = gc.get_freeze_count(); junk = [[i] for i in range(50000)]; gc.collect()\n"
             "frozen = gc.get_freeze_count() - before\n"
             "gc.collect(); gc.collect(); gc.collect(); after = gc.get_freeze_count()\n"
             "gc.collect(); print(os.environ['OPENBLAS_NUM_THREADS'], frozen > 50000, gc.get_freeze_count() == after, "
-            "gc.get_threshold() == default, 'numpy' in sys.modules)")
+            "gc.get_threshold() == default, 'numpy' in sys.modules, pairs.count('start') == pairs.count('stop'))")
     env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout
-    assert out.split() == ["1", "True", "True", "True", "False"]
+    assert out.split() == ["1", "True", "True", "True", "False", "True"]  # every callback saw each pass end
     env["OPENBLAS_NUM_THREADS"] = "2"
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout
     assert out.split()[0] == "2"

@@ -29,13 +29,14 @@ _passes = 0
 
 
 def _freeze_after_full_pass(phase: str, info: dict) -> None:
+    # (it stays registered after its passes, doing nothing: removing a callback while the
+    # collector runs the list would skip the next one's "stop", which other libraries' callbacks,
+    # dask's among them, count on)
     global _passes
-    if phase != "stop" or info.get("generation") != 2:
+    if _passes >= FROZEN_PASSES or phase != "stop" or info.get("generation") != 2:
         return
     _passes += 1
     gc.freeze()
-    if _passes >= FROZEN_PASSES:
-        gc.callbacks.remove(_freeze_after_full_pass)
 
 
 if _freeze_after_full_pass not in gc.callbacks:
