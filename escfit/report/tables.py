@@ -215,11 +215,14 @@ def sampler_rows(res) -> tuple[str, list[str], list[list[str]]]:
 
 
 def provenance_rows(res, path) -> list[tuple[str, str]]:
-    """Where the fit came from: files, their hash, solver, seed, run length, times, versions."""
+    """Where the fit came from: files, their hash, solver (and why its tolerance, how least squares
+    differentiated the model), seed, run length, times, versions."""
     a = res.attrs
     rows = [("results file", str(path)), ("method", a.get("method")), ("scene file", a.get("scene_file")),
             ("switching", a.get("switching")), ("data file", a.get("data_file")), ("data SHA-256", a.get("data_sha256")),
-            ("solver", f"{a.get('solver', '')} {a.get('solver_options', '')}".strip()), ("seed", a.get("seed")),
+            ("solver", f"{a.get('solver', '')} {a.get('solver_options', '')}".strip()),
+            ("solver tolerance", a.get("solver_tolerance")), ("least-squares Jacobians", a.get("jacobian")),
+            ("seed", a.get("seed")),
             ("walkers x steps (burn)", f"{a.get('walkers', '-')} x {a.get('steps', '-')} ({a.get('burn', '-')})"
              if "walkers" in a else None),
             ("started / finished", f"{a.get('started')} / {a.get('finished')}"), ("schema", a.get("schema_version")),
