@@ -62,7 +62,6 @@ from .system import System
 
 __all__ = ["covers", "record_tangents", "sample_sensitivities"]
 
-_A = np.ascontiguousarray(_coefficients.A[:N_STAGES, :N_STAGES])
 _B = np.ascontiguousarray(_coefficients.B)
 _OK, _STOPPED, _REFUSED = int(Status.OK), int(Status.STOPPED), int(Status.REFUSED)
 _SWING = 8  # the dense row's column holding its half swing (escfit.balance.solution)
@@ -140,6 +139,35 @@ def _by_record(x, v, s, k, dk):
     return da
 
 
+@kernel(inline="always")
+def _stage_angle(i, x, h, kx):
+    """The angle at stage ``i`` of a step from ``x``: ``x + h sum_j A_ij kx_j`` (its velocity is
+    the stage ``kx_i`` itself)."""
+    dx = 0.0
+    for j in range(i):
+        dx += A_EXTENDED[i, j] * kx[j]
+    return x + h * dx if i > 0 else x
+
+
+@kernel(inline="always")
+def _tangent_stage(i, xs, vs, h, tangent, regime, stages):
+    """Stage ``i`` of every tangent, at the state's stage ``(xs, vs)``, from the tangents' earlier
+    stages ``stages = (tx, tv)`` (written into them)."""
+    w2, _, s, k, dks = regime
+    tx, tv = stages
+    a_x, a_v = _partials(xs, vs, w2, k)
+    for p in range(tangent.shape[0]):
+        sx = 0.0
+        sv = 0.0
+        for j in range(i):
+            sx += A_EXTENDED[i, j] * tx[p, j]
+            sv += A_EXTENDED[i, j] * tv[p, j]
+        sx = tangent[p, 0] + h * sx
+        sv = tangent[p, 1] + h * sv
+        tx[p, i] = sv
+        tv[p, i] = a_x * sx + a_v * sv + _by_record(xs, vs, s, k, dks[p])
+
+
 @kernel
 def _tangent_step(state, tangent, h, regime, work):
     """One DOP853 step of length ``h`` (s) of the state and its tangents.
@@ -165,30 +193,12 @@ def _tangent_step(state, tangent, h, regime, work):
         State and acceleration at the step end.
     """
     x, v, _ = state
-    w2, xc, s, k, dks = regime
+    w2, xc, _, k, _ = regime
     kx, kv, tx, tv, out = work
     x1, v1, a1 = dop853_step(state, h, (w2, xc, k), (kx, kv))  # the primal step, its stages kept
     m = tangent.shape[0]
     for i in range(N_STAGES):
-        # the stage's state: x + h sum_j A_ij kx_j, and its velocity is the stage kx_i itself
-        xs = x
-        if i > 0:
-            dx = 0.0
-            for j in range(i):
-                dx += _A[i, j] * kx[j]
-            xs = x + h * dx
-        vs = kx[i] if i > 0 else v
-        a_x, a_v = _partials(xs, vs, w2, k)
-        for p in range(m):
-            sx = 0.0
-            sv = 0.0
-            for j in range(i):
-                sx += _A[i, j] * tx[p, j]
-                sv += _A[i, j] * tv[p, j]
-            sx = tangent[p, 0] + h * sx
-            sv = tangent[p, 1] + h * sv
-            tx[p, i] = sv
-            tv[p, i] = a_x * sx + a_v * sv + _by_record(xs, vs, s, k, dks[p])
+        _tangent_stage(i, _stage_angle(i, x, h, kx), kx[i] if i > 0 else v, h, tangent, regime, (tx, tv))
     for p in range(m):
         sx = 0.0
         sv = 0.0
@@ -209,32 +219,15 @@ def _tangent_extension(state, tangent, h, regime, work, coef, tcoef):
     augmented system (``work``'s stage arrays of length :data:`~escfit.balance.steps.N_EXTENDED`).
     """
     x, v, _ = state
-    w2, xc, s, k, dks = regime
+    w2, xc, _, k, _ = regime
     kx, kv, tx, tv, out = work
     m = tangent.shape[0]
     x1, v1, _ = _tangent_step(state, tangent, h, regime, work)
-    a_x, a_v = _partials(x1, v1, w2, k)
-    for p in range(m):  # the tangents' last stage: their derivative at the step end
-        tx[p, N_STAGES] = out[p, 1]
-        tv[p, N_STAGES] = a_x * out[p, 0] + a_v * out[p, 1] + _by_record(x1, v1, s, k, dks[p])
+    # the last stage is the derivative at the step end (the stage weights of row 12 are the step's)
+    _tangent_stage(N_STAGES, x1, v1, h, tangent, regime, (tx, tv))
     extension_stages(state, h, (w2, xc, k), (kx, kv))
     for i in range(N_STAGES + 1, N_EXTENDED):
-        dx = 0.0
-        for j in range(i):
-            dx += A_EXTENDED[i, j] * kx[j]
-        xs = x + h * dx
-        vs = kx[i]
-        a_x, a_v = _partials(xs, vs, w2, k)
-        for p in range(m):
-            sx = 0.0
-            sv = 0.0
-            for j in range(i):
-                sx += A_EXTENDED[i, j] * tx[p, j]
-                sv += A_EXTENDED[i, j] * tv[p, j]
-            sx = tangent[p, 0] + h * sx
-            sv = tangent[p, 1] + h * sv
-            tx[p, i] = sv
-            tv[p, i] = a_x * sx + a_v * sv + _by_record(xs, vs, s, k, dks[p])
+        _tangent_stage(i, _stage_angle(i, x, h, kx), kx[i], h, tangent, regime, (tx, tv))
     extension_column(coef, 0, x1 - x, kx, h)
     extension_column(coef, 1, v1 - v, kv, h)
     for p in range(m):

@@ -15,12 +15,11 @@ from ..core.kernels import kernel
 from .acceleration import acceleration
 from .dop853_tables import tables as _coefficients
 
-__all__ = ["dop853_step", "dop853_extension", "extension_stages", "extension_column", "extension_value",
+__all__ = ["dop853_step", "dop853_extension", "extension_stages", "stage", "extension_column", "extension_value",
            "extension_at", "rk4_step", "N_STAGES", "N_EXTENDED", "stage_arrays"]
 
 N_STAGES = _coefficients.N_STAGES  # 12 stages, plus the first-same-as-last evaluation at the step end
 N_EXTENDED = _coefficients.N_STAGES_EXTENDED  # and three more for the continuous extension
-_A = np.ascontiguousarray(_coefficients.A[:N_STAGES, :N_STAGES])
 A_EXTENDED = np.ascontiguousarray(_coefficients.A)  # every stage's row, the extension's three included
 _B = np.ascontiguousarray(_coefficients.B)
 _D = np.ascontiguousarray(_coefficients.D)
@@ -56,14 +55,7 @@ def dop853_step(state, h, regime, stages):
     kx[0] = v
     kv[0] = a
     for i in range(1, N_STAGES):
-        dx = 0.0
-        dv = 0.0
-        for j in range(i):
-            dx += _A[i, j] * kx[j]
-            dv += _A[i, j] * kv[j]
-        vs = v + h * dv
-        kx[i] = vs
-        kv[i] = acceleration(x + h * dx, vs, w2, xc, k)
+        stage(i, state, h, regime, stages)
     sx = 0.0
     sv = 0.0
     for j in range(N_STAGES):
@@ -106,18 +98,28 @@ def dop853_extension(state, h, regime, stages, coef):
 @kernel
 def extension_stages(state, h, regime, stages):
     """The continuous extension's three extra stages, after :func:`dop853_step` filled ``stages``."""
+    for i in range(N_STAGES + 1, N_EXTENDED):
+        stage(i, state, h, regime, stages)
+
+
+@kernel(inline="always")
+def stage(i, state, h, regime, stages):
+    """Stage ``i`` of a step from ``state``, from the stages before it: its state
+    ``(x + h sum_j A_ij kx_j, v + h sum_j A_ij kv_j)`` and the field there, into ``stages``.
+    Returns the stage's state ``(x, v)``."""
     x, v, _ = state
     w2, xc, k = regime
     kx, kv = stages
-    for i in range(N_STAGES + 1, N_EXTENDED):
-        dx = 0.0
-        dv = 0.0
-        for j in range(i):
-            dx += A_EXTENDED[i, j] * kx[j]
-            dv += A_EXTENDED[i, j] * kv[j]
-        vs = v + h * dv
-        kx[i] = vs
-        kv[i] = acceleration(x + h * dx, vs, w2, xc, k)
+    dx = 0.0
+    dv = 0.0
+    for j in range(i):
+        dx += A_EXTENDED[i, j] * kx[j]
+        dv += A_EXTENDED[i, j] * kv[j]
+    xs = x + h * dx
+    vs = v + h * dv
+    kx[i] = vs
+    kv[i] = acceleration(xs, vs, w2, xc, k)
+    return xs, vs
 
 
 @kernel(inline="always")
