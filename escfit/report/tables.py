@@ -8,11 +8,10 @@ from __future__ import annotations
 
 import json
 import math
-from typing import Any
 
 import numpy as np
 
-from ..core.display import display_name, format_value, load_unit, to_display
+from ..core.display import format_value, load_unit, to_display
 from ..core.names import plain_name
 from .params import estimate_kind, parameter_table
 
