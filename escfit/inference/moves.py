@@ -31,10 +31,52 @@ import numpy as np
 
 from .emcee_import import emcee
 
-__all__ = ["EnsembleTMove", "de_t_moves", "complement_splits"]
+__all__ = ["EnsembleTMove", "ArrayDEMove", "de_t_moves", "complement_splits"]
 
 
-class EnsembleTMove(emcee.moves.RedBlueMove):
+class ArrayAcceptance:
+    """emcee's red-blue update (``RedBlueMove.propose``) with its per-walker work done on arrays.
+
+    The same random numbers are drawn in the same order (the split's shuffle, the proposal's
+    draws, then one uniform per walker of the sub-ensemble, in walker order), the proposal sees
+    the same sub-ensemble and complement (the other sub-ensembles one after another, each in
+    walker order) and the acceptance test is the same arithmetic, ``factor + new - old >
+    log(u)``: the draws are those of emcee's own loop (``tests/test_moves.py`` compares the
+    chains).  What goes is Python work per walker and per sub-ensemble (a boolean mask per
+    sub-ensemble for each of the others, a loop over the walkers).  Mixed in before the emcee
+    move it modifies.
+    """
+
+    def propose(self, model, state):
+        nwalkers, ndim = state.coords.shape
+        if nwalkers < 2 * ndim and not self.live_dangerously:
+            raise RuntimeError("It is unadvisable to use a red-blue move with fewer walkers than twice the number of "
+                               "dimensions.")
+        self.setup(state.coords)
+        accepted = np.zeros(nwalkers, dtype=bool)
+        inds = np.arange(nwalkers) % self.nsplits
+        if self.randomize_split:
+            model.random.shuffle(inds)
+        order = np.argsort(inds, kind="stable")  # the walkers of split 0, then 1, ..., each in walker order
+        ends = np.cumsum(np.bincount(inds, minlength=self.nsplits))
+        for split in range(self.nsplits):
+            a, b = (ends[split - 1] if split else 0), ends[split]
+            members = order[a:b]
+            q, factors = self.get_proposal(state.coords[members], [state.coords[np.concatenate((order[:a], order[b:]))]],
+                                           model.random)
+            new_log_probs, new_blobs = model.compute_log_prob_fn(q)
+            accepted[members] = factors + new_log_probs - state.log_prob[members] > np.log(
+                model.random.rand(members.size))
+            state = self.update(state, emcee.State(q, log_prob=new_log_probs, blobs=new_blobs), accepted,
+                                inds == split)
+        return state, accepted
+
+
+class ArrayDEMove(ArrayAcceptance, emcee.moves.DEMove):
+    """emcee's differential-evolution move with :class:`ArrayAcceptance`'s update: the same draws."""
+
+
+class EnsembleTMove(ArrayAcceptance, emcee.moves.RedBlueMove):
     """Independence proposals from a Student-t fitted to the complementary half-ensemble.
 
     Parameters
@@ -58,7 +100,7 @@ class EnsembleTMove(emcee.moves.RedBlueMove):
         self.nsplits = complement_splits(*coords.shape)
 
     def get_proposal(self, s: np.ndarray, c: list, random) -> tuple[np.ndarray, np.ndarray]:
-        comp = np.concatenate(c, axis=0)
+        comp = c[0] if len(c) == 1 else np.concatenate(c, axis=0)
         ns, ndim = s.shape
         factor = self._factor(comp, ndim)
         if factor is None:
@@ -74,15 +116,15 @@ class EnsembleTMove(emcee.moves.RedBlueMove):
         """Mean and Cholesky factor of the proposal's scatter, or None when the complement fixes none."""
         if comp.shape[0] < ndim + 2:
             return None
-        mean = comp.mean(axis=0)
+        mean = np.add.reduce(comp, axis=0) / comp.shape[0]  # ndarray.mean's sum and division, less its wrapping
         dev = comp - mean
         cov = (dev.T @ dev) / (comp.shape[0] - 1) * self.scale**2
         try:
             chol = np.linalg.cholesky(cov)
         except np.linalg.LinAlgError:
             return None
-        d = np.diag(chol)
-        if not (np.all(np.isfinite(chol)) and np.all(d > 1e-12 * np.sqrt(np.diag(cov)).max())):
+        # sqrt of the largest variance is the largest standard deviation (sqrt is monotone)
+        if not (np.isfinite(chol).all() and (chol.diagonal() > 1e-12 * math.sqrt(cov.diagonal().max())).all()):
             return None
         return mean, chol
 
@@ -121,4 +163,4 @@ def de_t_moves(t_weight: float = 0.8) -> list:
     differential evolution with the rest (a step uses one of them, drawn with these weights)."""
     if not 0.0 < t_weight < 1.0 or math.isnan(t_weight):
         raise ValueError(f"t_weight must lie in (0, 1), got {t_weight!r}")
-    return [(EnsembleTMove(), t_weight), (emcee.moves.DEMove(), 1.0 - t_weight)]
+    return [(EnsembleTMove(), t_weight), (ArrayDEMove(), 1.0 - t_weight)]

@@ -14,6 +14,7 @@ import numpy as np
 
 from ..core.errors import FitError
 from ..core.params import ParamSet
+from .prior_block import PriorBlock
 from .priors import Prior, prior_of
 
 __all__ = ["FreeParameters"]
@@ -80,11 +81,11 @@ class FreeParameters:
     def log_prior_many(self, vecs: np.ndarray) -> np.ndarray:
         """:meth:`log_prior` of every row of ``vecs`` (sets, ndim), the same sums in the same order."""
         vecs = np.atleast_2d(np.asarray(vecs, float))
-        total = np.zeros(vecs.shape[0])
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            for i, p in enumerate(self.priors):
-                total = total + p.logpdf_array(vecs[:, i])
-        return total
+        block = self.__dict__.get("_prior_block")
+        if block is None or len(block.priors) != len(self.priors) or any(
+                a is not b for a, b in zip(block.priors, self.priors)):
+            self.__dict__["_prior_block"] = block = PriorBlock(self.priors)
+        return block.log_density(vecs)
 
     def log_prob_many(self, vecs: np.ndarray) -> np.ndarray:
         """Log posterior of each row of ``vecs``, shape ``(sets, ndim)`` -> ``(sets,)``.
