@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from escfit.inference.ensemble import ArraySampler
 from escfit.inference.mcmc import run_emcee
 from escfit.inference.moves import EnsembleTMove, complement_splits, de_t_moves
 
@@ -136,17 +137,32 @@ class _EmceeLoopT(EnsembleTMove):
 
 @pytest.mark.parametrize("ndim, skewed, walkers", [(9, 2, 32), (2, 1, 8), (5, 0, 24)])
 def test_the_array_update_draws_what_emcees_loop_draws(ndim, skewed, walkers):
-    """Same seed, same moves, emcee's per-walker loop against the array update: the same chain,
-    bit for bit (the skewed coordinates' bound makes some proposals -inf)."""
+    """Same seed, same moves, emcee's per-walker loop and conversion of the log densities against
+    the array update and :class:`ArraySampler`: the same chain, bit for bit (the skewed
+    coordinates' bound makes some proposals -inf)."""
     target = Target(ndim, skewed)
     start = target.initial + 0.01 * np.random.default_rng(1).standard_normal((walkers, ndim))
     start[:, :skewed] = np.abs(start[:, :skewed])
     chains = []
-    for moves in (de_t_moves(), [(_EmceeLoopT(), 0.8), (emcee.moves.DEMove(), 0.2)]):
-        sampler = emcee.EnsembleSampler(walkers, ndim, target.log_prob_many, vectorize=True, moves=moves)
+    for moves, kind in ((de_t_moves(), ArraySampler), ([(_EmceeLoopT(), 0.8), (emcee.moves.DEMove(), 0.2)],
+                                                          emcee.EnsembleSampler)):
+        sampler = kind(walkers, ndim, target.log_prob_many, vectorize=True, moves=moves)
         sampler.random_state = np.random.RandomState(7).get_state()
         sampler.run_mcmc(start, 300, progress=False)
         chains.append((sampler.get_chain(), sampler.get_log_prob(), sampler.acceptance_fraction))
     assert 0.05 < chains[0][2].mean() < 0.95  # both kinds of outcome were exercised
     for got, want in zip(*chains):
         np.testing.assert_array_equal(got, want)
+
+
+def test_array_sampler_refuses_what_emcee_refuses():
+    sampler = ArraySampler(4, 1, lambda x: np.where(x[:, 0] > 0, 0.0, np.nan), vectorize=True)
+    with pytest.raises(ValueError, match="NaN"):
+        sampler.compute_log_prob(np.array([[1.0], [-1.0], [2.0], [3.0]]))
+    with pytest.raises(ValueError, match="infinite"):
+        sampler.compute_log_prob(np.array([[1.0], [np.inf], [2.0], [3.0]]))
+    short = ArraySampler(4, 1, lambda x: np.zeros(2), vectorize=True)
+    with pytest.raises(ValueError, match="shape"):
+        short.compute_log_prob(np.ones((4, 1)))
+    lp, blobs = ArraySampler(2, 1, lambda x: [0.5, -np.inf], vectorize=True).compute_log_prob(np.ones((2, 1)))
+    assert lp.tolist() == [0.5, -np.inf] and blobs is None

@@ -198,7 +198,7 @@ def run_sampling(many, system: System, spec: np.ndarray, times: np.ndarray, shif
     """
     times = np.ascontiguousarray(times, float)
     shift = np.ascontiguousarray(np.broadcast_to(np.asarray(shift, float), (len(system),)))
-    if times.ndim != 1 or not times.size or not np.all(np.diff(times) >= 0.0):
+    if times.ndim != 1 or not times.size or not (times[1:] >= times[:-1]).all():
         raise SolverError("sample times must be a non-empty ascending 1-d array")
     n = len(system)
     active = np.array([not m for m in system.refusals()], np.bool_)
@@ -206,9 +206,11 @@ def run_sampling(many, system: System, spec: np.ndarray, times: np.ndarray, shif
     summary = np.zeros(n, SAMPLED)
     summary["status"] = _REFUSED
     summary["t"] = math.nan
+    if threads is None:
+        many(system.k, spec, (times, shift), active, values, summary)
+        return values, summary
     previous = get_num_threads()
-    if threads is not None:
-        set_num_threads(max(1, min(int(threads), config.NUMBA_NUM_THREADS)))
+    set_num_threads(max(1, min(int(threads), config.NUMBA_NUM_THREADS)))
     try:
         many(system.k, spec, (times, shift), active, values, summary)
     finally:

@@ -35,6 +35,7 @@ from .checkpoint import Checkpoint, check_identity, load_checkpoint, run_identit
 from .convergence import BURN_FAR, BURN_FRACTION, Assessment, assess, autocorr_time, default_burn
 from .emcee_import import emcee
 from .lsq import LeastSquaresResult
+from .ensemble import ArraySampler
 from .moves import de_t_moves
 from .space import IDENTITY, SamplerSpace, sampler_space
 
@@ -292,7 +293,7 @@ def run_emcee(problem: Problem, lsq: LeastSquaresResult | None = None, *, walker
         if vectorize is None:
             vectorize = bool(getattr(problem, "vectorized", False))
         fn = problem.log_prob_many if vectorize else problem.log_prob
-    sampler = emcee.EnsembleSampler(walkers, ndim, fn, vectorize=vectorize, moves=MOVES[moves]())
+    sampler = ArraySampler(walkers, ndim, fn, vectorize=vectorize, moves=MOVES[moves]())
     run = _Run(problem, sampler, previous, checkpoint, seed, moves, checkpoint_every, ident, space)
     run.burn_fraction = BURN_FRACTION if lsq is not None else BURN_FAR  # walkers started at the optimum, or not
     if previous is None:

@@ -77,11 +77,15 @@ class Transformed(SamplerSpace):
         of the scale) or whose log posterior is not finite give -inf, never NaN.
         """
         u = np.atleast_2d(np.asarray(u, float))
-        out = np.full(u.shape[0], -math.inf)
-        finite = np.all(np.isfinite(u), axis=1)
+        finite = np.isfinite(u).all(axis=1)
         with np.errstate(over="ignore", invalid="ignore"):
-            x = self.coords.to_problem(np.where(finite[:, None], u, 0.0))
-        rows = np.flatnonzero(finite & self.coords.in_domain(x) & np.all(np.isfinite(x), axis=1))
+            x = self.coords.to_problem(u if finite.all() else np.where(finite[:, None], u, 0.0))
+        usable = finite & self.coords.in_domain(x) & np.isfinite(x).all(axis=1)
+        if usable.all():  # the usual case: every row, no gathering
+            lp = np.asarray(self.problem.log_prob_many(x), float) + self.coords.log_jacobian(u)
+            return np.where(np.isfinite(lp), lp, -math.inf)
+        out = np.full(u.shape[0], -math.inf)
+        rows = np.flatnonzero(usable)
         if rows.size == 0:
             return out
         lp = np.asarray(self.problem.log_prob_many(x[rows]), float)

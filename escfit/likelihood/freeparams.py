@@ -97,12 +97,16 @@ class FreeParameters:
         the batch cannot finish), else from ``log_likelihood`` one row at a time.
         """
         vecs = np.atleast_2d(np.asarray(vecs, float))
-        out = np.full(vecs.shape[0], -math.inf)
         lp = self.log_prior_many(vecs)
-        rows = np.flatnonzero(np.isfinite(lp))
+        inside = np.isfinite(lp)
+        vectorized = getattr(self, "vectorized", False)
+        if vectorized and inside.all():  # the usual case: every row, no gathering
+            return lp + self._log_likelihood_many(vecs)
+        out = np.full(vecs.shape[0], -math.inf)
+        rows = np.flatnonzero(inside)
         if rows.size == 0:
             return out
-        if getattr(self, "vectorized", False):
+        if vectorized:
             out[rows] = lp[rows] + self._log_likelihood_many(vecs[rows])
         else:
             out[rows] = lp[rows] + np.array([self.log_likelihood(self.values(vecs[i])) for i in rows])
