@@ -119,3 +119,44 @@ def test_student_t_amplitudes_keep_the_numpy_path():
     assert problem._compiled_model() is None
     vals = problem.values(problem.initial)
     assert problem.log_likelihood(vals) == _python_loglike(problem, vals)
+
+
+def _predictive_problems():
+    monday = MONDAY.read_text()
+    amp = escfit.load_scene("amp.toml", text=monday.split("[observation]")[0] + (
+        '[observation]\nmodel = "amplitude"\n'
+        'sigma = { value = 0.02, vary = true, min = 0.001, max = 0.5 }\n'
+        'offset = { value = 0.01, vary = true, min = -0.2, max = 0.2 }\n'
+        'offset_rate = { value = 0.0005, vary = true, min = -0.01, max = 0.01 }\n'))
+    data = record_unit_curve(amp, every=2, swings=60, sigma=0.02, offset=0.01, seed=4)
+    student = escfit.load_scene("t.toml", text=monday.split("[observation]")[0] + (
+        '[observation]\nmodel = "amplitude"\nnoise = "student_t"\n'
+        'sigma = { value = 0.02, vary = true, min = 0.001, max = 0.5 }\n'))
+    near = escfit.load_scene("near.toml", text=monday)
+    phase = escfit.load_scene("phase.toml", text=UNIT3.read_text().split("[fit.loads]")[0])  # one load
+    return {"phase, every half swing": FitProblem(phase, record_unit_curve(phase, every=1, swings=30, notch_deg=6,
+                                                                           sigma=0.03, seed=2)),
+            "unit3": escfit.inference.registry.make_problem(str(UNIT3), str(UNIT3_DATA)),
+            "amplitude drift": FitProblem(amp, dataclasses.replace(data, time=data.swing * math.pi / 15.9)),
+            "student-t": FitProblem(student, record_unit_curve(student, every=4, swings=40, sigma=0.02, seed=4)),
+            "notches": FitProblem(near, record_unit_curve(near, every=4, swings=60, notch_deg=6, sigma=0.03, seed=7))}
+
+
+@pytest.mark.parametrize("name", ["unit3", "phase, every half swing", "amplitude drift", "student-t", "notches"])
+def test_predictive_of_many_draws_is_the_one_draw_methods(name):
+    """The posterior predictive's batch (expected readings and pointwise log-likelihood of many
+    draws at once) against :meth:`expected` and :meth:`loglike_pointwise` one draw at a time,
+    including draws far enough out that the balance stops before the last reading."""
+    problem = _predictive_problems()[name]
+    assert (name == "phase, every half swing") == (problem.scene.switching == "phase" and
+                                                   np.any(problem._layout()["side"] < 0))
+    vecs = _sets(problem, 12, 0.08, 9)
+    lo, hi = problem.bounds
+    vecs[0] = np.clip(problem.initial * np.where(np.array(["coulomb" in n for n in problem.names]), 6.0, 1.0),
+                      lo, hi)  # six times the friction: stops early
+    exp, ll = problem.predictive_many(vecs)
+    assert exp.shape == ll.shape == (12, problem.n_data)
+    for i, v in enumerate(vecs):
+        vals = problem.values(v)
+        np.testing.assert_allclose(exp[i], problem.expected(vals), rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(ll[i], problem.loglike_pointwise(vals), rtol=1e-10, atol=1e-9)

@@ -467,16 +467,21 @@ def _predictive(problem: Problem, mc: McmcResult, obs_coords: dict, reading_unit
 
     per_chain = max(1, draws // mc.walkers)
     idx = np.unique(np.linspace(0, mc.chain.shape[1] - 1, per_chain).astype(int))
-    exp = np.full((mc.walkers, idx.size, problem.n_data), np.nan)
-    ll = np.full_like(exp, -np.inf)
-    for w in range(mc.walkers):
-        for j, d in enumerate(idx):
-            vals = problem.values(mc.chain[w, d])
-            try:
-                exp[w, j] = problem.expected(vals)
-                ll[w, j] = problem.loglike_pointwise(vals)
-            except Exception:  # noqa: BLE001 - a failed draw stays NaN / -inf
-                problem.failures["posterior predictive solve failed"] += 1
+    many = getattr(problem, "predictive_many", None)
+    if many is not None:  # every thinned draw in one batch call
+        e, lp = many(mc.chain[:, idx, :].reshape(-1, mc.chain.shape[-1]))
+        exp, ll = e.reshape(mc.walkers, idx.size, -1), lp.reshape(mc.walkers, idx.size, -1)
+    else:
+        exp = np.full((mc.walkers, idx.size, problem.n_data), np.nan)
+        ll = np.full_like(exp, -np.inf)
+        for w in range(mc.walkers):
+            for j, d in enumerate(idx):
+                vals = problem.values(mc.chain[w, d])
+                try:
+                    exp[w, j] = problem.expected(vals)
+                    ll[w, j] = problem.loglike_pointwise(vals)
+                except Exception:  # noqa: BLE001 - a failed draw stays NaN / -inf
+                    problem.failures["posterior predictive solve failed"] += 1
     coords = {"chain": np.arange(mc.walkers), "draw": idx, **obs_coords}
     return (Group({"expected": (("chain", "draw", "obs"), exp, {"units": reading_units})}, coords=coords),
             Group({"reading": (("chain", "draw", "obs"), ll)}, coords=coords,

@@ -426,6 +426,42 @@ class FitProblem(FreeParameters, BalanceProblem):
         shape = (n_curves, n_sets)
         return turns.reshape(*shape, 1 + n), n_done.reshape(shape), failed.reshape(shape)
 
+    def predictive_many(self, vecs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`expected` and :meth:`loglike_pointwise` of every row of ``vecs`` (sets, ndim),
+        each of shape (sets, readings), from one batch run of every set at every load.
+
+        Rows the batch does not finish go through the one-set methods; a row whose solve fails
+        there reads NaN and -inf, counted under "posterior predictive solve failed".
+        """
+        vecs = np.atleast_2d(np.asarray(vecs, float))
+        n_sets = vecs.shape[0]
+        exp = np.full((n_sets, self.n_data), np.nan)
+        ll = np.full((n_sets, self.n_data), -np.inf)
+        redo = np.ones(n_sets, bool)
+        vals = self.values_many(vecs)
+        try:
+            turns, n_done, failed = self._solve_all_curves(vals, n_sets)
+        except (EscfitError, ValueError, ArithmeticError):
+            turns = None
+        if turns is not None:
+            lay = self._layout()
+            columns = {k: (v[:, None] if isinstance(v, np.ndarray) else v) for k, v in vals.items()}
+            inside = lay["swing"][:, None] <= n_done[lay["curve"], :]
+            pred = np.where(inside, turns[lay["curve"], :, lay["swing"]], 0.0).T
+            pred = pred if lay["side"] is None else lay["side"] * pred  # as _nominal
+            with np.errstate(all="ignore"):
+                e = self.observation.expected(pred, columns, lay["side"], lay["time"])
+                lp = self.observation.loglike_pointwise(pred, lay["y"], columns, lay["side"], lay["time"])
+            redo = failed.any(axis=0)
+            exp[~redo], ll[~redo] = np.broadcast_to(e, exp.shape)[~redo], np.broadcast_to(lp, ll.shape)[~redo]
+        for i in np.flatnonzero(redo):
+            one = self.values(vecs[i])
+            try:
+                exp[i], ll[i] = self.expected(one), self.loglike_pointwise(one)
+            except Exception:  # noqa: BLE001 - as the posterior predictive's loop: a failed draw stays NaN / -inf
+                self.failures["posterior predictive solve failed"] += 1
+        return exp, ll
+
     def residuals(self, vals: Mapping[str, float]) -> np.ndarray:
         """Standardised residuals of all readings (large values on failure)."""
         n = sum(c.y.size for c in self.curves)
