@@ -18,7 +18,7 @@ import pytest
 from escfit.core.errors import FitError, ResultsError
 from escfit.inference.checkpoint import load_checkpoint
 from escfit.inference.convergence import assess
-from escfit.inference.mcmc import run_emcee
+from escfit.inference.mcmc import look_points, run_emcee
 
 
 class Gaussian2D:
@@ -178,8 +178,17 @@ def test_walkers_that_disagree_are_not_converged():
     assert not quick.complete and not quick.converged
     np.testing.assert_array_equal(quick.rhat, a.rhat)
     assert np.isnan(quick.ess_bulk).all() and np.isnan(quick.tau).all()
-    # a run that passes R-hat gets every figure
+    # looking at the failing parameter first, the look computes its R-hat alone
+    hinted = assess(x, rhat_first=True, first=1)
+    assert not hinted.converged and hinted.rhat[1] == a.rhat[1] and np.isnan(hinted.rhat[0])
+    # a run that passes R-hat gets every figure, whichever parameter is looked at first
     assert assess(x[:, :, :1], rhat_first=True).complete
+    y = x.copy()
+    y[:, :4, 1] -= 0.5
+    for first in (None, 0, 1):
+        full = assess(y, rhat_first=True, first=first)
+        assert full.complete and full.converged
+        np.testing.assert_array_equal(full.rhat, assess(y).rhat)
 
 
 def test_chain_diagnostics_are_arviz_figures():
@@ -252,7 +261,8 @@ def test_an_interrupted_auto_run_resumes_to_the_same_length_and_draws(tmp_path):
     stops where the uninterrupted one does (interrupted off and on a look point)."""
     whole = run_emcee(Gaussian2D(), walkers=8, steps="auto", seed=1, moves="de")
     assert whole.converged and whole.steps > 700
-    for cut in (697, 781):  # 781 is a look point (400, 500, 625, 781, ...)
+    on = max(n for n in look_points(whole.steps - 1) if n > 600)  # a look point the run went past
+    for cut in (on - 3, on):
         ck = tmp_path / f"a{cut}.emcee"
         with pytest.raises(KeyboardInterrupt):
             run_emcee(Gaussian2D(die_after=1 + 2 * cut + 1), walkers=8, steps="auto", seed=1, moves="de",

@@ -32,7 +32,7 @@ from ..core.errors import FitError, ResultsError
 from ..core.limits import check_sampler_size
 from ..likelihood.problem import Problem
 from .checkpoint import Checkpoint, check_identity, load_checkpoint, run_identity, save_checkpoint
-from .convergence import BURN_FAR, BURN_FRACTION, Assessment, assess, autocorr_time, default_burn
+from .convergence import BURN_FAR, BURN_FRACTION, RHAT_MAX, Assessment, assess, autocorr_time, default_burn
 from .emcee_import import emcee
 from .lsq import LeastSquaresResult
 from .ensemble import ArraySampler
@@ -205,7 +205,7 @@ def _check_bounds(problem: Problem, ck: Checkpoint, where: str, space: SamplerSp
 
 
 AUTO_MIN_STEPS = 400  # first look at convergence
-AUTO_GROWTH = 1.25  # later looks: each after the run has grown by a quarter
+AUTO_GROWTH = 1.05  # later looks: each after the run has grown by a twentieth (a look mostly costs one R-hat)
 
 
 def run_emcee(problem: Problem, lsq: LeastSquaresResult | None = None, *, walkers: int = 32,
@@ -224,7 +224,7 @@ def run_emcee(problem: Problem, lsq: LeastSquaresResult | None = None, *, walker
         Total steps, or ``"auto"``: sample until every parameter has split R-hat <= 1.01, bulk
         and tail ESS >= 400 and the run is longer than 50 autocorrelation times
         (:mod:`escfit.inference.convergence`), looking first after 400 steps and then each time
-        the run has grown by a quarter, up to ``max_steps``.
+        the run has grown by a twentieth, up to ``max_steps``.
     burn
         Steps discarded at the start (default: the first quarter of the run when the walkers start
         at ``lsq``'s optimum, else the first half; :func:`~escfit.inference.convergence.default_burn`).
@@ -404,7 +404,8 @@ class _Run:
                     done = self.steps + len(buf)
                     if auto and done >= look:
                         self._flush(buf, lp_buf)
-                        assessment = assess(self.chain(), burn, rhat_first=True, burn_fraction=self.burn_fraction)
+                        assessment = assess(self.chain(), burn, rhat_first=True, burn_fraction=self.burn_fraction,
+                                            first=_failing(assessment))
                         if assessment.converged:
                             break
                         look = next_look(done)
@@ -449,9 +450,19 @@ class _Run:
         self.every = max(self.every, 20.0 * spent)  # saving costs at most a twentieth of the run
 
 
+def _failing(assessment: Assessment | None) -> int | None:
+    """The parameter whose R-hat failed the last look (to be looked at first in the next), if any."""
+    if assessment is None:
+        return None
+    failed = np.flatnonzero(np.isfinite(assessment.rhat) & ~(assessment.rhat <= RHAT_MAX))
+    return int(failed[0]) if failed.size else None
+
+
 def look_points(upto: int) -> list[int]:
     """Run lengths at which an ``"auto"`` run looks at convergence, up to ``upto``: 400, then each
-    a quarter longer than the one before (400, 500, 625, 781, ...)."""
+    a twentieth longer than the one before (400, 420, 441, 463, ...).  A look that fails stops at
+    the first parameter whose R-hat fails, looked at first the next time, so it mostly costs one
+    parameter's R-hat."""
     out, n = [], AUTO_MIN_STEPS
     while n <= upto:
         out.append(n)
