@@ -68,6 +68,9 @@ def test_fit_recipe_summary_and_reports(tmp_path, monkeypatch):
     s = json.loads(run("summary", "monday_unit4.h5", "--json").output)
     assert s["parameters"]["viscous.C"]["unit"] == "1/s"
     assert set(s["parameters"]["viscous.C"]) >= {"median", "lo95", "hi95", "unit"}
+    # the report written with the fit (from the results in memory) is the one the file gives
+    assert run("report", "monday_unit4.h5", "--out", "again.html").exit_code == 0
+    assert (tmp_path / "again.html").read_text() == html
     md = run("report", "monday_unit4.h5", "--format", "md")
     assert md.exit_code == 0 and (tmp_path / "monday_unit4.md").exists()
     again = run("fit", "fits/monday_unit4.toml", "--steps", "300", "--walkers", "12")

@@ -499,16 +499,16 @@ def fit(data, scene_path, method, out, seed, walkers, steps, max_steps, checkpoi
         _print_summary(result)
     if report_path:
         with timings.phase("report"):
-            _write_report(out, report_path, force)
+            _write_report(out, report_path, force, result)
     if show_timings:
         click.echo(timings.table(startup), err=True)
     if getattr(result, "verdict", "") == "not determined":
         raise click.exceptions.Exit(EXIT_NOT_DETERMINED)
 
 
-def _write_report(results: str, report_path: str, force: bool) -> None:
-    """The report of a fit just written; if it cannot be written, say that the results are kept
-    and which command writes the report from them (a rerun of the fit would find its output)."""
+def _write_report(results: str, report_path: str, force: bool, result=None) -> None:
+    """The report of a fit just written (``result``, as written to ``results``); if it cannot be written,
+    say that the results are kept and which command writes it from them (a rerun would find its output)."""
     from ..core.errors import ResultsError
     from ..report import make_report
 
@@ -517,7 +517,8 @@ def _write_report(results: str, report_path: str, force: bool) -> None:
     again = (f"`escfit report {quote(str(results))} --out {quote(str(report_path))}"
              f"{' --format md' if report_path.endswith('.md') else ''}`")
     try:
-        make_report(results, report_path, fmt="md" if str(report_path).endswith(".md") else "html", force=force)
+        make_report(results, report_path, fmt="md" if str(report_path).endswith(".md") else "html", force=force,
+                    result=result)
     except KeyboardInterrupt:
         click.echo(f"escfit: interrupted while writing the report; the results are saved in {results}: {again} "
                    "writes it", err=True)

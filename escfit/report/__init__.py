@@ -106,7 +106,7 @@ def _md_cell(text: str) -> str:
 
 
 def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: bool = False,
-                title: str | None = None) -> Path:
+                title: str | None = None, result: FitResult | None = None) -> Path:
     """Write a report of the fit stored at ``path``.
 
     Parameters
@@ -123,6 +123,10 @@ def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: 
     title
         The report's title; by default the fit's (a recipe's ``title``), else the scene's,
         else the data file's name (see :func:`report_title`).
+    result
+        The fit just written to ``path`` by this process (:func:`escfit.fit`'s return): the
+        report is made from it instead of reading the file back (the same page, without the
+        read).
 
     Returns
     -------
@@ -142,7 +146,7 @@ def make_report(path: str | Path, out: str | Path, *, fmt: str = "html", force: 
     refuse_clobbering_inputs({"the report": out}, {"results": path})
     check_output_folder(out, "the report", companions=48 if fmt == "md" else 0)  # md: <stem>_<figure>.png
     refuse_existing(out, force)
-    res = load_fit(path)
+    res = load_fit(path) if result is None else result
     a = res.attrs
     page = {
         "title": report_title(res, title),
