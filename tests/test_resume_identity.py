@@ -159,7 +159,7 @@ def test_a_signal_during_least_squares_ends_the_command_and_writes_nothing(work,
 def test_a_signal_while_writing_the_report_keeps_the_results_and_says_how_to_finish(work, monkeypatch, sig):
     import escfit.report as report
 
-    monkeypatch.setattr(report, "load_fit", _signalling(report.load_fit, sig))
+    monkeypatch.setattr(report, "fit_statistics", _signalling(report.fit_statistics, sig))
     r = run("fit", "data.csv", "--scene", "rig.toml", "--out", "r.h5", "--report", "r.html")
     assert r.exit_code == 130, r.output
     assert "the results are saved in r.h5: `escfit report r.h5 --out r.html` writes it" in r.stderr
