@@ -2,7 +2,8 @@
 
 Run from a checkout::
 
-    python benchmarks/command.py [--previous DIR | --baseline REV] [--repeat 5] [--quickstart] [--cold]
+    python benchmarks/command.py [--previous DIR | --baseline REV] [--repeat 5] [--quickstart] [--trial] [--only]
+                                 [--cold]
 
 (``--previous`` a checkout of the previous main, e.g. ``git worktree add --detach DIR main``.)
 
@@ -11,7 +12,8 @@ previous version and this checkout in turn (A B A B ...), so that a drift of the
 machine's speed hits both alike; the ratio previous/current is taken pair by pair and its
 median printed.  Jobs: the string pendulum's least squares (``fits/real/string_pendulum_lab1.toml
 --method leastsq``) and, with ``--quickstart``, the README's quick start
-(``fits/monday_unit3.toml --report``, emcee).
+(``fits/monday_unit3.toml --report``, emcee), and with ``--trial`` the string pendulum's trial posterior
+(``fits/real/string_pendulum_trial1.toml``, emcee, nine parameters); ``--only`` leaves out the least squares.
 
 Phases are timed the same way in both versions, from outside escfit's code: a small harness
 wraps, as each module finishes importing, the functions that start each phase (the scene's
@@ -190,6 +192,8 @@ def job_args(job: str, out: Path) -> list[str]:
     if job == "leastsq":
         recipe = "fits/real/string_pendulum_lab1.toml"
         return ["fit", recipe, "--method", "leastsq", "--out", str(out), "--force", "--quiet"]
+    if job == "trial":
+        return ["fit", "fits/real/string_pendulum_trial1.toml", "--out", str(out), "--force", "--quiet"]
     return ["fit", "fits/monday_unit3.toml", "--out", str(out), "--force", "--quiet", "--report",
             str(out.with_suffix(".html"))]
 
@@ -282,6 +286,9 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--baseline", default=BASELINE, help="else this git revision, extracted with git archive")
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--quickstart", action="store_true", help="also the quick start (emcee, with its report)")
+    ap.add_argument("--trial", action="store_true", help="also the string pendulum's trial posterior (emcee, 9 "
+                    "parameters, to R-hat <= 1.01)")
+    ap.add_argument("--only", action="store_true", help="leave out the least squares")
     ap.add_argument("--cold", action="store_true", help="also one run each with an empty numba cache")
     ap.add_argument("--json", default=None, help="write the figures here")
     args = ap.parse_args(argv)
@@ -292,7 +299,9 @@ def main(argv: list[str] | None = None) -> None:
     record = {"previous": str(previous), "cpus": os.cpu_count(), "load_before": load, "jobs": {}}
     lines = []
     with tempfile.TemporaryDirectory(prefix="escfit-command-") as tmp:
-        for job in ["leastsq"] + (["quickstart"] if args.quickstart else []):
+        jobs = ([] if args.only else ["leastsq"]) + (["quickstart"] if args.quickstart else []) + (
+            ["trial"] if args.trial else [])
+        for job in jobs:
             record["jobs"][job] = measure(job, previous, args.repeat, Path(tmp), args.cold)
             lines += report(job, record["jobs"][job])
     record["load_after"] = os.getloadavg()
