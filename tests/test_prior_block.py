@@ -30,8 +30,10 @@ def _loop(priors, x):
     return total
 
 
-def test_same_bits_as_one_prior_at_a_time():
-    priors = _priors()
+@pytest.mark.parametrize("grouped", [False, True])
+def test_same_bits_as_one_prior_at_a_time(grouped):
+    """Forms scattered over the vector, and each form's columns side by side (read as slices)."""
+    priors = sorted(_priors(), key=lambda p: p.kind) if grouped else _priors()
     rng = np.random.default_rng(3)
     x = np.column_stack([rng.uniform(p.lo - 0.5 if math.isfinite(p.lo) else -3, p.hi + 0.5 if math.isfinite(p.hi)
                                      else 9, 4000) for p in priors])

@@ -197,10 +197,12 @@ def run_sampling(many, system: System, spec: np.ndarray, times: np.ndarray, shif
     and ``summary`` (:data:`SAMPLED`); sets the one-set solver would refuse stay ``REFUSED``.
     """
     times = np.ascontiguousarray(times, float)
-    shift = np.ascontiguousarray(np.broadcast_to(np.asarray(shift, float), (len(system),)))
+    n = len(system)
+    if not (isinstance(shift, np.ndarray) and shift.dtype == np.float64 and shift.shape == (n,)
+            and shift.flags.c_contiguous):
+        shift = np.ascontiguousarray(np.broadcast_to(np.asarray(shift, float), (n,)))
     if times.ndim != 1 or not times.size or not (times[1:] >= times[:-1]).all():
         raise SolverError("sample times must be a non-empty ascending 1-d array")
-    n = len(system)
     active = np.array([not m for m in system.refusals()], np.bool_)
     values = np.full((n, times.size), np.nan)
     summary = np.zeros(n, SAMPLED)

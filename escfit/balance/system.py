@@ -131,7 +131,9 @@ class Structure:
 
     def records(self, n: int) -> np.ndarray:
         """``n`` records prepared for this structure, to be filled with parameter values."""
-        return (self.words.copy() if n == 1 else np.tile(self.words, n)).view(COEFFICIENTS)
+        out = np.empty((n, self.words.size))
+        out[:] = self.words  # n copies of the prepared words (np.tile's result, without its wrapping)
+        return out.reshape(-1).view(COEFFICIENTS)
 
 
 @dataclass(frozen=True)

@@ -78,11 +78,16 @@ class Transformed(SamplerSpace):
         """
         u = np.atleast_2d(np.asarray(u, float))
         finite = np.isfinite(u).all(axis=1)
+        both = getattr(self.coords, "to_problem_and_log_jacobian", None)
         with np.errstate(over="ignore", invalid="ignore"):
-            x = self.coords.to_problem(u if finite.all() else np.where(finite[:, None], u, 0.0))
+            if both is not None and finite.all():
+                x, log_jac = both(u)
+            else:
+                x, log_jac = self.coords.to_problem(np.where(finite[:, None], u, 0.0)), None
         usable = finite & self.coords.in_domain(x) & np.isfinite(x).all(axis=1)
         if usable.all():  # the usual case: every row, no gathering
-            lp = np.asarray(self.problem.log_prob_many(x), float) + self.coords.log_jacobian(u)
+            log_jac = self.coords.log_jacobian(u) if log_jac is None else log_jac
+            lp = np.asarray(self.problem.log_prob_many(x), float) + log_jac
             return np.where(np.isfinite(lp), lp, -math.inf)
         out = np.full(u.shape[0], -math.inf)
         rows = np.flatnonzero(usable)

@@ -39,9 +39,9 @@ class PriorBlock:
         self._base = np.zeros(len(self.priors))
         for kind, cols, consts in groups[:2]:
             self._base[cols] = consts[0]
-        self._groups = [g for g in groups[2:] if g[1].size]
+        self._groups = [g for g in groups[2:] if g[2][0].size]  # forms present
 
-    def _group(self, kind: str) -> tuple[str, np.ndarray, tuple[np.ndarray, ...]]:
+    def _group(self, kind: str) -> tuple[str, np.ndarray | slice, tuple[np.ndarray, ...]]:
         """``(kind, columns, constants)``: the columns with this form and the per-column numbers
         :meth:`Prior.logpdf_array` uses (each a row vector to broadcast over the sets)."""
         cols = [i for i, p in enumerate(self.priors) if p.kind == kind]
@@ -63,7 +63,10 @@ class PriorBlock:
             consts = (arg(0), np.array([math.log(p.args[0]) for p in ps], float), mass)
         else:  # lognormal
             consts = (arg(0), arg(1), np.array([math.log(p.args[1]) for p in ps], float), mass)
-        return kind, np.array(cols, np.intp), consts
+        idx = np.array(cols, np.intp)
+        if cols and cols == list(range(cols[0], cols[-1] + 1)):  # contiguous: a slice reads a view
+            return kind, slice(cols[0], cols[-1] + 1), consts
+        return kind, idx, consts
 
     def columns(self, x: np.ndarray) -> np.ndarray:
         """Each prior's log density at each row of ``x`` (sets, ndim), ``-inf`` outside its support;

@@ -326,6 +326,12 @@ class WaveformProblem(RecordingProblem):
         return rec
 
     def _noise(self) -> tuple[int, float]:
+        noise = self.__dict__.get("_noise_cache")
+        if noise is None:
+            self.__dict__["_noise_cache"] = noise = self._noise_code()
+        return noise
+
+    def _noise_code(self) -> tuple[int, float]:
         from ..observation.waveform_compiled import AR1, QUANTISED, WHITE
 
         obs = self.observation
