@@ -78,16 +78,11 @@ class Transformed(SamplerSpace):
         """
         u = np.atleast_2d(np.asarray(u, float))
         finite = np.isfinite(u).all(axis=1)
-        both = getattr(self.coords, "to_problem_and_log_jacobian", None)
         with np.errstate(over="ignore", invalid="ignore"):
-            if both is not None and finite.all():
-                x, log_jac = both(u)
-            else:
-                x, log_jac = self.coords.to_problem(np.where(finite[:, None], u, 0.0)), None
+            x = self.coords.to_problem(u if finite.all() else np.where(finite[:, None], u, 0.0))
         usable = finite & self.coords.in_domain(x) & np.isfinite(x).all(axis=1)
         if usable.all():  # the usual case: every row, no gathering
-            log_jac = self.coords.log_jacobian(u) if log_jac is None else log_jac
-            lp = np.asarray(self.problem.log_prob_many(x), float) + log_jac
+            lp = np.asarray(self.problem.log_prob_many(x), float) + self.coords.log_jacobian(u)
             return np.where(np.isfinite(lp), lp, -math.inf)
         out = np.full(u.shape[0], -math.inf)
         rows = np.flatnonzero(usable)

@@ -116,13 +116,3 @@ class AR1Coordinates:
         """``log|det dx/du|`` of each row of ``u``: ``u1 - log cosh(u2)`` (finite for any finite u)."""
         u = np.asarray(u, float)
         return u[..., self.sigma] - log_cosh(u[..., self.rho])
-
-    def to_problem_and_log_jacobian(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`to_problem` and :meth:`log_jacobian` of ``u`` (rows), sharing ``log cosh(u2)``."""
-        u = np.asarray(u, float)
-        x = u.copy()
-        lc = log_cosh(u[..., self.rho])
-        with np.errstate(over="ignore"):
-            x[..., self.sigma] = np.exp(u[..., self.sigma] + lc)
-        x[..., self.rho] = np.tanh(u[..., self.rho])
-        return x, u[..., self.sigma] - lc
