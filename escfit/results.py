@@ -81,7 +81,11 @@ class FitResult:
         return self.tree[name].to_dataset() if name in self.tree.children else None
 
     def arrays(self, name: str):
-        """Group ``name`` as the plain tree or the DataTree holds it (both give ``[var].values``)."""
+        """Group ``name`` as the plain tree or the DataTree holds it, or None.
+
+        Both give ``[var].values`` (and ``.dims``, ``.attrs``, ``.shape``, ``.size``), ``name in``,
+        ``.coords``, ``.sizes`` and ``.attrs``: what the report, the summary and the figures read, so
+        that a fit just run is reported without importing xarray."""
         if self._plain is not None:
             return self._plain.children.get(name)
         return self.group(name)

@@ -83,6 +83,21 @@ def test_sampler_fit_imports_no_statistics_signal_or_data_libraries(tmp_path):
     assert not never & set(seen["at_end"]), seen
 
 
+def test_a_unit_curve_fit_with_its_report_reads_no_xarray(tmp_path):
+    # the report of a fit just run is made from the results in memory, as plain arrays
+    out = tmp_path / "fit.h5"
+    recipe = ROOT / "fits" / "monday_unit3.toml"
+    r = subprocess.run([sys.executable, "-c", DRIVER, "fit", str(recipe), "--out", str(out), "--quiet", "--steps",
+                        "200", "--report", str(tmp_path / "fit.html")],
+                       capture_output=True, text=True, env=_env(), cwd=tmp_path, timeout=900)
+    line = [ln for ln in r.stdout.splitlines() if ln.startswith("SEEN ")]
+    assert line, r.stderr[-3000:]
+    seen = json.loads(line[0][5:])
+    assert seen.get("exit") in (0, None), r.stderr[-3000:]
+    assert "matplotlib" in seen["at_end"] and (tmp_path / "fit.html").is_file()
+    assert not {"xarray", "pandas", "scipy.stats", "arviz"} & set(seen["at_end"]), seen
+
+
 def test_timings_table_adds_up_to_the_process(tmp_path):
     out = tmp_path / "fit.h5"
     r = subprocess.run([sys.executable, "-m", "escfit", "fit", str(RECIPE), "--method", "leastsq", "--out", str(out),

@@ -206,12 +206,12 @@ def test_binned_means():
 
 # -- the figure's numbers, from a saved fit ------------------------------------------------------
 class _Saved:
-    """What the figure reads of a results file: ``attrs`` and ``group(name)``."""
+    """What the figure reads of a results file: ``attrs`` and ``arrays(name)``."""
 
     def __init__(self, attrs, **groups):
         self.attrs, self._groups = attrs, groups
 
-    def group(self, name):
+    def arrays(self, name):
         return self._groups.get(name)
 
 
@@ -342,4 +342,4 @@ def test_no_figure_without_amplitudes():
     res = _saved(FIT_SCENE, "pulses", np.arange(5.0), np.arange(5.0), {"viscous.C": 0.1},
                  {"swing": ("obs", np.arange(5)), "curve": ("obs", np.full(5, "notch"))})
     assert decrement_figure(res) is None
-    assert decrement_figure(SimpleNamespace(attrs={}, group=lambda name: None)) is None
+    assert decrement_figure(SimpleNamespace(attrs={}, arrays=lambda name: None)) is None

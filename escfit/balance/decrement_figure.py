@@ -45,8 +45,8 @@ def decrement_panels(res) -> tuple[list[DecrementPanel], list[str]]:
     Returns ``([], [why])`` for fits whose readings give no amplitudes (passage times,
     timegrapher readings) or too few of them.
     """
-    lsq = res.group("least_squares")
-    obs = res.group("observed_data")
+    lsq = res.arrays("least_squares")
+    obs = res.arrays("observed_data")
     kind = res.attrs.get("data_kind", "amplitude")
     if lsq is None or obs is None or "expected" not in lsq:
         return [], ["no readings and model stored"]
@@ -344,8 +344,8 @@ def _caption(res, panels: list[DecrementPanel], notes: list[str]) -> str:
                "removed). The span between turning points k and k+1 is A(k) + A(k+1) wherever the centre lies, so "
                "half the difference of consecutive spans is (A(k) - A(k+2))/2, drawn at a quarter of their sum.")
     else:
-        swings = [np.diff(res.group("observed_data")["swing"].values[res.group("observed_data")["curve"].values == c])
-                  for c in dict.fromkeys(res.group("observed_data")["curve"].values)]
+        swings = [np.diff(res.arrays("observed_data")["swing"].values[res.arrays("observed_data")["curve"].values == c])
+                  for c in dict.fromkeys(res.arrays("observed_data")["curve"].values)]
         consecutive = all(np.all(g == 1) for g in swings)
         how = ("Loss of amplitude per half swing against the amplitude, from the amplitude readings: "
                + ("three consecutive half swings k, k+1, k+2 give (A(k) - A(k+2))/2 at the amplitude "

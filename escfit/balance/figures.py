@@ -21,7 +21,7 @@ __all__ = ["figures"]
 
 def figures(res) -> dict[str, bytes]:
     """The data-versus-model figure(s) of a balance fit, by the kind of its readings."""
-    if "expected" not in res.group("least_squares"):
+    if "expected" not in res.arrays("least_squares"):
         return {}
     plt = pyplot()
     kind = res.attrs.get("data_kind", "amplitude")
@@ -35,7 +35,7 @@ def figures(res) -> dict[str, bytes]:
         return {"data and fit": _amplitude_figure(res, plt)}
     if kind == "timegrapher":
         out = {}
-        curves = res.group("observed_data")["curve"].values.astype(str)
+        curves = res.arrays("observed_data")["curve"].values.astype(str)
         if "amplitude" in curves:
             out["data and fit"] = _timegrapher_amplitudes(res, plt)
         if (curves != "amplitude").any():
@@ -46,7 +46,7 @@ def figures(res) -> dict[str, bytes]:
 
 def _band(res, n: int):
     """The 95 % posterior band of the expected readings, or None without a posterior."""
-    pp = res.group("posterior_predictive")
+    pp = res.arrays("posterior_predictive")
     if pp is None:
         return None
     e = pp["expected"].values.reshape(-1, n)
@@ -63,8 +63,8 @@ def _names(res, curves) -> dict[str, str]:
 
 def _amplitude_figure(res, plt) -> bytes:
     """Amplitude (or notch) readings per half swing against the model, in degrees."""
-    obs = res.group("observed_data")
-    model = res.group("least_squares")["expected"].values.astype(float)
+    obs = res.arrays("observed_data")
+    model = res.arrays("least_squares")["expected"].values.astype(float)
     y = obs["reading"].values.astype(float)
     curves = obs["curve"].values.astype(str)
     band = _band(res, y.size)
@@ -100,10 +100,10 @@ def _amplitude_figure(res, plt) -> bytes:
 
 def _timegrapher_amplitudes(res, plt) -> bytes:
     """The timegrapher's amplitude readings (already in degrees) against the model."""
-    obs = res.group("observed_data")
+    obs = res.arrays("observed_data")
     m = obs["curve"].values.astype(str) == "amplitude"
     y = obs["reading"].values.astype(float)
-    model = res.group("least_squares")["expected"].values.astype(float)
+    model = res.arrays("least_squares")["expected"].values.astype(float)
     band = _band(res, y.size)
     lift = _lift_angle_deg(res)
     fig = fit_figure(plt, x=obs["swing"].values[m], y=y[m], model=model[m], curves=obs["curve"].values[m],
@@ -118,9 +118,11 @@ def _timegrapher_amplitudes(res, plt) -> bytes:
 
 
 def _lift_angle_deg(res) -> str:
-    lsq = res.group("least_squares")
-    if "observation.lift_angle" in list(lsq["parameter"].values):
-        return f"fitted true lift angle {float(lsq['value'].sel(parameter='observation.lift_angle')) * RAD_TO_DEG:.4g} deg"
+    lsq = res.arrays("least_squares")
+    names = [str(n) for n in lsq["parameter"].values]
+    if "observation.lift_angle" in names:
+        value = float(lsq["value"].values[names.index("observation.lift_angle")])
+        return f"fitted true lift angle {value * RAD_TO_DEG:.4g} deg"
     return ""
 
 
@@ -132,8 +134,8 @@ READ_AS = {"rad": (RAD_TO_DEG, "deg", "angle", "theta(t)"),
 
 def _waveform_figure(res, plt) -> bytes:
     """Every sample against time with the model's theta(t) (or theta'(t), x(t)), and the residuals below."""
-    obs = res.group("observed_data")
-    lsq_exp = res.group("least_squares")["expected"].values
+    obs = res.arrays("observed_data")
+    lsq_exp = res.arrays("least_squares")["expected"].values
     t = obs["time"].values
     k, unit, what, model_words = READ_AS.get(obs["reading"].attrs.get("units", "rad"), READ_AS["rad"])
     y = obs["reading"].values.astype(float)
@@ -173,8 +175,8 @@ def _envelope_figure(res, plt):
     samples and of the model from the sensor's zero is the amplitude (alternate half swings
     differ by twice the centre's offset).
     """
-    obs = res.group("observed_data")
-    model = res.group("least_squares")["expected"].values.astype(float)
+    obs = res.arrays("observed_data")
+    model = res.arrays("least_squares")["expected"].values.astype(float)
     y = obs["reading"].values.astype(float)
     t = obs["time"].values.astype(float)
     k, unit, what, _ = READ_AS.get(obs["reading"].attrs.get("units", "rad"), READ_AS["rad"])
@@ -205,8 +207,8 @@ def _residual_figure(res, plt, only=None) -> bytes:
     minus the least-squares prediction, with the posterior band of the prediction around it.
     Times are shown in milliseconds.
     """
-    obs = res.group("observed_data")
-    lsq_exp = res.group("least_squares")["expected"].values
+    obs = res.arrays("observed_data")
+    lsq_exp = res.arrays("least_squares")["expected"].values
     y = obs["reading"].values.astype(float)
     swing, curves = obs["swing"].values, obs["curve"].values.astype(str)
     units = obs["reading"].attrs.get("units", "")

@@ -37,6 +37,18 @@ class Variable:
         """Itself (as ``xarray.DataArray.variable``: the array without its coordinates)."""
         return self
 
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return self.values.shape
+
+    @property
+    def size(self) -> int:
+        return int(self.values.size)
+
+    @property
+    def ndim(self) -> int:
+        return self.values.ndim
+
 
 def _variable(name: str, spec: Any) -> Variable:
     """A variable from xarray's forms: ``(dims, values[, attrs])``, or bare values of the

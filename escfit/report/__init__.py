@@ -82,7 +82,7 @@ def _units_note(units: list[str], res=None) -> str:
     text = ("Display units: " + ", ".join(said) + "; the results file and its JSON and CSV summaries keep SI units "
             "(angles in radians).") if said else ""
     names = res.parameter_names if res is not None else []
-    obs = res.group("observed_data") if res is not None else None
+    obs = res.arrays("observed_data") if res is not None else None
     rate = obs is not None and obs["reading"].attrs.get("units") == "rad/s"
     if rate and ("observation.offset" in names or "observation.offset_rate" in names):
         text += (" The rate's zero (the sensor's bias) is what the sensor reads when the oscillator is still, and its "

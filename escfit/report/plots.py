@@ -30,11 +30,11 @@ def report_figures(res) -> tuple[dict[str, CaptionedPNG], dict[str, CaptionedPNG
     if draw is not None:
         figs.update({title: image if isinstance(image, CaptionedPNG) else CaptionedPNG(image)
                      for title, image in draw(res).items()})
-    lsq = res.group("least_squares")
+    lsq = res.arrays("least_squares")
     if "data and fit" not in figs and lsq is not None and "expected" in lsq:
         figs["data and fit"] = _generic_figure(res, plt)
     diagnostics: dict[str, CaptionedPNG] = {}
-    post = res.group("posterior")
+    post = res.arrays("posterior")
     names = _sampled(res)
     if post is not None and names:
         draws, labels = _display_draws(res, names)  # once, for both figures
@@ -45,7 +45,7 @@ def report_figures(res) -> tuple[dict[str, CaptionedPNG], dict[str, CaptionedPNG
 
 
 def _sampled(res) -> list[str]:
-    post = res.group("posterior")
+    post = res.arrays("posterior")
     if post is None:
         return []
     return [n for n in res.parameter_names if n in post and np.ptp(post[n].values) > 0]
@@ -63,9 +63,9 @@ READING_WORDS = {"terminal-speeds": "driver speed", "speed-trace": "driver speed
 def _generic_figure(res, plt) -> CaptionedPNG:
     """Readings against their plotting coordinate ``x`` (else their index), the model at the
     least-squares optimum and the 95 % posterior band, one colour per curve; residuals below."""
-    obs = res.group("observed_data")
-    model = res.group("least_squares")["expected"].values.astype(float)
-    pp = res.group("posterior_predictive")
+    obs = res.arrays("observed_data")
+    model = res.arrays("least_squares")["expected"].values.astype(float)
+    pp = res.arrays("posterior_predictive")
     family = str(res.attrs.get("model", ""))
     y = obs["reading"].values.astype(float)
     y_disp, y_unit = to_display(y, obs["reading"].attrs.get("units", ""), "reading")
@@ -99,7 +99,7 @@ def _generic_figure(res, plt) -> CaptionedPNG:
 
 def _display_draws(res, names: list[str]) -> tuple[dict[str, np.ndarray], dict[str, str]]:
     """Posterior draws (chain, draw) in display units, keyed by display name; and axis labels."""
-    post = res.group("posterior")
+    post = res.arrays("posterior")
     units = _units(res)
     loads_in = load_unit(json.loads(res.attrs.get("meanings", "{}") or "{}"))
     meanings = json.loads(res.attrs.get("meanings", "{}") or "{}")

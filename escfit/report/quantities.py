@@ -88,7 +88,7 @@ def derived_rows(res) -> tuple[list[str], list[list[str]], str]:
     rows = [row for row in map(_row, quantities) if row is not None]
     if not rows:
         return [], [], ""
-    how = ("posterior draws" if res.group("posterior") is not None
+    how = ("posterior draws" if res.arrays("posterior") is not None
            else "the least-squares estimate's normal approximation")
     note = f"{note} Medians and 95 % intervals over {how}; held parameters at their values.".lstrip()
     return ["quantity", "unit", "median", "95% interval", "formula"], rows, note

@@ -31,11 +31,11 @@ def fit_statistics(res) -> str:
     here is the least-squares one; a posterior ``observation.sigma`` is in the parameter table.
     """
     a = res.attrs
-    lsq = res.group("least_squares")
+    lsq = res.arrays("least_squares")
     la = lsq.attrs if lsq is not None else {}
     n = int(la.get("n_data", 0) or 0)
     npar = int(lsq.sizes.get("parameter", 0)) if lsq is not None else 0
-    obs = res.group("observed_data")
+    obs = res.arrays("observed_data")
     units = obs["reading"].attrs.get("units", "rad") if obs is not None else "rad"
     sigma_unit = "rad" if units == "notches" else units  # notch counts: the jitter is an angle
     noise = [name for name in res.parameter_names if name.startswith("observation.sigma")]
@@ -65,7 +65,7 @@ def fit_statistics(res) -> str:
         shown, label = to_display(float(value), sigma_unit, "observation.sigma")
         return f"{format_value(shown, 3)} {label}"
 
-    posterior_sigma = res.group("posterior") is not None and "observation.sigma" in res.group("posterior")
+    posterior_sigma = res.arrays("posterior") is not None and "observation.sigma" in res.arrays("posterior")
     where = " (the posterior's reading noise is the reading-noise row of the table)" if posterior_sigma else ""
     tail = ". " + _criteria_text(la, obs)
     if mixed:
@@ -161,7 +161,7 @@ def _series_scatter(res, units: str) -> str:
     (``"deg (amplitude) and s (beats)"``); times in ms."""
     import re
 
-    obs, lsq = res.group("observed_data"), res.group("least_squares")
+    obs, lsq = res.arrays("observed_data"), res.arrays("least_squares")
     if obs is None or lsq is None or "expected" not in lsq or "curve" not in obs.coords:
         return ""
     unit_of = {series: unit for unit, series in re.findall(r"(\S+) \(([^)]+)\)", units)}
@@ -186,8 +186,8 @@ def sampler_rows(res) -> tuple[str, list[str], list[list[str]]]:
         ``(sentence, head, rows)``; empty strings and lists for a least-squares fit.
     """
     a = res.attrs
-    diag = res.group("diagnostics")
-    if res.group("posterior") is None:
+    diag = res.arrays("diagnostics")
+    if res.arrays("posterior") is None:
         return "", [], []
     how = "fixed length"
     if a.get("steps_mode") == "auto":
@@ -205,11 +205,11 @@ def sampler_rows(res) -> tuple[str, list[str], list[list[str]]]:
     meanings = json.loads(res.attrs.get("meanings", "{}") or "{}")
     head = ["parameter", "split R-hat", "ESS (bulk)", "ESS (tail)", "autocorrelation time (steps)"]
     rows = []
-    for name in map(str, diag["parameter"].values):
-        sel = diag.sel(parameter=name)
-        rows.append([plain_name(name, meanings.get(name, ""), loads_in), f"{float(sel['rhat']):.3f}",
-                     _count(float(sel["ess_bulk"])), _count(float(sel["ess_tail"])),
-                     format_value(float(sel["tau"]), 3) if "tau" in sel else "-"])
+    for i, name in enumerate(map(str, diag["parameter"].values)):
+        sel = {k: float(diag[k].values[i]) for k in ("rhat", "ess_bulk", "ess_tail", "tau") if k in diag}
+        rows.append([plain_name(name, meanings.get(name, ""), loads_in), f"{sel['rhat']:.3f}",
+                     _count(sel["ess_bulk"]), _count(sel["ess_tail"]),
+                     format_value(sel["tau"], 3) if "tau" in sel else "-"])
     return sentence, head, rows
 
 
