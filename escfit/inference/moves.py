@@ -50,8 +50,8 @@ class ArrayAcceptance:
     def propose(self, model, state):
         nwalkers, ndim = state.coords.shape
         if nwalkers < 2 * ndim and not self.live_dangerously:
-            raise RuntimeError("It is unadvisable to use a red-blue move with fewer walkers than twice the number of "
-                               "dimensions.")
+            raise RuntimeError(f"{nwalkers} walkers for {ndim} parameters: a red-blue move needs at least twice as "
+                               "many walkers as parameters")
         self.setup(state.coords)
         accepted = np.zeros(nwalkers, dtype=bool)
         inds = np.arange(nwalkers) % self.nsplits
