@@ -288,6 +288,6 @@ class _ReachedBound(Exception):
 
 def _bounded_step(x: np.ndarray, r: np.ndarray, jac: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
     """The Gauss-Newton step of the linearised residuals inside the bounds."""
-    from scipy.optimize import lsq_linear
+    from .bounded_linear import bounded_lstsq
 
-    return lsq_linear(jac, -r, bounds=(np.minimum(lower - x, 0.0), np.maximum(upper - x, 0.0))).x
+    return bounded_lstsq(jac, -r, np.minimum(lower - x, 0.0), np.maximum(upper - x, 0.0))

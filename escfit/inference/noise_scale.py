@@ -12,7 +12,7 @@ Refitting at each new scale until the scale stops moving costs a trust-region ru
 residuals are linear in the parameters to second order, ``r(x0 + dx) = r0 + J dx``, so the
 fixed point of the linearised problem is found with no model run at all
 (:func:`settle_scale`): each round is a bounded linear least-squares step
-(:func:`scipy.optimize.lsq_linear`) and a new scale.  When that moves a parameter by more than
+(:func:`~escfit.inference.bounded_linear.bounded_lstsq`) and a new scale.  When that moves a parameter by more than
 :data:`STEP_SE` of its standard error, one trust-region run from the linear solution confirms
 it (the linear step's own error is second order in the step) and the settling is repeated
 there; otherwise one model run gives the residuals at the settled point.  An optimiser that
@@ -27,6 +27,7 @@ from typing import Callable
 import numpy as np
 
 from ..core.errors import FitError
+from .bounded_linear import bounded_lstsq
 from .trf import Optimum, optimum
 
 __all__ = ["settle_scale", "profiled_scale", "STEP_SE", "SCALE_RTOL", "MAX_POLISH"]
@@ -137,8 +138,6 @@ def _linear_fixed_point(best: Optimum, s0: float, n: int, lower: np.ndarray, upp
 
     Returns ``x0``, the step ``dx``, the stacked Jacobian at the settled scale and that scale.
     """
-    from scipy.optimize import lsq_linear
-
     x0 = np.asarray(best.x, float)
     res, jac = np.asarray(best.residual, float), np.asarray(best.jac, float)
     r_data, j_data = res[:n] * s0, jac[:n] * s0  # the reading rows in the scene's noise units
@@ -149,7 +148,7 @@ def _linear_fixed_point(best: Optimum, s0: float, n: int, lower: np.ndarray, upp
         a = np.vstack([j_data / s, j_prior])
         b = -np.r_[r_data / s, r_prior]
         if np.all(np.isfinite(a)) and np.all(np.isfinite(b)):
-            dx = lsq_linear(a, b, bounds=(np.minimum(lo, 0.0), np.maximum(hi, 0.0))).x
+            dx = bounded_lstsq(a, b, np.minimum(lo, 0.0), np.maximum(hi, 0.0))
         rl = r_data + j_data @ dx
         step = optimum(x0 + dx, np.r_[rl / s, r_prior + j_prior @ dx], a, scale_covar=False, success=True,
                        message="", nfev=0)
