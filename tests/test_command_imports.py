@@ -25,7 +25,7 @@ import escfit.inference.fit
 module = sys.modules["escfit.inference.fit"]
 inner, seen = module.least_squares, {}
 WATCH = ("scipy.signal", "scipy.stats", "pandas", "xarray", "h5py", "emcee", "arviz", "arviz_stats", "matplotlib",
-         "lmfit", "distributed", "dask")
+         "lmfit", "distributed", "dask", "pint")
 
 def hooked(*a, **k):
     seen.setdefault("before_fit", [m for m in WATCH if sys.modules.get(m) is not None])
@@ -61,8 +61,10 @@ def test_least_squares_fit_imports_no_signal_stats_or_pandas_before_the_fit(tmp_
     assert seen["before_fit"] == [], seen
     # the whole command never needs the signal-processing or statistics packages, a sampler, plots,
     # or dask (which pint and xarray would import, and xarray's own writer its cluster scheduler);
-    # nor xarray and pandas: the results are built and written as plain arrays
-    never = {"scipy.signal", "scipy.stats", "emcee", "arviz", "matplotlib", "distributed", "dask", "xarray", "pandas"}
+    # nor xarray and pandas: the results are built and written as plain arrays; nor pint: the
+    # scene and the record name radians and seconds, whose factors need no unit registry
+    never = {"scipy.signal", "scipy.stats", "emcee", "arviz", "matplotlib", "distributed", "dask", "xarray", "pandas",
+             "pint"}
     assert not never & set(seen["at_end"]), seen
     assert out.is_file()
 
@@ -79,7 +81,9 @@ def test_sampler_fit_imports_no_statistics_signal_or_data_libraries(tmp_path):
     seen = json.loads(line[0][5:])
     assert seen.get("exit") in (0, None), r.stderr[-3000:]
     assert "emcee" in seen["at_end"] and out.is_file()
-    never = {"scipy.signal", "scipy.stats", "arviz", "arviz_stats", "matplotlib", "distributed", "dask", "xarray", "pandas"}
+    # pint neither: the loads are in grams, a unit of the table of exact factors
+    never = {"scipy.signal", "scipy.stats", "arviz", "arviz_stats", "matplotlib", "distributed", "dask", "xarray", "pandas",
+             "pint"}
     assert not never & set(seen["at_end"]), seen
 
 

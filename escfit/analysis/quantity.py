@@ -226,11 +226,14 @@ def _dimension(unit: str | None) -> str | None:
     """``"angle"``, ``"angular_velocity"``, ``"length"``, ``"acceleration"``, ``"energy"``, ``"time"`` or None."""
     if not unit:
         return None
-    from ..core.units import COUNT_WORDS, safe_unit_text, ureg
+    from ..core.units import COMMON_UNITS, COUNT_WORDS, registry, safe_unit_text
 
     text = unit.strip().replace("°", "deg").replace("²", "^2")
+    if text in COMMON_UNITS:  # radians, degrees, seconds: no pint
+        return COMMON_UNITS[text][0]
     if text.lower() in COUNT_WORDS or not safe_unit_text(text):
         return None
+    ureg = registry()
     try:
         q = ureg.parse_expression(text)
         dim = q.dimensionality

@@ -16,81 +16,17 @@ import math
 import os
 import re
 from functools import lru_cache
-from typing import Any
-
-import pint
+from typing import TYPE_CHECKING, Any
 
 from .errors import UnitError
+from .unit_text import _NUMBER, MAX_UNIT_TEXT, safe_unit_text
 
-__all__ = ["ureg", "COUNT_WORDS", "UnsafeUnitText", "to_canonical", "CANONICAL", "safe_unit_text", "quantity",
+if TYPE_CHECKING:
+    import pint
+
+__all__ = ["ureg", "registry", "COMMON_UNITS", "COMMON_RATES", "common_factor", "common_convert", "STANDARD_GRAVITY", "COUNT_WORDS", "UnsafeUnitText", "to_canonical", "CANONICAL", "safe_unit_text", "quantity",
            "MAX_UNIT_TEXT", "BARE_ANGLE_LIMIT", "check_bare_angle", "angular_frequency", "angular_frequency_factor",
            "ANGULAR_FREQUENCY_UNITS"]
-
-class UnsafeUnitText(pint.errors.PintError, ValueError):
-    """Text pint was asked to parse that is not a number and a unit of :func:`safe_unit_text`'s grammar."""
-
-
-class _GuardedRegistry(pint.UnitRegistry):
-    """pint's registry, refusing to evaluate text outside a bounded grammar once it is built.
-
-    pint parses a unit string as arithmetic, so ``"9**9**9 rad"`` (in a scene) or a column
-    header ``load_g**9**9**9`` would compute a number with hundreds of millions of digits: the
-    process hangs in one C call that no signal interrupts.  Every parse of text (``Quantity(str)``,
-    ``Unit(str)``, ``parse_units``, ``parse_expression``) comes through these two methods, so
-    after construction they accept only an optional number followed by a unit of names,
-    ``* / ( )`` and small integer powers (:func:`safe_unit_text`), and raise
-    :class:`UnsafeUnitText` otherwise (callers already report pint's errors as one line).
-    """
-
-    _guarded = False
-
-    def _check(self, text):
-        if not self._guarded or not isinstance(text, str):
-            return
-        m = _PREFIX.match(text)
-        rest = text[m.end():].strip() if m else text.strip()
-        numbers = _PREFIX_NUMBER.findall(m.group(0)) if m else []
-        if (rest and not safe_unit_text(rest)) or not all(math.isfinite(float(x)) for x in numbers):
-            raise UnsafeUnitText(f"{text[:60]!r} is not a number and a unit (a number or a fraction such as pi/2, "
-                                 "then names, * / ( ) and powers up to two digits)")
-
-    def parse_expression(self, input_string, *args, **kwargs):
-        self._check(input_string)
-        return super().parse_expression(input_string, *args, **kwargs)
-
-    __call__ = parse_expression  # ureg("...") is parse_expression; the base class binds its own
-
-    def parse_units(self, input_string, *args, **kwargs):
-        self._check(input_string)
-        return super().parse_units(input_string, *args, **kwargs)
-
-    def parse_units_as_container(self, input_string, *args, **kwargs):
-        # what Unit(str), Quantity.to(str) and m_as(str) evaluate text with
-        self._check(input_string)
-        return super().parse_units_as_container(input_string, *args, **kwargs)
-
-
-def _registry() -> _GuardedRegistry:
-    """pint's registry, its parsed definitions kept in pint's cache folder between processes.
-
-    Parsing pint's definition files takes about 0.2 s of every command's start; pint keeps the
-    parsed result in the user's cache folder (``platformdirs``' cache path for "pint") and reuses
-    it while the definition files are unchanged.  ``ESCFIT_UNIT_CACHE=0`` turns that off; a
-    cache that cannot be read or written (a read-only home, a file another process is still
-    writing) falls back to parsing, with the same registry.
-    """
-    if os.environ.get("ESCFIT_UNIT_CACHE", "1") != "0":
-        try:
-            return _GuardedRegistry(cache_folder=":auto:")
-        except Exception:  # noqa: BLE001 - any failure of the cache: parse the definitions instead
-            pass
-    return _GuardedRegistry()
-
-
-ureg = _registry()
-ureg.define("gf = gram * g_0 = gram_force")  # gram-force, as in Monday's fixture data
-# A watch's beat is half a period of its balance: f = bph / 7200 Hz (18000 bph = 2.5 Hz)
-ureg.define("beats_per_hour = turn / 7200 / second = bph = vph")
 
 # Canonical unit of each kind of quantity escfit reads.  Per-inertia quantities
 # (C, R, X, omega0**2) are the model's working units.
@@ -122,9 +58,69 @@ def _article(kind: str) -> str:
     return ("an " if words[0] in "aeiou" else "a ") + words
 
 
+def registry():
+    """pint's unit registry (:mod:`escfit.core.unit_registry`), imported on first use."""
+    from .unit_registry import ureg
+
+    return ureg
+
+
+def __getattr__(name: str):
+    # ``ureg`` and ``UnsafeUnitText`` live with pint in unit_registry, loaded when first asked for
+    if name in ("ureg", "UnsafeUnitText"):
+        from . import unit_registry
+
+        return getattr(unit_registry, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+#: exact factors of the units records and scenes name most, to the canonical unit of a kind:
+#: text -> (kind, factor).  Read without pint; ``tests/test_units.py`` holds them against pint.
+COMMON_UNITS: dict[str, tuple[str, float]] = {
+    **{u: ("angle", 1.0) for u in ("rad", "radian", "radians")},
+    **{u: ("angle", math.pi / 180.0) for u in ("deg", "degree", "degrees")},
+    **{u: ("time", 1.0) for u in ("s", "second", "seconds")},
+    "ms": ("time", 1e-3),
+    "min": ("time", 60.0),
+    "g": ("mass", 1e-3),
+    "kg": ("mass", 1.0),
+    "N": ("force", 1.0),
+}
+
+#: rates per time read without pint: (text, kind) -> factor to the kind's canonical unit, by
+#: :func:`to_canonical`'s rule for rates (Hz counts cycles: 2 pi rad/s for an angular frequency)
+COMMON_RATES: dict[tuple[str, str], float] = {
+    ("Hz", "frequency"): 1.0,
+    ("kHz", "frequency"): 1e3,
+    ("Hz", "angular_frequency"): 2.0 * math.pi,
+    ("rad/s", "angular_frequency"): 1.0,
+    **{("1/s", kind): 1.0 for kind in ("frequency", "angular_frequency", "rate_per_s")},
+}
+
+#: standard gravity, m/s^2 (exact by definition): the weight of a mass load
+STANDARD_GRAVITY = 9.80665
+
+
+def common_factor(unit: str, kind: str) -> float | None:
+    """The factor of ``unit`` (text, compared exactly after stripping) to the canonical unit of
+    ``kind`` from :data:`COMMON_UNITS`, or ``None`` when the table does not hold it for that kind."""
+    entry = COMMON_UNITS.get(unit.strip())
+    return entry[1] if entry is not None and entry[0] == kind else None
+
+
+def common_convert(text: str, unit: str) -> float | None:
+    """``text`` (a number and a unit, ``"25 g"``) in ``unit`` when both units are in
+    :data:`COMMON_UNITS` with the same kind; ``None`` otherwise (then pint reads it)."""
+    m = _NUMBER.match(text)
+    given, wanted = COMMON_UNITS.get(text[m.end():].strip()) if m else None, COMMON_UNITS.get(unit.strip())
+    if given is None or wanted is None or given[0] != wanted[0]:
+        return None
+    return float(m.group(1)) * given[1] / wanted[1]
+
+
 @lru_cache(maxsize=None)
-def _unit(kind: str) -> pint.Unit:
-    return ureg.Unit(CANONICAL[kind])
+def _unit(kind: str) -> "pint.Unit":
+    return registry().Unit(CANONICAL[kind])
 
 
 # Largest bare angle (rad) a balance wheel or pendulum reading accepts: two turns.  Balance
@@ -191,14 +187,18 @@ def to_canonical(value: Any, kind: str, where: str, *, bare_limit: float | None 
         raise UnitError(f"expected a number, got the boolean {value!r}", where)
     if isinstance(value, (int, float)):
         out = float(value)
+    elif isinstance(value, str) and (common := _common(value, kind)) is not None:
+        out = common
     elif isinstance(value, str):
         q = _parse(value, where)
         if kind in _PER_TIME_KINDS:
             out = _per_time(q, value, kind, where)
         else:
+            from pint import DimensionalityError
+
             try:
                 out = float(q.to(_unit(kind)).magnitude)
-            except pint.DimensionalityError:
+            except DimensionalityError:
                 expect = CANONICAL[kind] or "dimensionless"
                 raise UnitError(
                     f"{value!r} has dimension {q.dimensionality}, expected {_article(kind)} "
@@ -216,13 +216,25 @@ def to_canonical(value: Any, kind: str, where: str, *, bare_limit: float | None 
 _ONE_OVER = re.compile(r"^(\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s+1\s*/(?=\s*[A-Za-z_(])")
 
 
+def _common(value: str, kind: str) -> float | None:
+    """``value`` in the canonical unit of ``kind`` when it is a plain number and a unit of
+    :data:`COMMON_UNITS` of that kind (``"300 deg"``, ``"0.5 s"``); ``None`` otherwise."""
+    m = _NUMBER.match(value)
+    if m is None:
+        return None
+    unit = value[m.end():].strip()
+    factor = COMMON_RATES.get((unit, kind)) if kind in _PER_TIME_KINDS else common_factor(unit, kind)
+    return None if factor is None else float(m.group(1)) * factor
+
+
 def _parse(value: str, where: str) -> Any:
     """pint's reading of ``value`` as a Quantity (dimensionless for a string without a unit)."""
+    ureg = registry()
     try:
         q = ureg.Quantity(_ONE_OVER.sub(r"\1 /", value))
     except Exception as exc:  # pint raises several types for bad strings
         raise UnitError(f"cannot read {value!r} as a quantity ({exc})", where) from None
-    return q if isinstance(q, pint.Quantity) else ureg.Quantity(float(q))
+    return q if isinstance(q, ureg.Quantity) else ureg.Quantity(float(q))
 
 
 # --- frequencies: one rule for every key that takes a rate per unit of time ----------------------
@@ -230,8 +242,12 @@ def _parse(value: str, where: str) -> Any:
 #: the units suggested when a value is not an angular frequency
 ANGULAR_FREQUENCY_UNITS = "rad/s (or a bare number), Hz, rpm, turn/s or bph"
 _PER_TIME_KINDS = frozenset({"angular_frequency", "frequency", "rate_per_s"})
-_TIME = ureg.second.dimensionality
-_PER_TIME = (1 / ureg.second).dimensionality
+
+
+def _time_dimensions():
+    """pint's dimensionality of a time and of a rate per time."""
+    ureg = registry()
+    return ureg.second.dimensionality, (1 / ureg.second).dimensionality
 
 
 def _frequency_kind(q: "pint.Quantity") -> str | None:
@@ -246,7 +262,9 @@ def _frequency_kind(q: "pint.Quantity") -> str | None:
         one rate per time (another dimension; a dimensionless factor such as percent or
         count; a becquerel; a power of hertz or of an angle).
     """
-    if q.dimensionality != _PER_TIME:
+    ureg = registry()
+    time, per_time = _time_dimensions()
+    if q.dimensionality != per_time:
         return None
     hertz = angle = 0
     for name, power in q.unit_items():
@@ -256,7 +274,7 @@ def _frequency_kind(q: "pint.Quantity") -> str | None:
         radians = dict((1 * ureg.get_root_units(name)[1]).unit_items()).get("radian", 0)
         if radians:
             angle += radians * power
-        elif ureg.Unit(name).dimensionality != _TIME:
+        elif ureg.Unit(name).dimensionality != time:
             return None
     if hertz and angle:
         return "mixed"
@@ -273,7 +291,7 @@ def _per_time(q: "pint.Quantity", value: Any, kind: str, where: str) -> float:
                                      "cycles: 1 Hz = 2 pi rad/s)",
                 "frequency": "a frequency; give it in Hz (e.g. '500 Hz')",
                 "rate_per_s": "a rate per second; give it in 1/s (e.g. '0.05/s' or a bare number)"}[kind]
-        if q.dimensionality != _PER_TIME:
+        if q.dimensionality != _time_dimensions()[1]:
             raise UnitError(f"{value!r} has dimension {q.dimensionality}, not {what}", where)
         raise UnitError(f"{value!r} is not {what}" + ("; it mixes Hz (cycles) with an angle" if how else ""), where)
     per_second = float(q.to("1/s").magnitude)
@@ -346,49 +364,6 @@ def angular_frequency_factor(unit: str, where: str) -> float:
     return angular_frequency(f"1 {text}", where)
 
 
-MAX_UNIT_TEXT = 40
-_UNIT_TOKEN = re.compile(r"(?P<name>[A-Za-z_°µΩ²³]+(?:_\d{1,2})?(?![\w])|%)|(?P<pow>(?:\*\*|\^)\s*-?\d{1,2})(?![\d.])"
-                         r"|(?P<op>[*/])|(?P<paren>[()])|(?P<space>\s+)")
-_NUMBER = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)")
-_NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
-# A leading number, or a short product or quotient of numbers and pi ("pi/2 rad", "1/4 turn"):
-# at most four factors and no powers, so nothing pint computes from it can grow.
-_PREFIX = re.compile(rf"\s*(?:{_NUM}|pi)(?:\s*[*/]\s*(?:{_NUM}|pi)(?![A-Za-z_])){{0,3}}(?![\d.eE])")
-_PREFIX_NUMBER = re.compile(_NUM)
-
-
-def safe_unit_text(text: str) -> bool:
-    """Whether ``text`` (what follows an argument's number) is a unit pint may evaluate safely.
-
-    Tokens: unit names (ASCII letters, ``_``, ``°``, ``µ``, ``Ω``, optionally ending in ``_``
-    and one or two digits such as ``g_0``), ``%``, ``*``, ``/``, parentheses (depth at most 2),
-    spaces and a power ``**n`` / ``^n`` (``n`` one or two digits, optionally negative) directly
-    after a name.  No other numbers, so nothing pint evaluates can grow: ``9**9**9`` is refused.
-    """
-    if len(text) > MAX_UNIT_TEXT:
-        return False
-    pos, prev, depth = 0, "start", 0
-    while pos < len(text):
-        m = _UNIT_TOKEN.match(text, pos)
-        if not m:
-            return False
-        pos = m.end()
-        tok = m.lastgroup
-        if tok == "space":
-            continue
-        if tok == "pow" and prev != "name":
-            return False
-        if tok == "op" and prev == "op":
-            return False
-        if tok == "paren":
-            depth += 1 if m.group() == "(" else -1
-            if not 0 <= depth <= 2:
-                return False
-            tok = m.group()
-        prev = tok
-    return depth == 0 and prev not in ("op", "(")
-
-
 def quantity(text: str, where: str) -> "pint.Quantity":
     """A number followed by an optional unit, read without letting pint evaluate arithmetic.
 
@@ -401,6 +376,7 @@ def quantity(text: str, where: str) -> "pint.Quantity":
     rest = text[m.end():].strip() if m else ""
     if not m or not math.isfinite(float(m.group(1))) or (rest and not safe_unit_text(rest)):
         raise UnitError(f"cannot read {text!r}: write a number and a unit, e.g. '0.3 turn' or '2 deg'", where)
+    ureg = registry()
     if not rest:
         return ureg.Quantity(float(m.group(1)))
     units = ("1 " + rest) if rest[0] == "/" else rest.lstrip("*").strip()
@@ -410,7 +386,6 @@ def quantity(text: str, where: str) -> "pint.Quantity":
         raise UnitError(f"unknown unit {rest!r} in {text!r}", where) from None
 
 
-ureg._guarded = True  # after the module's own definitions (see _GuardedRegistry)
 
 #: words a column's unit uses for an encoder's counts (not a pint unit: they need counts per turn)
 COUNT_WORDS = frozenset({"count", "counts", "cts", "ticks"})

@@ -18,7 +18,7 @@ from pathlib import Path
 
 from ..core.csvtable import refuses_unreadable
 from ..core.errors import DataError
-from ..core.units import ureg
+from ..core.units import registry
 from .readers import Readings, write_readings
 from .scene import RigScene, parse
 from .synthetic import SessionSpec, make_session
@@ -26,7 +26,7 @@ from .synthetic import SessionSpec, make_session
 __all__ = ["MuRow", "read_mu_table", "ASSUMPTIONS", "session_spec", "sessions", "write_sessions",
            "SCENE_TEXT", "scene", "session_file"]
 
-_GF = float(ureg.Quantity(1.0, "gf").to("N").magnitude)
+_GF = float(registry().Quantity(1.0, "gf").to("N").magnitude)
 _INCH = 0.0254
 _FT_S = 0.3048
 

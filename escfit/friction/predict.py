@@ -9,14 +9,14 @@ import numpy as np
 import xarray as xr
 
 from ..core.errors import SolverError
-from ..core.units import ureg
+from ..core.units import registry
 from .rig import lever_ratio, mu_law, predicted_dw
 from .scene import SIGMA, RigScene
 
 __all__ = ["simulate", "json_summary"]
 
-_GF = float(ureg.Quantity(1.0, "gf").to("N").magnitude)
-_FT_S = float(ureg.Quantity(1.0, "ft/s").to("m/s").magnitude)
+_GF = float(registry().Quantity(1.0, "gf").to("N").magnitude)
+_FT_S = float(registry().Quantity(1.0, "ft/s").to("m/s").magnitude)
 
 
 def simulate(scene: RigScene, solver: str | None = None, *, loads: Sequence[float] | None = None,

@@ -40,7 +40,7 @@ import pint
 
 from ..core.csvtable import refuses_unreadable
 from ..core.errors import DataError
-from ..core.units import ureg
+from ..core.units import registry
 
 __all__ = ["Readings", "read_readings", "parse_readings", "write_readings"]
 
@@ -230,14 +230,14 @@ def _unit_factor(name: str, token: str, where: str) -> float:
     """Factor converting one header unit to the canonical unit of quantity ``name``."""
     unit_text = token.replace("_", "/")
     try:
-        q = ureg.Quantity(1.0, unit_text)
+        q = registry().Quantity(1.0, unit_text)
     except (pint.errors.UndefinedUnitError, pint.errors.DefinitionSyntaxError, AttributeError,
             TypeError, ValueError, AssertionError):
         raise DataError(f"unknown unit {token!r}", where) from None
     target = _QUANTITIES[name]
     if name in ("load", "dw") and q.check("[mass]"):
         # grams on the pan: their weight under standard gravity
-        q = q * ureg.Quantity(1.0, "g_0")
+        q = q * registry().Quantity(1.0, "g_0")
     try:
         return float(q.to(target).magnitude)
     except pint.DimensionalityError:

@@ -51,7 +51,7 @@ import pint
 from ..core.errors import SceneError, UnitError
 from ..core.params import Param, ParamSet, read_param
 from ..core.scene import check_keys
-from ..core.units import to_canonical, ureg
+from ..core.units import registry, to_canonical
 from ..likelihood.priors import Prior, loguniform, normal, parse_prior, uniform
 from .rig import LOAD_AT, load_sd_from_scale
 
@@ -215,7 +215,7 @@ def _quantity(raw: Any, unit: str, where: str, *, nonneg: bool = False, positive
             raise UnitError(f"expected a number or a string with a unit, got {raw!r}", where)
         if isinstance(raw, str):
             try:
-                q = ureg.Quantity(raw)
+                q = registry().Quantity(raw)
             except Exception:
                 raise UnitError(f"cannot read {raw!r} as a quantity", where) from None
             try:

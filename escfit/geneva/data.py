@@ -36,7 +36,7 @@ from ..core.csvtable import refuses_unreadable
 from ..core.atomic import atomic_path
 from ..core.csvtable import Table, read_table
 from ..core.errors import DataError, UnitError
-from ..core.units import angular_frequency_factor, ureg
+from ..core.units import angular_frequency_factor, registry
 
 __all__ = ["SpeedTrace", "TerminalSpeeds", "read_speed_trace", "read_terminal_speeds", "write_speed_trace",
            "detect_format", "read_data", "FORMATS"]
@@ -197,7 +197,7 @@ def _columns(table: Table, allowed: dict[str, tuple[str, str]], what: str) -> di
             if target == "rad/s":  # an angular speed: Hz counts turns, as for every angular frequency
                 factor = _angular_speed_factor(unit, dimension, name, where)
             else:
-                q = ureg.Quantity(1.0, unit if unit not in ("", "1") else "dimensionless")
+                q = registry().Quantity(1.0, unit if unit not in ("", "1") else "dimensionless")
                 factor = float(q.to(target or "dimensionless").magnitude)
         except pint.DimensionalityError:
             raise DataError(f"column {name!r}: unit {unit!r} is not {dimension} ({target or 'dimensionless'})",

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import DataError
-from ..core.units import ureg
+from ..core.units import registry
 
 __all__ = ["read_table", "MEYER_TABLES", "meyer_table"]
 
@@ -95,7 +95,7 @@ def _column(cell: str, where: str) -> tuple[str, float]:
     if unit in ("", "1"):
         return name, 1.0
     try:
-        q = ureg.Quantity(1.0, unit)
+        q = registry().Quantity(1.0, unit)
         return name, float(q.to_base_units().magnitude)
     except Exception as exc:  # pint raises several types
         raise DataError(f"header cell {cell!r}: unknown unit {unit!r} ({exc})", where) from None

@@ -53,12 +53,11 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
-import pint
 
 from ..core.errors import SceneError
 from .distributions import distribution
 from ..core.params import Param
-from ..core.units import MAX_UNIT_TEXT, safe_unit_text, ureg
+from ..core.units import COMMON_UNITS, MAX_UNIT_TEXT, registry, safe_unit_text
 
 __all__ = ["Prior", "parse_prior", "prior_of", "FORMS", "uniform", "loguniform", "normal", "halfnormal",
            "lognormal", "flat"]
@@ -448,14 +447,19 @@ def _argument(text: str, unit: str, kind: str, spec: str, where: str) -> float:
     if not safe_unit_text(rest):
         raise SceneError(f"prior {spec!r}: cannot read argument {text!r}; {how}; a unit is names, * / ( ) and "
                          f"integer powers of a name, at most {MAX_UNIT_TEXT} characters", where)
+    given, wanted = COMMON_UNITS.get(rest), COMMON_UNITS.get(unit)
+    if given is not None and wanted is not None and given[0] == wanted[0]:  # deg for rad, ms for s: no pint
+        return value * given[1] / wanted[1]
+    from pint import DimensionalityError
+
     units = ("1 " + rest) if rest[0] == "/" else rest.lstrip("*").strip()
     try:
-        factor = ureg.Quantity(1.0, ureg.parse_units(units))
+        factor = registry().Quantity(1.0, registry().parse_units(units))
     except Exception:  # pint raises several types for unknown names and bad syntax
         raise SceneError(f"prior {spec!r}: unknown unit {rest!r} in argument {text!r}", where) from None
     try:
         out = value * float(factor.to(_target(unit)).magnitude)
-    except pint.DimensionalityError:
+    except DimensionalityError:
         raise SceneError(f"prior {spec!r}: argument {text!r} is not in units of {unit or 'dimensionless'}",
                          where) from None
     except SceneError as exc:
@@ -468,6 +472,6 @@ def _argument(text: str, unit: str, kind: str, spec: str, where: str) -> float:
 @lru_cache(maxsize=None)
 def _target(unit: str):
     try:
-        return ureg.parse_units(unit) if unit else ureg.dimensionless
+        return registry().parse_units(unit) if unit else registry().dimensionless
     except Exception:
         raise SceneError(f"the parameter's unit {unit!r} is not a unit pint knows") from None

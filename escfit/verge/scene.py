@@ -42,7 +42,7 @@ import pint
 from ..core.errors import SceneError, UnitError
 from ..core.params import Param, ParamSet, read_param
 from ..core.scene import check_keys
-from ..core.units import ureg
+from ..core.units import registry
 from .geometry import Constants, build_constants
 from .kinematics import coupled_kinematics
 
@@ -243,7 +243,7 @@ def _speed(raw: Any, where: str) -> float:
     if isinstance(raw, bool) or not isinstance(raw, (int, float, str)):
         raise UnitError(f"expected a speed such as '2 in/s', got {raw!r}", where)
     try:
-        q = ureg.Quantity(raw) if isinstance(raw, str) else ureg.Quantity(float(raw), "m/s")
+        q = registry().Quantity(raw) if isinstance(raw, str) else registry().Quantity(float(raw), "m/s")
         value = float(q.to("m/s").magnitude)
     except (pint.DimensionalityError, pint.UndefinedUnitError, ValueError, AttributeError) as exc:
         raise UnitError(f"cannot read {raw!r} as a speed ({exc})", where) from None

@@ -23,7 +23,7 @@ import numpy as np
 
 from ...core.errors import DataError
 from ...core.tabletext import column_floats, parse_number, time_seconds
-from ...core.units import angular_frequency_factor, ureg
+from ...core.units import angular_frequency_factor, registry
 from .rawsteps import build_series, file_options, merge_file_meta
 from .recording_spec import COUNT_WORDS, RecordingSpec, header_role, rad_per_unit, safe_unit_text, seconds_per_unit
 from .candidates import TEXT_KINDS as _TEXT_KINDS
@@ -130,14 +130,14 @@ def _dimension(unit: str | None) -> str | None:
     if not unit or not safe_unit_text(unit) or unit.strip().lower() in COUNT_WORDS:
         return None
     try:
-        q = ureg.parse_expression(unit.strip())
+        q = registry().parse_expression(unit.strip())
         dim = q.dimensionality
     except Exception:
         return None
-    if dim == ureg.parse_expression("rad/s").dimensionality and "rad" in str(q.to_root_units().units) + unit \
+    if dim == registry().parse_expression("rad/s").dimensionality and "rad" in str(q.to_root_units().units) + unit \
             or unit.strip() in ("°/s", "deg/s", "rpm", "1/s"):
         return "angular_velocity"
-    if dim == ureg.meter.dimensionality:
+    if dim == registry().meter.dimensionality:
         return "length"
     return None
 
@@ -474,8 +474,8 @@ def _si_factor(cols: Columns, col: int, spec: RecordingSpec, opts: dict, reader:
         target = "rad/s" if quantity == "angular_velocity" else "m"
         volts = False
         try:
-            q = ureg.parse_expression(unit.strip().replace("°", "deg")) if safe_unit_text(unit) else None
-            volts = q is not None and q.dimensionality == ureg.volt.dimensionality
+            q = registry().parse_expression(unit.strip().replace("°", "deg")) if safe_unit_text(unit) else None
+            volts = q is not None and q.dimensionality == registry().volt.dimensionality
             if volts:
                 factor = 1.0  # scale is the SI value per volt
             elif quantity == "angular_velocity":  # Hz counts turns, as for every angular frequency

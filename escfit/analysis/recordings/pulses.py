@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from ...core.errors import DataError
-from ...core.units import ureg
+from ...core.units import registry
 from ...core.csvtable import read_table
 from .sniff import canonical_header, did_you_mean, refuse_unless_csv, release_from_meta
 from .unit_curve import UnitCurve
@@ -163,7 +163,7 @@ def read_pulses(path: str | Path, *, notches: int | None = None) -> PulseTrain:
                         where)
     unit = tcols[0][len("time_"):]
     try:
-        factor = float(ureg.Quantity(1.0, unit).to("s").magnitude)
+        factor = float(registry().Quantity(1.0, unit).to("s").magnitude)
     except Exception:
         raise DataError(f"unknown time unit {unit!r} in column {tcols[0]!r}", where) from None
     time = np.array(t.floats(tcols[0])) * factor

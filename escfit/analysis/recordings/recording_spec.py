@@ -66,7 +66,7 @@ from dataclasses import dataclass, fields, replace
 from typing import Any, Callable, Mapping
 
 from ...core.errors import DataError, SceneError
-from ...core.units import COUNT_WORDS, angular_frequency_factor, to_canonical, ureg
+from ...core.units import COMMON_UNITS, COUNT_WORDS, angular_frequency_factor, common_factor, registry, to_canonical
 from .window import WINDOW_KEYS, Instant, parse_instant
 
 __all__ = ["RecordingSpec", "recording_spec_from_table", "merge_spec", "parse_option", "parse_seconds", "safe_unit_text",
@@ -219,10 +219,10 @@ def _parse_unit(text: str, where: str):
         raise DataError(f"cannot read {text!r} as a unit (letters, digits, * / ^ and parentheses, at most "
                     "40 characters)", where)
     try:
-        q = ureg.parse_expression(text.strip())
+        q = registry().parse_expression(text.strip())
     except Exception:
         try:  # free-text unit labels (LabVIEW's Y_Unit_Label "Deg", "Sec") in another case
-            q = ureg.parse_expression(text.strip().lower())
+            q = registry().parse_expression(text.strip().lower())
         except Exception:
             raise DataError(f"unknown unit {text!r}", where) from None
     if not hasattr(q, "units"):
@@ -234,11 +234,13 @@ def is_angle_unit(text: str) -> bool:
     """Whether ``text`` is a pint angle unit (deg, rad, grad, turn, arcmin ...) or a counts word."""
     if text.strip().lower() in COUNT_WORDS:
         return True
+    if text.strip() in COMMON_UNITS:  # radians, degrees, seconds: no pint
+        return COMMON_UNITS[text.strip()][0] == "angle"
     try:
         q = _parse_unit(text, "")
     except DataError:
         return False
-    return q.to_root_units().units == ureg.radian
+    return q.to_root_units().units == registry().radian
 
 
 def rad_per_unit(unit: str, counts_per_turn: float | None, where: str, *, hint: str = "") -> float:
@@ -254,16 +256,20 @@ def rad_per_unit(unit: str, counts_per_turn: float | None, where: str, *, hint: 
         if counts_per_turn is None:
             raise DataError(f"angle unit {unit!r} needs [recording] counts_per_turn", where)
         return 2.0 * math.pi / counts_per_turn
+    if (factor := common_factor(unit, "angle")) is not None:
+        return factor
     q = _parse_unit(unit, where)
-    if q.to_root_units().units != ureg.radian:
+    if q.to_root_units().units != registry().radian:
         raise DataError(f"{unit!r} is not an angle unit{hint}", where)
     return float(q.to("rad").magnitude)
 
 
 def seconds_per_unit(unit: str, where: str) -> float:
     """Seconds per ``unit`` (a pint time unit such as s, ms, min)."""
+    if (factor := common_factor(unit, "time")) is not None:
+        return factor
     q = _parse_unit(unit, where)
-    if q.dimensionality != ureg.second.dimensionality:
+    if q.dimensionality != registry().second.dimensionality:
         raise DataError(f"{unit!r} is not a time unit", where)
     return float(q.to("s").magnitude)
 
@@ -379,11 +385,11 @@ def _signal_unit(dimension: str, what: str):
     def parse(value: Any, where: str, cli: bool) -> str:
         if isinstance(value, str) and safe_unit_text(value):
             try:
-                q = ureg.parse_expression(value.strip())
+                q = registry().parse_expression(value.strip())
                 dim = q.dimensionality if hasattr(q, "dimensionality") else None
             except Exception:
                 dim = None
-            if dim is not None and dim == ureg.volt.dimensionality:
+            if dim is not None and dim == registry().volt.dimensionality:
                 return value.strip()
             if dimension == "rad/s":  # an angular velocity: the rule of every angular frequency (Hz = turn/s)
                 try:
@@ -391,7 +397,7 @@ def _signal_unit(dimension: str, what: str):
                     return value.strip()
                 except SceneError:
                     pass
-            elif dim is not None and dim == ureg.parse_expression(dimension).dimensionality:
+            elif dim is not None and dim == registry().parse_expression(dimension).dimensionality:
                 return value.strip()
         raise SceneError(f"expected {what} (e.g. {dimension}) or a voltage (V, mV) with scale, got {value!r}", where)
     return parse
@@ -500,7 +506,7 @@ def _check(spec: RecordingSpec, where_of: Callable[[str], str]) -> RecordingSpec
                                                                                               "angular_velocity"):
             raise SceneError(f"{unit_key} goes with {col_key}", where_of(unit_key))
         unit = getattr(spec, unit_key)
-        if unit is not None and ureg.parse_expression(unit).dimensionality == ureg.volt.dimensionality \
+        if unit is not None and registry().parse_expression(unit).dimensionality == registry().volt.dimensionality \
                 and spec.scale is None:
             raise SceneError(f"{unit_key} = {unit!r} is the sensor's reading: give scale, the SI value per {unit} "
                              f"({'rad/s' if col_key.startswith('velocity') else 'm'} per {unit})", where_of(unit_key))

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from ...core.errors import DataError
-from ...core.units import ureg
+from ...core.units import common_factor, registry
 from ...core.csvtable import read_numbers, read_table
 from .rawsteps import notes_of, repaired_times, warnings_of
 from .series import TimeSeries
@@ -59,13 +59,15 @@ def read_timeseries(path: str | Path) -> TimeSeries:
         raise DataError(f"unknown column(s) {unknown}{did_you_mean(unknown)}; a time series has time_s and "
                         "theta_rad|theta_deg", where)
     unit = angle[0][len("theta_"):]
-    try:
-        q = ureg.Quantity(1.0, unit)
-    except Exception:
-        raise DataError(f"unknown angle unit {unit!r} in column {angle[0]!r}", where) from None
-    if not q.dimensionless:
-        raise DataError(f"column {angle[0]!r}: {unit!r} is not an angle unit", where)
-    factor = float(q.to("rad").magnitude)
+    factor = common_factor(unit, "angle")
+    if factor is None:
+        try:
+            q = registry().Quantity(1.0, unit)
+        except Exception:
+            raise DataError(f"unknown angle unit {unit!r} in column {angle[0]!r}", where) from None
+        if not q.dimensionless:
+            raise DataError(f"column {angle[0]!r}: {unit!r} is not an angle unit", where)
+        factor = float(q.to("rad").magnitude)
     if numbers is not None:
         time, theta = t.column("time_s"), t.column(angle[0])
         if time.size >= 20 and np.all(np.isfinite(theta)) and np.all(np.diff(time) > 0) \

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from ...core.errors import DataError
-from ...core.units import ureg
+from ...core.units import COMMON_UNITS, registry
 from ...core.csvtable import read_table
 from .sniff import canonical_header, did_you_mean
 
@@ -165,11 +165,15 @@ def read_unit_curve(path: str | Path, *, notch_deg: float | None = None,
         raise DataError(f"more than one load column {loads}", where)
     if loads:
         load_unit = loads[0][len("load_"):]
-        try:
-            dim = ureg.Unit(load_unit).dimensionality
-        except Exception:
-            raise DataError(f"unknown load unit {load_unit!r} in column {loads[0]!r}", where) from None
-        if dim not in (ureg.Unit("g").dimensionality, ureg.Unit("N").dimensionality):
+        if COMMON_UNITS.get(load_unit, ("",))[0] not in ("mass", "force"):  # not g, kg or N: pint reads it
+            try:
+                dim = registry().Unit(load_unit).dimensionality
+            except Exception:
+                raise DataError(f"unknown load unit {load_unit!r} in column {loads[0]!r}", where) from None
+            mass_or_force = dim in (registry().Unit("g").dimensionality, registry().Unit("N").dimensionality)
+        else:
+            mass_or_force = True
+        if not mass_or_force:
             raise DataError(f"load unit {load_unit!r} in column {loads[0]!r} is not a mass or a force", where)
         load = np.array(t.floats(loads[0], nonneg=True))
     unit = np.array(t.column("unit"), dtype=str) if "unit" in t.header else np.full(swing.size, "", dtype=str)

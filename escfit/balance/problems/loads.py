@@ -30,7 +30,7 @@ from ...core.errors import SceneError
 from ...core.params import ParamSet, read_param
 from ...analysis.recordings import UnitCurve
 from ...core.scene import check_keys
-from ...core.units import to_canonical, ureg
+from ...core.units import COMMON_UNITS, STANDARD_GRAVITY, common_convert, registry, to_canonical
 
 __all__ = ["LoadRule"]
 
@@ -119,19 +119,24 @@ class LoadRule:
 
 
 def _load_in(text: str, unit: str, where: str) -> float:
+    if (value := common_convert(text, unit or "g")) is not None:
+        return value
     try:
-        return float(ureg.Quantity(text).to(unit or "g").magnitude)
+        return float(registry().Quantity(text).to(unit or "g").magnitude)
     except Exception as exc:
         raise SceneError(f"cannot read {text!r} as a load in {unit or 'g'} ({exc})", where) from None
 
 
 def _newton_per_unit(unit: str, where: str) -> float:
-    q = ureg.Quantity(1.0, unit or "g")
+    kind, factor = COMMON_UNITS.get(unit or "g", (None, math.nan))
+    if kind in ("mass", "force"):  # grams, kilograms, newtons: no pint
+        return factor * STANDARD_GRAVITY if kind == "mass" else factor
+    q = registry().Quantity(1.0, unit or "g")
     try:
         return float(q.to("N").magnitude)
     except Exception:  # a mass load: its weight at standard gravity
         try:
-            return float((q * ureg.Quantity(1.0, "standard_gravity")).to("N").magnitude)
+            return float((q * registry().Quantity(1.0, "standard_gravity")).to("N").magnitude)
         except Exception:
             raise SceneError(f"load unit {unit!r} is neither a mass nor a force", where) from None
 

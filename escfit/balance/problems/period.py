@@ -191,11 +191,20 @@ def period_consistency(problem, values) -> list[Implied]:
                     f"the fitted model's period is {p_model:.5g} s where the record's is {mp.describe()}")]
 
 
+#: the exponent of time in the parameters' canonical units, read without pint (held against pint in tests)
+TIME_POWERS = {"": 0.0, "rad": 0.0, "deg": 0.0, "1/rad": 0.0, "1/rad**2": 0.0, "m": 0.0, "s": 1.0, "1/s": -1.0,
+               "rad/s": -1.0, "1/s**2": -2.0, "rad/s**2": -2.0}
+
+
 def _time_power(unit: str) -> float:
     """Exponent of time in a unit (-1 for 1/s, -2 for rad/s^2); 0 when it has none or is unknown."""
     if not unit:
         return 0.0
-    from ...core.units import ureg
+    if unit in TIME_POWERS:
+        return TIME_POWERS[unit]
+    from ...core.units import registry
+
+    ureg = registry()
 
     try:
         return float(ureg.Quantity(1.0, unit).dimensionality.get("[time]", 0.0))
