@@ -181,3 +181,22 @@ def test_a_swing_that_comes_back_after_sinking_has_not_ended():
     stepped = decay + noise + np.where(t > 25, 0.2, 0.0)  # a step of a fifth of the first swing
     drifting = decay + noise + 0.01 * t  # an integrated bias
     assert not resumes(t, stepped, i, 1.0) and not resumes(t, drifting, i, 1.0)
+
+
+def test_a_tail_that_comes_to_rest_is_counted_whole():
+    """Noise that ends in a rest: the note gives the whole tail left out, then its noise and its
+    rest (it said "0 % of it" of a record whose last 12 % rested), each from the record's clock."""
+    from escfit.analysis.recordings.noise_end import describe, sunk_end_before
+
+    series, _ = sunk_record(0.0)
+    t, y = np.asarray(series.time), np.asarray(series.theta)
+    end = sunk_end(t, y, PERIOD)
+    i_rest = end.index + int(0.5 * RATE)  # half a second of noise, then the rest
+    got = sunk_end_before(t, y, PERIOD, i_rest)
+    span = t[-1] - t[0]
+    assert got.share == pytest.approx((t[i_rest - 1] - end.time) / span, rel=1e-12)
+    assert got.at_rest == pytest.approx((t[-1] - t[i_rest - 1]) / span, rel=1e-12)
+    note, _ = describe(got, lambda v: f"{v:.2g} rad")
+    whole = round(100 * (t[-1] - end.time) / span)
+    assert f"is left out ({whole} % of it: {round(100 * got.share)} % noise, then " \
+           f"{round(100 * got.at_rest)} % at rest)" in note, note

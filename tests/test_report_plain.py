@@ -265,3 +265,15 @@ def test_watch_timegrapher_fit_gives_the_impulse_share(tmp_path):
     per_half = re.search(rf"Friction in the pivot would take {NUMBER} deg \(between {NUMBER} and {NUMBER} deg",
                          text)
     _agree_interval(per_half, np.degrees(2 * d["coulomb.R"] / d["oscillator.omega0"] ** 2))
+
+
+@pytest.mark.parametrize("x", np.linspace(0.2, 0.995, 40))
+def test_a_share_is_named_by_a_fraction_near_it(x):
+    """Every share from a fifth up is named by a fraction within a tenth of it ("about three
+    quarters" said of 86 % before); "most" is 80-90 %, "nearly all" 90 % and up."""
+    from escfit.core.plainwords import fraction_words
+
+    nominal = {"about a quarter": 0.25, "about a third": 1 / 3, "about half": 0.5, "about two thirds": 2 / 3,
+               "about three quarters": 0.75, "most": 0.85, "nearly all": 0.95, "all": 1.0}
+    words = fraction_words(x)
+    assert abs(nominal[words] - x) <= 0.1 + 1e-12, (x, words)

@@ -19,7 +19,8 @@ pivot (R)").  The swing loses ``2 (sum of the parts) / A`` of its amplitude each
 part's share of the sum says where the loss goes, and ``Q = pi / (that fraction)``
 (``omega0 / C`` for viscous damping alone).  The amplitude halves in
 ``ln 2 / -ln(1 - fraction)`` periods.  A minute holds ``60 omega0 / pi`` half swings; the
-amplitude lost in it is given when it is less than the amplitude (a balance's figure).  Where
+amplitude lost in it follows the decay down through them (the parts at each amplitude on the
+way) and is given when most draws still swing after the minute (a balance's figure).  Where
 the first-order loss of a half swing exceeds :data:`~escfit.balance.plain_decay.MODEL_ABOVE`
 (2 %) of the amplitude, the first period's loss, the loss of the period from about half the
 amplitude and the halving time come from runs of the fitted scene itself
@@ -55,6 +56,15 @@ from .derived import inertia_of
 __all__ = ["plain_sentences"]
 
 HALF_SWINGS_PER_MINUTE = 60.0 / math.pi  # times omega0
+
+#: the largest fraction of the amplitude one step of the minute's decay takes off
+MINUTE_STEP = 0.01
+
+#: steps of the minute's decay at most (a thousandth of the amplitude left counts as stopped)
+MAX_MINUTE_STEPS = 800
+
+#: draws whose decay over the minute is followed at most
+MINUTE_DRAWS = 2000
 #: a first-order loss per half swing above this share of the amplitude is beyond the small-damping
 #: rule (a quadratic drag's 4 D A^2 / 3 then overstates the loss of a half swing by a third or more)
 STRONG = 0.2
@@ -102,19 +112,25 @@ def plain_sentences(draws: Mapping[str, Any], attrs: Mapping[str, Any], observed
     if "oscillator.theta0" not in draws:
         return []
     amp = np.abs(np.asarray(draws["oscillator.theta0"], float))
-    swing = swing_of(amp, w0, k3=draws.get("stiffening.k3", 0.0),
-                     restoring=scene.get("oscillator", {}).get("restoring", "spring"))
+    k3, restoring = draws.get("stiffening.k3", 0.0), scene.get("oscillator", {}).get("restoring", "spring")
+    amp, w0 = np.broadcast_arrays(amp, w0)
+    swing = swing_of(amp, w0, k3=k3, restoring=restoring)
+
+    def swing_at(a, pick):
+        return swing_of(a, w0[pick], k3=np.asarray(k3, float)[pick] if np.ndim(k3) else k3, restoring=restoring)
+
     out = []
     for load in _loads(draws):
-        out += _free_decay(draws, attrs, swing, load, linear=linear, k=k, unit=unit)
+        out += _free_decay(draws, attrs, swing, load, linear=linear, k=k, unit=unit, swing_at=swing_at)
     return out + _other_optimum(attrs)
 
 
-def _free_decay(draws, attrs, swing, load: str, *, linear: bool, k: float, unit: str) -> list[str]:
+def _free_decay(draws, attrs, swing, load: str, *, linear: bool, k: float, unit: str, swing_at) -> list[str]:
     """The sentences of a free decay at one load (``""``: the only one); see the module docstring.
 
-    ``swing`` is the undamped half swing at the release amplitude of every draw; ``k`` and
-    ``unit`` turn radians (or metres) into the amplitude's display unit."""
+    ``swing`` is the undamped half swing at the release amplitude of every draw, ``swing_at(a,
+    pick)`` the one at amplitudes ``a`` of the draws ``pick``; ``k`` and ``unit`` turn radians
+    (or metres) into the amplitude's display unit."""
     amp, w0 = swing.amplitude, np.asarray(draws["oscillator.omega0"], float)
     parts = [(loss, np.asarray(part, float)) for loss, part in _loss_parts(draws, swing, load)]
     total = sum((part for _, part in parts), np.zeros_like(amp))
@@ -144,10 +160,45 @@ def _free_decay(draws, attrs, swing, load: str, *, linear: bool, k: float, unit:
         out.append(f"At that rate the amplitude halves in {interval_words(halving, 's')}.")
     elif np.mean(np.isfinite(model.halving)) >= 0.9:
         out.append(f"The amplitude halves in {interval_words(model.halving[np.isfinite(model.halving)], 's')}.")
-    minute = total * w0 * HALF_SWINGS_PER_MINUTE * k
-    if np.median(minute) < np.median(amp) * k:  # a balance's figure; a pendulum at rest sooner has none
-        out.append(f"That is {interval_words(minute, unit)} of amplitude lost in the first minute.")
+    minute = _lost_in_a_minute(draws, swing, load, swing_at) * k
+    if np.mean(np.isfinite(minute)) >= 0.5:  # a balance's figure; a pendulum at rest sooner has none
+        out.append(f"That is {interval_words(minute[np.isfinite(minute)], unit)} of amplitude lost in the first "
+                   "minute.")
     return out
+
+
+def _lost_in_a_minute(draws, swing, load: str, swing_at) -> np.ndarray:
+    """The amplitude lost in the first minute (rad, or m), per draw; NaN where the swing stops sooner.
+
+    The decay is followed half swing by half swing in steps that lose at most
+    :data:`MINUTE_STEP` of the amplitude, each step's loss taken at its midpoint amplitude
+    (the losses' parts at that amplitude, ``swing_at(amplitude)`` their undamped half swing):
+    a viscous decay loses ``A (1 - exp(-30 C))`` in a minute, not the ``30 C A`` its first
+    half swing's rate would give over the minute.  At most :data:`MINUTE_DRAWS` draws, evenly
+    spaced, are followed.
+    """
+    pick = np.unique(np.linspace(0, swing.amplitude.size - 1, min(swing.amplitude.size, MINUTE_DRAWS)).astype(int))
+    sub = {n: (np.asarray(v, float)[pick] if np.ndim(v) else v) for n, v in draws.items()}
+    start = np.asarray(swing.amplitude, float)[pick]
+    at = lambda a: swing_at(a, pick)  # noqa: E731 - the undamped half swing of the picked draws
+    a, floor = start.copy(), start * 1e-3
+    left = np.broadcast_to(np.asarray(swing.omega0, float), swing.amplitude.shape)[pick] * HALF_SWINGS_PER_MINUTE
+    for _ in range(MAX_MINUTE_STEPS):
+        going = (left > 0) & (a > floor)
+        if not going.any():
+            break
+        loss = _total_loss(sub, at(a), load)
+        steps = np.where(going, np.minimum(left, MINUTE_STEP * a / np.maximum(loss, 1e-300)), 0.0)
+        mid = np.maximum(a - 0.5 * steps * loss, floor)
+        a = np.where(going, np.maximum(a - steps * _total_loss(sub, at(mid), load), 0.0), a)
+        left = left - steps
+    return np.where((left > 0) | ~np.isfinite(a), np.nan, start - a)
+
+
+def _total_loss(draws, swing, load: str) -> np.ndarray:
+    """The amplitude every loss takes off a half swing together (rad per half swing)."""
+    return sum((np.asarray(part, float) for _, part in _loss_parts(draws, swing, load)),
+               np.zeros_like(swing.amplitude))
 
 
 def _at_half(model, k: float, unit: str) -> str:

@@ -57,7 +57,8 @@ def share_words(share) -> str:
 
 def fraction_words(x: float) -> str:
     """A fraction (0-1) as people say it: "about a third", "nearly all"."""
-    for value, words in ((0.995, "all"), (0.9, "nearly all"), (0.72, "about three quarters"),
+    # each word covers the values nearest it: 86 % is "most", not "about three quarters"
+    for value, words in ((0.995, "all"), (0.9, "nearly all"), (0.8, "most"), (0.7, "about three quarters"),
                          (0.6, "about two thirds"), (0.4, "about half"), (0.29, "about a third"),
                          (0.2, "about a quarter"), (0.05, "a small part"), (0.0, "hardly any")):
         if x >= value:

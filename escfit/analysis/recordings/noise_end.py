@@ -69,6 +69,9 @@ class SunkEnd:
         The swing's amplitude at the end (the samples' unit).
     share : float
         Share of the record's duration left out as noise (0 to 1).
+    at_rest : float
+        Share of the record's duration after the noise where the record rests (left out as
+        rest, not counted in ``share``).
     """
 
     time: float
@@ -76,6 +79,7 @@ class SunkEnd:
     floor: float
     amplitude: float
     share: float
+    at_rest: float = 0.0
 
 
 def window_fits(t: np.ndarray, x: np.ndarray, period: float, *, width: float = WINDOW_PERIODS,
@@ -148,17 +152,25 @@ def describe(end: SunkEnd, show, origin: float = 0.0) -> tuple[str, str]:
     times shown (the record's first sample).
     """
     at = end.time - origin
+    ratio = f"{end.amplitude / end.floor:.2g} times the noise floor of {show(end.floor)}"
+    after = f"{_percent(end.share + end.at_rest)} of it"
+    if end.at_rest > 0:
+        after += f": {_percent(end.share)} noise, then {_percent(end.at_rest)} at rest"
     note = (f"the swing sinks into the record's noise at t = {at:.4g} s: its amplitude there is "
-            f"{show(end.amplitude)}, {end.amplitude / end.floor:.2g} times the noise floor of {show(end.floor)} (the "
-            "scatter of the samples about the local swing where the swing no longer stands out); the record after it "
-            f"({100 * end.share:.0f} % of it) is left out as noise, not motion (its wobbles and steps are no push); "
-            f"[recording] stop sets the end otherwise")
+            f"{show(end.amplitude)}, {ratio} (the scatter of the samples about the local swing where the swing no "
+            f"longer stands out; {CUT_RATIO:g} floors or less is noise); the record after it is left out ({after}) as "
+            "noise, not motion (its wobbles and steps are no push); [recording] stop sets the end otherwise")
     warning = ""
     if end.share > CUT_WARNING:
-        warning = (f"{100 * end.share:.0f} % of the record (from t = {at:.4g} s on) is left out: the swing has sunk "
-                   f"there to {show(end.amplitude)}, {CUT_RATIO:g} times the noise floor of {show(end.floor)}, and what "
-                   "follows is noise; if the motion goes on there, set [recording] stop later to keep it")
+        warning = (f"{_percent(end.share)} of the record (from t = {at:.4g} s on) is left out: the swing has sunk "
+                   f"there to {show(end.amplitude)}, {ratio}, and what follows is noise; if the motion goes on there, "
+                   "set [recording] stop later to keep it")
     return note, warning
+
+
+def _percent(share: float) -> str:
+    """A share of the record (0-1) in per cent: whole per cent, or "under 1 %"."""
+    return "under 1 %" if 0 < share < 0.005 else f"{100 * share:.0f} %"
 
 
 def resting_tail(rec) -> tuple[int, float]:
@@ -237,5 +249,7 @@ def sunk_end_before(t: np.ndarray, x: np.ndarray, period: float, i_rest: int | N
     end = sunk_end(t, x, period)
     if end is None or end.index >= n:
         return None
-    share = (float(t[n - 1]) - end.time) / (float(t[-1]) - float(t[0]))
-    return SunkEnd(end.time, end.index, end.floor, end.amplitude, max(share, 0.0))
+    span = float(t[-1]) - float(t[0])
+    share = (float(t[n - 1]) - end.time) / span
+    return SunkEnd(end.time, end.index, end.floor, end.amplitude, max(share, 0.0),
+                   max((float(t[-1]) - float(t[n - 1])) / span, 0.0))
