@@ -23,6 +23,11 @@ IMPULSE = '[[effects.escapement]]\nkind = "impulse"\nfrom = {lo}\nto = {hi}\nX =
     (balance_toml(effects='[effects.coulomb]\nR = "1 N*m"\n'), ["coulomb", "'1 N*m'", "angular acceleration"]),
     (balance_toml(effects='[effects.coulomb]\ntorque = "1e-9 N*m"\n'), ["torque", "needs [oscillator] inertia"]),
     (balance_toml(effects="[effects.viscous]\nC = { value = 9, min = 0, max = 5, vary = true }\n"), ["viscous", "outside"]),
+    # a negative frequency: the physical range is named, not a backwards interval of the clipped bounds
+    (balance_toml().replace("omega0 = 10.0", "omega0 = { value = -8.0, vary = true, min = -11, max = -6.4 }"),
+     ["omega0", "-8.0", "physical range [1e-09,"]),
+    (balance_toml().replace("omega0 = 10.0", "omega0 = { value = 8.0, vary = true, min = -11, max = -6.4 }"),
+     ["omega0", "min -11 and max -6.4 lie outside the physical range [1e-09,"]),
     (balance_toml(effects='[effects.viscous]\nC = { value = 1, vary = "yes" }\n'), ["vary", "'yes'"]),
     (balance_toml(switching="phase", effects="[effects.hairspring]\nangles = [0.5]\nomega0 = [9.0, 11.0]\n")
      .replace("omega0 = 10.0\n", "", 1), ["hairspring", "switching = 'angle'"]),
@@ -126,3 +131,12 @@ def test_unit_text_is_never_evaluated_as_arithmetic_but_fractions_read():
     assert to_canonical("pi/2 rad", "angle", "w") == pytest.approx(np.pi / 2, rel=1e-15)
     assert to_canonical("1/4 turn", "angle", "w") == pytest.approx(np.pi / 2, rel=1e-15)
     assert to_canonical("300 deg", "angle", "w") == pytest.approx(np.radians(300), rel=1e-15)
+
+
+def test_a_misspelt_observation_model_key_is_suggested():
+    """``modle = "waveform"`` left the default model, whose list of keys lacked ``model``."""
+    from escfit.balance.observation import observation_from_table
+
+    with pytest.raises(SceneError) as info:
+        observation_from_table({"modle": "waveform"}, "s.toml", "amplitude")
+    assert "'modle'" in str(info.value) and "did you mean 'model'" in str(info.value)

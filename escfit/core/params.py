@@ -182,23 +182,39 @@ def read_param(
             raise SceneError(f"'sd' must be positive, got {raw['sd']!r}", f"{where}.sd")
         if pmin > pmax:
             raise SceneError(f"min {raw.get('min')!r} is above max {raw.get('max')!r}", where)
+        _check_physical(raw["value"], value, lower, upper, lower_open, meaning or name, where)
+        if pmax < lower or pmin > upper:
+            raise SceneError(f"min {raw.get('min')!r} and max {raw.get('max')!r} lie outside the physical range "
+                             f"{_range(lower, upper, lower_open)} ({_shown_unit(out_unit)}) for {meaning or name}", where)
         pmin, pmax = max(pmin, lower), min(pmax, upper)
         if not (pmin <= value <= pmax):
-            raise SceneError(f"value {raw['value']!r} lies outside [{pmin:g}, {pmax:g}] ({out_unit or 'dimensionless'})", where)
+            raise SceneError(f"value {raw['value']!r} lies outside [{pmin:g}, {pmax:g}] ({_shown_unit(out_unit)})", where)
         if vary:
             _check_range_resolvable(value, pmin, pmax, sd, raw, where)
     else:
         value = canonical(raw, where)
         vary, pmin, pmax, prior, sd = False, lower, upper, None, None
+    _check_physical(raw if not isinstance(raw, Mapping) else raw["value"], value, lower, upper, lower_open,
+                    meaning or name, where)
+    return Param(name, value, out_unit, meaning, vary, pmin, pmax, prior, None, sd)
+
+
+def _range(lower: float, upper: float, lower_open: bool) -> str:
+    return f"{'(' if lower_open else '['}{lower:g}, {upper:g}]"
+
+
+def _shown_unit(unit: str) -> str:
+    """A canonical unit as a reader writes it: an angular frequency's 1/s is rad/s."""
+    return {"1/s": "1/s or rad/s", "": "dimensionless"}.get(unit, unit)
+
+
+def _check_physical(raw: Any, value: float, lower: float, upper: float, lower_open: bool, what: str,
+                    where: str) -> None:
+    """Refuse a value outside the physical range ``lower``..``upper`` (open below when ``lower_open``)."""
     bad_low = value <= lower if lower_open else value < lower
     if bad_low or value > upper:
-        rng = f"({lower:g}" if lower_open else f"[{lower:g}"
-        raise SceneError(
-            f"value {raw if not isinstance(raw, Mapping) else raw['value']!r} is outside the physical range "
-            f"{rng}, {upper:g}] for {meaning or name}",
-            where,
-        )
-    return Param(name, value, out_unit, meaning, vary, pmin, pmax, prior, None, sd)
+        raise SceneError(f"value {raw!r} is outside the physical range {_range(lower, upper, lower_open)} for {what}",
+                         where)
 
 
 @dataclass

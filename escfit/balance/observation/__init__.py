@@ -43,5 +43,5 @@ def observation_from_table(table: Mapping[str, Any] | None, where: str, data_kin
     if model != data_kind:
         raise SceneError(f"observation model {model!r} does not match the data, which hold {data_kind} readings", w)
     cls = _KINDS[model]
-    check_keys(table, cls.KEYS, w)
+    check_keys(table, cls.KEYS | {"model"}, w)  # model was read above: named among the keys a typo may mean
     return cls.from_table(table, w, notch=notch)

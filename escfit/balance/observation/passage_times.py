@@ -41,6 +41,7 @@ import numpy as np
 
 from ...core.errors import SceneError
 from ...core.params import Param, read_param
+from ...core.scene import check_keys
 from ...core.units import BARE_ANGLE_LIMIT
 
 __all__ = ["PassageTimeObservation"]
@@ -81,9 +82,7 @@ class PassageTimeObservation:
         if model != "passage_times":
             raise SceneError(f"a pulse recording needs model = \"passage_times\" in [observation], got {model!r}",
                              f"{where}.model")
-        unknown = sorted(set(table) - cls.KEYS)
-        if unknown:
-            raise SceneError(f"unknown key(s) {unknown}; allowed: {sorted(cls.KEYS)}", where)
+        check_keys(table, cls.KEYS | {"model"}, where)
         sigma = read_param(table.get("sigma", {"value": default_sigma, "vary": True, "min": 1e-7, "max": 1.0,
                                                "prior": "loguniform(1e-7, 1)"}),
                            name="observation.sigma", kind="time", lower=0.0, lower_open=True,

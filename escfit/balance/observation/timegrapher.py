@@ -43,6 +43,7 @@ from scipy import special
 
 from ...core.errors import SceneError
 from ...core.params import Param, read_param
+from ...core.scene import check_keys
 from ...core.units import BARE_ANGLE_LIMIT
 from .notches import log_interval_mass
 
@@ -141,9 +142,7 @@ class TimegrapherObservation:
         if model != "timegrapher":
             raise SceneError(f"a timegrapher recording needs model = \"timegrapher\" in [observation], got {model!r}",
                              f"{where}.model")
-        unknown = sorted(set(table) - cls.KEYS)
-        if unknown:
-            raise SceneError(f"unknown key(s) {unknown}; allowed: {sorted(cls.KEYS)}", where)
+        check_keys(table, cls.KEYS | {"model"}, where)
         beats = table.get("beats", True)
         if not isinstance(beats, bool):
             raise SceneError(f"beats must be true or false, got {beats!r}", f"{where}.beats")

@@ -51,6 +51,7 @@ import numpy as np
 
 from ...core.errors import SceneError
 from ...core.params import Param, read_param
+from ...core.scene import check_keys
 from ...core.units import BARE_ANGLE_LIMIT, to_canonical
 from .notches import log_interval_mass
 
@@ -126,9 +127,7 @@ class WaveformObservation:
             (the units of sigma, offset, offset_rate and quantum follow).
         """
         r = READINGS[quantity]
-        unknown = sorted(set(table) - cls.KEYS)
-        if unknown:
-            raise SceneError(f"unknown key(s) {unknown}; known: {sorted(cls.KEYS)}", where)
+        check_keys(table, cls.KEYS | {"model"}, where)
         quantum = to_canonical(table.get("quantum", 0.0), r.kind, f"{where}.quantum", bare_limit=r.bare_limit)
         if not (math.isfinite(quantum) and quantum >= 0.0):
             raise SceneError(f"quantum must be a step of the readings ({r.unit}) >= 0, got {table.get('quantum')!r}",
