@@ -154,6 +154,20 @@ def test_a_hand_stopped_end_is_not_determined_and_the_stop_it_names_gives_the_tr
         assert abs(est - TRUTH[name]) < 3.5 * (hi - lo) / (2 * 1.96), (name, est, TRUTH[name])
 
 
+def test_a_record_on_a_later_clock_names_its_stop_after_its_first_sample():
+    """The same hand-stopped record with its clock starting at 60 s (a logger's time of day): the
+    stop it advises is counted from the record's first sample, as ``[recording] stop`` and the
+    notes count it (it named the file's clock, 60 s too late)."""
+    record, t_stop = hand_stopped_record()
+    res = fitted(TimeSeries(record.time + 60.0, record.theta, source="hand-stopped, later clock"))
+    first = res.warnings[0]
+    assert "last turning points do not follow the decay" in first, first
+    stop = float(re.search(r"\[recording\] stop = ([0-9.]+)", first).group(1))
+    assert t_stop - 0.6 < stop <= t_stop + 0.01, (stop, t_stop)
+    at = float(re.search(r"at t = ([0-9.]+) s", first).group(1))
+    assert at < record.time[-1], first  # the turning point's time on the same count
+
+
 def test_a_trade_between_two_losses_leaves_them_undetermined_and_a_common_shift_does_not():
     from escfit.analysis.agreement import ModelFacts, ParameterDifference, judge
     from escfit.balance.decrement import loss_symbols

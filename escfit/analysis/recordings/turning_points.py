@@ -296,7 +296,8 @@ def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool,
     rec.moving_at_start = "drive_off" in series.meta and not (user_window is not None and user_window.given)
     if origin != 0.0:
         rec.notes.insert(0, f"times in these notes are counted from the record's first sample (t = 0 s there, "
-                            f"{origin:.10g} s on the file's clock)")
+                            f"{origin:.10g} s on the file's clock; the fitted observation.t_release is on the "
+                            "file's clock)")
     i_rest, rest_theta = resting_tail(rec)
     sunk = None
     if user_window is None or user_window.stop is None:  # the user's stop wins

@@ -77,6 +77,7 @@ def _compare_turns(problem, values: Mapping[str, float]) -> tuple[TurnDifference
         amp_rec, amp_mod = curve.y[rows], problem.expected(values)[rows]
     phase = 2.0 * math.pi * (t_rec - t_mod) / period
     d_amp = amp_rec - amp_mod
+    t_rec = t_rec - float(getattr(tp, "origin", 0.0))  # shown as the notes show times: after the first sample
     out = []
     for what, d, floor in (("phase", phase, 1e-6), ("amplitude", d_amp, 1e-6 * float(np.max(np.abs(amp_rec))))):
         if what == "amplitude" and getattr(problem, "quantity", "angle") == "angular_velocity":
