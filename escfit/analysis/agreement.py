@@ -52,6 +52,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .decrement_law import LESS_AT_LARGE, law_mismatch, refuted_caution
 from .turn_trend import smooth_trend, trend_spread, turn_scatter
 
 __all__ = ["Agreement", "TurnDifferences", "ParameterDifference", "ModelFacts", "judge", "turn_scatter",
@@ -482,6 +483,13 @@ def judge(phase: TurnDifferences | None, amplitude: TurnDifferences | None, para
         cautions.append("the waveform and turning-point fits differ on " + said + ", beyond their standard errors "
                         "but by less than matters (" + _materiality() + "): the intervals are too narrow for this "
                         "record")
+    said = unsplit or findings or any(c.startswith("the record swings ") for c in cautions)  # a wander, a drift
+    refuted = "" if said or not model.losses else refuted_caution(
+        amplitude, lambda v: _shown(v, model.unit), " and ".join(model.short(n) for n, _ in model.losses),
+        "drag" in model.effects)
+    if refuted:
+        cautions.insert(0, refuted)
+        undetermined = tuple(dict.fromkeys(tuple(undetermined) + losses))
     advice = _advice(model, phase, amplitude) if findings else ""
     return Agreement("waveform" if model.waveform else "amplitude", periods, phase, amplitude, tuple(parameters),
                      tuple(findings), tuple(cautions), advice, tuple(comments), undetermined)
@@ -494,8 +502,6 @@ def _split_only(material: list[ParameterDifference]) -> bool:
         return False
     signs = {math.copysign(1.0, p.waveform - p.turning_points) for p in material}
     return signs == {1.0, -1.0}
-
-
 
 
 def _shown(x: float, unit: str) -> str:
@@ -518,6 +524,9 @@ def _remedy(model: ModelFacts, d: TurnDifferences) -> str:
     if d.what == "amplitude":
         missing = [f"[effects.{k}]" for k in ("drag", "coulomb") if k not in model.effects]
         law = f" (add {' or '.join(missing)})" if missing else ""
+        losses = law_mismatch(d.swing, d.size, np.abs(d.size) - d.difference) if d.size is not None else None
+        if losses is not None and not losses.steeper:  # no law escfit adds loses less at large amplitude
+            law = f"; {LESS_AT_LARGE}"
         return f": the model's damping law does not follow the record's decay{law}; the estimates are a compromise"
     return (": the record's period changes along it (an amplitude-dependent restoring torque, a temperature drift); "
             "the turning-point fit does not use the times")
