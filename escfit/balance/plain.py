@@ -212,7 +212,8 @@ def _at_half(model, k: float, unit: str) -> str:
 
 def _split(parts, total, per_period, attrs, linear: bool) -> list[str]:
     """Where the loss goes: each effect's share (largest first) and Q, or that the record cannot split it."""
-    q = f"Q = {sig(quantiles(math.pi / (per_period / 100))[0])} at this amplitude."
+    every = " (every loss counted; the table's Q is viscous damping's alone)" if len(parts) > 1 else ""
+    q = f"Q = {sig(quantiles(math.pi / (per_period / 100))[0])} at this amplitude{every}."
     undetermined = _undetermined(attrs)
     unsplit = [loss.words(linear=linear) for loss, _ in parts if loss.parameter in undetermined]
     if len(unsplit) >= 2:
