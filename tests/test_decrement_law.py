@@ -40,7 +40,7 @@ def test_a_friction_decay_refutes_an_exponential_through_its_ends():
     share = (1 - math.exp(-2 * c)) / 2
     assert np.all(np.diff(law.model) > 0) and law.model[-1] / law.model[0] > 3
     assert np.all(law.model >= share * model.min() * 0.999) and np.all(law.model <= share * model.max() * 1.001)
-    assert law.refuted and not law.steeper
+    assert law.refuted and law.at_large < 0
     k = law.worst
     assert law.sigmas[k] > LAW_SIGMAS and law.share[k] > LAW_SHARE
 

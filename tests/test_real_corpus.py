@@ -177,8 +177,11 @@ DECAYS = [
           "SinglePendulumDataForParameterEstimation.mat", "multiarm_estimation.toml", 134, slow=True,
           verdict="partly determined",
           reference=(("the authors' omega0 = 8.01 rad/s", lambda r: (omega0(r), 8.01, 0.12)),)),
+    # from 105 deg the record loses about 0.8 deg every half swing down to 50 deg and less below, which
+    # no sum of viscous damping and friction does (0.80 against the fit's 0.95 deg at 92 deg, 11
+    # standard errors): the law is refuted and the split of C and R is not determined
     Decay("torsion pendulum, CASSY Lab 2 .labx", REAL / "gpl_tests_only" / "cassy_phyprakit" / "Drehpendel.labx",
-          "cassy_torsion_pendulum.toml", 186, slack=2, slow=True,
+          "cassy_torsion_pendulum.toml", 186, slack=2, slow=True, verdict="partly determined",
           reference=(("the source's period, about 1.79 s", lambda r: (measured_period(r), 1.79, 0.01)),)),
     Decay("torsion pendulum, CASSY Lab 2 .labx, 0.2 s sampling", REAL / "gpl_tests_only" / "cassy_phyprakit" /
           "CassyExample.labx", "cassy_torsion_pendulum.toml", 0,

@@ -525,7 +525,7 @@ def _remedy(model: ModelFacts, d: TurnDifferences) -> str:
         missing = [f"[effects.{k}]" for k in ("drag", "coulomb") if k not in model.effects]
         law = f" (add {' or '.join(missing)})" if missing else ""
         losses = law_mismatch(d.swing, d.size, np.abs(d.size) - d.difference) if d.size is not None else None
-        if losses is not None and not losses.steeper:  # no law escfit adds loses less at large amplitude
+        if losses is not None and losses.at_large < 0:  # no law escfit adds loses less at large amplitude
             law = f"; {LESS_AT_LARGE}"
         return f": the model's damping law does not follow the record's decay{law}; the estimates are a compromise"
     return (": the record's period changes along it (an amplitude-dependent restoring torque, a temperature drift); "

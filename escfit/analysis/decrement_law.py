@@ -34,6 +34,7 @@ BINS = 6  # amplitude bins of equal count
 LAW_SIGMAS = 5.0  # a bin this many standard errors from the model's loss refutes the law ...
 LAW_SHARE = 0.15  # ... when the difference is also this share of the model's loss there
 MIN_LOSSES = 24  # fewer losses measure no law
+SIDE_SIGMAS = 2.0  # the largest amplitudes' bin says which way the record departs beyond this many errors
 
 #: what a record losing less at large amplitude than the fitted laws suggests
 LESS_AT_LARGE = ("it loses less at large amplitude than the model's laws allow (a scale that reads large angles short, "
@@ -77,11 +78,13 @@ class LawMismatch:
         return int(np.argmax(np.where(bad, self.sigmas, -1.0)))
 
     @property
-    def steeper(self) -> bool:
-        """Whether the record's loss grows with the amplitude faster than the model's (a law
-        stronger at large amplitude, such as air drag, is missing)."""
-        slope = lambda y: np.polyfit(self.amplitude, y, 1)[0]  # noqa: E731
-        return bool(slope(self.record) > slope(self.model))
+    def at_large(self) -> int:
+        """How the record's loss compares with the model's in the bin of largest amplitude: +1
+        more (a law stronger at large amplitude, such as air drag, is missing), -1 less, 0 within
+        :data:`SIDE_SIGMAS` standard errors."""
+        top = int(np.argmax(self.amplitude))
+        z = (self.record[top] - self.model[top]) / self.error[top]
+        return 1 if z > SIDE_SIGMAS else -1 if z < -SIDE_SIGMAS else 0
 
     def caution(self, show, losses: str, drag: bool) -> str:
         """The evidence and what it suggests, in words.
@@ -90,10 +93,12 @@ class LawMismatch:
         coefficients (``"C and R"``); ``drag`` says whether the model has air drag already.
         """
         k = self.worst
-        if self.steeper:
-            why = "its loss grows with the amplitude faster than the model's" + ("" if drag else " (add [effects.drag])")
-        else:
+        if self.at_large > 0:
+            why = "it loses more at large amplitude than the model's laws allow" + ("" if drag else " (add [effects.drag])")
+        elif self.at_large < 0:
             why = LESS_AT_LARGE
+        else:
+            why = "escfit compare weighs the damping laws"
         return (f"the record's loss per half swing does not follow the model's damping law: at {show(self.amplitude[k])} "
                 f"the record loses {show(self.record[k])} a half swing, the model {show(self.model[k])} "
                 f"({self.sigmas[k]:.0f} standard errors, {100 * self.share[k]:.0f} %): {why}; {losses} and the loss at "
