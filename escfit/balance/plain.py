@@ -58,13 +58,13 @@ __all__ = ["plain_sentences"]
 HALF_SWINGS_PER_MINUTE = 60.0 / math.pi  # times omega0
 
 #: the largest fraction of the amplitude one step of the minute's decay takes off
-MINUTE_STEP = 0.01
+MINUTE_STEP = 0.02
 
 #: steps of the minute's decay at most (a thousandth of the amplitude left counts as stopped)
-MAX_MINUTE_STEPS = 800
+MAX_MINUTE_STEPS = 400
 
 #: draws whose decay over the minute is followed at most
-MINUTE_DRAWS = 2000
+MINUTE_DRAWS = 1000
 #: a first-order loss per half swing above this share of the amplitude is beyond the small-damping
 #: rule (a quadratic drag's 4 D A^2 / 3 then overstates the loss of a half swing by a third or more)
 STRONG = 0.2
