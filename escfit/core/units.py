@@ -13,7 +13,6 @@ a value written with its unit is always taken as written.
 from __future__ import annotations
 
 import math
-import os
 import re
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any
@@ -24,8 +23,8 @@ from .unit_text import _NUMBER, MAX_UNIT_TEXT, safe_unit_text
 if TYPE_CHECKING:
     import pint
 
-__all__ = ["ureg", "registry", "COMMON_UNITS", "COMMON_RATES", "common_factor", "common_convert", "STANDARD_GRAVITY", "COUNT_WORDS", "UnsafeUnitText", "to_canonical", "CANONICAL", "safe_unit_text", "quantity",
-           "MAX_UNIT_TEXT", "BARE_ANGLE_LIMIT", "check_bare_angle", "angular_frequency", "angular_frequency_factor",
+__all__ = ["ureg", "registry", "COMMON_UNITS", "COMMON_RATES", "common_factor", "common_convert", "STANDARD_GRAVITY",
+           "COUNT_WORDS", "UnsafeUnitText", "to_canonical", "CANONICAL", "safe_unit_text", "quantity", "MAX_UNIT_TEXT", "BARE_ANGLE_LIMIT", "check_bare_angle", "angular_frequency", "angular_frequency_factor",
            "ANGULAR_FREQUENCY_UNITS"]
 
 # Canonical unit of each kind of quantity escfit reads.  Per-inertia quantities
@@ -75,7 +74,7 @@ def __getattr__(name: str):
 
 
 #: exact factors of the units records and scenes name most, to the canonical unit of a kind:
-#: text -> (kind, factor).  Read without pint; ``tests/test_units.py`` holds them against pint.
+#: text -> (kind, factor).  Read without pint; ``tests/test_unit_table.py`` holds them against pint.
 COMMON_UNITS: dict[str, tuple[str, float]] = {
     **{u: ("angle", 1.0) for u in ("rad", "radian", "radians")},
     **{u: ("angle", math.pi / 180.0) for u in ("deg", "degree", "degrees")},
