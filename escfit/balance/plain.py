@@ -65,6 +65,7 @@ MAX_MINUTE_STEPS = 400
 
 #: draws whose decay over the minute is followed at most
 MINUTE_DRAWS = 1000
+
 #: a first-order loss per half swing above this share of the amplitude is beyond the small-damping
 #: rule (a quadratic drag's 4 D A^2 / 3 then overstates the loss of a half swing by a third or more)
 STRONG = 0.2
