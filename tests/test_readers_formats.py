@@ -110,6 +110,16 @@ def test_picoscope_units_row_and_blank_line(tmp_path):
     assert "row of units" in ts.meta["source_format"]
 
 
+def test_volts_given_as_the_angle_unit_say_what_scale_is_for():
+    """``angle_unit = "V"`` (the column's own unit) is refused with what the two keys hold."""
+    from escfit.analysis.recordings.recording_spec import recording_spec_from_table
+    from escfit.core.errors import SceneError
+
+    with pytest.raises(SceneError, match=r"got 'V': a column in volts keeps its angle_unit for the angle \(deg or "
+                                         r"rad\) and takes scale, the angle per volt"):
+        recording_spec_from_table({"angle_column": "Channel A", "angle_unit": "V"}, "s.toml")
+
+
 # -- phyphox ------------------------------------------------------------------------------------------
 @pytest.mark.parametrize("sep, dec", [(",", "."), ("\t", "."), (";", "."), ("\t", ","), (";", ",")])
 def test_phyphox_csv_variants(tmp_path, sep, dec):

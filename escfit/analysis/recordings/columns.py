@@ -164,9 +164,9 @@ def _index(col, cols: Columns, key: str) -> int:
 def _hint_other_quantities(cols: Columns, roles: list[str | None]) -> str:
     volts = [i for i in range(cols.ncols) if (cols.unit(i) or "").strip() in ("V", "mV", "volt", "volts")]
     if volts:
-        return (f" (column {cols.label(volts[0])!r} holds a sensor's volts: with angle_column set angle_unit and scale, "
-                "the angle per volt; a rate or a position: velocity_column or displacement_column with its unit and "
-                "scale)")
+        return (f" (column {cols.label(volts[0])!r} holds a sensor's volts: an angle sensor's needs angle_column = "
+                f"{cols.label(volts[0])!r}, angle_unit = the angle's unit (\"deg\" or \"rad\") and scale = the angle "
+                "per volt; a rate or a position: velocity_column or displacement_column with its unit and scale)")
     for role, key in (("angular_velocity", "velocity_column"), ("displacement", "displacement_column")):
         hits = [i for i, r in enumerate(roles) if r == role]
         if len(hits) > 1:

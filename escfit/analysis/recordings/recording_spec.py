@@ -376,8 +376,10 @@ def _number(value: Any, where: str, cli: bool) -> float:
 
 def _angle_unit(value: Any, where: str, cli: bool) -> str:
     if not isinstance(value, str) or not is_angle_unit(value):
-        raise SceneError(f"expected an angle unit (deg, rad, grad, turn, arcmin ... or 'counts'), got {value!r}",
-                         where)
+        volts = isinstance(value, str) and value.strip() in ("V", "mV", "volt", "volts")
+        raise SceneError(f"expected an angle unit (deg, rad, grad, turn, arcmin ... or 'counts'), got {value!r}" + (
+            ": a column in volts keeps its angle_unit for the angle (deg or rad) and takes scale, the angle per "
+            "volt" if volts else ""), where)
     return value.strip()
 
 
