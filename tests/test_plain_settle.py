@@ -123,3 +123,19 @@ def test_the_amplitude_lost_in_a_minute_follows_the_decay(make_scene, c, r):
     printed = said.group(1)
     assert float(printed) == pytest.approx(np.degrees(want), abs=_half_digit(printed) + 0.003 * np.degrees(want)), text
 
+
+
+def test_a_refuted_damping_law_is_said_beside_the_figures():
+    """The summary's loss and halving time are the fitted law's: when the record's losses refute
+    that law (a warning of the agreement check), a sentence says the figures are a compromise."""
+    import json
+
+    from escfit.analysis.decrement_law import LAW_REFUTED
+
+    n = 20
+    draws = {"oscillator.omega0": np.full(n, OMEGA0), "oscillator.theta0": np.full(n, 1.5),
+             "viscous.C": np.full(n, 0.01), "coulomb.R": np.full(n, 0.3)}
+    said = "The record's own losses do not follow the fitted damping law"
+    refuted = {"warnings": json.dumps([f"{LAW_REFUTED}: at 92 deg the record loses 0.8 deg a half swing"])}
+    assert said in " ".join(plain_sentences(draws, refuted))
+    assert said not in " ".join(plain_sentences(draws, {"warnings": json.dumps(["residuals come in long runs"])}))

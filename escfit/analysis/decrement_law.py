@@ -28,13 +28,16 @@ import numpy as np
 
 from .decrements import from_readings
 
-__all__ = ["LawMismatch", "law_mismatch", "refuted_caution", "LESS_AT_LARGE", "BINS", "LAW_SIGMAS", "LAW_SHARE", "MIN_LOSSES"]
+__all__ = ["LawMismatch", "law_mismatch", "refuted_caution", "LAW_REFUTED", "LESS_AT_LARGE", "BINS", "LAW_SIGMAS", "LAW_SHARE", "MIN_LOSSES"]
 
 BINS = 6  # amplitude bins of equal count
 LAW_SIGMAS = 5.0  # a bin this many standard errors from the model's loss refutes the law ...
 LAW_SHARE = 0.15  # ... when the difference is also this share of the model's loss there
 MIN_LOSSES = 24  # fewer losses measure no law
 SIDE_SIGMAS = 2.0  # the largest amplitudes' bin says which way the record departs beyond this many errors
+
+#: how the caution of a refuted law begins (the plain summary looks for it among the warnings)
+LAW_REFUTED = "the record's loss per half swing does not follow the model's damping law"
 
 #: what a record losing less at large amplitude than the fitted laws suggests
 LESS_AT_LARGE = ("it loses less at large amplitude than the model's laws allow (a scale that reads large angles short, "
@@ -99,7 +102,7 @@ class LawMismatch:
             why = LESS_AT_LARGE
         else:
             why = "escfit compare weighs the damping laws"
-        return (f"the record's loss per half swing does not follow the model's damping law: at {show(self.amplitude[k])} "
+        return (f"{LAW_REFUTED}: at {show(self.amplitude[k])} "
                 f"the record loses {show(self.record[k])} a half swing, the model {show(self.model[k])} "
                 f"({self.sigmas[k]:.0f} standard errors, {100 * self.share[k]:.0f} %): {why}; {losses} and the loss at "
                 "the start are a compromise of the whole record")

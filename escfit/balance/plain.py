@@ -46,6 +46,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from ..analysis.decrement_law import LAW_REFUTED
 from ..core.display import RAD_TO_DEG, to_display
 from ..core.names import plain_name
 from ..core.plainwords import interval_words, join_words, quantiles, share_words, sig
@@ -85,6 +86,15 @@ def _undetermined(attrs: Mapping[str, Any]) -> list[str]:
     except (TypeError, ValueError):
         return []
     return [str(n) for n in names] if isinstance(names, list) else []
+
+
+def _law_refuted(attrs: Mapping[str, Any]) -> bool:
+    """Whether the fit's warnings say the record's losses refute its damping law."""
+    try:
+        warnings = json.loads(attrs.get("warnings", "[]") or "[]")
+    except (TypeError, ValueError):
+        return False
+    return isinstance(warnings, list) and any(str(w).startswith(LAW_REFUTED) for w in warnings)
 
 
 def plain_sentences(draws: Mapping[str, Any], attrs: Mapping[str, Any], observed=None) -> list[str]:
@@ -155,6 +165,9 @@ def _free_decay(draws, attrs, swing, load: str, *, linear: bool, k: float, unit:
         out = [f"The swing{_load_words(load)} loses {interval_words(per_period, '%')} of its amplitude in its first "
                f"period, from {start}{_at_half(model, k, unit)} (from runs of the fitted model itself: the "
                "small-damping rule is not precise at this damping)."]
+    if _law_refuted(attrs):
+        out.append("The record's own losses do not follow the fitted damping law (the warnings give the figures): "
+                   "these figures are the fitted law's, a compromise over the whole record.")
     out += _split(parts, total, per_period, attrs, linear)
     if model is None:
         halving = math.log(2) / -np.log1p(-np.minimum(per_period / 100, 1 - 1e-12)) * 2 * math.pi / w0
