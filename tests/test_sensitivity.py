@@ -150,7 +150,9 @@ def test_fit_by_sensitivities_is_the_forward_difference_fit():
     assert exact.success and ref.success and exact.names == ref.names
     assert np.max(np.abs(exact.value - ref.value) / ref.stderr) < 1e-3
     np.testing.assert_allclose(exact.stderr, ref.stderr, rtol=1e-3)
-    assert exact.chisqr == pytest.approx(ref.chisqr, rel=1e-6) and exact.chisqr <= ref.chisqr * (1 + 1e-12)
+    # the trust region stops once a step gains less than ftol = 1e-8 of the cost, so either fit may
+    # end a few ftol above the other (1.3e-8 seen on an AMD EPYC): the sensitivities must not do worse
+    assert exact.chisqr == pytest.approx(ref.chisqr, rel=1e-6) and exact.chisqr <= ref.chisqr * (1 + 1e-7)
 
 
 def test_scenes_with_other_switches_fall_back_to_forward_differences():
