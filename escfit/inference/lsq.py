@@ -211,7 +211,8 @@ def least_squares(problem: Problem, *, n_starts: int = 8, n_refine: int | None =
     # kinds (timegrapher amplitudes and beat times) share the one covariance rescale instead
     profile_noise = "observation.sigma" in problem.names and "observation.sigma" in noise
     iterate_scale = profile_noise and pinned > 0 and not getattr(problem, "mixed_readings", False)
-    starts = multistart_points(priors, x0, lo, hi, n_starts, seed)
+    spans = {names.index(n): span for n, span in (getattr(problem, "start_spans", None) or {}).items() if n in names}
+    starts = multistart_points(priors, x0, lo, hi, n_starts, seed, spans)
     n = problem.n_data
     options = dict(getattr(problem, "lsq_options", {}) or {})
     # reading residuals are divided by this (the profiled noise over the scene's)

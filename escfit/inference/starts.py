@@ -33,11 +33,13 @@ def latin_hypercube(n: int, d: int, seed: int | None) -> np.ndarray:
 
 
 def multistart_points(priors, x0: np.ndarray, lo: np.ndarray, hi: np.ndarray, n_starts: int,
-                      seed: int) -> list[np.ndarray]:
+                      seed: int, spans: dict[int, tuple[float, float]] | None = None) -> list[np.ndarray]:
     """The start point ``x0`` and ``n_starts - 1`` points of a Latin hypercube over the priors.
 
     A proper non-uniform prior places its axis's points at its quantiles; other axes span the
-    bounds ``lo``, ``hi`` (or ``x0`` +- 50 % where a bound is infinite).
+    bounds ``lo``, ``hi`` (or ``x0`` +- 50 % where a bound is infinite).  ``spans`` (axis ->
+    ``(low, high)``) narrows an axis to the range a measurement allows, within the bounds, in
+    place of its prior: the hypercube's numbers stay the same, so the other axes do not move.
     """
     starts = [x0]
     if n_starts <= 1:
@@ -55,4 +57,8 @@ def multistart_points(priors, x0: np.ndarray, lo: np.ndarray, hi: np.ndarray, n_
                 continue
             if np.all(np.isfinite(x)):
                 pts[:, j] = x
+    for j, (a, b) in (spans or {}).items():
+        a, b = max(float(a), float(span_lo[j])), min(float(b), float(span_hi[j]))
+        if a < b:
+            pts[:, j] = a + u[:, j] * (b - a)
     return starts + list(pts)

@@ -188,6 +188,9 @@ class ProblemBase:
     other_modes: tuple = ()
     record_window = None
     given_scene = None
+    #: name -> (low, high): where the multistart's Latin hypercube draws a parameter the record has
+    #: measured (a frequency's basin), in place of its prior or bounds
+    start_spans: dict[str, tuple[float, float]] = {}
 
     #: derived quantities: name -> (canonical unit, meaning)
     DERIVED: dict[str, tuple[str, str]] = {}

@@ -34,6 +34,7 @@ from .pulses import RecordingProblem
 from .nuisance import centre_priors
 from .release import release_from_record
 from .tolerance import noise_rtol
+from .start_spans import start_spans
 
 __all__ = ["WaveformProblem", "noise_from_samples"]
 
@@ -132,6 +133,9 @@ class WaveformProblem(RecordingProblem):
                                                     span / period if period > 0 else math.nan,
                                                     sensitivities=self.has_sensitivities)
             self.solver_options = {**self.solver_options, "rtol": rtol}
+        #: where the multistart draws omega0 and the losses: what the record's period and decay allow
+        self.start_spans = start_spans(self.scene, getattr(facts, "measured_period", None), reference,
+                                       float(self.sample_time[-1] - t_ref)) if self.quantity == "angle" else {}
         self.jacobians = Counter()  # least squares' Jacobians by how they were made
         self.vectorized = self.solver in _BATCH_OPTIONS and set(self.solver_options) <= _BATCH_OPTIONS[self.solver]
         if facts is not None:
