@@ -92,11 +92,13 @@ def test_a_record_ending_in_a_tracking_fault_names_the_stop_that_fits_it(tmp_pat
     within(load_fit(tmp_path / "r.h5"), Reference(1.8947, 0.02, 0.01167, 0.5719))
 
 
-@pytest.mark.xfail(strict=True, reason="NOT DETERMINED: the waveform and turning-point fits of this 80 deg release "
-                   "disagree on omega0 by 0.5 % (before, refused as driven on a 0.1 deg rise between neighbours)")
 def test_a_slow_decay_of_175_periods_fits_inside_its_reference(tmp_path, monkeypatch):
+    # its first half swing from 80 deg loses 4 deg where the next ones lose 0.4 (a hand let go while it
+    # moved): the free decay starts at the turning point after it.  Taken from the turning point before,
+    # the fit was NOT DETERMINED (the waveform and turning-point fits 0.5 % apart on omega0)
     r, res = init_and_fit(LEF / "q2_data.csv", tmp_path, monkeypatch)
     assert r.exit_code == 0, r.output[-2000:]
+    assert "guided or braked" in r.output or "guided or braked" in (tmp_path / "q2_data.toml").read_text()
     within(res, Reference(2.06682, 0.01, 0.00869, 0.6027))
 
 

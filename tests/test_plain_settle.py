@@ -139,3 +139,24 @@ def test_a_refuted_damping_law_is_said_beside_the_figures():
     refuted = {"warnings": json.dumps([f"{LAW_REFUTED}: at 92 deg the record loses 0.8 deg a half swing"])}
     assert said in " ".join(plain_sentences(draws, refuted))
     assert said not in " ".join(plain_sentences(draws, {"warnings": json.dumps(["residuals come in long runs"])}))
+
+
+def test_a_drifting_envelope_and_a_start_dependent_loss_are_said_beside_the_figures():
+    """The envelope's drift from the model (its damping law misses the record's) is said as a
+    refuted law is; a loss that changes when the record's first period is left out is said
+    instead, as figures not determined by the record."""
+    import json
+
+    from escfit.analysis.decrement_law import LAW_DRIFTS
+    from escfit.analysis.start_dependence import LOSS_MOVES
+
+    n = 20
+    draws = {"oscillator.omega0": np.full(n, OMEGA0), "oscillator.theta0": np.full(n, 0.4),
+             "viscous.C": np.full(n, 0.04), "coulomb.R": np.full(n, 0.0)}
+    drift = f"the record swings 2.7 deg more than the model at t = 89.5 s: {LAW_DRIFTS} (add [effects.drag])"
+    moved = f"C and R are not determined by this record: ...; {LOSS_MOVES} (at 20 deg, 2.63 % a period in the fit)"
+    compromise, undetermined = "a compromise over the whole record", "not determined by this record."
+    text = " ".join(plain_sentences(draws, {"warnings": json.dumps([drift])}))
+    assert compromise in text and undetermined not in text
+    text = " ".join(plain_sentences(draws, {"warnings": json.dumps([moved, drift])}))
+    assert "Fitted again without the record's first period" in text and compromise not in text

@@ -190,3 +190,39 @@ def test_a_swing_built_up_by_a_drive_starts_free_at_its_peak(seed):
     v = a * (-1.0) ** k + 2e-3 * np.random.default_rng(seed).standard_normal(k.size)
     peak = swung_up(v)
     assert 25 <= peak <= 70, peak
+
+
+@pytest.mark.parametrize("law", [(0.02, 0.0, 0.0), (0.0, 0.004, 0.0), (0.0, 0.0, 0.08), (0.3, 0.0, 0.0),
+                                 (0.12, 0.0, 0.0), (0.2, 0.01, 0.0), (0.0, 0.03, 0.0), (0.0, 0.0, 0.4),
+                                 (0.25, 0.0, 0.3), (0.005, 0.002, 0.05)])
+def test_a_free_decay_of_any_loss_law_is_never_braked(law):
+    """The same decays as above: a free swing's loss grows with its size at most as its square
+    (air drag), so no first half swing loses more than three times what that allows."""
+    from escfit.analysis.segments import braked_start
+
+    from .test_drive_off import loss_law_turns
+
+    for n in (14, 30, 80):
+        for noise in (1e-4, 1e-3, 5e-3, 2e-2):
+            for seed in range(5):
+                assert braked_start(loss_law_turns(n, *law, noise, seed)) == 0, (law, n, noise, seed)
+
+
+@pytest.mark.parametrize("law,hand", [((0.02, 0.0, 0.0), 1.2), ((0.0, 0.004, 0.0), 1.2), ((0.02, 0.0, 0.0), 1.5),
+                                      ((0.0, 0.004, 0.0), 2.0), ((0.0, 0.0, 0.08), 1.5), ((0.005, 0.002, 0.05), 1.5),
+                                      ((0.0, 0.0, 0.08), 2.0)])
+def test_a_first_turn_the_hand_made_is_left_out(law, hand):
+    """A hand pulls the oscillator out to ``hand`` times the free swing's first amplitude on the
+    other side and guides it back, letting go while it moves: the first half swing loses a
+    tenth to a half of the swing, where the free ones lose 0.4-4 %.  The free decay starts at
+    the turning point after it.  (A fifth more than the free swing against air drag that takes
+    4 % a half swing lies within three times what drag's square law allows: not found.)"""
+    from escfit.analysis.segments import braked_start
+
+    from .test_drive_off import A0, loss_law_turns
+
+    for seed in range(5):
+        free = loss_law_turns(40, *law, 1e-3, seed)
+        guided = np.r_[-hand * A0 + 0.01, free]
+        assert braked_start(guided) == 1, (law, hand, seed)
+        assert braked_start(free) == 0

@@ -92,3 +92,35 @@ def test_only_a_material_change_beyond_its_errors_counts():
     clause = found.clause(lambda n: n.split(".")[1])
     assert clause.startswith("C, R and D are not determined by this record") and "t = 12.5 s" in clause
     assert "C from 1 to 1.2 (+20 %, 20 of its standard errors)" in clause, clause
+
+
+def test_the_swings_loss_is_said_to_move_only_beyond_its_share():
+    from escfit.analysis.start_dependence import LOSS_MOVES, LOSS_SHARE
+
+    short = lambda n: n.split(".")[1]  # noqa: E731
+    big = StartDifference("viscous.C", 1.0, 0.01, 1.5, 0.02)
+    small = StartDifference("viscous.C", 1.0, 0.01, 1.02, 0.02)
+    moved = start_dependence([big], 3.0, (math.radians(20), 0.0263, 0.0164))
+    assert moved.loss_moves and LOSS_MOVES in moved.clause(short)
+    assert "at 20 deg, 2.63 % a period in the fit, 1.64 % from one period later" in moved.clause(short)
+    near = start_dependence([big], 3.0, (0.35, 0.0164 * (1 + 0.9 * LOSS_SHARE), 0.0164))
+    assert not near.loss_moves and "the swing's loss and the other parameters stand" in near.clause(short)
+    # the loss is judged only when a coefficient moved
+    assert not start_dependence([small], 3.0, (0.35, 0.03, 0.0164)).loss_moves
+
+
+@pytest.mark.parametrize("restoring", ["spring", "pendulum"])
+def test_the_losses_compared_follow_the_closed_forms(restoring):
+    """Each fit's loss per period at the later fit's first amplitude: viscous damping takes
+    ``1 - exp(-pi C / omega_d)`` of a linear swing's amplitude a period (to second order in the
+    damping), Coulomb friction ``4 R / omega0^2`` of amplitude (a pendulum's ``A / sin A`` more)."""
+    from escfit.balance.problems.agreement import _losses_at
+
+    w, c, r, a = 2 * math.pi, 0.02, 0.01, 0.3
+    later = {"oscillator.omega0": w, "oscillator.theta0": -a, "coulomb.R": r, "viscous.C": 0.0}
+    amp, viscous, friction = _losses_at(restoring, {"oscillator.omega0": w, "viscous.C": c, "coulomb.R": 0.0}, later)
+    assert amp == a
+    if restoring == "spring":
+        assert viscous == pytest.approx(1 - math.exp(-math.pi * c / math.sqrt(w * w - c * c / 4)), rel=1e-2)
+    assert friction == pytest.approx(4 * r / w ** 2 / a * (a / math.sin(a) if restoring == "pendulum" else 1.0),
+                                     rel=1e-3)

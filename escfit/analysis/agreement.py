@@ -52,7 +52,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .decrement_law import LESS_AT_LARGE, law_mismatch, refuted_caution
+from .decrement_law import LAW_DRIFTS, LESS_AT_LARGE, law_mismatch, refuted_caution
 from .turn_trend import smooth_trend, trend_spread, turn_scatter
 
 __all__ = ["Agreement", "TurnDifferences", "ParameterDifference", "ModelFacts", "judge", "turn_scatter",
@@ -359,15 +359,16 @@ class EnvelopeWander:
         spread = math.hypot(self.wander, self.noise)
         return spread > WANDER_NOISE * self.noise and self.wander >= WANDER_SHARE * self.separation
 
-    def clause(self, unit: str, short: tuple) -> str:
-        """The caution, for the loss parameters of symbols ``short`` (``("C", "R")``)."""
+    def clause(self, unit: str, short: tuple, *, loss_stands: bool = True) -> str:
+        """The caution, for the loss parameters of symbols ``short`` (``("C", "R")``); the swing's
+        loss is said to stand unless ``loss_stands`` is false (another caution says the law misses)."""
         which = ", ".join(short[:-1]) + " and " + short[-1]
+        stands = "the swing's loss and the other parameters stand" if loss_stands else "the other parameters stand"
         return (f"{which} are not determined by this record: its envelope wanders by {_shown(self.wander, unit)} "
                 f"(root mean square, over {WANDER_TURNS} turning points) about the fitted decay, "
                 f"{100.0 * self.wander / self.separation:.0f} % of the {_shown(self.separation, unit)} that "
-                "separates a viscous decay from a friction decay through the same amplitudes; the swing's loss "
-                "and the other parameters stand; a record without the wander, a longer one, or fixing one of "
-                "them separates them")
+                f"separates a viscous decay from a friction decay through the same amplitudes; {stands}; a record "
+                "without the wander, a longer one, or fixing one of them separates them")
 
 
 def envelope_wander(amplitude: TurnDifferences) -> EnvelopeWander | None:
@@ -468,7 +469,8 @@ def judge(phase: TurnDifferences | None, amplitude: TurnDifferences | None, para
     if unsplit:
         undetermined = losses
         trade = ", ".join(f"{model.short(p.name)} {p.waveform:.4g} against {p.turning_points:.4g}" for p in traded)
-        cautions.insert(0, wander.clause(model.unit, tuple(model.short(n) for n in losses)) + (
+        drifts = any(LAW_DRIFTS in c for c in cautions)
+        cautions.insert(0, wander.clause(model.unit, tuple(model.short(n) for n in losses), loss_stands=not drifts) + (
             f"; the waveform and turning-point fits trade one loss for the other too ({trade})"
             if _split_only(traded) else ""))
     if split:  # one loss traded for another: the split is not determined, the rest stands
@@ -527,7 +529,7 @@ def _remedy(model: ModelFacts, d: TurnDifferences) -> str:
         losses = law_mismatch(d.swing, d.size, np.abs(d.size) - d.difference) if d.size is not None else None
         if losses is not None and losses.at_large < 0:  # no law escfit adds loses less at large amplitude
             law = f"; {LESS_AT_LARGE}"
-        return f": the model's damping law does not follow the record's decay{law}; the estimates are a compromise"
+        return f": {LAW_DRIFTS}{law}; the estimates are a compromise"
     return (": the record's period changes along it (an amplitude-dependent restoring torque, a temperature drift); "
             "the turning-point fit does not use the times")
 

@@ -28,7 +28,7 @@ import numpy as np
 
 from .decrements import from_readings
 
-__all__ = ["LawMismatch", "law_mismatch", "refuted_caution", "LAW_REFUTED", "LESS_AT_LARGE", "BINS", "LAW_SIGMAS", "LAW_SHARE", "MIN_LOSSES"]
+__all__ = ["LawMismatch", "law_mismatch", "refuted_caution", "LAW_REFUTED", "LAW_DRIFTS", "LESS_AT_LARGE", "BINS", "LAW_SIGMAS", "LAW_SHARE", "MIN_LOSSES"]
 
 BINS = 6  # amplitude bins of equal count
 LAW_SIGMAS = 5.0  # a bin this many standard errors from the model's loss refutes the law ...
@@ -38,6 +38,9 @@ SIDE_SIGMAS = 2.0  # the largest amplitudes' bin says which way the record depar
 
 #: how the caution of a refuted law begins (the plain summary looks for it among the warnings)
 LAW_REFUTED = "the record's loss per half swing does not follow the model's damping law"
+
+#: what an envelope drifting from the model's says (the plain summary looks for it among the warnings)
+LAW_DRIFTS = "the model's damping law does not follow the record's decay"
 
 #: what a record losing less at large amplitude than the fitted laws suggests
 LESS_AT_LARGE = ("it loses less at large amplitude than the model's laws allow (a scale that reads large angles short, "

@@ -47,14 +47,15 @@ import numpy as np
 
 from .free_law import free_law_gains, law_pushes, robust_scale, window_medians
 
-__all__ = ["SwingEvent", "swing_gains", "find_events", "driven_start", "amplitude_growth", "robust_scale", "stands_out", "SIDE",
-           "Z_PUSH"]
+__all__ = ["SwingEvent", "swing_gains", "find_events", "driven_start", "braked_start", "amplitude_growth",
+           "robust_scale", "stands_out", "SIDE", "Z_PUSH", "BRAKE_FACTOR"]
 
 SIDE = 6  # half swings on each side of a candidate (a median of 6 tolerates two that are out of line)
 MIN_SIDE = 3  # fewer on either side: no verdict there (a median of 3 tolerates one out of line)
 Z_PUSH = 5.0  # evidence a push needs: gain over the larger of its two scales
 MAD = 1.4826  # median absolute deviation -> standard deviation of a normal sample
 MEDIAN_SE = math.sqrt(math.pi / 2.0)  # standard error of a median over that of a mean, normal samples
+BRAKE_FACTOR = 3.0  # a first half swing losing this many times what the free law allows at its size was braked
 WOBBLE_FLOOR = 0.1  # a start's shortfall is held against stretches whose swing is this share of the start's at least
 
 
@@ -382,6 +383,41 @@ def find_events(times: np.ndarray, values: np.ndarray, *, resolution: float, qua
             f"keeps its size ({score:.0f} times the scatter of the centre): the tracked origin or the sensor's zero "
             "moved"))
     return sorted(events, key=lambda e: e.time)
+
+
+def braked_start(values: np.ndarray, *, most: int = 3, reference: int = 6) -> int:
+    """Half swings at the start of ``values`` (alternating turning points) that lost more than a free swing can.
+
+    A free swing's loss per half swing grows with its amplitude at most as its square (air
+    drag; Coulomb friction takes the same at every amplitude, viscous damping in proportion to
+    it).  The first loss ``l_0 = p_0 - p_1`` (``p`` the peak-to-peak swings) is held against the
+    most that law allows at ``p_0``: the median loss of the ``reference`` half swings after it
+    times ``(p_0 / their median swing)**2``, times :data:`BRAKE_FACTOR` for the scatter of a
+    median of few.  A loss beyond that by six standard errors (the losses' noise from the
+    second differences of ``p``) was taken out by something other than the oscillator's losses:
+    a hand that guided the first swing and let go while it moved, or braked it.  The free decay
+    is then taken from the next turning point, and the test repeated there (at most ``most``
+    times).
+
+    Returns
+    -------
+    int
+        ``m`` (0: none): the free decay is taken from turning point ``m``.
+    """
+    p = np.abs(np.diff(np.asarray(values, float)))
+    if p.size < reference + 3 or not np.all(np.isfinite(p)):
+        return 0
+    loss = -np.diff(p)
+    s_l = robust_scale(np.diff(p, 2)) / math.sqrt(2.0)
+    m = 0
+    while m < most and loss.size - m > reference:
+        ahead = slice(m + 1, m + 1 + reference)
+        size = float(np.median(p[ahead]))
+        allowed = BRAKE_FACTOR * max(float(np.median(loss[ahead])), 0.0) * (p[m] / size) ** 2 if size > 0 else math.inf
+        if not loss[m] > allowed + 6.0 * s_l:
+            break
+        m += 1
+    return m
 
 
 def driven_start(values: np.ndarray, *, most: int = 4, reference: int = 6) -> int:

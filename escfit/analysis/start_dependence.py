@@ -10,7 +10,11 @@ not the record's (air drag takes more at large swings than viscous damping and f
 together can follow).  Either way the coefficients that moved are not determined by the record,
 whatever their intervals say, and with them every other loss coefficient of the fit (they share
 the swing's loss: one that moved takes its share from the others), while the swing's loss and
-the other parameters may stand: the fit is partly determined and says why.
+the other parameters may stand: the fit is partly determined and says why.  The swing's loss
+stands only if both fits' coefficients give it alike: at the later fit's first amplitude, the
+two losses per period must differ by less than :data:`LOSS_SHARE` of the later one (a hand that
+guided the first swing, taking energy out, doubled the viscous C and the loss by half again,
+while the fit from one period later found the record's own).
 
 The move is measured in the fit's own standard error, not in the two fits' combined one: the
 later fit leaves out a small share of the same samples, and for nested least squares the
@@ -34,10 +38,15 @@ from dataclasses import dataclass
 
 from .agreement import PARAMETER_SIGMAS, ParameterDifference
 
-__all__ = ["StartDifference", "StartDependence", "start_dependence", "LATER_PERIODS", "MIN_PERIODS"]
+__all__ = ["StartDifference", "StartDependence", "start_dependence", "LATER_PERIODS", "MIN_PERIODS", "LOSS_SHARE",
+           "LOSS_MOVES"]
 
 LATER_PERIODS = 1.0  # the second fit starts this many periods after the first one's reference turning point
 MIN_PERIODS = 6.0  # periods the record must hold after that for the comparison to be made
+LOSS_SHARE = 0.15  # the swing's loss per period moves with the coefficients when the two fits' differ by this share
+
+#: how the warning says that the swing's loss moved too (the plain summary looks for it among the warnings)
+LOSS_MOVES = "the swing's loss moves with them"
 
 
 @dataclass(frozen=True)
@@ -71,6 +80,17 @@ class StartDependence:
     start: float
     differences: tuple
     moved: tuple
+    loss: tuple[float, float, float] | None = None
+
+    @property
+    def loss_moves(self) -> bool:
+        """Whether the swing's loss per period at the later fit's first amplitude differs between
+        the fits by more than :data:`LOSS_SHARE` of the later fit's (only when coefficients moved)."""
+        if not self.moved or self.loss is None:
+            return False
+        _, here, later = self.loss
+        return bool(math.isfinite(here) and math.isfinite(later) and later > 0
+                    and abs(here - later) > LOSS_SHARE * later)
 
     def clause(self, short) -> str:
         """The warning on what moved and why it matters (``short``: name -> symbol)."""
@@ -84,7 +104,15 @@ class StartDependence:
                 f"point at t = {self.start:.6g} s), {said}; the record's first period does not lose what the law "
                 "fitted to the rest of it gives (its first swings driven, guided or pushed, or a damping law that "
                 "is not the record's, such as air drag at large swings): leave it out with [recording] start, or "
-                "add the effect the record shows; the swing's loss and the other parameters stand")
+                f"add the effect the record shows; {self._loss_words()}")
+
+    def _loss_words(self) -> str:
+        if not self.loss_moves:
+            return "the swing's loss and the other parameters stand"
+        amplitude, here, later = self.loss
+        return (f"{LOSS_MOVES} (at {math.degrees(amplitude):.3g} deg, {100 * here:.3g} % a period in the fit, "
+                f"{100 * later:.3g} % from one period later), and the figures in words with it; the other parameters "
+                "stand")
 
     def note(self) -> str:
         """One sentence for the notes when nothing moved."""
@@ -117,7 +145,8 @@ def _signed(d: StartDifference) -> str:
     return (f"{change:+.0f} %" if abs(change) >= 10 else f"{change:+.2g} %") + ", "
 
 
-def start_dependence(differences: list[StartDifference], start: float) -> StartDependence:
+def start_dependence(differences: list[StartDifference], start: float,
+                     loss: tuple[float, float, float] | None = None) -> StartDependence:
     """Which loss coefficients move when the record's first period is left out (see the module docstring).
 
     Parameters
@@ -126,10 +155,14 @@ def start_dependence(differences: list[StartDifference], start: float) -> StartD
         Each loss coefficient of the fit against the fit from one period later.
     start : float
         The later fit's reference turning point, s.
+    loss : tuple of float, optional
+        ``(amplitude, fit's, later fit's)``: the swing's loss per period (a fraction of the
+        amplitude) by each fit's coefficients at one amplitude (rad), the later fit's first.
 
     Returns
     -------
     StartDependence
     """
     moved = any(d.material and d.sigmas > PARAMETER_SIGMAS for d in differences)
-    return StartDependence(float(start), tuple(differences), tuple(d.name for d in differences) if moved else ())
+    return StartDependence(float(start), tuple(differences), tuple(d.name for d in differences) if moved else (),
+                           loss)

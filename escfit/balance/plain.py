@@ -46,7 +46,8 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ..analysis.decrement_law import LAW_REFUTED
+from ..analysis.decrement_law import LAW_DRIFTS, LAW_REFUTED
+from ..analysis.start_dependence import LOSS_MOVES
 from ..core.display import RAD_TO_DEG, to_display
 from ..core.names import plain_name
 from ..core.plainwords import interval_words, join_words, quantiles, share_words, sig
@@ -88,13 +89,23 @@ def _undetermined(attrs: Mapping[str, Any]) -> list[str]:
     return [str(n) for n in names] if isinstance(names, list) else []
 
 
-def _law_refuted(attrs: Mapping[str, Any]) -> bool:
-    """Whether the fit's warnings say the record's losses refute its damping law."""
+def _warnings(attrs: Mapping[str, Any]) -> list[str]:
     try:
         warnings = json.loads(attrs.get("warnings", "[]") or "[]")
     except (TypeError, ValueError):
-        return False
-    return isinstance(warnings, list) and any(str(w).startswith(LAW_REFUTED) for w in warnings)
+        return []
+    return [str(w) for w in warnings] if isinstance(warnings, list) else []
+
+
+def _law_refuted(attrs: Mapping[str, Any]) -> bool:
+    """Whether the fit's warnings say the record's losses refute its damping law, or that its
+    envelope drifts from the model's for want of the right law."""
+    return any(w.startswith(LAW_REFUTED) or LAW_DRIFTS in w for w in _warnings(attrs))
+
+
+def _loss_moves(attrs: Mapping[str, Any]) -> bool:
+    """Whether the fit's warnings say the swing's loss changes when the record's first period is left out."""
+    return any(LOSS_MOVES in w for w in _warnings(attrs))
 
 
 def plain_sentences(draws: Mapping[str, Any], attrs: Mapping[str, Any], observed=None) -> list[str]:
@@ -165,7 +176,11 @@ def _free_decay(draws, attrs, swing, load: str, *, linear: bool, k: float, unit:
         out = [f"The swing{_load_words(load)} loses {interval_words(per_period, '%')} of its amplitude in its first "
                f"period, from {start}{_at_half(model, k, unit)} (from runs of the fitted model itself: the "
                "small-damping rule is not precise at this damping)."]
-    if _law_refuted(attrs):
+    if _loss_moves(attrs):
+        out.append("Fitted again without the record's first period, the swing's loss comes out otherwise (the "
+                   "warnings give both figures): that period does not decay freely or by the fitted law, so these "
+                   "figures are not determined by this record.")
+    elif _law_refuted(attrs):
         out.append("The record's own losses do not follow the fitted damping law (the warnings give the figures): "
                    "these figures are the fitted law's, a compromise over the whole record.")
     out += _split(parts, total, per_period, attrs, linear)

@@ -38,7 +38,7 @@ import numpy as np
 
 from ...core.errors import DataError
 from ...analysis.drive_off import drive_off, not_a_wobble
-from ...analysis.segments import amplitude_growth, driven_start, find_events, robust_scale, swung_up
+from ...analysis.segments import amplitude_growth, braked_start, driven_start, find_events, robust_scale, swung_up
 from .episodes import envelope, restarted, rises, steady_tail
 from .holds import HOLD_PERIODS, flat_start as _flat_start, held_release, turn_at_start as _turn_at_start
 
@@ -246,6 +246,14 @@ def find_start(rec, turns: list[Turn], end: int, *, at_start: bool = False) -> S
             r += steady + 1
             why = (f"the first {steady} half swing(s) lose less than half of what the swing loses freely just after, "
                    f"at the same amplitude: driven (or guided) until t = {times[r]:.4g} s")
+    braked = braked_start(values[r:end])
+    if braked:
+        p = np.abs(np.diff(values[r:end]))
+        free = float(np.median(p[braked:braked + 6] - p[braked + 1:braked + 7]))
+        r += braked
+        why = (f"its first half swing loses {rec.show(0.5 * (p[0] - p[1]), 2)} of amplitude where the swings after it "
+               f"lose {rec.show(0.5 * free, 2)}, more than any free swing's loss grows with its size: guided or braked "
+               f"(a hand that let go while it moved) until t = {times[r]:.4g} s")
     pulled = r == first_ok + 1 and held_release(rec, turns[first_ok]) is not None
     if pulled:
         rec.notes.append(f"held at {rec.show(values[first_ok], 4)}, then moved to "

@@ -239,11 +239,31 @@ def _start_dependence(problem, lsq, refit, seed: int, agreement: Agreement, mode
             i, j = lsq.names.index(name), later.names.index(name)
             differences.append(StartDifference(name, float(lsq.value[i]), float(lsq.stderr[i]),
                                                float(later.value[j]), float(later.stderr[j])))
-    found = start_dependence(differences, float(again.turning_points.release_time))
+    found = start_dependence(differences, float(again.turning_points.release_time),
+                             _losses_at(problem.scene.restoring, lsq.values, later.values))
     if not found.moved:
         return replace(agreement, comments=agreement.comments + (found.note(),))
     return replace(agreement, undetermined=tuple(dict.fromkeys(tuple(agreement.undetermined) + found.moved)),
                    cautions=(found.clause(model.short),) + tuple(agreement.cautions))
+
+
+def _losses_at(restoring: str, values: Mapping, later: Mapping) -> tuple[float, float, float] | None:
+    """``(A, fit's, later fit's)``: the swing's loss per period (a fraction of ``A``) by each fit's
+    coefficients at ``A``, the later fit's first amplitude (rad); None without the parameters."""
+    from ..decrement import losses, swing_of
+
+    if not {"oscillator.omega0", "oscillator.theta0"} <= set(later) or "oscillator.omega0" not in values:
+        return None
+    amplitude = abs(float(later["oscillator.theta0"]))
+
+    def per_period(v: Mapping) -> float:
+        swing = swing_of(np.array([amplitude]), float(v["oscillator.omega0"]), k3=float(v.get("stiffening.k3", 0.0)),
+                         restoring=restoring)
+        parts = [cls.decrement(float(v[cls.LOSS.parameter]), swing) for cls in losses().values()
+                 if cls.LOSS.parameter in v]
+        return 2.0 * float(np.sum(parts)) / amplitude if parts and amplitude > 0 else math.nan
+
+    return amplitude, per_period(values), per_period(later)
 
 
 def _pendulum_law(problem, agreement: Agreement) -> Agreement:
