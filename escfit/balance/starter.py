@@ -360,7 +360,7 @@ def survey(path: str | Path, *, restoring: str = "spring", recording: dict | Non
 
 def _survey_samples(s: Survey, series: TimeSeries, restoring: str, turns=None) -> None:
     """The survey of a sampled record; ``turns``: its turning points when already found."""
-    from .problems.period import implied_omega0, measured_period
+    from .problems.period import check_pendulum_period, implied_omega0, measured_period
     from .problems.release import swing_unit_warnings
     from ..analysis.recordings.turning_points import reduce_series
 
@@ -378,6 +378,7 @@ def _survey_samples(s: Survey, series: TimeSeries, restoring: str, turns=None) -
     s.checks = [n for n in str(series.meta.get("analysis", "")).split("; ") if n]  # column and unit judged
     s.checks += [f"warning: {w}" for w in swing_unit_warnings(series, tp, restoring)]  # as the fit will judge it
     s.kind, s.tp = "waveform", tp
+    check_pendulum_period("spring" if series.quantity == "displacement" else restoring, measured_period(tp, series.source))
     s.period = float(tp.period)
     times = np.concatenate([[tp.release_time], np.asarray(tp.time, float)])
     theta = np.concatenate([[tp.release_theta], np.asarray(tp.theta, float)])

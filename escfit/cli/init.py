@@ -20,7 +20,7 @@ import click
 
 __all__ = ["init", "offer_starter", "write_starter", "interactive"]
 
-RECORDING_OPTIONS = ("time_column", "sample_rate", "angle_column", "angle_unit", "counts_per_turn", "scale", "start",
+RECORDING_OPTIONS = ("time_column", "time_unit", "sample_rate", "angle_column", "angle_unit", "counts_per_turn", "scale", "start",
                      "stop", "release", "readings", "velocity_column", "velocity_unit", "displacement_column",
                      "displacement_unit", "run", "mode")
 
@@ -140,6 +140,8 @@ def next_command(data: str, scene: Path) -> str:
               help="Recording format (detected from the file's content): escfit's own, raw, or an instrument's or "
                    "program's (phyphox, cassy, lvm, tracker, ...: see docs/recordings.md).")
 @click.option("--time-column", default=None, help="[recording] time_column: name or 1-based position.")
+@click.option("--time-unit", default=None, help="[recording] time_unit: s, ms, us, min (the header names none, or the "
+                                                 "wrong one).")
 @click.option("--sample-rate", default=None, help="[recording] sample_rate, e.g. '500 Hz' (instead of a time column).")
 @click.option("--angle-column", default=None, help="[recording] angle_column: name or 1-based position.")
 @click.option("--angle-unit", default=None, help="[recording] angle_unit: deg, rad, ... or counts.")

@@ -548,7 +548,7 @@ def series_from_columns(cols: Columns, spec: RecordingSpec | None, *, sha256: st
         time = _clock_floats(cols, t_col)
         reader["time_column"] = cols.named(t_col)
     else:
-        tu = cols.unit(t_col)
+        tu = spec.time_unit or cols.unit(t_col)  # the scene's unit wins over the header's
         at = f"{cols.where}:{cols.header_line} [{cols.label(t_col)}]" if cols.header_line else cols.where
         factor = 1.0 if tu is None else seconds_per_unit(tu, at)
         time = _floats(cols, t_col) * factor

@@ -5,6 +5,7 @@ the angle, in which units, and which part of the record to keep::
 
     [recording]
     time_column = "t (s)"          # name or 1-based position; or
+    time_unit = "ms"               # the time column's unit where its header names none (or names it wrong)
     sample_rate = "500 Hz"         # a uniform clock: time = row / rate (row 0 at t = 0)
     angle_column = "angle (deg)"   # name or 1-based position (.mat: a selector or a list of them)
     angle_unit = "deg"             # any pint angle unit, or "counts" with counts_per_turn
@@ -29,15 +30,10 @@ The command line overrides the table key by key (:func:`merge_spec`).
 
 The window: start, stop, release
 --------------------------------
-Times are read on the record's clock **measured from its first sample**: ``start = "13 s"``
-is 13 s after the first sample, also when the file's clock reads 1.407e9 s there (an epoch
-clock).  The file's own clock is named by the prefix ``abs`` (``start = "abs 1407000013 s"``),
-or by a bare value that exceeds the record's span but lies within the file's clock range
-(``start = 1407000013.0``); a value that fits both readings is a time after the first sample
-(a note names the ``abs`` form).  A value beyond the record is refused, naming the key, the
-value and the record's span.  Every format that yields a sampled series applies them, in one
-place (:func:`~escfit.analysis.recordings.rawsteps.build_series`, through
-:func:`~escfit.analysis.recordings.window.resolve_window`).
+Times are read on the record's clock measured from its first sample, or on the file's own
+clock with the prefix ``abs`` (:mod:`~escfit.analysis.recordings.window` gives the rule); every
+format that yields a sampled series applies them in one place
+(:func:`~escfit.analysis.recordings.rawsteps.build_series`).
 
 The user's choice wins over the analysis' own search for the free decay
 (:func:`~escfit.analysis.recordings.turning_points.reduce_series`): with ``release`` the model is
@@ -89,6 +85,8 @@ class RecordingSpec:
         Column name, 1-based position, or (.mat) selector(s) of the time stamps.
     sample_rate : float or None
         Uniform sampling rate, Hz (exclusive with ``time_column``).
+    time_unit : str or None
+        Unit of the time column (s, ms, us, min): where its header names none, or names the wrong one.
     angle_column : str, int, tuple of str or None
         Column name, 1-based position, or (.mat) selector(s) of the angle.
     angle_unit : str or None
@@ -146,6 +144,7 @@ class RecordingSpec:
     bph: int | None = None
     release: Instant | None = None
     mode: int | None = None
+    time_unit: str | None = None
 
     def __post_init__(self):
         for key in WINDOW_KEYS:  # a plain number is a time after the first sample
@@ -405,6 +404,12 @@ def _signal_unit(dimension: str, what: str):
     return parse
 
 
+def _time_unit(value: Any, where: str, cli: bool) -> str:
+    if not (isinstance(value, str) and safe_unit_text(value) and _is_time_unit(value.strip())):
+        raise SceneError(f"expected a time unit (s, ms, us, min), got {value!r}", where)
+    return value.strip()
+
+
 def _format(value: Any, where: str, cli: bool) -> str:
     from .formats_list import FORMAT_NAMES
 
@@ -431,6 +436,7 @@ def _lift(value: Any, where: str, cli: bool) -> float:
 _PARSE: dict[str, Callable[[Any, str, bool], Any]] = {
     "time_column": _column,
     "sample_rate": lambda v, w, cli: _positive(v, "frequency", w),
+    "time_unit": _time_unit,
     "angle_column": _column,
     "angle_unit": _angle_unit,
     "counts_per_turn": lambda v, w, cli: _positive(v, "dimensionless", w),

@@ -40,7 +40,7 @@ from ...analysis.recordings.window import window_of
 from .curves import FitProblem
 from .facts import RecordFacts
 from .nuisance import centre_priors
-from .period import check_scene_omega0, hold_omega0, measured_period, start_omega0
+from .period import check_pendulum_period, check_scene_omega0, hold_omega0, measured_period, start_omega0
 from .release import release_from_record, swing_unit_warnings, table_unit_warnings
 
 __all__ = ["problem_from_series", "turning_point_curve", "amplitude_readings_curve"]
@@ -122,6 +122,7 @@ def problem_from_series(scene: BalanceScene, series, *, solver: str, solver_opti
     series = _without_steps(series, tp)
     _refuse_sustained(scene, tp, series.source)
     mp = measured_period(tp, series.source)
+    check_pendulum_period(scene.restoring, mp)
     unit_notes, unit_warnings = _unit_from_period(scene, series, tp)
     notes += unit_notes
     unit_warnings = swing_warnings + unit_warnings

@@ -26,12 +26,13 @@ import numpy as np
 from ...core.errors import DataError
 from ...likelihood.consistency import Implied
 
-__all__ = ["MeasuredPeriod", "measured_period", "implied_omega0", "check_scene_omega0", "hold_omega0",
+__all__ = ["MeasuredPeriod", "measured_period", "implied_omega0", "check_pendulum_period", "PENDULUM_MAX_PERIOD", "check_scene_omega0", "hold_omega0",
            "start_omega0", "period_consistency", "held_omega0_effects", "REL_TOL", "CHECK_SIGMAS"]
 
 REL_TOL = 0.03  # a scene's omega0 within this fraction of the period's value (plus damping) is accepted
 CHECK_SIGMAS = 5.0  # a fit's period further than this many standard errors from the measured one disagrees
 MIN_REL = 0.002  # ... and further than this fraction of it
+PENDULUM_MAX_PERIOD = 60.0  # s: a gravity pendulum slower than this would be over 900 m long
 
 
 @dataclass(frozen=True)
@@ -73,6 +74,28 @@ def measured_period(tp, source: str = "") -> MeasuredPeriod:
     w = amps[first:n] ** 2
     amplitude = float(np.sum(w * amps[first:n]) / np.sum(w)) if np.sum(w) > 0 else float(np.median(amps))
     return MeasuredPeriod(float(tp.period), float(getattr(tp, "period_stderr", math.nan)), swings, amplitude, source)
+
+
+def check_pendulum_period(restoring: str, mp: MeasuredPeriod) -> None:
+    """Refuse a gravity pendulum whose period needs a string longer than any hall holds.
+
+    A clock read in milliseconds as seconds makes every period a thousand times too long and
+    every rate a thousand times too small, and nothing else in the record says so: a pendulum's
+    length ``g (P / 2 pi)**2`` does (a period of :data:`PENDULUM_MAX_PERIOD` is 900 m).
+    """
+    if restoring != "pendulum" or not mp.period > PENDULUM_MAX_PERIOD:
+        return
+    from ...core.units import STANDARD_GRAVITY
+
+    def length(period: float) -> str:
+        metres = STANDARD_GRAVITY * (period / (2.0 * math.pi)) ** 2
+        return f"{metres / 1000:.3g} km" if metres >= 1000 else (f"{metres:.3g} m" if metres >= 1 else
+                                                                  f"{100 * metres:.3g} cm")
+
+    raise DataError(f"the record's period is {mp.describe()}: a gravity pendulum that slow would be "
+                    f"{length(mp.period)} long.  If the time column is in milliseconds (a period of "
+                    f"{mp.period / 1000:.4g} s, {length(mp.period / 1000)}), set [recording] time_unit = \"ms\" (escfit "
+                    "init --time-unit ms); a torsion or horizontal pendulum swings as a spring (--spring)", mp.source)
 
 
 def implied_omega0(restoring: str, mp: MeasuredPeriod, c: float = 0.0) -> float:
