@@ -155,12 +155,6 @@ def _regular(interval: float, half: float) -> bool:
     return INTERVAL_RANGE[0] <= interval / half <= INTERVAL_RANGE[1]
 
 
-def _spans_gap(rec, t0: float, t1: float) -> bool:
-    """Whether the sampling has a gap (over three median intervals) between ``t0`` and ``t1``."""
-    sel = (rec.t >= t0) & (rec.t <= t1)
-    return bool(np.any(np.diff(rec.t[sel]) > 3.0 * rec.dt)) if np.count_nonzero(sel) > 1 else True
-
-
 def _local_half(times: np.ndarray, i: int, end: int, fallback: float) -> float:
     """Median interval of the turning points from ``i`` on (up to six), or ``fallback``."""
     d = sorted(np.diff(times[i:min(end, i + 7)]).tolist())  # at most six: no numpy call per interval

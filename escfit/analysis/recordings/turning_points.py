@@ -77,6 +77,7 @@ from .modes import MIN_PROMINENCE, check_other_modes
 from .noise_end import noise_tail, resting_tail
 from .sampled import MIN_SAMPLES_PER_PERIOD, SampledRecord
 from .series import TimeSeries, quantity_words, show_value
+from .swing_numbers import GAP_INTERVALS, period_of, swing_numbers
 from .window import window_of
 
 __all__ = ["TurningPoints", "reduce_series", "turning_points", "period_of", "MIN_SAMPLES_PER_PERIOD", "MIN_TURNS"]
@@ -344,7 +345,9 @@ def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool,
         raise DataError(f"only {all_t.size} turning point(s) from the reference at t = {t_ref:.4g} s on stand above "
                         f"the noise ({rec.show(rec.band, 2)}); a decay needs at least {MIN_TURNS} (one whole "
                         "period)", where)
-    _check_intervals(rec, all_t, all_v, strict)
+    ratio = _local_ratios(np.diff(all_t))[0] if all_t.size > 1 else np.zeros(0)
+    numbers = swing_numbers(rec.t, rec.dt, all_t, all_v, ratio, INTERVAL_RANGE[1])
+    _check_intervals(rec, all_t, all_v, strict, numbers)
     centre = measure_centre(all_t, all_v, rec.band, rec.quantity)
     if centre.note:
         rec.notes.append(centre.note)
@@ -352,8 +355,8 @@ def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool,
     # its left, and a stop is none on its right
     n_moving = all_t.size - 1 if math.isfinite(stop_time) and stop_time == all_t[-1] else all_t.size
     amps = all_v - centre.offset - centre.rate * (all_t - t_ref)
-    period, period_se = period_of(all_t[1:n_moving], amps[1:n_moving]) if n_moving > 3 \
-        else period_of(all_t[:n_moving], amps[:n_moving])
+    period, period_se = period_of(all_t[1:n_moving], amps[1:n_moving], numbers[1:n_moving]) if n_moving > 3 \
+        else period_of(all_t[:n_moving], amps[:n_moving], numbers[:n_moving])
     if math.isfinite(stop_time) and sunk is None and not cut:
         level = centre.offset + centre.rate * (stop_time - t_ref)
         rec.notes.append(f"motion stopped at t = {stop_time:.4g} s (resting {rec.show(rest_theta - level, signed=True)} "
@@ -362,7 +365,7 @@ def _reduce(series: TimeSeries, window: float | None, degree: int, strict: bool,
     held_from, why = (kept.time, kept.sentence) if kept is not None else (math.nan, "")
     if kept is not None:
         rec.notes.append(f"the swing no longer decays as a free oscillator's would (it keeps its amplitude): {why}")
-    swing = np.arange(1, len(times) + 1, dtype=np.int64)
+    swing = numbers[1:len(times) + 1].astype(np.int64)
     return TurningPoints(swing, np.array(times, dtype=float) + origin, np.array(values, dtype=float), float(period),
                          float(centre.offset), float(centre.rate), float(t_ref) + origin, float(theta_ref),
                          float(stop_time) + origin, float(rest_theta) if math.isfinite(stop_time) and not cut else math.nan,
@@ -382,35 +385,18 @@ def remove_steps(time: np.ndarray, values: np.ndarray, steps) -> np.ndarray:
     return out
 
 
-def period_of(times: np.ndarray, amplitudes: np.ndarray) -> tuple[float, float]:
-    """Period (s) and its standard error from turning times and the amplitudes there.
-
-    Twice the slope of the turning times on their number, weighted by the squared amplitude:
-    a turning point's time is fixed by its curvature, so its error grows as the swing fades
-    (the last turning points of a strongly damped record scatter by a good part of a second).
-    The same rule applied to a model's turning points gives the model's period.
-    """
-    times = np.asarray(times, float)
-    k = np.arange(times.size, dtype=float)
-    if times.size < 3:
-        return 2.0 * float(times[-1] - times[0]) / max(times.size - 1, 1), math.inf
-    a = np.abs(np.asarray(amplitudes, float))
-    w = np.maximum((a / max(float(np.max(a)), 1e-300)) ** 2, 1e-4)
-    design = np.stack([k, np.ones_like(k)], axis=1)
-    normal = design.T @ (design * w[:, None])
-    coef = np.linalg.solve(normal, design.T @ (w * times))
-    resid = times - design @ coef
-    s2 = float(w @ resid**2) / (times.size - 2)
-    cov = np.linalg.inv(normal) * s2
-    return 2.0 * float(coef[0]), 2.0 * math.sqrt(max(float(cov[0, 0]), 0.0))
-
-
 def _refine_all(rec: "SampledRecord", cands: list, t_end: float) -> list[Turn]:
     """The candidates before ``t_end`` refined on the raw samples; stops at one too close to the end."""
     t = rec.t
     late = [c for c in cands if t[c[0]] > t_end]
     if late:
         rec.notes.append(f"{len(late)} extrema after motion stopped (disturbances) left out")
+    # the last sample before a gap of the samples a quarter period long and the first after it are
+    # extrema of the indices, not turning points of the swing (it moved on, unseen)
+    gaps = [(t[g] - 0.1 * rec.period, t[g + 1] + 0.1 * rec.period)
+            for g in np.flatnonzero(np.diff(t) > max(GAP_INTERVALS * rec.dt, 0.25 * rec.period))]
+    if gaps:
+        cands = [c for c in cands if not any(lo <= t[c[0]] <= hi or lo <= t[c[1]] <= hi for lo, hi in gaps)]
     out: list[Turn] = []
     for k, (a, b, is_max) in enumerate(c for c in cands if t[c[0]] <= t_end):
         got = rec.refine(a, b, is_max=is_max)
@@ -564,7 +550,8 @@ def _pendulum_stretch(values: np.ndarray) -> np.ndarray:
     return ellipk(np.sin(0.5 * amp) ** 2) / (0.5 * math.pi)
 
 
-def _check_intervals(rec: SampledRecord, times: np.ndarray, values: np.ndarray, strict: bool) -> None:
+def _check_intervals(rec: SampledRecord, times: np.ndarray, values: np.ndarray, strict: bool,
+                     numbers: np.ndarray) -> None:
     """Each interval between turning points within :data:`INTERVAL_RANGE` local half periods.
 
     An angle record's interval also passes when it is regular once each half swing is scaled by
@@ -578,7 +565,11 @@ def _check_intervals(rec: SampledRecord, times: np.ndarray, values: np.ndarray, 
     if out.any() and rec.quantity == "angle":
         scaled, _ = _local_ratios(d / _pendulum_stretch(np.asarray(values, float)))
         out &= (scaled < INTERVAL_RANGE[0]) | (scaled > INTERVAL_RANGE[1])
-    bad = np.flatnonzero(out)
+    hid = np.diff(numbers) - 1  # turning points a gap of the samples hid: counted across it
+    if hid.any():
+        rec.notes.append(f"{int(hid.sum())} turning point(s) fall in gaps of the samples (the first after t = "
+                         f"{times[int(np.flatnonzero(hid)[0])]:.4g} s): the half swings after them are counted across")
+    bad = np.flatnonzero(out & (hid == 0))
     if not bad.size:
         return
     i = int(bad[0])

@@ -70,7 +70,7 @@ def measured_period(tp, source: str = "") -> MeasuredPeriod:
     if math.isfinite(getattr(tp, "stop_time", math.nan)) and n > 1 and tp.stop_time == tp.time[-1]:
         n -= 1  # a stop is no turning point of the free motion
     first = 1 if n > 3 else 0  # as reduce_series: the reference is left out when it can be
-    swings = np.arange(first, n)
+    swings = np.r_[0, np.asarray(tp.swing, np.int64)][first:n]  # half swings counted across gaps in the samples
     w = amps[first:n] ** 2
     amplitude = float(np.sum(w * amps[first:n]) / np.sum(w)) if np.sum(w) > 0 else float(np.median(amps))
     return MeasuredPeriod(float(tp.period), float(getattr(tp, "period_stderr", math.nan)), swings, amplitude, source)
@@ -192,7 +192,7 @@ def model_period(problem, values) -> float:
     amps = np.r_[abs(sys.theta0), np.asarray(tr.amplitude, float)]
     if times.size <= n:
         return math.nan
-    return period_of(times[mp.swings], amps[mp.swings])[0]
+    return period_of(times[mp.swings], amps[mp.swings], mp.swings)[0]
 
 
 def period_consistency(problem, values) -> list[Implied]:
