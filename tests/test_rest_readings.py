@@ -22,7 +22,7 @@ OFFSET = 0.02
 
 
 def _problem(tmp_path, n_rows: int):
-    rows = ["t,A"] + [f"{0.5 * k},{0.5}" for k in range(n_rows)]  # readings' values do not matter here
+    rows = ["t,A"] + [f"{0.5 * k},{0.5 * 0.98 ** k:.6f}" for k in range(n_rows)]  # readings' values do not matter here
     data = tmp_path / "rows.csv"
     data.write_text("\n".join(rows) + "\n")
     scene = tmp_path / "scene.toml"

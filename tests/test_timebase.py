@@ -317,3 +317,20 @@ def test_init_and_fit_recover_the_period_instead_of_refusing(tmp_path, fault, sa
     # the sine's period 1.3 s; omega0 of the fitted pendulum is sqrt(omega1^2 + (C/2)^2) with C/2 =
     # 0.05 1/s (0.005 % of omega0) and a period longer by theta^2/16 < 0.07 % at 0.1 rad
     assert 2 * math.pi / omega0 == pytest.approx(PERIOD, rel=0.005)
+
+
+def test_a_log_written_on_change_that_waited_at_the_end_is_read_as_stamped(tmp_path):
+    """A logger that writes a row only when the angle changes (an encoder): rows dense where the
+    swing is fast, sparse at its turning points, and one last row half a minute later, when the
+    pendulum had stopped.  The rows are read as stamped, up to the wait (a step forward longer
+    than all the rest of the record ends it).  (The wait no longer counts in the mean step that
+    stamps "in clusters" are measured against: on a real encoder log of this kind it had made
+    two thirds of the steps look short, and the stamps were refused as bursts off a line.)"""
+    t = np.arange(0.0, 30.0, 2e-5)
+    theta = 0.5 * np.exp(-0.05 * t) * np.cos(2 * math.pi * t / PERIOD)
+    counts = np.round(theta / (2 * math.pi / 4000))  # a 4000-count encoder, its changes stamped to 20 us
+    rows = np.r_[0, np.flatnonzero(np.diff(counts)) + 1]
+    stamps = np.r_[t[rows], t[rows[-1]] + 30.7]
+    angles = np.r_[counts[rows], counts[rows[-1]]] * 2 * math.pi / 4000
+    series = read_data(write(tmp_path, "on_change.csv", stamps, angles))
+    np.testing.assert_allclose(series.time, stamps[:-1], rtol=0, atol=1e-9)

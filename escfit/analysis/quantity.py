@@ -191,9 +191,9 @@ def swing_shape(time: np.ndarray, x: np.ndarray) -> SwingShape:
     within = fitted = 0.0
     amps, lows, highs = [], [], []
     for lo, hi in zip(edges[:-1], edges[1:]):
-        tc, xc = t[lo:hi] - t[lo:hi].mean(), x[lo:hi]
-        if xc.size < 6:
+        if hi - lo < 6:  # a stretch the samples skip (a gap of the record)
             continue
+        tc, xc = t[lo:hi] - t[lo:hi].mean(), x[lo:hi]
         base = np.column_stack([np.ones_like(tc), tc])
         line = xc - base @ np.linalg.lstsq(base, xc, rcond=None)[0]
         best = (math.inf, 0.0)

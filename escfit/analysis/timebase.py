@@ -330,12 +330,12 @@ def _rounded(t) -> bool:
 
 def _clustered(t) -> bool:
     """Whether the stamps arrive in clusters: never falling, most steps shorter than
-    :data:`CLUSTER_STEP` of the mean step, and most of those short steps above zero (stamps
-    written with too few digits repeat exactly instead)."""
+    :data:`CLUSTER_STEP` of the mean step (jumps of the clock, a log that waited, aside), and
+    most of those short steps above zero (stamps written with too few digits repeat exactly)."""
     if t.size < 20:
         return False
     d = np.diff(t)
-    mean = (t[-1] - t[0]) / (t.size - 1)
+    mean = float(np.mean(d[d <= JUMP_INTERVALS * np.percentile(d, 99)]))  # a wait of the log is no cluster's gap
     if not (mean > 0 and np.all(d >= 0)):
         return False
     short = d < CLUSTER_STEP * mean

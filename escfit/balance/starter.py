@@ -34,6 +34,7 @@ from .family import read_data
 from ..analysis.recordings import UnitCurve
 from ..analysis.recordings.timegrapher import TimegrapherRecording
 from ..analysis.recordings.timeseries import TimeSeries
+from ..analysis.recordings.still_column import TRACK_HINT
 
 from .starter_decay import BOUND_FACTOR, decay_estimates
 
@@ -176,6 +177,9 @@ def _help(path, table: dict, exc: DataError, fmt) -> tuple[str, object, str] | N
                                           "rpm, or V with scale)")
     if "gives no unit: set [recording] displacement_unit" in message and "displacement_unit" not in table:
         return "displacement_unit", "m", "the file names no unit for the displacement: m assumed; CHECK it (cm, mm)"
+    if TRACK_HINT in message and "format" not in table and fmt is None:
+        return "format", "tracker", (f"{message.split(';')[0]}, while x and y move: read as a track, the angle "
+                                     "about the arc they trace")
     if "angle_column" in message and "angle_column" not in table:
         choice = getattr(exc, "channel_choice", None)
         if choice is not None and choice.chosen is not None:

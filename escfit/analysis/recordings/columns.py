@@ -25,6 +25,7 @@ from ...core.errors import DataError
 from ...core.tabletext import column_floats, parse_number, time_seconds
 from ...core.units import angular_frequency_factor, registry
 from .rawsteps import build_series, file_options, merge_file_meta
+from .still_column import refuse_still
 from .recording_spec import COUNT_WORDS, RecordingSpec, header_role, rad_per_unit, safe_unit_text, seconds_per_unit
 from .candidates import TEXT_KINDS as _TEXT_KINDS
 from .candidates import measured_candidates
@@ -279,6 +280,7 @@ def _choose(cols: Columns, spec: RecordingSpec, rate: float | None) -> tuple[int
         raise DataError(f"the time and the {quantity.replace('_', ' ')} are the same column ({a + 1})", where)
     if cols.kind(a) in _TEXT_KINDS + ("clock", "datetime"):
         raise DataError(f"column {cols.label(a)!r} holds {cols.kind(a)}s, not numbers; {hint}", where)
+    refuse_still(lambda i: _floats(cols, i), cols.label, a, [i for i in numeric if i not in (a, t)], hint, cols.where)
     return t, a
 
 

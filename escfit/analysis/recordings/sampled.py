@@ -12,6 +12,7 @@ sinusoid of the record's period with its third harmonic).
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -109,8 +110,19 @@ class SampledRecord:
             return para
         span = self.xs[first:last + 1]
         i = first + int(np.argmax(span) if is_max else np.argmin(span))
-        self.notes.append(f"the local fit near t = {t[i]:.4g} s failed; the smoothed extremum is used there")
+        self._note_fallback(float(t[i]))
         return float(t[i]), float(self.xs[i])
+
+    def _note_fallback(self, at: float) -> None:
+        """One note for every turning point whose local fit failed: how many, and the first."""
+        for k, note in enumerate(self.notes):
+            found = re.match(r"the local fit failed at (\d+) turning point\(s\), the first near (t = \S+ s)", note)
+            if found:
+                self.notes[k] = (f"the local fit failed at {int(found.group(1)) + 1} turning point(s), the first near "
+                                 f"{found.group(2)}; the smoothed extremum is used there")
+                return
+        self.notes.append(f"the local fit failed at 1 turning point(s), the first near t = {at:.4g} s; the smoothed "
+                          "extremum is used there")
 
     def _arc(self, first: int, last: int, is_max: bool) -> tuple[float, float] | None:
         """Vertex of an oscillation of the record's period through the samples within a third

@@ -200,6 +200,11 @@ def _tracked_rows(body: list, where: str, notes: list) -> list:
     return [out[0]] + rows
 
 
+def _constant(values: np.ndarray) -> bool:
+    finite = values[np.isfinite(values)]
+    return bool(finite.size == 0 or np.ptp(finite) == 0)
+
+
 def read_tracker_table(path: str | Path, spec: RecordingSpec | None = None) -> TimeSeries:
     """Read a Tracker data-table export (see the module docstring)."""
     spec = spec or RecordingSpec()
@@ -219,13 +224,17 @@ def read_tracker_table(path: str | Path, spec: RecordingSpec | None = None) -> T
     cols.describe = f"Tracker data export{f' of track {track!r}' if track else ''} ({cols.describe})"
     if track:
         cols.meta["track"] = track
-    if spec.angle_column is not None or any(n in ("θ", "theta", "angle", "θ_v") for n in low):
-        return series_from_columns(cols, spec, sha256=hashlib.sha256(raw).hexdigest())
-    if "x" not in low or "y" not in low or "t" not in low:
-        raise DataError(f"the header {cols.names} has no t, x, y columns (nor an angle θ)", f"{where}:{cols.header_line}")
-    ix, iy, it = low.index("x"), low.index("y"), low.index("t")
+    angle = [i for i, n in enumerate(low) if n in ("θ", "theta", "angle", "θ_v")]
     from .columns import _floats
 
+    if spec.angle_column is not None or (angle and not ({"x", "y"} <= set(low) and _constant(_floats(cols, angle[0])))):
+        return series_from_columns(cols, spec, sha256=hashlib.sha256(raw).hexdigest())
+    it = next((i for i, n in enumerate(low) if n in ("t", "time")), None)
+    if "x" not in low or "y" not in low or it is None:
+        raise DataError(f"the header {cols.names} has no t, x, y columns (nor an angle θ)", f"{where}:{cols.header_line}")
+    if angle:
+        notes.append(f"column {cols.names[angle[0]]!r} holds one value in every row: the angle is taken from x and y")
+    ix, iy = low.index("x"), low.index("y")
     x, y, t = _floats(cols, ix), _floats(cols, iy), _floats(cols, it)
     theta, note = arc_angle(x, y, where)
     tu = cols.unit(it)
