@@ -96,6 +96,7 @@ def pytest_configure(config):
 LONG = {
     # whole fits through the command line or the API
     "test_long_waveform.py::test_a_five_thousand_period_decay_is_fitted_in_blocks",
+    "test_long_waveform.py::test_a_record_of_thousands_of_periods_is_fitted_again_from_one_period_later",
     "test_kernel_store.py::test_the_examples_first_runs_compile_nothing[fits/real/encoder_pendulum_jensen.toml]",
     "test_kernel_store.py::test_the_examples_first_runs_compile_nothing[fits/monday_unit3.toml]",
     "test_cli_recordings.py::test_record_fit_summary_round_trip[timegrapher-t.json-timegrapher_scene.toml-None]",

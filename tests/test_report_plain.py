@@ -277,3 +277,14 @@ def test_a_share_is_named_by_a_fraction_near_it(x):
                "about three quarters": 0.75, "most": 0.85, "nearly all": 0.95, "all": 1.0}
     words = fraction_words(x)
     assert abs(nominal[words] - x) <= 0.1 + 1e-12, (x, words)
+
+
+@pytest.mark.parametrize("spread,said", [(0.002, "(85.0 %, between 84.8 and 85.2 %)"), (0.0001, "(85.0 %)"),
+                                         (0.05, "(85 %, between 80 and 90 %)")])
+def test_a_narrow_share_gives_an_interval_that_says_something(spread, said):
+    """"most (85 %, between 85 and 85 %)" says nothing: a narrow interval gets a third figure,
+    one narrower still none; the 2.5 and 97.5 % quantiles of a uniform spread of draws are known."""
+    from escfit.core.plainwords import share_words
+
+    draws = 0.85 + spread * np.linspace(-1, 1, 4001) / 0.95  # 95 % of them within +- spread
+    assert share_words(draws) == f"most {said}"

@@ -52,7 +52,12 @@ def interval_words(values, unit: str = "", digits: int = 2) -> str:
 def share_words(share) -> str:
     """``"about two thirds (64 %, between 50 and 80 %)"`` for a share (0-1) of a whole."""
     med, lo, hi = quantiles(100 * np.asarray(share, float))
-    return f"{fraction_words(med / 100)} ({sig(med)} %, between {sig(lo)} and {sig(hi)} %)"
+    digits = 2
+    while digits < 3 and sig(lo, digits) == sig(hi, digits) and lo < hi:
+        digits += 1  # a narrow interval: "between 85 and 85 %" says nothing
+    if sig(lo, digits) == sig(hi, digits):
+        return f"{fraction_words(med / 100)} ({sig(med, digits)} %)"
+    return f"{fraction_words(med / 100)} ({sig(med, digits)} %, between {sig(lo, digits)} and {sig(hi, digits)} %)"
 
 
 def fraction_words(x: float) -> str:

@@ -120,7 +120,8 @@ def _second_fit(problem, scene, series, lsq, refit, seed: int, what: str, *, kee
                  if n in lsq.values and not n.startswith("observation.") and keep(n)}
         fit, unresolved = refit(other, begin, seed)
     except (EscfitError, ValueError, ArithmeticError) as exc:
-        return f"no {what} to compare with ({str(exc).splitlines()[0][:160]})"
+        said = str(exc).splitlines()[0]
+        return f"no {what} to compare with ({said if len(said) <= 240 else said[:240].rsplit(' ', 1)[0] + ' ...'})"
     if unresolved:
         return f"the {what} contradicts the record's measured period: not compared"
     return fit, other
@@ -217,11 +218,15 @@ def later_start_refit(problem, lsq, refit, *, seed: int = 0):
     if not end - start >= MIN_PERIODS * period:
         return f"the record is too short to be fitted again from one period later (under {MIN_PERIODS:g} periods after it)"
     used = np.isin(series.time, problem.sample_time)  # a thinned record: the same samples, nested
-    if not used.all():
-        series = replace(series, time=series.time[used], theta=series.theta[used])
-    later = replace(series, window=replace(window_of(series), start=start, release=None), release_s=math.nan)
-    return _second_fit(problem, problem.given_scene, later, lsq, refit, seed, "fit from one period later",
-                       keep=lambda name: name != "oscillator.theta0")
+    tries = [replace(series, time=series.time[used], theta=series.theta[used]), series] if not used.all() \
+        else [series]
+    for each in tries:  # the whole record when the analysis of the thinned one fails (its blocks can alias)
+        later = replace(each, window=replace(window_of(each), start=start, release=None), release_s=math.nan)
+        got = _second_fit(problem, problem.given_scene, later, lsq, refit, seed, "fit from one period later",
+                          keep=lambda name: name != "oscillator.theta0")
+        if not (isinstance(got, str) and got.startswith("no fit")):
+            return got
+    return got
 
 
 def _start_dependence(problem, lsq, refit, seed: int, agreement: Agreement, model: ModelFacts) -> Agreement:
