@@ -102,3 +102,17 @@ def test_a_release_at_the_records_start_is_no_glitch(hold):
     tp = reduce_series(TimeSeries(t, x, source="video.csv"))
     assert not any("tracking glitch" in n for n in tp.notes), tp.notes
     assert abs(tp.release_time - hold) < 0.5 / RATE + 0.05, (tp.release_time, tp.notes)
+
+
+@pytest.mark.parametrize("length,found", [(6, True), (10, True), (15, False)])
+def test_at_a_fast_rate_a_glitch_may_last_a_tenth_of_a_period(length, found):
+    """At 100 samples a period a tracker that lost the bob for a tenth of a period leaves ten
+    samples off the swing: a glitch, found exactly; fifteen (0.15 of a period) are motion."""
+    rng = np.random.default_rng(4)
+    t = np.arange(0.0, 30.0, 0.01)
+    x, *_ = decay(t, 0.3, c=0.02, r=0.05)
+    x = x + 1e-3 * rng.standard_normal(t.size)
+    i = int(0.45 * t.size)
+    x[i:i + length] -= 0.2
+    got = find_glitches(t, x, PERIOD, smooth(x, PERIOD * 100))
+    assert [(g.first, g.last) for g in got] == ([(i, i + length - 1)] if found else [])

@@ -1,8 +1,9 @@
 """Samples that leave the swing for a frame or three: a tracker that jumped, a dropped bit.
 
 A free swing moves smoothly: over a fraction of a period it is an arc of a sinusoid of its own
-period, whatever its damping.  A tracking glitch puts a few samples (at most :data:`LONGEST`)
-far off that arc and brings the next ones back; left in, it makes a spurious pair of turning
+period, whatever its damping.  A tracking glitch puts a few samples (at most :data:`LONGEST`, or
+:data:`LONGEST_PERIODS` of a period where that is more: a tracker that lost the bob for a tenth
+of a second at 100 frames a second) far off that arc and brings the next ones back; left in, it makes a spurious pair of turning
 points that shifts the count of swings after it (and so the period) or passes for a push.
 
 Candidates are found in one pass over the record: the second difference of the samples is,
@@ -23,9 +24,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Glitch", "find_glitches", "LONGEST", "Z_OFF"]
+__all__ = ["Glitch", "find_glitches", "LONGEST", "LONGEST_PERIODS", "Z_OFF"]
 
-LONGEST = 4  # samples: a run longer than this off the arc is motion, not a glitch
+LONGEST = 4  # samples: a run longer than this off the arc is motion, not a glitch ...
+LONGEST_PERIODS = 0.1  # ... unless it lasts under this share of a period (a tracker that lost the bob a moment)
 Z_OFF = 8.0  # a sample this many robust scatters off the arc is off it
 Z_CANDIDATE = 8.0  # a second difference this many noise scales from the smooth motion's is looked at
 FLOOR = 0.01  # ... and by more than this share of the swing
@@ -47,12 +49,13 @@ def _scale(values: np.ndarray) -> float:
     return float(MAD * np.median(np.abs(values - np.median(values)))) if values.size else 0.0
 
 
-def _judge(t: np.ndarray, x: np.ndarray, i: int, period: float) -> Glitch | None:
-    """The glitch around sample ``i``, if the samples near it leave the arc the others follow."""
+def _judge(t: np.ndarray, x: np.ndarray, i: int, period: float, longest: int = LONGEST) -> Glitch | None:
+    """The glitch around sample ``i``, if the samples near it (runs of at most ``longest``) leave
+    the arc the others follow."""
     w = 2.0 * math.pi / period
     lo, hi = np.searchsorted(t, [t[i] - 0.5 * period, t[i] + 0.5 * period])
     idx = np.arange(lo, hi)
-    near = np.abs(idx - i) <= LONGEST
+    near = np.abs(idx - i) <= longest
     fit_idx = idx[~near]
     if fit_idx.size < 8:
         return None
@@ -69,7 +72,7 @@ def _judge(t: np.ndarray, x: np.ndarray, i: int, period: float) -> Glitch | None
         return None
     run = idx[bad & near]
     first, last = int(run.min()), int(run.max())
-    if last - first + 1 > LONGEST or bad[(idx >= first - 1) & (idx <= last + 1) & ~near].any():
+    if last - first + 1 > longest or bad[(idx >= first - 1) & (idx <= last + 1) & ~near].any():
         return None
     # a glitch leaves the arc and comes back to it: the arc is followed on both sides of it (at
     # the record's first or last samples one side is missing, and a release from a hold or the
@@ -108,10 +111,11 @@ def find_glitches(time: np.ndarray, values: np.ndarray, period: float, smoothed:
     if s <= 0:
         return []
     found: list[Glitch] = []
+    longest = max(LONGEST, int(LONGEST_PERIODS * period / dt))
     for i in np.flatnonzero(np.abs(rest) > Z_CANDIDATE * s) + 1:
-        if found and i <= found[-1].last + LONGEST:
+        if found and i <= found[-1].last + longest:
             continue
-        g = _judge(t, x, int(i), period)
+        g = _judge(t, x, int(i), period, longest)
         if g is not None and not (found and g.first <= found[-1].last):
             found.append(g)
     return found
