@@ -80,21 +80,22 @@ def _scene(attrs: Mapping[str, Any]) -> dict:
         return {}
 
 
-def _undetermined(attrs: Mapping[str, Any]) -> list[str]:
-    """The parameters the fit marked as not determined by the record."""
+def _json_list(attrs: Mapping[str, Any], key: str) -> list[str]:
+    """The list of strings a results attribute holds as JSON (empty when absent or not a list)."""
     try:
-        names = json.loads(attrs.get("undetermined", "[]") or "[]")
+        items = json.loads(attrs.get(key, "[]") or "[]")
     except (TypeError, ValueError):
         return []
-    return [str(n) for n in names] if isinstance(names, list) else []
+    return [str(n) for n in items] if isinstance(items, list) else []
+
+
+def _undetermined(attrs: Mapping[str, Any]) -> list[str]:
+    """The parameters the fit marked as not determined by the record."""
+    return _json_list(attrs, "undetermined")
 
 
 def _warnings(attrs: Mapping[str, Any]) -> list[str]:
-    try:
-        warnings = json.loads(attrs.get("warnings", "[]") or "[]")
-    except (TypeError, ValueError):
-        return []
-    return [str(w) for w in warnings] if isinstance(warnings, list) else []
+    return _json_list(attrs, "warnings")
 
 
 def _law_refuted(attrs: Mapping[str, Any]) -> bool:
