@@ -25,6 +25,9 @@ import numpy as np
 
 __all__ = ["Optimum", "minimize", "optimum", "single_blas_thread", "DEFAULT_TOL"]
 
+#: a start this many times its bounds' width from zero is optimised as its offset from the start
+OFFSET_RANGES = 1e4
+
 #: ftol, xtol and gtol of every run (lmfit's defaults for this method)
 DEFAULT_TOL = 1e-8
 
@@ -102,9 +105,37 @@ def minimize(fun: Callable[[np.ndarray], np.ndarray], x0: np.ndarray, lower: np.
     kws = dict(jac="2-point", method="trf", ftol=DEFAULT_TOL, xtol=DEFAULT_TOL, gtol=DEFAULT_TOL, x_scale=1.0,
                max_nfev=4000 * (k + 1))
     kws.update(options)
+    # scipy's trust region sizes its first step by the norm of the start: a release instant on an
+    # epoch clock (1e9 s) made it a billion, and the first steps threw the losses far off.  A
+    # parameter far from zero against its range is optimised as its offset from the start.
+    width = np.where(np.isfinite(upper - lower), upper - lower, np.abs(x0))
+    # (to the start less its range: an offset of exactly 0 gets no finite-difference step from scipy)
+    far = np.abs(x0) > OFFSET_RANGES * np.maximum(width, 1e-300)
+    shift = np.where(far, x0 - np.maximum(width, 1.0), 0.0)
+    if np.any(shift):
+        fun, kws = _shifted(fun, kws, shift, x0)
+        x0, lower, upper = x0 - shift, lower - shift, upper - shift
     ret = scipy_least_squares(fun, x0, bounds=(lower, upper), **kws)
-    return optimum(ret.x, ret.fun, ret.jac, scale_covar=scale_covar, success=bool(ret.success),
+    return optimum(ret.x + shift, ret.fun, ret.jac, scale_covar=scale_covar, success=bool(ret.success),
                    message=str(ret.message), nfev=int(ret.nfev))
+
+
+def _shifted(fun, kws: dict, shift: np.ndarray, x0: np.ndarray):
+    """``fun`` and a callable ``jac`` of ``kws`` taking offsets ``u`` from ``shift`` (the same derivatives).
+
+    scipy's finite differences step an offset of about 1 by about 1e-8, below what ``shift + u``
+    resolves (1e9 s holds 1e-7 s): a shifted parameter's step is a thousand times its rounding
+    instead (2e-4 s at 1e9 s), the others' scipy's own.
+    """
+    jac = kws.get("jac")
+    if callable(jac):
+        kws = {**kws, "jac": lambda u, *a: jac(u + shift, *a)}
+    elif kws.get("diff_step") is None:
+        eps = np.finfo(float).eps
+        own = eps ** (1 / 3 if jac == "3-point" else 1 / 2)  # scipy's relative step
+        kws = {**kws, "diff_step": np.where(shift != 0, np.maximum(own, 1e3 * eps * np.abs(shift) / np.maximum(
+            np.abs(x0 - shift), 1.0)), own)}
+    return (lambda u, *a: fun(u + shift, *a)), kws
 
 
 def optimum(x, residual, jac, *, scale_covar: bool, success: bool, message: str, nfev: int) -> Optimum:
